@@ -1,0 +1,78 @@
+"""Argument helpers shared by subcommands (data folder, scenario choice, output)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from typing import Any
+
+import numpy as np
+
+from ..scenario import Params
+
+
+def add_data_arg(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--data", metavar="DIR", default=None,
+                        help="Haikou data folder (default: $RPBENCH_DATA, else ../shared/data/haikou)")
+
+
+def add_scenario_args(parser: argparse.ArgumentParser, *, positional: bool = False) -> None:
+    """--scenario/--date/--sample/--seed plus parameter overrides."""
+    if positional:
+        parser.add_argument("scenario", metavar="NAME", help="scenario name (see `rpbench list`)")
+    else:
+        parser.add_argument("--scenario", default=None,
+                            help="scenario name (default: haikou-peak, or toy when no data folder exists)")
+    parser.add_argument("--date", default=None, help="date YYYY-MM-DD (default 2017-05-01)")
+    parser.add_argument("--sample", type=float, default=None,
+                        help="fraction of orders kept, in (0, 1] (haikou-peak default 0.3)")
+    parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    parser.add_argument("--fleet-at", dest="fleet_placement", default="order_origins",
+                        choices=("order_origins", "random_nodes"), help="initial vehicle positions")
+    parser.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                        help="override a parameter, e.g. --param dt_s=30 (repeatable; see `rpbench list`)")
+    add_data_arg(parser)
+
+
+def parse_param_overrides(items: list[str]) -> dict[str, float]:
+    from ..exceptions import ParameterError
+    out: dict[str, float] = {}
+    known = set(Params().as_dict())
+    for item in items:
+        name, sep, value = item.partition("=")
+        name = name.strip()
+        if not sep or name not in known:
+            raise ParameterError(f"--param {item!r}: expected NAME=VALUE with NAME one of {', '.join(sorted(known))}")
+        try:
+            out[name] = float(value)
+        except ValueError:
+            raise ParameterError(f"--param {item!r}: value {value!r} is not a number") from None
+    return out
+
+
+def scenario_kwargs(args: argparse.Namespace) -> dict[str, Any]:
+    return dict(data_dir=args.data, date=args.date, sample=args.sample, seed=args.seed,
+                param_overrides=parse_param_overrides(args.param), fleet_placement=args.fleet_placement)
+
+
+def to_jsonable(obj: Any) -> Any:
+    if isinstance(obj, dict):
+        return {str(k): to_jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [to_jsonable(v) for v in obj]
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, float) and not np.isfinite(obj):
+        return None
+    return obj
+
+
+def print_json(obj: Any) -> None:
+    json.dump(to_jsonable(obj), sys.stdout, indent=2)
+    sys.stdout.write("\n")
+
+
+def note(message: str) -> None:
+    """A one-line remark for humans, on stderr (never pollutes --json output)."""
+    print(message, file=sys.stderr)

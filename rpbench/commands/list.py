@@ -1,0 +1,72 @@
+"""``rpbench list``: scenarios, the data folder, solver presets and whether each is installed."""
+
+from __future__ import annotations
+
+import argparse
+
+from ..data import available_peak_dates
+from ..exceptions import RpbenchError
+from ..paths import default_data_candidates, find_data_dir
+from ..scenario import Params
+from ..scenarios import SCENARIOS
+from ..solver_presets import load_preset, preset_names
+from ._common import add_data_arg, print_json
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("list", help="list scenarios, data folder and solver presets",
+                       description="List scenarios, the data folder in use, and solver presets "
+                                   "with whether each preset's backend is installed.")
+    add_data_arg(p)
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(handler=run)
+
+
+def gather(data: str | None) -> dict:
+    folder = find_data_dir(data)
+    presets = []
+    for name in preset_names():
+        try:
+            preset = load_preset(name)
+            cls = preset.backend_class()
+            presets.append({"name": name, "backend": preset.backend, "installed": cls.is_installed(),
+                            "missing": cls.missing_libraries(), "exact": sorted(s.value for s in cls.exact),
+                            "description": preset.description})
+        except RpbenchError as exc:
+            presets.append({"name": name, "backend": None, "installed": False, "error": str(exc)})
+    return {
+        "data_dir": str(folder) if folder else None,
+        "data_dir_candidates": [str(c) for c in default_data_candidates()],
+        "peak_dates": available_peak_dates(folder) if folder else [],
+        "scenarios": [{"name": s.name, "description": s.description, "needs_data": s.needs_data,
+                       "available": (not s.needs_data) or folder is not None} for s in SCENARIOS.values()],
+        "presets": presets,
+        "parameters": Params().as_dict(),
+    }
+
+
+def run(args: argparse.Namespace) -> int:
+    info = gather(args.data)
+    if args.json:
+        print_json(info)
+        return 0
+    folder = info["data_dir"]
+    print(f"data folder: {folder or 'none found (only the toy scenario runs); pass --data DIR'}")
+    if info["peak_dates"]:
+        dates = info["peak_dates"]
+        print(f"  peak-hour dates: {len(dates)} ({dates[0]} .. {dates[-1]})")
+    print("\nscenarios:")
+    for s in info["scenarios"]:
+        mark = "" if s["available"] else "  [needs data]"
+        print(f"  {s['name']:<14} {s['description']}{mark}")
+    print("\nsolver presets (--solver NAME):")
+    if not info["presets"]:
+        print("  none")
+    for p in info["presets"]:
+        if p.get("error"):
+            print(f"  {p['name']:<14} BROKEN: {p['error']}")
+            continue
+        state = "installed" if p["installed"] else f"NOT INSTALLED (missing {', '.join(p['missing'])})"
+        print(f"  {p['name']:<14} {p['backend']:<9} {state:<10} exact: {', '.join(p['exact'])}")
+    print("\nparameters (--param NAME=VALUE): " + ", ".join(f"{k}={v:g}" for k, v in info["parameters"].items()))
+    return 0

@@ -1,0 +1,55 @@
+"""Reader for ``samples_and_aggregates/data_dayly_hourly_count.csv``.
+
+Orders per day and per hour (by departure time) for 2017-05-01..10-31:
+``date`` (``MM/DD``, year 2017), ``day_count``, ``hour_count`` (a list of 24).
+It is the diurnal profile of the ``haikou-day`` stand-in.
+"""
+
+from __future__ import annotations
+
+import ast
+import datetime as dt
+from pathlib import Path
+
+import numpy as np
+
+from ..exceptions import DataError, DataNotFoundError
+from ._table import INT, TEXT, read_table
+from .orders import parse_date
+
+HOURLY_FILE = Path("samples_and_aggregates") / "data_dayly_hourly_count.csv"
+_YEAR = 2017
+
+
+def read_hourly_counts(data_dir: Path) -> dict[str, np.ndarray]:
+    """Map ``YYYY-MM-DD`` -> 24 hourly order counts (int64)."""
+    path = data_dir / HOURLY_FILE
+    frame = read_table(path, "hourly counts", {"date": TEXT, "day_count": INT, "hour_count": TEXT})
+    out: dict[str, np.ndarray] = {}
+    for row, (date, total, hours) in enumerate(zip(frame["date"], frame["day_count"], frame["hour_count"])):
+        where = f"hourly counts file {str(path)!r}, data row {row + 1}"
+        try:
+            month, day = (int(x) for x in str(date).split("/"))
+            key = dt.date(_YEAR, month, day).isoformat()
+        except ValueError:
+            raise DataError(f"{where}: date {date!r} is not MM/DD") from None
+        try:
+            counts = np.asarray(ast.literal_eval(str(hours)), dtype=np.int64)
+        except (ValueError, SyntaxError, TypeError):
+            raise DataError(f"{where}: hour_count {hours!r} is not a list of 24 integers") from None
+        if counts.shape != (24,) or (counts < 0).any():
+            raise DataError(f"{where}: hour_count must hold 24 non-negative integers, got {hours!r}")
+        if int(counts.sum()) != int(total):
+            raise DataError(f"{where}: hour_count sums to {int(counts.sum())}, day_count says {int(total)}")
+        out[key] = counts
+    return out
+
+
+def hourly_counts_for(data_dir: Path, date: str) -> np.ndarray:
+    """The 24 hourly counts of ``date``, with a clear error when the date is absent."""
+    day = parse_date(date).isoformat()
+    table = read_hourly_counts(data_dir)
+    if day not in table:
+        span = f"{min(table)}..{max(table)}" if table else "none"
+        raise DataNotFoundError(f"no hourly counts for {day} in {data_dir / HOURLY_FILE} (dates present: {span})")
+    return table[day]

@@ -1,0 +1,46 @@
+"""Error classes.
+
+Every error a user can cause (bad file, bad parameter, missing solver) is an
+``RpbenchError``; the CLI prints its message on one line and exits with
+status 2.  Each class also subclasses the matching built-in so callers that
+catch ``ValueError`` or ``FileNotFoundError`` keep working.  Messages say what
+is wrong, the offending value, and what to do.
+"""
+
+from __future__ import annotations
+
+
+class RpbenchError(Exception):
+    """Base class of every user-facing rpbench error."""
+
+
+class DataError(RpbenchError, ValueError):
+    """A data file is malformed: missing column, bad value, unknown node."""
+
+
+class DataNotFoundError(RpbenchError, FileNotFoundError):
+    """A data folder or data file does not exist."""
+
+
+class ParameterError(RpbenchError, ValueError):
+    """A parameter is out of its valid range or of the wrong kind."""
+
+
+class ModelError(RpbenchError, ValueError):
+    """A solver-agnostic model is malformed (NaN value, index out of range...)."""
+
+
+class SolverNotInstalledError(RpbenchError, ImportError):
+    """The library behind a backend is not importable."""
+
+
+class SolverError(RpbenchError, RuntimeError):
+    """A solver failed or returned something that is not a valid solution."""
+
+
+class PresetError(RpbenchError, ValueError):
+    """A solver preset is unknown or its TOML file is malformed."""
+
+
+class ResultsError(RpbenchError, ValueError):
+    """A results folder is missing, empty or inconsistent."""

@@ -1,0 +1,393 @@
+"""Solver-agnostic decision models: 0/1 set packing over a sparse incidence matrix.
+
+Every decision rpbench makes is one of three models, each
+
+    maximise  Σ_c values[c] · x[c]
+    s.t.      Σ_{c covers r} x[c] = 1   for rows r with ``row_exact[r]``
+              Σ_{c covers r} x[c] ≤ 1   for the other rows
+              x ∈ {0, 1}
+
+with a special structure exact algorithms exploit:
+
+* :class:`AssignmentModel` — one batch round (paper Eqs. 1-4 and 16): rows are
+  passengers (exactly one option each) and vehicles (at most one passenger);
+  a column is (passenger, vehicle) or (passenger, keep waiting).  Bipartite,
+  so the LP relaxation is integral.
+* :class:`TripPackingModel` — RTV's trip assignment (ALGORITHMS.md §3.3):
+  a column is (trip of one or two requests, vehicle); each request and each
+  vehicle at most once.  General set packing.
+* :class:`PairingModel` — the oracle (ALGORITHMS.md §4): a column is a pair
+  of orders; each order at most once.  General-graph matching: odd cycles
+  make the LP relaxation fractional (the unit triangle has LP value 1.5).
+  ``objective = "cardinality_then_weight"`` asks for a maximum-cardinality
+  matching of maximum weight (Oracle-2, A20).
+
+Values are integers in units of ``unit_m`` metres (default 1 mm), so every
+exact backend — including integer-only algorithms — solves the *same*
+problem and objectives can be compared exactly.  Use :func:`quantize` to turn
+metres into model values.  Models are frozen and validated on construction.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+from typing import ClassVar
+
+import numpy as np
+import scipy.sparse as sp
+
+from .exceptions import ModelError
+
+#: Sums of |values| must stay exactly representable in float64 (2**53).
+MAX_EXACT_TOTAL = float(2 ** 53)
+
+
+class Structure(str, enum.Enum):
+    ASSIGNMENT = "assignment"
+    TRIP_PACKING = "trip_packing"
+    PAIRING = "pairing"
+
+
+class Status(str, enum.Enum):
+    OPTIMAL = "optimal"            # proven optimal
+    FEASIBLE = "feasible"          # feasible, stopped with a gap (gap/bound say how far)
+    TIME_LIMIT = "time_limit"      # stopped by the time limit; the incumbent is returned
+    INFEASIBLE = "infeasible"
+    ERROR = "error"
+
+
+def quantize(values_m, unit_m: float = 1e-3) -> np.ndarray:
+    """Metres -> integral model values in units of ``unit_m`` (round half to even)."""
+    return np.round(np.asarray(values_m, dtype=np.float64) / unit_m)
+
+
+# --------------------------------------------------------------------- models
+@dataclass(frozen=True, eq=False)
+class _Model:
+    structure: ClassVar[Structure]
+    values: np.ndarray
+    unit_m: float
+    name: str
+
+    # -- generic view --------------------------------------------------------
+    @property
+    def n_cols(self) -> int:
+        return len(self.values)
+
+    @property
+    def n_rows(self) -> int:
+        raise NotImplementedError
+
+    def row_exact(self) -> np.ndarray:
+        """Boolean per row: True for "= 1", False for "<= 1"."""
+        raise NotImplementedError
+
+    def column_rows(self) -> tuple[np.ndarray, np.ndarray]:
+        """Rows covered by each column as CSC ``(col_start, row_index)``."""
+        raise NotImplementedError
+
+    def incidence(self) -> sp.csc_matrix:
+        """The 0/1 row x column incidence matrix (rows as in :meth:`row_exact`)."""
+        start, rows = self.column_rows()
+        data = np.ones(len(rows), dtype=np.float64)
+        return sp.csc_matrix((data, rows, start), shape=(self.n_rows, self.n_cols))
+
+    @property
+    def size(self) -> dict[str, int]:
+        return {"rows": int(self.n_rows), "cols": int(self.n_cols), "nonzeros": int(self.column_rows()[0][-1])}
+
+    # -- validation helpers --------------------------------------------------
+    def _check_values(self) -> None:
+        v = self.values
+        if v.ndim != 1:
+            raise ModelError(f"model {self.name!r}: values must be one-dimensional")
+        if not np.all(np.isfinite(v)):
+            bad = int(np.flatnonzero(~np.isfinite(v))[0])
+            raise ModelError(f"model {self.name!r}: value of column {bad} is {float(v[bad])!r}; values must be finite")
+        if not np.all(v == np.round(v)):
+            bad = int(np.flatnonzero(v != np.round(v))[0])
+            raise ModelError(f"model {self.name!r}: value of column {bad} is {float(v[bad])!r}; values must be whole "
+                             f"multiples of unit_m={self.unit_m} (use rpbench.model.quantize)")
+        if np.abs(v).sum() > MAX_EXACT_TOTAL:
+            raise ModelError(f"model {self.name!r}: values too large for exact float64 sums; use a coarser unit_m")
+        if not (self.unit_m > 0 and np.isfinite(self.unit_m)):
+            raise ModelError(f"model {self.name!r}: unit_m={self.unit_m!r} must be a positive number")
+
+    def _check_index(self, arr: np.ndarray, what: str, upper: int, allow_minus_one: bool = False) -> None:
+        if len(arr) != self.n_cols:
+            raise ModelError(f"model {self.name!r}: {what} has {len(arr)} entries for {self.n_cols} columns")
+        lo = -1 if allow_minus_one else 0
+        bad = (arr < lo) | (arr >= upper)
+        if bad.any():
+            c = int(np.flatnonzero(bad)[0])
+            raise ModelError(f"model {self.name!r}: column {c} has {what} {int(arr[c])}, outside "
+                             f"[{lo}, {upper - 1}]")
+
+    def _check_unique(self, *keys: np.ndarray) -> None:
+        if self.n_cols < 2:
+            return
+        table = np.stack([np.asarray(k, dtype=np.int64) for k in keys], axis=1)
+        uniq = np.unique(table, axis=0)
+        if len(uniq) != self.n_cols:
+            srt = np.lexsort(table.T[::-1])
+            dup = np.flatnonzero((np.diff(table[srt], axis=0) == 0).all(axis=1))[0]
+            raise ModelError(f"model {self.name!r}: columns {int(srt[dup])} and {int(srt[dup + 1])} are duplicates")
+
+    # -- solutions -------------------------------------------------------------
+    def objective_of(self, chosen) -> float:
+        return float(self.values[np.asarray(chosen, dtype=np.int64)].sum()) if len(chosen) else 0.0
+
+    def violations(self, chosen) -> list[str]:
+        """Constraint violations of a 0/1 solution given as chosen column indices."""
+        chosen = np.asarray(chosen, dtype=np.int64)
+        out = []
+        if len(chosen) and (chosen.min() < 0 or chosen.max() >= self.n_cols):
+            return [f"chosen column index outside 0..{self.n_cols - 1}"]
+        if len(np.unique(chosen)) != len(chosen):
+            out.append("a column is chosen twice")
+        start, rows = self.column_rows()
+        counts = np.zeros(self.n_rows, dtype=np.int64)
+        for c in chosen:
+            counts[rows[start[c]:start[c + 1]]] += 1
+        exact = self.row_exact()
+        over = np.flatnonzero(counts > 1)
+        if len(over):
+            out.append(f"row {int(over[0])} is covered {int(counts[over[0]])} times")
+        under = np.flatnonzero(exact & (counts == 0))
+        if len(under):
+            out.append(f"row {int(under[0])} must be covered exactly once but is not covered")
+        return out
+
+
+@dataclass(frozen=True, eq=False)
+class AssignmentModel(_Model):
+    """One batch round: passengers x (vehicles + keep waiting).
+
+    Rows ``0..n_passengers-1`` are passengers ("= 1"); rows
+    ``n_passengers..n_passengers+n_vehicles-1`` are vehicles ("<= 1").
+    ``col_vehicle == -1`` marks a passenger's keep-waiting option (at most one
+    per passenger).
+    """
+
+    structure: ClassVar[Structure] = Structure.ASSIGNMENT
+    n_passengers: int = 0
+    n_vehicles: int = 0
+    col_passenger: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int32))
+    col_vehicle: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int32))
+
+    def __init__(self, n_passengers: int, n_vehicles: int, col_passenger, col_vehicle, values, *,
+                 unit_m: float = 1e-3, name: str = "assignment"):
+        object.__setattr__(self, "n_passengers", int(n_passengers))
+        object.__setattr__(self, "n_vehicles", int(n_vehicles))
+        object.__setattr__(self, "col_passenger", np.asarray(col_passenger, dtype=np.int32))
+        object.__setattr__(self, "col_vehicle", np.asarray(col_vehicle, dtype=np.int32))
+        object.__setattr__(self, "values", np.asarray(values, dtype=np.float64))
+        object.__setattr__(self, "unit_m", float(unit_m))
+        object.__setattr__(self, "name", name)
+        self._validate()
+
+    def _validate(self) -> None:
+        if self.n_passengers < 0 or self.n_vehicles < 0:
+            raise ModelError(f"model {self.name!r}: negative number of passengers or vehicles")
+        self._check_values()
+        self._check_index(self.col_passenger, "passenger", self.n_passengers)
+        self._check_index(self.col_vehicle, "vehicle", self.n_vehicles, allow_minus_one=True)
+        self._check_unique(self.col_passenger, self.col_vehicle)
+        has_option = np.zeros(self.n_passengers, dtype=bool)
+        has_option[self.col_passenger] = True
+        if not has_option.all():
+            p = int(np.flatnonzero(~has_option)[0])
+            raise ModelError(f"model {self.name!r}: passenger {p} has no option at all; every passenger needs "
+                             "at least a keep-waiting column")
+
+    @property
+    def n_rows(self) -> int:
+        return self.n_passengers + self.n_vehicles
+
+    def row_exact(self) -> np.ndarray:
+        return np.concatenate([np.ones(self.n_passengers, bool), np.zeros(self.n_vehicles, bool)])
+
+    def column_rows(self) -> tuple[np.ndarray, np.ndarray]:
+        has_v = self.col_vehicle >= 0
+        counts = 1 + has_v.astype(np.int64)
+        start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        rows = np.empty(start[-1], dtype=np.int32)
+        rows[start[:-1]] = self.col_passenger
+        rows[start[:-1][has_v] + 1] = self.n_passengers + self.col_vehicle[has_v]
+        return start, rows
+
+    @property
+    def wait_columns(self) -> np.ndarray:
+        return np.flatnonzero(self.col_vehicle < 0)
+
+
+@dataclass(frozen=True, eq=False)
+class TripPackingModel(_Model):
+    """RTV trip assignment: columns are (trip of 1-2 requests, vehicle).
+
+    Rows ``0..n_requests-1`` are requests, then ``n_vehicles`` vehicle rows;
+    all "<= 1".  ``col_request2 == -1`` marks a one-request trip; otherwise
+    ``col_request1 < col_request2``.
+    """
+
+    structure: ClassVar[Structure] = Structure.TRIP_PACKING
+    n_requests: int = 0
+    n_vehicles: int = 0
+    col_vehicle: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int32))
+    col_request1: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int32))
+    col_request2: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int32))
+
+    def __init__(self, n_requests: int, n_vehicles: int, col_vehicle, col_request1, col_request2, values, *,
+                 unit_m: float = 1e-3, name: str = "trip_packing"):
+        object.__setattr__(self, "n_requests", int(n_requests))
+        object.__setattr__(self, "n_vehicles", int(n_vehicles))
+        object.__setattr__(self, "col_vehicle", np.asarray(col_vehicle, dtype=np.int32))
+        object.__setattr__(self, "col_request1", np.asarray(col_request1, dtype=np.int32))
+        object.__setattr__(self, "col_request2", np.asarray(col_request2, dtype=np.int32))
+        object.__setattr__(self, "values", np.asarray(values, dtype=np.float64))
+        object.__setattr__(self, "unit_m", float(unit_m))
+        object.__setattr__(self, "name", name)
+        self._validate()
+
+    def _validate(self) -> None:
+        if self.n_requests < 0 or self.n_vehicles < 0:
+            raise ModelError(f"model {self.name!r}: negative number of requests or vehicles")
+        self._check_values()
+        self._check_index(self.col_vehicle, "vehicle", self.n_vehicles)
+        self._check_index(self.col_request1, "first request", self.n_requests)
+        self._check_index(self.col_request2, "second request", self.n_requests, allow_minus_one=True)
+        pair = self.col_request2 >= 0
+        if np.any(self.col_request1[pair] >= self.col_request2[pair]):
+            c = int(np.flatnonzero(pair & (self.col_request1 >= self.col_request2))[0])
+            raise ModelError(f"model {self.name!r}: column {c} must list its requests in increasing order "
+                             f"(got {int(self.col_request1[c])}, {int(self.col_request2[c])})")
+        self._check_unique(self.col_vehicle, self.col_request1, self.col_request2)
+
+    @property
+    def n_rows(self) -> int:
+        return self.n_requests + self.n_vehicles
+
+    def row_exact(self) -> np.ndarray:
+        return np.zeros(self.n_rows, dtype=bool)
+
+    def column_rows(self) -> tuple[np.ndarray, np.ndarray]:
+        pair = self.col_request2 >= 0
+        counts = 2 + pair.astype(np.int64)
+        start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        rows = np.empty(start[-1], dtype=np.int32)
+        rows[start[:-1]] = self.col_request1
+        rows[start[:-1][pair] + 1] = self.col_request2[pair]
+        rows[start[1:] - 1] = self.n_requests + self.col_vehicle
+        return start, rows
+
+
+OBJECTIVES = ("weight", "cardinality_then_weight")
+
+
+@dataclass(frozen=True, eq=False)
+class PairingModel(_Model):
+    """General-graph matching over orders: a column is a pair ``(a, b)``, ``a < b``.
+
+    ``objective="weight"``: maximise the total value (Oracle-1).
+    ``objective="cardinality_then_weight"``: maximise the number of pairs,
+    then the total value among maximum matchings (Oracle-2).
+    """
+
+    structure: ClassVar[Structure] = Structure.PAIRING
+    n_orders: int = 0
+    col_a: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int32))
+    col_b: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int32))
+    objective: str = "weight"
+
+    def __init__(self, n_orders: int, col_a, col_b, values, *, objective: str = "weight",
+                 unit_m: float = 1e-3, name: str = "pairing"):
+        object.__setattr__(self, "n_orders", int(n_orders))
+        object.__setattr__(self, "col_a", np.asarray(col_a, dtype=np.int32))
+        object.__setattr__(self, "col_b", np.asarray(col_b, dtype=np.int32))
+        object.__setattr__(self, "values", np.asarray(values, dtype=np.float64))
+        object.__setattr__(self, "objective", objective)
+        object.__setattr__(self, "unit_m", float(unit_m))
+        object.__setattr__(self, "name", name)
+        self._validate()
+
+    def _validate(self) -> None:
+        if self.n_orders < 0:
+            raise ModelError(f"model {self.name!r}: negative number of orders")
+        if self.objective not in OBJECTIVES:
+            raise ModelError(f"model {self.name!r}: objective {self.objective!r} unknown; expected one of "
+                             f"{', '.join(OBJECTIVES)}")
+        self._check_values()
+        self._check_index(self.col_a, "first order", self.n_orders)
+        self._check_index(self.col_b, "second order", self.n_orders)
+        if np.any(self.col_a >= self.col_b):
+            c = int(np.flatnonzero(self.col_a >= self.col_b)[0])
+            raise ModelError(f"model {self.name!r}: pair column {c} must satisfy a < b "
+                             f"(got {int(self.col_a[c])}, {int(self.col_b[c])})")
+        self._check_unique(self.col_a, self.col_b)
+
+    @property
+    def n_rows(self) -> int:
+        return self.n_orders
+
+    def row_exact(self) -> np.ndarray:
+        return np.zeros(self.n_orders, dtype=bool)
+
+    def column_rows(self) -> tuple[np.ndarray, np.ndarray]:
+        start = np.arange(0, 2 * self.n_cols + 1, 2, dtype=np.int64)
+        rows = np.empty(2 * self.n_cols, dtype=np.int32)
+        rows[0::2] = self.col_a
+        rows[1::2] = self.col_b
+        return start, rows
+
+
+Model = AssignmentModel | TripPackingModel | PairingModel
+
+
+# ------------------------------------------------------------------ solutions
+@dataclass(frozen=True)
+class Solution:
+    """What a backend returns: chosen columns plus status, bound and timings.
+
+    ``objective`` and ``bound`` are in model units (``Σ values[chosen]``);
+    ``gap`` is relative, ``(bound - objective) / max(1, |objective|)``, when a
+    bound is known.  Times are seconds: building the solver's own model,
+    solving, and reading the answer back.
+    """
+
+    chosen: np.ndarray
+    objective: float
+    status: Status
+    backend: str
+    bound: float | None = None
+    gap: float | None = None
+    build_s: float = 0.0
+    solve_s: float = 0.0
+    extract_s: float = 0.0
+    message: str = ""
+
+    @property
+    def total_s(self) -> float:
+        return self.build_s + self.solve_s + self.extract_s
+
+    @property
+    def cardinality(self) -> int:
+        return int(len(self.chosen))
+
+    def objective_m(self, model: _Model) -> float:
+        return self.objective * model.unit_m
+
+
+def make_solution(model: _Model, chosen, status: Status, backend: str, **kw) -> Solution:
+    """A :class:`Solution` with ``chosen`` sorted and the objective recomputed from the model.
+
+    Backends use this so the reported objective is always Σ values[chosen]
+    exactly, never a solver's floating-point echo of it.
+    """
+    chosen = np.unique(np.asarray(chosen, dtype=np.int64))
+    return Solution(chosen=chosen, objective=model.objective_of(chosen), status=status, backend=backend, **kw)
+
+
+def empty_solution(model: _Model, backend: str) -> Solution:
+    """The optimal solution of a model with no columns (nothing to decide)."""
+    return make_solution(model, np.zeros(0, np.int64), Status.OPTIMAL, backend, bound=0.0, gap=0.0)

@@ -1,0 +1,83 @@
+"""Where rpbench finds its data folder, its cache and its checkout.
+
+Data folder precedence (DESIGN.md "Data"): ``--data DIR``, else the
+``RPBENCH_DATA`` environment variable, else ``../shared/data/haikou`` next to
+the checkout (tried beside the current directory first, then beside the
+source tree when rpbench runs from a checkout).  Nothing here assumes which
+days exist in the folder.
+
+The cache (all-pairs distances, predictions) lives in the user cache
+directory, never in the repository; ``RPBENCH_CACHE`` overrides it.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from platformdirs import user_cache_dir
+
+from .exceptions import DataNotFoundError
+
+DATA_ENV = "RPBENCH_DATA"
+CACHE_ENV = "RPBENCH_CACHE"
+_RELATIVE_DEFAULT = Path("..") / "shared" / "data" / "haikou"
+
+
+def source_root() -> Path:
+    """The folder holding the ``rpbench`` package (the checkout, when run from one)."""
+    return Path(__file__).resolve().parent.parent
+
+
+def default_data_candidates() -> list[Path]:
+    """Folders tried, in order, when neither ``--data`` nor the env var is set."""
+    candidates = [Path.cwd() / _RELATIVE_DEFAULT, source_root() / _RELATIVE_DEFAULT]
+    unique: list[Path] = []
+    for c in candidates:
+        c = c.resolve()
+        if c not in unique:
+            unique.append(c)
+    return unique
+
+
+def find_data_dir(explicit: str | os.PathLike | None = None) -> Path | None:
+    """Return the data folder to use, or ``None`` when no folder exists.
+
+    An explicit folder (argument or env var) that does not exist is an
+    error, not a silent fall-back: the user asked for it by name.
+    """
+    if explicit is not None:
+        path = Path(explicit).expanduser()
+        if not path.is_dir():
+            raise DataNotFoundError(f"data folder {str(path)!r} (from --data) does not exist; "
+                                    "point --data at the Haikou data folder")
+        return path.resolve()
+    env = os.environ.get(DATA_ENV)
+    if env:
+        path = Path(env).expanduser()
+        if not path.is_dir():
+            raise DataNotFoundError(f"data folder {env!r} (from ${DATA_ENV}) does not exist; "
+                                    f"unset {DATA_ENV} or point it at the Haikou data folder")
+        return path.resolve()
+    for candidate in default_data_candidates():
+        if candidate.is_dir():
+            return candidate
+    return None
+
+
+def require_data_dir(explicit: str | os.PathLike | None = None, *, what: str = "this scenario") -> Path:
+    """Like :func:`find_data_dir` but raise a clear error when nothing is found."""
+    found = find_data_dir(explicit)
+    if found is None:
+        tried = ", ".join(str(c) for c in default_data_candidates())
+        raise DataNotFoundError(f"no Haikou data folder found for {what} (tried {tried}); "
+                                f"pass --data DIR or set ${DATA_ENV}")
+    return found
+
+
+def cache_dir() -> Path:
+    """The user cache directory for derived data (created on demand)."""
+    root = os.environ.get(CACHE_ENV) or user_cache_dir("rpbench", appauthor=False)
+    path = Path(root).expanduser()
+    path.mkdir(parents=True, exist_ok=True)
+    return path

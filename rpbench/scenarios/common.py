@@ -1,0 +1,100 @@
+"""Pieces shared by the scenario generators: cached networks, seeded draws, fleets."""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+
+from ..data import read_haikou_network, read_predecessor_network
+from ..exceptions import ParameterError
+from ..network import RoadNetwork
+from ..scenario import Fleet, Orders, Params
+
+FLEET_PLACEMENTS = ("order_origins", "random_nodes")
+
+
+@lru_cache(maxsize=4)
+def haikou_network(data_dir: Path) -> RoadNetwork:
+    """The authors' Haikou network (read once per process and data folder)."""
+    return RoadNetwork.from_tables(read_haikou_network(data_dir))
+
+
+@lru_cache(maxsize=4)
+def predecessor_network(data_dir: Path) -> RoadNetwork:
+    """The TR-B 2021 network of the 2017-07-01 trace."""
+    return RoadNetwork.from_tables(read_predecessor_network(data_dir))
+
+
+class Streams:
+    """Independent seeded random streams, one per purpose.
+
+    Changing how one thing is drawn (say, fleet placement) never changes
+    another (the sampled orders) for the same seed.
+    """
+
+    NAMES = ("sample", "times", "od", "patience", "fleet")
+
+    def __init__(self, seed: int):
+        children = np.random.SeedSequence(int(seed)).spawn(len(self.NAMES))
+        self._rng = {name: np.random.default_rng(s) for name, s in zip(self.NAMES, children)}
+
+    def __getattr__(self, name: str) -> np.random.Generator:
+        try:
+            return self._rng[name]
+        except KeyError:
+            raise AttributeError(name) from None
+
+
+def check_sample(sample: float) -> float:
+    if not isinstance(sample, (int, float, np.floating)) or not (0 < float(sample) <= 1):
+        raise ParameterError(f"--sample {sample!r} must lie in (0, 1] (1.0 = every order)")
+    return float(sample)
+
+
+def check_seed(seed: int) -> int:
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ParameterError(f"--seed {seed!r} must be a non-negative integer")
+    return int(seed)
+
+
+def draw_patience(rng: np.random.Generator, n: int, params: Params) -> np.ndarray:
+    """K_p ~ N(mean, sd) floored at ``patience_floor_s`` (paper §4.1, SEED-CODE floor)."""
+    k = rng.normal(params.patience_mean_s, params.patience_sd_s, size=n)
+    return np.maximum(k, params.patience_floor_s)
+
+
+def make_orders(order_id, request_s, origin, destination, patience_s) -> Orders:
+    """Orders sorted by (request time, id)."""
+    order = np.lexsort((np.asarray(order_id), np.asarray(request_s)))
+    return Orders(order_id=np.asarray(order_id, dtype=np.int64)[order],
+                  request_s=np.asarray(request_s, dtype=np.float64)[order],
+                  origin=np.asarray(origin, dtype=np.int32)[order],
+                  destination=np.asarray(destination, dtype=np.int32)[order],
+                  patience_s=np.asarray(patience_s, dtype=np.float64)[order])
+
+
+def fleet_size(n_orders: int, params: Params) -> int:
+    """Vehicles for ``n_orders`` at the order-driver ratio (at least one)."""
+    return max(1, int(round(n_orders * params.vehicles_per_100_orders / 100.0)))
+
+
+def place_fleet(rng: np.random.Generator, n_vehicles: int, placement: str, origins: np.ndarray,
+                n_nodes: int) -> np.ndarray:
+    """Initial vehicle nodes: random order origins (default) or random nodes."""
+    if placement == "order_origins" and len(origins):
+        return rng.choice(origins, size=n_vehicles, replace=True).astype(np.int32)
+    if placement in FLEET_PLACEMENTS:
+        return rng.integers(0, n_nodes, size=n_vehicles).astype(np.int32)
+    raise ParameterError(f"fleet placement {placement!r} unknown; expected one of {', '.join(FLEET_PLACEMENTS)}")
+
+
+def hourly_fleet(rng: np.random.Generator, orders_per_hour: np.ndarray, params: Params, placement: str,
+                 origins: np.ndarray, n_nodes: int) -> Fleet:
+    """A fleet whose on-duty count follows hourly demand at the order-driver ratio."""
+    counts = np.array([fleet_size(int(n), params) if n > 0 else 0 for n in orders_per_hour], dtype=np.int64)
+    n_vehicles = max(1, int(counts.max()))
+    return Fleet(initial_node=place_fleet(rng, n_vehicles, placement, origins, n_nodes),
+                 online_times_s=np.arange(len(counts), dtype=np.float64) * 3600.0,
+                 online_count=counts)

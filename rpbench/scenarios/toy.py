@@ -1,0 +1,83 @@
+"""``toy``: a small synthetic city generated in code (no data needed).
+
+A ``size x size`` two-way grid with block lengths of 500 m stretched by a
+seeded factor in [1, 1.2) (so road distance is never shorter than the
+straight line), placed near Haikou's coordinates for plotting.  One hour of
+demand: ``round(sample * 400)`` requests at uniform times; 60 % of origins
+come from three "residential" hot spots and 60 % of destinations go to two
+"business" hot spots, so there is something to pool.  It is rpbench's
+built-in default when no data folder exists and the fixture of fast tests.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..data.road import NetworkTables
+from ..exceptions import ParameterError
+from ..network import RoadNetwork
+from ..scenario import Fleet, Params, Scenario
+from .common import (Streams, check_sample, check_seed, draw_patience, fleet_size, make_orders, place_fleet)
+
+BLOCK_M = 500.0
+BASE_ORDERS = 400
+_LON0, _LAT0 = 110.30, 19.98
+_M_PER_DEG_LAT = 110_540.0
+
+
+def grid_network(size: int = 12, seed: int = 0) -> RoadNetwork:
+    """A seeded ``size x size`` two-way grid (node ids ``0..size²-1``)."""
+    if not isinstance(size, (int, np.integer)) or size < 2:
+        raise ParameterError(f"toy grid size {size!r} must be an integer >= 2")
+    rng = np.random.default_rng(np.random.SeedSequence([int(seed), 7]))
+    ids = np.arange(size * size)
+    row, col = np.divmod(ids, size)
+    right = ids[col < size - 1]
+    down = ids[row < size - 1]
+    a = np.concatenate([right, down])
+    b = np.concatenate([right + 1, down + size])
+    length = BLOCK_M * (1.0 + 0.2 * rng.random(len(a)))
+    m_per_deg_lon = _M_PER_DEG_LAT * np.cos(np.radians(_LAT0))
+    tables = NetworkTables(
+        name=f"toy-grid-{size}", node_id=ids, lon=_LON0 + col * BLOCK_M / m_per_deg_lon,
+        lat=_LAT0 + row * BLOCK_M / _M_PER_DEG_LAT, arc_from=np.concatenate([a, b]),
+        arc_to=np.concatenate([b, a]), arc_length_m=np.concatenate([length, length]),
+        arc_link_id=np.concatenate([np.arange(len(a))] * 2), source="generated in code")
+    return RoadNetwork.from_tables(tables)
+
+
+def _hotspot_nodes(rng: np.random.Generator, centres: np.ndarray, share: float, n: int, size: int) -> np.ndarray:
+    """Nodes near a random hot spot (with probability ``share``) or uniform."""
+    uniform = rng.integers(0, size * size, size=n)
+    centre = centres[rng.integers(0, len(centres), size=n)]
+    r, c = np.divmod(centre, size)
+    r = np.clip(r + np.rint(rng.normal(0, 1.2, size=n)).astype(int), 0, size - 1)
+    c = np.clip(c + np.rint(rng.normal(0, 1.2, size=n)).astype(int), 0, size - 1)
+    return np.where(rng.random(n) < share, r * size + c, uniform)
+
+
+def build_toy(*, sample: float = 1.0, seed: int = 0, params: Params | None = None, size: int = 12,
+              fleet_placement: str = "order_origins", data_dir=None, date: str | None = None) -> Scenario:
+    params = params or Params()
+    sample, seed = check_sample(sample), check_seed(seed)
+    network = grid_network(size, seed=0)  # the city stays the same across seeds; demand varies
+    rng = Streams(seed)
+    n = int(round(sample * BASE_ORDERS))
+    homes = np.array([1 * size + 1, (size - 2) * size + 2, (size // 2) * size + size - 2])
+    work = np.array([(size // 2) * size + size // 2, 2 * size + size - 3])
+    origin = _hotspot_nodes(rng.od, homes, 0.6, n, size)
+    destination = _hotspot_nodes(rng.od, work, 0.6, n, size)
+    same = origin == destination
+    destination[same] = (destination[same] + size + 1) % (size * size)
+    orders = make_orders(np.arange(n), np.sort(rng.times.uniform(0, 3600.0, size=n)), origin, destination,
+                         draw_patience(rng.patience, n, params))
+    fleet = Fleet(initial_node=place_fleet(rng.fleet, fleet_size(n, params), fleet_placement,
+                                           orders.origin, network.n_nodes))
+    return Scenario(
+        name="toy",
+        label=f"SYNTHETIC toy city ({size}x{size} grid, {n} orders in one hour, seed {seed})",
+        network=network, orders=orders, fleet=fleet, params=params, seed=seed, horizon_s=3600.0,
+        start_time="2017-05-01T08:00:00", synthetic=True,
+        provenance={"source": "generated in code (rpbench.scenarios.toy)", "sample": sample, "size": size,
+                    "fleet_placement": fleet_placement},
+    )
