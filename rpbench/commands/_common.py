@@ -7,8 +7,7 @@ import json
 import sys
 from typing import Any
 
-import numpy as np
-
+from ..results import to_jsonable
 from ..scenario import Params
 
 
@@ -54,18 +53,6 @@ def parse_param_overrides(items: list[str]) -> dict[str, float]:
 def scenario_kwargs(args: argparse.Namespace) -> dict[str, Any]:
     return dict(data_dir=args.data, date=args.date, sample=args.sample, seed=args.seed,
                 param_overrides=parse_param_overrides(args.param), fleet_placement=args.fleet_placement)
-
-
-def to_jsonable(obj: Any) -> Any:
-    if isinstance(obj, dict):
-        return {str(k): to_jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [to_jsonable(v) for v in obj]
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, float) and not np.isfinite(obj):
-        return None
-    return obj
 
 
 def print_json(obj: Any) -> None:

@@ -1,0 +1,182 @@
+"""Scenario x strategies x preset -> one results folder.
+
+:func:`simulate_strategy` runs one strategy and derives its KPIs from the
+event log (:mod:`rpbench.metrics`); :func:`run_comparison` runs several on
+the same scenario and writes a results folder (:mod:`rpbench.results`)
+with a report.  The offline oracles join the comparison as runs named
+``oracle1``/``oracle2``.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from . import metrics, results
+from .exceptions import ParameterError
+from .report import write_report
+from .scenario import Scenario
+from .sim import SimResult, Simulator
+from .solver_presets import Preset, load_preset
+from .strategies import REGISTRY as STRATEGY_REGISTRY
+from .strategies import make_strategy
+
+ORACLES = ("oracle1", "oracle2")
+
+
+@dataclass
+class StrategyRun:
+    """One strategy's simulation with its KPIs."""
+
+    name: str
+    sim: SimResult
+    passengers: pd.DataFrame
+    kpis: dict[str, float]
+    hourly: pd.DataFrame
+    options: dict[str, Any] = field(default_factory=dict)
+
+
+def parse_strategies(text: str | list[str]) -> list[str]:
+    names = [s.strip().lower() for s in (text.split(",") if isinstance(text, str) else text) if s.strip()]
+    known = list(STRATEGY_REGISTRY) + list(ORACLES)
+    unknown = [n for n in names if n not in known]
+    if unknown or not names:
+        raise ParameterError(f"unknown strategy {unknown[0] if unknown else '(none)'!r}; "
+                             f"choose from {', '.join(known)}")
+    if len(set(names)) != len(names):
+        raise ParameterError(f"strategy list {','.join(names)} names a strategy twice")
+    return names
+
+
+def progress_bar(scenario: Scenario, label: str, enabled: bool | None):
+    """A tqdm bar over simulated seconds on stderr (off when stderr is not a terminal)."""
+    if enabled is None:
+        enabled = sys.stderr.isatty()
+    if not enabled:
+        return None
+    from tqdm import tqdm
+    return tqdm(total=scenario.horizon_s, desc=f"{label:>6}", unit="sim s", leave=False, file=sys.stderr,
+                bar_format="{desc} {percentage:3.0f}%|{bar}| {n:.0f}/{total:.0f} sim s [{elapsed}<{remaining}]")
+
+
+def simulate_strategy(scenario: Scenario, name: str, preset: Preset, *, options: dict[str, Any] | None = None,
+                      progress: bool | None = None, canonical_ties: bool = True) -> StrategyRun:
+    """Simulate one strategy and compute its KPIs from the event log."""
+    strategy = make_strategy(name, **(options or {}))
+    backend = preset.make_backend()
+    if not backend.supports(strategy.structure):
+        raise ParameterError(f"solver preset {preset.name!r} (backend {preset.backend!r}) does not solve "
+                             f"{strategy.structure.value} models exactly, which strategy {name!r} needs; "
+                             "choose another --solver")
+    bar = progress_bar(scenario, name, progress)
+    try:
+        sim = Simulator(scenario, strategy, backend, preset.options, canonical_ties=canonical_ties,
+                        progress=bar).run()
+    finally:
+        if bar is not None:
+            bar.close()
+    return evaluate(scenario, sim, name, options or {})
+
+
+def evaluate(scenario: Scenario, sim: SimResult, name: str, options: dict[str, Any]) -> StrategyRun:
+    orders = scenario.orders
+    solo = scenario.network.distances()(orders.origin, orders.destination)
+    tab = metrics.passenger_table(sim.events, solo, orders.request_s, sim.trajectories)
+    occupied = metrics.occupied_distance_m(sim.events, sim.trajectories)
+    kpis = metrics.kpis(tab, occupied, scenario.params)
+    kpis["wall_s"] = sim.wall_s
+    return StrategyRun(name=name, sim=sim, passengers=tab, kpis=kpis, hourly=metrics.hourly(tab), options=options)
+
+
+def run_comparison(scenario: Scenario, strategies: list[str], preset_name: str, *, out: str | Path | None = None,
+                   strategy_options: dict[str, dict[str, Any]] | None = None, progress: bool | None = None,
+                   scenario_args: dict[str, Any] | None = None, command: str | None = None) -> tuple[Path, pd.DataFrame]:
+    """Run every strategy (and oracle) on ``scenario`` and write one results folder."""
+    preset = load_preset(preset_name)
+    strategy_options = strategy_options or {}
+    runs: list[StrategyRun] = []
+    oracle_results = {}
+    for name in strategies:
+        if name in ORACLES:
+            continue
+        runs.append(simulate_strategy(scenario, name, preset, options=strategy_options.get(name), progress=progress))
+    for name in strategies:
+        if name in ORACLES:
+            from .oracle import solve_oracle_for_harness
+            oracle_results[name] = solve_oracle_for_harness(scenario, name, preset)
+    table = kpi_table(runs, oracle_results, strategies)
+    stamp = results.timestamp()
+    default = f"{stamp}_{scenario.name}_{preset.name}"
+    with results.new_results_folder(out, default) as (folder, final):
+        write_folder(folder, scenario, runs, oracle_results, preset, strategies, scenario_args or {}, command)
+        write_report(folder, name=final.name)
+    return final, table
+
+
+def kpi_table(runs: list[StrategyRun], oracle_results: dict, order: list[str]) -> pd.DataFrame:
+    """Wide table: KPI rows x run columns (in the requested order), with the competitive ratio."""
+    cols = {r.name: r.kpis for r in runs}
+    for name, res in oracle_results.items():
+        cols[name] = res.kpis()
+    frame = pd.DataFrame({name: cols[name] for name in order if name in cols})
+    if "oracle1" in frame.columns and "total_saving_km" in frame.index:
+        best = frame.loc["total_saving_km", "oracle1"]
+        frame.loc["competitive_ratio"] = frame.loc["total_saving_km"] / best if best else np.nan
+    return frame
+
+
+def write_folder(folder: Path, scenario: Scenario, runs: list[StrategyRun], oracle_results: dict, preset: Preset,
+                 strategies: list[str], scenario_args: dict[str, Any], command: str | None) -> None:
+    orders = scenario.orders
+    solo = scenario.network.distances()(orders.origin, orders.destination)
+    pd.DataFrame({"order_id": orders.order_id, "request_s": orders.request_s, "origin": orders.origin,
+                  "destination": orders.destination, "patience_s": orders.patience_s, "solo_m": solo}
+                 ).to_csv(folder / "orders.csv.gz", index=False)
+    results.save_network(folder / "network.npz", scenario.network)
+    pd.DataFrame({"vehicle": np.arange(len(scenario.fleet)), "initial_node": scenario.fleet.initial_node}
+                 ).to_csv(folder / "fleet.csv.gz", index=False)
+    tidy, rounds, hourly = [], [], []
+    meta_runs = {}
+    for r in runs:
+        d = folder / "runs" / r.name
+        d.mkdir(parents=True)
+        r.sim.events.to_csv(d / "events.csv.gz", index=False)
+        results.save_trajectories(d / "trajectories.npz", r.sim.trajectories)
+        tidy += [{"run": r.name, "kpi": k, "value": v} for k, v in r.kpis.items()]
+        rounds.append(r.sim.rounds.assign(run=r.name))
+        hourly.append(r.hourly.assign(run=r.name))
+        meta_runs[r.name] = {"kind": "simulation", "options": r.options, "wall_s": r.sim.wall_s,
+                             "end_s": r.sim.end_s, "rounds_solved": int(len(r.sim.rounds))}
+    for name, res in oracle_results.items():
+        d = folder / "runs" / name
+        d.mkdir(parents=True)
+        res.pairs_frame().to_csv(d / "pairs.csv.gz", index=False)
+        tidy += [{"run": name, "kpi": k, "value": v} for k, v in res.kpis().items()]
+        meta_runs[name] = {"kind": "oracle", **res.meta()}
+    pd.DataFrame(tidy).to_csv(folder / "kpis.csv", index=False)
+    if rounds:
+        pd.concat(rounds, ignore_index=True).to_csv(folder / "rounds.csv.gz", index=False)
+    if hourly:
+        pd.concat(hourly, ignore_index=True).to_csv(folder / "hourly.csv", index=False)
+    meta = {
+        "rpbench_results": 1,
+        "command": command,
+        "scenario": {"name": scenario.name, "label": scenario.label, "synthetic": scenario.synthetic,
+                     "args": scenario_args, "seed": scenario.seed, "start_time": scenario.start_time,
+                     "horizon_s": scenario.horizon_s, "provenance": scenario.provenance,
+                     "summary": {k: v for k, v in scenario.summary().items() if k != "params"},
+                     "network_hash": scenario.network.content_hash},
+        "params": scenario.params.as_dict(),
+        "preset": preset.as_dict(),
+        "strategies": strategies,
+        "runs": meta_runs,
+        **results.environment(),
+        "written": time.strftime("%Y-%m-%dT%H:%M:%S"),
+    }
+    results.write_json(folder / "meta.json", meta)

@@ -1,0 +1,44 @@
+"""Dispatching strategies and their registry.
+
+A strategy turns a read-only :class:`~rpbench.strategies.base.RoundState`
+into a solver-agnostic :class:`~rpbench.strategies.base.RoundModel`; the
+simulator solves and commits it.  To add a formulation, write one module
+with a :class:`~rpbench.strategies.base.Strategy` subclass and register its
+name here.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+from ..exceptions import ParameterError
+from .base import Kind, RoundModel, RoundState, Strategy
+
+#: Strategy name -> "module:Class" (modules under rpbench.strategies).
+REGISTRY: dict[str, str] = {
+    "np": "myopic:NonPooling",
+    "mb": "myopic:MyopicBatch",
+    "rtv": "rtv:RTV",
+    "fl-nd": "forward:ForwardLookingNoDelay",
+    "fl": "forward:ForwardLooking",
+}
+
+#: The paper's column order in Table 2.
+PAPER_ORDER = ("np", "mb", "rtv", "fl", "fl-nd")
+
+
+def strategy_class(name: str) -> type[Strategy]:
+    target = REGISTRY.get(name)
+    if target is None:
+        raise ParameterError(f"unknown strategy {name!r}; known strategies: {', '.join(REGISTRY)}")
+    module_name, class_name = target.split(":")
+    return getattr(importlib.import_module(f"{__name__}.{module_name}"), class_name)
+
+
+def make_strategy(name: str, **options: Any) -> Strategy:
+    return strategy_class(name)(**options)
+
+
+__all__ = ["Kind", "PAPER_ORDER", "REGISTRY", "RoundModel", "RoundState", "Strategy", "make_strategy",
+           "strategy_class"]

@@ -1,0 +1,130 @@
+"""What a dispatching strategy sees and what it returns.
+
+The simulator knows a strategy only through :class:`Strategy`: once per
+batch round it hands over a read-only :class:`RoundState` and gets back a
+:class:`RoundModel` — a solver-agnostic model plus, per column, the decision
+it stands for.  A strategy never calls a solver; the simulator solves the
+model with the chosen preset and commits the chosen columns.  Adding a
+formulation is therefore one new module with one class.
+"""
+
+from __future__ import annotations
+
+import enum
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+
+from ..model import AssignmentModel, Structure, TripPackingModel
+from ..scenario import Params, Scenario
+
+
+class Kind(enum.IntEnum):
+    """What a chosen column means."""
+
+    WAIT = 0      # keep the passenger waiting this round
+    VACANT = 1    # a vacant vehicle (V0) picks the passenger up
+    JOIN = 2      # the passenger joins a partially occupied vehicle (V1)
+    TRIP2 = 3     # a vacant vehicle picks up two waiting passengers (RTV size-2 trip)
+
+
+@dataclass(frozen=True, eq=False)
+class RoundState:
+    """A read-only snapshot of one batch round (arrays indexed per passenger / vehicle).
+
+    Passengers are the waiting (revealed, unassigned, not cancelled) orders.
+    ``V0`` are on-duty vacant vehicles at ``v0_pre_m`` metres before node
+    ``v0_node`` (pick-up distance = pre + l(node, o_p)).  ``V1`` are on-duty
+    vehicles with exactly one unpaired passenger A; the pair geometry of
+    ALGORITHMS.md §1.1 is ``h = v1_node``, ``δ = v1_delta_m``, ``pre =
+    v1_pre_m`` (for A not yet picked up: h = o_A, δ = 0, pre = 0, A14).
+    """
+
+    t_s: float
+    params: Params
+    dist: np.ndarray                 # all-pairs shortest distances (m)
+    # waiting passengers
+    p_order: np.ndarray              # scenario order index
+    p_origin: np.ndarray
+    p_destination: np.ndarray
+    p_solo_m: np.ndarray
+    p_request_s: np.ndarray
+    p_rounds_waited: np.ndarray      # k_p = ceil((t - t_req) / Δt), >= 1 (A10)
+    # vacant vehicles V0
+    v0_vehicle: np.ndarray
+    v0_node: np.ndarray
+    v0_pre_m: np.ndarray
+    # partially occupied vehicles V1
+    v1_vehicle: np.ndarray
+    v1_node: np.ndarray
+    v1_delta_m: np.ndarray
+    v1_pre_m: np.ndarray
+    v1_order: np.ndarray             # passenger A's order index
+    v1_origin: np.ndarray
+    v1_destination: np.ndarray
+    v1_solo_m: np.ndarray
+    v1_onboard: np.ndarray           # bool: A already picked up
+
+    @property
+    def n_passengers(self) -> int:
+        return len(self.p_order)
+
+    @property
+    def n_v0(self) -> int:
+        return len(self.v0_vehicle)
+
+    @property
+    def n_v1(self) -> int:
+        return len(self.v1_vehicle)
+
+
+@dataclass(frozen=True, eq=False)
+class RoundModel:
+    """A strategy's model for one round and the decision behind each column.
+
+    Per column: ``kind`` (:class:`Kind`), ``vehicle`` (simulator vehicle id,
+    -1 for WAIT), ``first``/``second`` (order indices: the single passenger,
+    or for TRIP2 the one picked up first and second; ``second = -1``
+    otherwise), ``fofo`` (pairs: the passenger already in / picked up first
+    is dropped first), ``utility_m`` (the unquantised value) and
+    ``pickup_m`` (pick-up distance of the new passenger).
+    """
+
+    model: AssignmentModel | TripPackingModel
+    kind: np.ndarray
+    vehicle: np.ndarray
+    first: np.ndarray
+    second: np.ndarray
+    fofo: np.ndarray
+    utility_m: np.ndarray
+    pickup_m: np.ndarray
+
+    def __post_init__(self) -> None:
+        n = self.model.n_cols
+        for name in ("kind", "vehicle", "first", "second", "fofo", "utility_m", "pickup_m"):
+            if len(getattr(self, name)) != n:
+                raise ValueError(f"RoundModel.{name} has {len(getattr(self, name))} entries for {n} columns")
+
+
+class Strategy(ABC):
+    """A dispatching formulation.  Subclasses set ``name`` and implement :meth:`build`."""
+
+    name: ClassVar[str]
+    structure: ClassVar[Structure]
+    description: ClassVar[str] = ""
+
+    def __init__(self, **options: Any):
+        self.options = options
+
+    def prepare(self, scenario: Scenario) -> None:
+        """Called once before the first round (e.g. to load predictions)."""
+
+    @abstractmethod
+    def build(self, state: RoundState) -> RoundModel:
+        """Build this round's model from the state."""
+
+    def describe(self) -> dict[str, Any]:
+        """Options as recorded in a results folder's meta.json."""
+        return {"name": self.name, "structure": self.structure.value, "options": dict(self.options)}

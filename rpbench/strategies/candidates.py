@@ -1,0 +1,103 @@
+"""Feasible passenger-vehicle options of a round, and the assignment model built from them.
+
+Shared by every strategy of the paper's batch-matching family (NP, MB,
+FL-no_delay, FL): they differ only in the utility they put on the same
+feasible options (paper §2, Eqs. 1-4; pairing conditions of §2.1):
+
+* vacant option (p, v ∈ V0): pick-up ``pk = pre_v + l(node_v, o_p) <= R̄``;
+* join option (p, v ∈ V1 carrying A): ``POOL(A, p, h, δ, pre)`` feasible
+  (ALGORITHMS.md §1.1: pick-up <= R̄, both detours <= D̄).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..geometry import TOLERANCE_M, pair_geometry, choose_order
+from ..model import AssignmentModel, quantize
+from .base import Kind, RoundModel, RoundState
+
+#: Utility of keeping a passenger waiting when the strategy has no waiting
+#: option (MB, FL-no_delay, NP): -M with M = 10^6 m, so a passenger is
+#: assigned whenever any vehicle is feasible (ALGORITHMS.md A13).
+NO_WAIT_UTILITY_M = -1e6
+VALUE_UNIT_M = 1e-3  # utilities enter the model in millimetres
+
+
+@dataclass(frozen=True)
+class VacantOptions:
+    p: np.ndarray          # passenger position in the state
+    v: np.ndarray          # position in the state's V0 arrays
+    pickup_m: np.ndarray
+
+
+@dataclass(frozen=True)
+class JoinOptions:
+    p: np.ndarray
+    v: np.ndarray          # position in the state's V1 arrays
+    pickup_m: np.ndarray
+    saving_m: np.ndarray   # e(v_p', p), Eq. (5)
+    fofo: np.ndarray
+
+    @classmethod
+    def empty(cls) -> "JoinOptions":
+        none = np.zeros(0, np.int64)
+        return cls(none, none, np.zeros(0), np.zeros(0), np.zeros(0, bool))
+
+
+def vacant_options(state: RoundState) -> VacantOptions:
+    """Every (waiting passenger, vacant vehicle) pair within R̄."""
+    if state.n_passengers == 0 or state.n_v0 == 0:
+        empty = np.zeros(0, np.int64)
+        return VacantOptions(empty, empty, np.zeros(0))
+    pk = state.v0_pre_m[None, :] + state.dist[state.v0_node[None, :], state.p_origin[:, None]]
+    p, v = np.nonzero(pk <= state.params.max_pickup_m + TOLERANCE_M)
+    return VacantOptions(p, v, pk[p, v])
+
+
+def join_options(state: RoundState, order_rule: str = "min_feasible") -> JoinOptions:
+    """Every (waiting passenger, partially occupied vehicle) pair that POOL accepts."""
+    if state.n_passengers == 0 or state.n_v1 == 0:
+        return JoinOptions.empty()
+    p, v = (a.ravel() for a in np.meshgrid(np.arange(state.n_passengers), np.arange(state.n_v1), indexing="ij"))
+    # Cheap pick-up filter first: most pairs fail R̄.
+    pk = state.v1_pre_m[v] + state.dist[state.v1_node[v], state.p_origin[p]]
+    near = pk <= state.params.max_pickup_m + TOLERANCE_M
+    p, v = p[near], v[near]
+    g = pair_geometry(state.dist, state.v1_origin[v], state.v1_destination[v], state.v1_solo_m[v],
+                      state.p_origin[p], state.p_destination[p], state.p_solo_m[p],
+                      state.v1_node[v], state.v1_delta_m[v], state.v1_pre_m[v], state.params.max_detour_m)
+    r = choose_order(g, state.params.max_pickup_m, order_rule)
+    ok = r.feasible
+    return JoinOptions(p[ok], v[ok], r.pk[ok], r.saving[ok], r.fofo[ok])
+
+
+def assignment_round(state: RoundState, vac: VacantOptions, vac_utility_m: np.ndarray, join: JoinOptions,
+                     join_utility_m: np.ndarray, wait_utility_m: np.ndarray, *, name: str) -> RoundModel:
+    """Assemble the round's AssignmentModel (Eq. 1-4 / 16) and its column decoding.
+
+    Columns are ordered by passenger, then vacant vehicles, then partially
+    occupied vehicles (each by vehicle id), then the keep-waiting option:
+    a deterministic order the tie canonicalisation relies on.  Model
+    vehicle rows are V0 (state order) followed by V1.
+    """
+    n_p = state.n_passengers
+    wait_p = np.arange(n_p)
+    passenger = np.concatenate([vac.p, join.p, wait_p])
+    model_vehicle = np.concatenate([vac.v, state.n_v0 + join.v, np.full(n_p, -1)])
+    sim_vehicle = np.concatenate([state.v0_vehicle[vac.v], state.v1_vehicle[join.v], np.full(n_p, -1)])
+    kind = np.concatenate([np.full(len(vac.p), Kind.VACANT), np.full(len(join.p), Kind.JOIN),
+                           np.full(n_p, Kind.WAIT)]).astype(np.int8)
+    utility = np.concatenate([vac_utility_m, join_utility_m, wait_utility_m]).astype(np.float64)
+    pickup = np.concatenate([vac.pickup_m, join.pickup_m, np.full(n_p, np.nan)])
+    fofo = np.concatenate([np.zeros(len(vac.p), bool), join.fofo, np.zeros(n_p, bool)])
+    # Deterministic column order: passenger, kind (vacant < join < wait), vehicle id.
+    order = np.lexsort((sim_vehicle, kind, passenger))
+    model = AssignmentModel(n_p, state.n_v0 + state.n_v1, passenger[order], model_vehicle[order],
+                            quantize(utility[order], VALUE_UNIT_M), unit_m=VALUE_UNIT_M, name=name)
+    first = state.p_order[passenger[order]]
+    return RoundModel(model=model, kind=kind[order], vehicle=sim_vehicle[order], first=first,
+                      second=np.full(len(order), -1, dtype=np.int64), fofo=fofo[order],
+                      utility_m=utility[order], pickup_m=pickup[order])

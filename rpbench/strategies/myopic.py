@@ -1,0 +1,41 @@
+"""NP and MB: the paper's non-pooling and myopic batch strategies (§2.2, §4).
+
+* **NP** — passengers are matched to vacant vehicles only, utility
+  ``-l^pk(v, o_p)``.
+* **MB** — paper Eq. (7): ``-l^pk`` for a vacant vehicle, ``e(v_p', p) - l^pk``
+  for a partially occupied one (every pair the pairing conditions accept).
+
+Neither keeps a passenger waiting on purpose: the keep-waiting option gets
+``-10^6 m`` (A13), so it is chosen only when no vehicle is feasible.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..model import Structure
+from .base import RoundModel, RoundState, Strategy
+from .candidates import NO_WAIT_UTILITY_M, JoinOptions, assignment_round, join_options, vacant_options
+
+
+class NonPooling(Strategy):
+    name = "np"
+    structure = Structure.ASSIGNMENT
+    description = "non-pooling: vacant vehicles only, minimise pick-up distance"
+
+    def build(self, state: RoundState) -> RoundModel:
+        vac = vacant_options(state)
+        return assignment_round(state, vac, -vac.pickup_m, JoinOptions.empty(), np.zeros(0),
+                                np.full(state.n_passengers, NO_WAIT_UTILITY_M), name="np")
+
+
+class MyopicBatch(Strategy):
+    name = "mb"
+    structure = Structure.ASSIGNMENT
+    description = "myopic batch matching, paper Eq. (7)"
+
+    def build(self, state: RoundState) -> RoundModel:
+        vac = vacant_options(state)
+        join = join_options(state, self.options.get("order_rule", "min_feasible"))
+        return assignment_round(state, vac, -vac.pickup_m, join, join.saving_m - join.pickup_m,
+                                np.full(state.n_passengers, NO_WAIT_UTILITY_M), name="mb")

@@ -1,0 +1,55 @@
+"""The command line: JSON contracts and one-line errors with exit status 2."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from rpbench.cli import main
+
+
+def run_cli(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_scenario_json_keys(capsys):
+    code, out, _ = run_cli(capsys, "scenario", "toy", "--json")
+    assert code == 0
+    summary = json.loads(out)
+    assert {"orders", "vehicles", "nodes"} <= set(summary)
+    assert summary["orders"] == 400 and summary["nodes"] == 144
+
+
+def test_scenario_haikou_peak_json(capsys, data_dir):
+    code, out, _ = run_cli(capsys, "scenario", "haikou-peak", "--date", "2017-05-01", "--json")
+    summary = json.loads(out)
+    assert (summary["orders"], summary["vehicles"], summary["nodes"]) == (605, 151, 3901)
+
+
+def test_scenario_text(capsys):
+    code, out, _ = run_cli(capsys, "scenario", "toy", "--sample", "0.5")
+    assert code == 0 and "orders" in out and "200" in out
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["scenario", "toy", "--sample", "0"], "--sample 0.0 must lie in (0, 1]"),
+    (["scenario", "toy", "--param", "dt_s=0"], "dt_s = 0.0 must be > 0"),
+    (["scenario", "toy", "--param", "speed_mps=-8"], "speed_mps = -8.0 must be > 0"),
+    (["scenario", "toy", "--param", "foo=1"], "expected NAME=VALUE"),
+    (["scenario", "nowhere"], "unknown scenario 'nowhere'"),
+    (["scenario", "haikou-peak", "--data", "/no/such/dir"], "does not exist"),
+])
+def test_bad_input_is_one_line_and_exit_2(capsys, argv, message):
+    code, out, err = run_cli(capsys, *argv)
+    assert code == 2
+    assert out == ""
+    assert err.count("\n") == 1 and err.startswith("rpbench: error: ")
+    assert message in err
+
+
+def test_date_without_file(capsys, fake_data):
+    code, _, err = run_cli(capsys, "scenario", "haikou-peak", "--data", str(fake_data), "--date", "2017-05-02")
+    assert code == 2 and "no peak-hour order file for 2017-05-02" in err
