@@ -1,0 +1,101 @@
+"""``rpbench oracle``: solve Oracle-1 / Oracle-2 over all orders of a scenario (ALGORITHMS.md §4)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+from ..exceptions import ParameterError
+from ..oracle import PairRules, check_variant, find_candidates, solve_oracle
+from ..scenarios import build_scenario, default_scenario_name
+from ._common import add_scenario_args, note, print_json, scenario_kwargs
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("oracle", help="solve the offline oracle (Oracle-1 max saving, Oracle-2 max pairs)",
+                       description="Solve the offline oracle over all orders of a scenario: Oracle-1 maximises "
+                                   "the total distance saving, Oracle-2 the number of pairs (ties by saving). "
+                                   "Pair feasibility follows ALGORITHMS.md §4.2; the saving is counted once "
+                                   "per pair.")
+    add_scenario_args(p)
+    p.add_argument("--variant", default="both", choices=("1", "2", "both"), help="which oracle (default both)")
+    p.add_argument("--solver", default="matching", metavar="PRESET",
+                   help="solver preset with an exact pairing backend (default matching)")
+    p.add_argument("--both-pickup-orders", action="store_true",
+                   help="also allow the later order to be picked up first (oracle_both_pickup_orders)")
+    p.add_argument("--pickup-check", action="store_true",
+                   help="require the pick-up distance to the second order <= R̄ (oracle_pickup_check)")
+    p.add_argument("--allow-enroute", action="store_true",
+                   help="also pair an order requested while the first one rides (oracle_allow_enroute)")
+    p.add_argument("--pairs", metavar="CSV", default=None, help="write the chosen pairs to this CSV file")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    variants = (1, 2) if args.variant == "both" else (check_variant(args.variant),)
+    name = args.scenario or default_scenario_name(args.data)
+    if args.scenario is None and name == "toy":
+        note("rpbench: no Haikou data folder found; using the built-in SYNTHETIC toy city (pass --data DIR)")
+    scenario = build_scenario(name, **scenario_kwargs(args))
+    rules = PairRules.from_params(scenario.params, both_pickup_orders=args.both_pickup_orders,
+                                  pickup_check=args.pickup_check, allow_enroute=args.allow_enroute)
+    candidates = find_candidates(scenario.network.distances(), scenario.orders, rules)
+    results = {v: solve_oracle(scenario, v, args.solver, candidates=candidates) for v in variants}
+    for v, r in results.items():
+        if r.status.value != "optimal":
+            note(f"rpbench: Oracle-{v} stopped with status {r.status.value} (gap {r.kpis()['gap']:.3g}); "
+                 "its value is not proven optimal")
+    if args.pairs:
+        _write_pairs(args.pairs, results)
+
+    if args.json:
+        print_json({"scenario": name, "label": scenario.label, "rules": rules.as_dict(),
+                    "candidates": {"evaluated": candidates.evaluated, "feasible": len(candidates),
+                                   **candidates.stats, "seconds": candidates.seconds},
+                    **{f"oracle{v}": r.kpis() for v, r in results.items()}})
+        return 0
+    print(scenario.label)
+    flags = [k for k in ("both_pickup_orders", "pickup_check", "allow_enroute") if getattr(rules, k)]
+    print(f"  pair rules: K̄={rules.planner_patience_s:g} s, D̄={rules.max_detour_m:g} m"
+          + (f", R̄={rules.max_pickup_m:g} m" if rules.pickup_check else ", no R̄ test")
+          + (f"; flags: {', '.join(flags)}" if flags else "; default flags (ALGORITHMS.md A18)"))
+    print(f"  candidates: {len(candidates):,} feasible of {candidates.evaluated:,} pairs in the time windows "
+          f"({candidates.seconds:.3f} s)")
+    print(_table(results))
+    return 0
+
+
+_ROWS = (("orders", "orders", "{:,.0f}"), ("pairs", "pairs", "{:,.0f}"),
+         ("pooled_passengers", "pooled passengers", "{:,.0f}"), ("pairing_ratio", "pairing ratio", "{:.3f}"),
+         ("avg_detour_m", "avg detour (m)", "{:,.0f}"), ("avg_shared_m", "avg shared (m)", "{:,.0f}"),
+         ("total_saving_km", "total saving (km)", "{:,.1f}"), ("status", "status", "{}"),
+         ("bound_m", "proven bound (m)", "{:,.0f}"), ("gap", "gap", "{:.2g}"), ("edges", "model edges", "{:,.0f}"),
+         ("model_s", "model build (s)", "{:.3f}"), ("build_s", "solver build (s)", "{:.3f}"),
+         ("solve_s", "solve (s)", "{:.3f}"), ("total_s", "total incl. candidates (s)", "{:.3f}"))
+
+
+def _table(results: dict) -> str:
+    kpis = {v: r.kpis() for v, r in results.items()}
+    header = ["metric"] + [f"Oracle-{v} ({results[v].solver})" for v in results]
+    rows = [[label] + [_fmt(fmt, kpis[v][key]) for v in results] for key, label, fmt in _ROWS]
+    widths = [max(len(r[c]) for r in [header] + rows) for c in range(len(header))]
+    lines = ["  " + "  ".join(h.ljust(widths[0]) if c == 0 else h.rjust(widths[c]) for c, h in enumerate(header))]
+    lines += ["  " + "  ".join(x.ljust(widths[0]) if c == 0 else x.rjust(widths[c]) for c, x in enumerate(r))
+              for r in rows]
+    return "\n".join(lines)
+
+
+def _fmt(fmt: str, value) -> str:
+    if isinstance(value, float) and math.isnan(value):
+        return "-"
+    return fmt.format(value)
+
+
+def _write_pairs(path: str, results: dict) -> None:
+    import pandas as pd
+    frames = [r.pairs.assign(variant=v) for v, r in results.items()]
+    try:
+        pd.concat(frames, ignore_index=True).to_csv(path, index=False)
+    except OSError as exc:
+        raise ParameterError(f"--pairs {path!r}: cannot write the file ({exc.strerror})") from None

@@ -1,0 +1,220 @@
+"""The offline oracle: Oracle-1 (maximum saving) and Oracle-2 (maximum pairs) over a whole period.
+
+ALGORITHMS.md §4.  The paper's oracle (Eqs. 17-21, its "linear program"
+over ``x_ij`` for all ``i, j`` with ``x_ij = x_ji`` and ``e(i,i) = 0``) is a
+maximum-weight matching in the general graph of feasible pairs (§4.1):
+
+* Oracle-1: maximise ``Σ e_ij`` over the pairs with ``e_ij > 0`` (A11, A19);
+* Oracle-2: maximise the number of pairs over every feasible pair, ties
+  broken by maximum total saving (A20).
+
+Candidate pairs and their savings come from :mod:`rpbench.oracle_pairs`
+(§4.2, A18).  The matching is solved by any solver preset whose backend
+solves :class:`~rpbench.model.PairingModel` exactly.  The saving is reported
+once per pair; the seed's double sum counts every pair twice (§4.1, O-T7),
+so its objective is ``2 S``.  The oracle reports the matching, not a
+vehicle simulation of it: response rate and pick-up times of the paper's
+Table 2 need the simulator.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from .backends import REGISTRY, Backend, SolveOptions, backend_class
+from .exceptions import ParameterError, PresetError, RpbenchError, SolverError
+from .model import PairingModel, Solution, Status, Structure, empty_solution, quantize
+from .oracle_pairs import CandidatePairs, PairRules, find_candidates
+from .scenario import Scenario
+from .solver_presets import Preset, load_preset
+
+#: Oracle variant -> PairingModel objective (§4.3).
+VARIANTS = {1: "weight", 2: "cardinality_then_weight"}
+
+#: KPI keys shared with the strategies' reports (NaN where undefined).
+KPI_KEYS = ("orders", "pairs", "pooled_passengers", "pairing_ratio", "avg_detour_m", "avg_shared_m",
+            "total_saving_km")
+
+
+@dataclass(frozen=True, eq=False)
+class OracleResult:
+    """One oracle solve: the matching, its KPIs, and where the time went."""
+
+    variant: int
+    scenario: str
+    rules: PairRules
+    solver: str
+    n_orders: int
+    n_candidates: int          # feasible pairs found (§4.2)
+    n_evaluated: int           # pairs inside the time windows, tested with POOL
+    model: PairingModel
+    solution: Solution
+    pairs: pd.DataFrame        # the chosen pairs, one row each
+    timings: dict = field(default_factory=dict)
+
+    @property
+    def status(self) -> Status:
+        return self.solution.status
+
+    @property
+    def total_saving_m(self) -> float:
+        """S = Σ e over chosen pairs, each pair counted once (O-T7)."""
+        return float(self.pairs["saving_m"].sum())
+
+    @property
+    def seed_objective_m(self) -> float:
+        """The paper's double-counted objective Σ_i Σ_j e(i,j) x_ij = 2 S (§4.1)."""
+        return 2.0 * self.total_saving_m
+
+    def kpis(self) -> dict:
+        """Flat KPI dictionary (``KPI_KEYS`` first, then solver fields)."""
+        p = self.pairs
+        n_pairs = len(p)
+        detours = np.concatenate([p["detour_first_m"].to_numpy(), p["detour_second_m"].to_numpy()])
+        sol, unit = self.solution, self.model.unit_m
+        return {
+            "orders": self.n_orders,
+            "pairs": n_pairs,
+            "pooled_passengers": 2 * n_pairs,
+            "pairing_ratio": 2 * n_pairs / self.n_orders if self.n_orders else float("nan"),
+            # Per paired passenger; both members of a pair share the same distance.
+            "avg_detour_m": float(detours.mean()) if n_pairs else float("nan"),
+            "avg_shared_m": float(p["shared_m"].mean()) if n_pairs else float("nan"),
+            "total_saving_km": self.total_saving_m / 1000.0,
+            "variant": self.variant,
+            "solver": self.solver,
+            "status": sol.status.value,
+            "objective_m": sol.objective * unit,
+            "bound_m": sol.bound * unit if sol.bound is not None else float("nan"),
+            "gap": sol.gap if sol.gap is not None else float("nan"),
+            "candidates": self.n_candidates,
+            "edges": self.model.n_cols,
+            **self.timings,
+        }
+
+
+def competitive_ratio(strategy_total_saving_km: float, oracle1_total_saving_km: float) -> float:
+    """A strategy's total saving as a fraction of Oracle-1's (paper §4: FL = 63.2 %); NaN if Oracle-1 saves 0."""
+    s, o = float(strategy_total_saving_km), float(oracle1_total_saving_km)
+    if not (np.isfinite(s) and np.isfinite(o)) or o < 0:
+        raise ParameterError(f"competitive ratio of {s!r} km against Oracle-1's {o!r} km: both must be finite "
+                             "and Oracle-1's saving >= 0")
+    return s / o if o > 0 else float("nan")
+
+
+def check_variant(variant) -> int:
+    try:
+        v = int(variant)
+    except (TypeError, ValueError):
+        v = None
+    if v not in VARIANTS or isinstance(variant, bool) or (isinstance(variant, float) and variant != v):
+        raise ParameterError(f"oracle variant {variant!r} unknown; expected 1 (maximum saving) or "
+                             "2 (maximum pairs, ties by saving)")
+    return v
+
+
+def oracle_model(candidates: CandidatePairs, variant: int, *, unit_m: float = 1e-3) -> tuple[PairingModel, np.ndarray]:
+    """The PairingModel of a variant and, per column, its row in ``candidates``.
+
+    Oracle-1 keeps the pairs whose quantised saving is positive (a pair with
+    ``e <= 0`` never raises the total, A11); Oracle-2 keeps every feasible pair.
+    """
+    variant = check_variant(variant)
+    values = quantize(candidates.saving_m, unit_m)
+    rows = np.flatnonzero(values > 0) if variant == 1 else np.arange(len(candidates))
+    model = PairingModel(candidates.n_orders, candidates.low[rows], candidates.high[rows], values[rows],
+                         objective=VARIANTS[variant], unit_m=unit_m, name=f"oracle-{variant}")
+    return model, rows
+
+
+def resolve_solver(solver: str | Preset | Backend, options: SolveOptions | None = None
+                   ) -> tuple[Backend, SolveOptions, str]:
+    """(backend, options, label) from a preset name, a Preset, or a Backend instance."""
+    if isinstance(solver, Backend):
+        backend, opts, label = solver, options or SolveOptions(), solver.name
+    else:
+        preset = solver if isinstance(solver, Preset) else load_preset(str(solver))
+        try:
+            backend = preset.make_backend()
+        except ModuleNotFoundError as exc:
+            if not (exc.name or "").startswith("rpbench.backends."):
+                raise
+            raise PresetError(f"solver preset {preset.name!r}: the adapter module {exc.name} of backend "
+                              f"{preset.backend!r} is missing from this installation; choose another --solver") from None
+        opts, label = options or preset.options, preset.name
+    if not backend.supports(Structure.PAIRING):
+        raise PresetError(f"solver {label!r} (backend {backend.name!r}) does not solve the pairing model "
+                          f"exactly; choose a backend that does: {', '.join(pairing_backends()) or 'none'}")
+    return backend, opts, label
+
+
+def pairing_backends() -> list[str]:
+    """Registered backends that declare the pairing structure exact (modules that import)."""
+    out = []
+    for name in REGISTRY:
+        try:
+            if Structure.PAIRING in backend_class(name).exact:
+                out.append(name)
+        except (ImportError, RpbenchError):
+            continue
+    return out
+
+
+def solve_oracle(scenario: Scenario, variant: int = 1, solver: str | Preset | Backend = "matching", *,
+                 rules: PairRules | None = None, candidates: CandidatePairs | None = None,
+                 options: SolveOptions | None = None, unit_m: float = 1e-3) -> OracleResult:
+    """Solve Oracle-``variant`` over all orders of ``scenario``.
+
+    ``rules`` default to the scenario's K̄, D̄, R̄, v with the authors' flags
+    (§4.2).  Pass ``candidates`` (from :func:`find_candidates`) to share one
+    enumeration between both variants; ``options`` override the preset's.
+    """
+    variant = check_variant(variant)
+    backend, opts, label = resolve_solver(solver, options)
+    if candidates is None:
+        rules = rules or PairRules.from_params(scenario.params)
+        candidates = find_candidates(scenario.network.distances(), scenario.orders, rules)
+    elif rules is not None and rules != candidates.rules:
+        raise ParameterError("solve_oracle: `rules` differ from the rules the candidates were built with")
+    if candidates.n_orders != len(scenario.orders):
+        raise ParameterError(f"candidates cover {candidates.n_orders} orders, the scenario has {len(scenario.orders)}")
+
+    t0 = time.perf_counter()
+    model, rows = oracle_model(candidates, variant, unit_m=unit_m)
+    model_s = time.perf_counter() - t0
+    # A model without columns is trivially solved by the empty matching.
+    solution = backend.solve(model, opts) if model.n_cols else empty_solution(model, backend.name)
+    check_matching(model, solution, label)
+
+    chosen = rows[solution.chosen]
+    pairs = candidates.take(chosen).to_frame(scenario.orders)
+    timings = {"candidates_s": candidates.seconds, "model_s": model_s, "build_s": solution.build_s,
+               "solve_s": solution.solve_s, "extract_s": solution.extract_s,
+               "total_s": candidates.seconds + model_s + solution.total_s}
+    return OracleResult(variant=variant, scenario=scenario.name, rules=candidates.rules, solver=label,
+                        n_orders=len(scenario.orders), n_candidates=len(candidates),
+                        n_evaluated=candidates.evaluated, model=model, solution=solution, pairs=pairs,
+                        timings=timings)
+
+
+def check_matching(model: PairingModel, solution: Solution, solver: str) -> None:
+    """Raise SolverError unless ``solution`` is a matching of ``model`` (O-T1), vectorised."""
+    if solution.status in (Status.ERROR, Status.INFEASIBLE):
+        raise SolverError(f"solver {solver!r} failed on {model.name} ({solution.status.value}): "
+                          f"{solution.message or 'no message'}")
+    chosen = np.asarray(solution.chosen, dtype=np.int64)
+    if len(chosen) and (chosen.min() < 0 or chosen.max() >= model.n_cols or len(np.unique(chosen)) != len(chosen)):
+        raise SolverError(f"solver {solver!r} returned invalid column indices for {model.name}")
+    use = np.bincount(np.concatenate([model.col_a[chosen], model.col_b[chosen]]), minlength=model.n_orders)
+    if len(use) and use.max() > 1:
+        raise SolverError(f"solver {solver!r} returned a non-matching for {model.name}: order "
+                          f"{int(np.argmax(use))} is in {int(use.max())} pairs")
+
+
+__all__ = ["KPI_KEYS", "VARIANTS", "CandidatePairs", "OracleResult", "PairRules", "check_matching",
+           "competitive_ratio", "find_candidates", "oracle_model", "pairing_backends", "resolve_solver",
+           "solve_oracle"]
