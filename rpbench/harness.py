@@ -66,7 +66,7 @@ def progress_bar(scenario: Scenario, label: str, enabled: bool | None):
 
 
 def simulate_strategy(scenario: Scenario, name: str, preset: Preset, *, options: dict[str, Any] | None = None,
-                      progress: bool | None = None, canonical_ties: bool = True) -> StrategyRun:
+                      progress: bool | None = None, canonical_ties: bool = True, capture=None) -> StrategyRun:
     """Simulate one strategy and compute its KPIs from the event log."""
     strategy = make_strategy(name, **(options or {}))
     backend = preset.make_backend()
@@ -77,7 +77,7 @@ def simulate_strategy(scenario: Scenario, name: str, preset: Preset, *, options:
     bar = progress_bar(scenario, name, progress)
     try:
         sim = Simulator(scenario, strategy, backend, preset.options, canonical_ties=canonical_ties,
-                        progress=bar).run()
+                        progress=bar, capture=capture).run()
     finally:
         if bar is not None:
             bar.close()

@@ -181,7 +181,8 @@ def kpis(tab: pd.DataFrame, occupied_m: np.ndarray, params: Params) -> dict[str,
 
 def hourly(tab: pd.DataFrame, start_hour: int = 0) -> pd.DataFrame:
     """Per request hour: orders, response rate, pairing ratio, mean detour and shared distance,
-    and distance saving (each pair's l_A + l_B - L counted in the hour of its earlier request)."""
+    distance saving (each pair's l_A + l_B - L counted in the hour of its earlier request), and
+    mean pick-up distance and time (the FL calibration inputs)."""
     hour = (tab["request_s"] // 3600).astype(int) + start_hour
     served = tab["served"]
     pooled = tab["pooled"]
@@ -192,12 +193,15 @@ def hourly(tab: pd.DataFrame, start_hour: int = 0) -> pd.DataFrame:
     pair_saving = np.where(lead, tab["solo_m"].to_numpy() + tab["solo_m"].to_numpy()[p]
                            - _pair_length(tab, p), 0.0)
     frame = pd.DataFrame({"hour": hour, "served": served, "pooled": pooled, "detour_m": tab["detour_m"].where(pooled),
-                          "shared_m": tab["shared_m"].where(pooled), "saving_km": pair_saving / 1000})
+                          "shared_m": tab["shared_m"].where(pooled), "saving_km": pair_saving / 1000,
+                          "pickup_m": tab["pickup_m"].where(served),
+                          "pickup_time_s": (tab["pickup_s"] - tab["assign_s"]).where(served)})
     g = frame.groupby("hour")
     out = pd.DataFrame({"orders": g.size(), "response_rate": g["served"].mean(),
                         "pairing_ratio": g["pooled"].sum() / g["served"].sum().where(g["served"].sum() > 0),
                         "avg_detour_m": g["detour_m"].mean(), "avg_shared_m": g["shared_m"].mean(),
-                        "total_saving_km": g["saving_km"].sum()})
+                        "total_saving_km": g["saving_km"].sum(), "avg_pickup_m": g["pickup_m"].mean(),
+                        "avg_pickup_time_s": g["pickup_time_s"].mean()})
     return out.reset_index()
 
 

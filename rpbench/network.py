@@ -185,8 +185,10 @@ class DistanceOracle:
         if dist_path.is_file() and pred_path.is_file():
             t0 = time.perf_counter()
             try:
-                dist = np.load(dist_path, mmap_mode="r")
-                pred = np.load(pred_path, mmap_mode="r")
+                # Plain ndarray views of the memory maps: pages load lazily, and
+                # indexing avoids numpy.memmap's per-call overhead.
+                dist = np.asarray(np.load(dist_path, mmap_mode="r"))
+                pred = np.asarray(np.load(pred_path, mmap_mode="r"))
                 if dist.shape == pred.shape == (network.n_nodes,) * 2:
                     return cls(network, dist, pred, build_s=time.perf_counter() - t0, from_cache=True)
             except (OSError, ValueError):

@@ -161,7 +161,194 @@ def _has_tabulate() -> bool:
 
 
 def write_report(folder: Path, name: str | None = None) -> Path:
-    """Write ``report.md`` into ``folder`` (``name``: the folder's final name, for the text)."""
+    """Write ``report.md`` (and its PNG plots) into ``folder`` (``name``: its final name, for the text)."""
+    text = report_markdown(folder, name)
+    hourly_png = hourly_plot(folder)
+    if hourly_png is not None:
+        text += ("\n## Per hour\n\nKPIs by request hour (saving of a pair counted in the hour of its earlier "
+                 f"request).\n\n![per-hour comparison]({hourly_png.name})\n")
     path = folder / "report.md"
-    path.write_text(report_markdown(folder, name))
+    path.write_text(text)
     return path
+
+
+def hourly_plot(folder: Path) -> Path | None:
+    """``hourly.png`` when the folder covers more than two hours (full-day and trace scenarios)."""
+    path = folder / "hourly.csv"
+    if not path.is_file():
+        return None
+    hourly = pd.read_csv(path)
+    if hourly.empty or hourly["hour"].nunique() <= 2:
+        return None
+    from .plots import hourly_figure
+    meta = results.read_meta(folder)
+    return hourly_figure(hourly, folder / "hourly.png", meta["scenario"]["label"])
+
+
+# ------------------------------------------------------------------ multi-day
+def findings(table: pd.DataFrame) -> dict[str, bool] | None:
+    """The paper's headline claims on one KPI table (KPI rows x run columns), or None without FL/MB/RTV."""
+    if not {"fl", "mb", "rtv"} <= set(table.columns):
+        return None
+    col = table.loc
+    return {
+        "FL saves the most distance (vs MB, RTV)": bool(col["total_saving_km", "fl"] > max(
+            col["total_saving_km", "mb"], col["total_saving_km", "rtv"])),
+        "FL has the lowest average detour (vs MB, RTV)": bool(col["avg_detour_m", "fl"] < min(
+            col["avg_detour_m", "mb"], col["avg_detour_m", "rtv"])),
+        "FL has a lower response rate (vs MB, RTV)": bool(col["response_rate", "fl"] < min(
+            col["response_rate", "mb"], col["response_rate", "rtv"])),
+    }
+
+
+def write_multiday_report(parent: Path, name: str | None = None) -> Path:
+    """``report.md`` of a multi-day folder: mean KPIs, per-day key KPIs, findings per day, plots."""
+    from .multiday import MULTIDAY_PLOT_KPIS, by_day_table, day_folders
+    from .plots import per_day_figures
+    meta = results.read_meta(parent)
+    table = by_day_table(parent)
+    mean = table.groupby(["kpi", "run"], sort=False)["value"].mean().unstack("run")
+    runs = [r for r in meta.get("strategies", []) if r in mean.columns]
+    mean = mean[runs]
+    days = day_folders(parent)
+    first = results.read_meta(days[0])["scenario"]
+    lines = [f"# rpbench multi-day results: {len(days)} peak hours, {meta['dates'][0]} .. {meta['dates'][-1]}", "",
+             f"- scenario `haikou-peak`, sample {first['args'].get('sample') or 0.3}, seed {meta.get('seed')}, "
+             f"solver preset `{meta.get('preset')}`",
+             f"- rpbench {meta['versions']['rpbench']}, commit `{meta.get('git_commit')}`", ""]
+    if meta.get("command"):
+        lines += ["Command:", "", f"    {meta['command']}", ""]
+    lines += ["## Mean over days", "", markdown_table(mean), ""]
+    key = ["total_saving_km", "avg_detour_m", "response_rate", "pairing_ratio"]
+    for kpi in key + (["competitive_ratio"] if "competitive_ratio" in set(table["kpi"]) else []):
+        wide = table[table["kpi"] == kpi].pivot(index="date", columns="run", values="value")[runs]
+        lines += [f"### {KPI_LABELS.get(kpi, kpi)} per day", "",
+                  "| date | " + " | ".join(RUN_LABELS.get(r, r) for r in runs) + " |",
+                  "|---|" + "---:|" * len(runs)]
+        lines += [f"| {d} | " + " | ".join(fmt(kpi, wide.loc[d, r]) for r in runs) + " |" for d in wide.index]
+        lines.append("")
+    claims = {}
+    for day in days:
+        f = findings(load_kpis(day))
+        if f:
+            for claim, held in f.items():
+                claims.setdefault(claim, []).append(held)
+    if claims:
+        lines += ["## Do the paper's findings hold?", "",
+                  "| claim | days where it holds |", "|---|---:|"]
+        lines += [f"| {c} | {sum(v)} of {len(v)} |" for c, v in claims.items()]
+        lines.append("")
+    plots = per_day_figures(table, parent, MULTIDAY_PLOT_KPIS)
+    if plots:
+        lines += ["## Per-day plots", ""] + [f"![{p.stem}]({p.name})" for p in plots] + [""]
+    lines += [f"Each day's folder is an ordinary results folder: `rpbench check {name or parent.name}/<date>`.", ""]
+    path = parent / "report.md"
+    path.write_text("\n".join(lines))
+    return path
+
+
+# ---------------------------------------------------------------------- sweeps
+def write_sweep_report(parent: Path, name: str | None = None) -> Path:
+    """``report.md`` of a sweep folder in the layout of the paper's Tables 3-6, with plots."""
+    from .plots import sweep_figure
+    from .sweep import SWEEPS, sweep_table
+    meta = results.read_meta(parent)
+    table = sweep_table(parent)
+    spec = SWEEPS.get(meta["sweep"])
+    kpis = meta["kpis"]
+    runs = meta["strategies"]
+    args = meta.get("scenario_args", {})
+    with_paper = spec is not None and spec.paper_table and paper.table2_applies(
+        meta["scenario"], args.get("date"), args.get("sample"))
+    lines = [f"# rpbench sweep `{meta['sweep']}` over {meta['parameter']}", "",
+             f"- scenario `{meta['scenario']}` ({', '.join(f'{k}={v}' for k, v in args.items() if v is not None)}), "
+             f"solver preset `{meta['preset']}`",
+             f"- rpbench {meta['versions']['rpbench']}, commit `{meta.get('git_commit')}`", ""]
+    if meta.get("command"):
+        lines += ["Command:", "", f"    {meta['command']}", ""]
+    if with_paper:
+        lines += ["Each cell: rpbench (paper). The paper's values are shown for comparison only.", ""]
+    head = [meta["parameter"]] + [f"{KPI_LABELS.get(k, k).split(' (')[0]} {RUN_LABELS.get(r, r)}"
+                                  for k in kpis for r in runs]
+    lines += ["| " + " | ".join(head) + " |", "|---|" + "---:|" * (len(head) - 1)]
+    for p in meta["points"]:
+        sel = table[table["label"] == p["label"]].set_index(["kpi", "run"])["value"]
+        cells = []
+        for k in kpis:
+            for r in runs:
+                cell = fmt(k, sel.get((k, r), float("nan")))
+                if with_paper:
+                    ref = spec.paper_table.get(_paper_key(p["value"]), {}).get(r, {}).get(k, float("nan"))
+                    cell += f" ({fmt(k, ref)})"
+                cells.append(cell)
+        lines.append(f"| {p['value']:g} | " + " | ".join(cells) + " |")
+    lines.append("")
+    plot = sweep_figure(table[table["run"].isin(runs)], meta["parameter"], kpis, parent / "sweep.png",
+                        f"sweep {meta['sweep']}")
+    lines += [f"![sweep]({plot.name})", "",
+              f"Each point is an ordinary results folder: `rpbench check {name or parent.name}/<point>`.", ""]
+    path = parent / "report.md"
+    path.write_text("\n".join(lines))
+    return path
+
+
+def _paper_key(value: float):
+    return int(value) if float(value).is_integer() else value
+
+
+# -------------------------------------------------------------- any folder(s)
+def check_metrics(metrics: list[str] | None) -> list[str] | None:
+    """Validate a user's KPI selection against the known KPI names."""
+    if metrics is None:
+        return None
+    from .metrics import EXTRA_KPIS
+    known = KPI_ORDER + EXTRA_KPIS + ["competitive_ratio", "wall_s"]
+    unknown = [m for m in metrics if m not in known]
+    if unknown or not metrics:
+        raise ResultsError(f"unknown metric {unknown[0] if unknown else '(none)'!r}; known metrics: "
+                           f"{', '.join(known)}")
+    return metrics
+
+
+def render(folders: list[Path], metrics: list[str] | None = None) -> tuple[str, list[Path]]:
+    """Re-render the report of each folder from its files; return (markdown, written report paths).
+
+    One folder: its own report (comparison, multi-day or sweep).  Several
+    comparison folders: a combined table with one column group per folder.
+    """
+    metrics = check_metrics(metrics)
+    written = []
+    for folder in folders:
+        if not folder.is_dir():
+            raise ResultsError(f"results folder {str(folder)!r} does not exist")
+        kind = results.read_meta(folder).get("kind", "comparison")
+        if kind == "multi-day":
+            written.append(write_multiday_report(folder))
+        elif kind == "sweep":
+            written.append(write_sweep_report(folder))
+        else:
+            if not results.run_names(folder):
+                raise ResultsError(f"results folder {str(folder)!r} holds no runs")
+            written.append(write_report(folder))
+    if len(folders) == 1 and metrics is None:
+        return written[0].read_text(), written
+    blocks = []
+    for folder in folders:
+        meta = results.read_meta(folder)
+        if meta.get("kind", "comparison") != "comparison":
+            blocks.append(f"## {folder.name}\n\nsee {folder / 'report.md'}\n")
+            continue
+        table = load_kpis(folder)
+        if metrics is not None:
+            table = table.loc[[m for m in metrics if m in table.index]]
+        blocks.append(f"## {folder.name}\n\n{meta['scenario']['label']}, preset `{meta['preset']['name']}`\n\n"
+                      + _selected_markdown(table) + "\n")
+    return "# rpbench results\n\n" + "\n".join(blocks), written
+
+
+def _selected_markdown(table: pd.DataFrame) -> str:
+    cols = list(table.columns)
+    out = ["| Metric | " + " | ".join(RUN_LABELS.get(c, c) for c in cols) + " |", "|---|" + "---:|" * len(cols)]
+    for k in table.index:
+        out.append(f"| {KPI_LABELS.get(k, k)} | " + " | ".join(fmt(k, table.loc[k, c]) for c in cols) + " |")
+    return "\n".join(out)

@@ -63,13 +63,15 @@ class Simulator:
     """One run of one strategy on one scenario with one solver backend."""
 
     def __init__(self, scenario: Scenario, strategy: Strategy, backend: Backend, options: SolveOptions, *,
-                 canonical_ties: bool = True, progress=None):
+                 canonical_ties: bool = True, progress=None, capture=None):
+        """``capture(round, t, round_model, solution)``, if given, sees every solved round (snapshots)."""
         self.scenario = scenario
         self.strategy = strategy
         self.backend = backend
         self.options = options
         self.canonical_ties = canonical_ties
         self.progress = progress
+        self.capture = capture
         self.params = scenario.params
         self.oracle = scenario.network.distances()
         self.dist = self.oracle.dist
@@ -140,10 +142,15 @@ class Simulator:
         if problems:
             raise SolverError(f"round at t={t:g} s: backend {self.backend.name!r} returned an infeasible solution "
                               f"({problems[0]})")
+        if self.capture is not None:
+            self.capture(k, t, rm, solution)
         moves = 0
         if self.canonical_ties:
             solution, moves = canonicalize(model, solution)
         assigned = self._commit(rm, solution.chosen, t)
+        vehicles, targets = self.strategy.reposition(state, rm, solution.chosen)
+        for v, node in zip(vehicles, targets):
+            self._reposition(int(v), int(node), t)
         size = model.size
         self.rounds.append((k, t, state.n_passengers, state.n_v0, state.n_v1, size["rows"], size["cols"],
                             size["nonzeros"], build_s, solution.build_s, solution.solve_s, solution.extract_s,
@@ -233,6 +240,15 @@ class Simulator:
                 self._assign(b, v, t, rm, c, partner=a)
                 served += 2
         return served
+
+    def _reposition(self, v: int, node: int, t: float) -> None:
+        """Send a vacant vehicle to ``node``; it stays vacant and cruises on from there."""
+        fl = self.fleet
+        k, h, _ = fl.positions(np.array([v]), t)
+        tail, _ = fl.route_through([int(h[0]), node])
+        fl.replan(v, int(k[0]), np.concatenate([tail, fl.random_walk_from(node, int(tail[-2]) if len(tail) > 1
+                                                                          else int(h[0]))]), [], cruising=True)
+        self._event(t, "reposition", -1, v, node)
 
     @staticmethod
     def _drop_order(a: int, b: int, a_first: bool) -> list[int]:

@@ -181,6 +181,10 @@ class Fleet:
             plan.odo = np.concatenate([plan.odo, extra.odo[1:]])
         self._invalidate(v)
 
+    def random_walk_from(self, node: int, prev: int) -> np.ndarray:
+        """A random cruise continuing from ``node`` having come from ``prev``."""
+        return self._random_walk(node, prev)
+
     def _random_walk(self, node: int, prev: int) -> np.ndarray:
         net = self.network
         out = []

@@ -3,12 +3,16 @@
 from __future__ import annotations
 
 import gzip
+import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from rpbench.paths import find_data_dir
+
+# Let test modules in sub-folders import tests/helpers.py as `helpers`.
+sys.path.insert(0, str(Path(__file__).parent))
 
 
 @pytest.fixture(scope="session")

@@ -28,6 +28,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", default=None, help="results folder to create (default ./rpbench-runs/<stamp>_...)")
     p.add_argument("--json", action="store_true", help="print the KPI table as one JSON object")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--dates", default=None, metavar="A..B|A,B,...",
+                   help="run the peak hour of several days (haikou-peak), e.g. 2017-05-01..2017-05-14")
+    p.add_argument("--workers", type=int, default=None, help="parallel worker processes for --dates "
+                   "(default: one per core; 1 = in this process)")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="run --dates on an existing Dask cluster (e.g. tcp://host:8786) instead of a local one")
     p.set_defaults(handler=run)
 
 
@@ -61,6 +67,9 @@ def _value(text: str):
 def run(args: argparse.Namespace) -> int:
     strategies = parse_strategies(args.strategies)
     options = parse_options(args.opt, strategies)
+    command = "rpbench " + " ".join(shlex.quote(a) for a in sys.argv[1:]) if sys.argv else None
+    if args.dates:
+        return run_many_days(args, strategies, options, command)
     name = args.scenario or default_scenario_name(args.data)
     if args.scenario is None and name == "toy":
         note("no Haikou data folder found: running the built-in synthetic toy city (pass --data DIR for Haikou)")
@@ -69,7 +78,6 @@ def run(args: argparse.Namespace) -> int:
     note(scenario.label)
     scenario_args = {"date": args.date, "sample": args.sample, "seed": args.seed, "params": kwargs["param_overrides"],
                      "fleet_placement": args.fleet_placement}
-    command = "rpbench " + " ".join(shlex.quote(a) for a in sys.argv[1:]) if sys.argv else None
     folder, table = run_comparison(scenario, strategies, args.solver, out=args.out, strategy_options=options,
                                    progress=False if args.no_progress else None, scenario_args=scenario_args,
                                    command=command)
@@ -79,4 +87,32 @@ def run(args: argparse.Namespace) -> int:
         return 0
     print(text_table(table, title=f"{scenario.label} — solver preset {args.solver}"))
     print(f"\nresults written to {folder}  (verify: rpbench check {folder})")
+    return 0
+
+
+def run_many_days(args: argparse.Namespace, strategies: list[str], options: dict, command: str | None) -> int:
+    from ..multiday import parse_dates, run_days
+    from ..paths import require_data_dir
+    from ..report import load_kpis
+    if args.scenario not in (None, "haikou-peak") or args.date:
+        raise ParameterError("--dates runs the haikou-peak scenario; drop --scenario/--date")
+    kwargs = scenario_kwargs(args)
+    dates = parse_dates(args.dates, require_data_dir(args.data, what="--dates"))
+    note(f"running {len(dates)} peak hours ({dates[0]} .. {dates[-1]}) x {', '.join(strategies)}")
+    folder = run_days(dates, data_dir=args.data, sample=args.sample, seed=args.seed,
+                      param_overrides=kwargs["param_overrides"], fleet_placement=args.fleet_placement,
+                      strategies=strategies, preset=args.solver, strategy_options=options, out=args.out,
+                      workers=args.workers, scheduler=args.scheduler, command=command)
+    import pandas as pd
+    summary = pd.read_csv(folder / "summary.csv")
+    mean = summary.pivot(index="kpi", columns="run", values="mean")[[s for s in strategies]]
+    if args.json:
+        print_json({"results_dir": str(folder), "dates": dates,
+                    "mean_kpis": {col: mean[col].to_dict() for col in mean.columns},
+                    "per_day": {d: {c: t[c].to_dict() for c in t.columns}
+                                for d in dates for t in [load_kpis(folder / d)]}})
+        return 0
+    print(text_table(mean, title=f"Mean over {len(dates)} peak hours ({dates[0]} .. {dates[-1]}), "
+                                 f"solver preset {args.solver}"))
+    print(f"\nresults written to {folder}  (per-day folders inside; report: {folder / 'report.md'})")
     return 0

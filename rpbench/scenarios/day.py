@@ -60,6 +60,6 @@ def build_day(data_dir: Path, *, date: str = DEFAULT_DATE, sample: float = 1.0, 
         start_time=start.isoformat(), synthetic=True,
         provenance={"source": f"{data_dir}/samples_and_aggregates/data_dayly_hourly_count.csv + "
                               f"{data_dir}/demand_0800_0900/month_5_OD.csv.gz",
-                    "date": day, "sample": sample, "orders_per_hour": per_hour.tolist(),
+                    "date": day, "sample": sample, "orders_per_hour": per_hour.tolist(), "data_dir": str(data_dir),
                     "fleet_placement": fleet_placement},
     )

@@ -48,6 +48,6 @@ def build_peak(data_dir: Path, *, date: str = DEFAULT_DATE, sample: float = DEFA
         label=f"Haikou {day} 08:00-09:00, real DiDi orders ({pct} sample, seed {seed})",
         network=network, orders=orders, fleet=fleet, params=params, seed=seed, horizon_s=3600.0,
         start_time=start.isoformat(), synthetic=False,
-        provenance={"source": str(data_dir / "demand_0800_0900" / "orders" / f"{day}.csv.gz"), "date": day,
+        provenance={"source": str(data_dir / "demand_0800_0900" / "orders" / f"{day}.csv.gz"), "date": day, "data_dir": str(data_dir),
                     "sample": sample, "rows_in_hour": int(len(frame)), "fleet_placement": fleet_placement},
     )

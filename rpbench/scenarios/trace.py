@@ -46,6 +46,6 @@ def build_trace(data_dir: Path, *, sample: float = 1.0, seed: int = 0, params: P
                f"({sample * 100:g} % sample, seed {seed})"),
         network=network, orders=orders, fleet=fleet, params=params, seed=seed, horizon_s=hours * 3600.0,
         start_time=start.isoformat(), synthetic=False,
-        provenance={"source": str(data_dir / "predecessor_trb2021_network"), "date": TRACE_DATE,
+        provenance={"source": str(data_dir / "predecessor_trb2021_network"), "date": TRACE_DATE, "data_dir": str(data_dir),
                     "sample": sample, "fleet_placement": fleet_placement},
     )

@@ -125,6 +125,14 @@ class Strategy(ABC):
     def build(self, state: RoundState) -> RoundModel:
         """Build this round's model from the state."""
 
+    def reposition(self, state: RoundState, rm: RoundModel, chosen: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Vehicles to send towards nodes after the round's decisions (default: none).
+
+        Returns ``(vehicle ids, target nodes)``; a repositioned vehicle stays
+        vacant and resumes cruising when it arrives.
+        """
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+
     def describe(self) -> dict[str, Any]:
         """Options as recorded in a results folder's meta.json."""
         return {"name": self.name, "structure": self.structure.value, "options": dict(self.options)}

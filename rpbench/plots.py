@@ -1,0 +1,112 @@
+"""PNG plots for reports (matplotlib, headless), each a pure function of tables read from result files."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+
+from .metrics import KPI_LABELS
+
+RUN_STYLE = {"np": ("NP", "tab:gray"), "mb": ("MB", "tab:blue"), "rtv": ("RTV", "tab:orange"),
+             "fl": ("FL", "tab:green"), "fl-nd": ("FL-no_delay", "tab:olive"), "oracle1": ("Oracle-1", "tab:red"),
+             "oracle2": ("Oracle-2", "tab:purple")}
+HOURLY_PANELS = [("avg_shared_m", "(a) Average shared distance (m)"), ("avg_detour_m", "(b) Average detour (m)"),
+                 ("total_saving_km", "(c) Distance saving (km)"), ("response_rate", "(d) Response rate")]
+
+
+def _pyplot():
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    return plt
+
+
+def _label(run: str) -> tuple[str, str | None]:
+    return RUN_STYLE.get(run, (run, None))
+
+
+def hourly_figure(hourly: pd.DataFrame, path: Path, title: str) -> Path:
+    """The paper's 24-hour comparison: four panels, one line per run (``hourly.csv`` layout)."""
+    plt = _pyplot()
+    fig, axes = plt.subplots(2, 2, figsize=(11, 7), sharex=True)
+    for ax, (col, name) in zip(axes.ravel(), HOURLY_PANELS):
+        for run, g in hourly.groupby("run", sort=False):
+            label, color = _label(run)
+            ax.plot(g["hour"], g[col], marker="o", ms=3, label=label, color=color)
+        ax.set_title(name, fontsize=10)
+        ax.grid(alpha=0.3)
+    for ax in axes[1]:
+        ax.set_xlabel("hour of day (request time)")
+    axes[0, 0].legend(fontsize=8)
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def per_day_figures(by_day: pd.DataFrame, folder: Path, kpis: list[str]) -> list[Path]:
+    """One PNG per KPI: value per day, one line per run (``by_day`` columns date, run, kpi, value)."""
+    plt = _pyplot()
+    paths = []
+    for kpi in kpis:
+        sel = by_day[by_day["kpi"] == kpi]
+        if sel.empty:
+            continue
+        fig, ax = plt.subplots(figsize=(8, 3.6))
+        for run, g in sel.groupby("run", sort=False):
+            label, color = _label(run)
+            ax.plot(pd.to_datetime(g["date"]), g["value"], marker="o", ms=3, label=label, color=color)
+        ax.set_title(KPI_LABELS.get(kpi, kpi), fontsize=10)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, ncol=4)
+        fig.autofmt_xdate()
+        fig.tight_layout()
+        path = folder / f"by_day_{kpi}.png"
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+        paths.append(path)
+    return paths
+
+
+def sweep_figure(table: pd.DataFrame, parameter: str, kpis: list[str], path: Path, title: str) -> Path:
+    """KPIs against a swept parameter (``table`` columns value, run, kpi, value_kpi)."""
+    plt = _pyplot()
+    fig, axes = plt.subplots(1, len(kpis), figsize=(3.6 * len(kpis), 3.4))
+    axes = [axes] if len(kpis) == 1 else list(axes)
+    for ax, kpi in zip(axes, kpis):
+        sel = table[table["kpi"] == kpi]
+        for run, g in sel.groupby("run", sort=False):
+            label, color = _label(run)
+            ax.plot(g["point"], g["value"], marker="o", ms=3, label=label, color=color)
+        ax.set_xlabel(parameter)
+        ax.set_title(KPI_LABELS.get(kpi, kpi), fontsize=9)
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=8)
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def bench_figure(table: pd.DataFrame, path: Path, title: str) -> Path:
+    """Solve time against model size per preset (log-log), from a benchmark table
+    with columns preset, cols, solve_s."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6.5, 4.2))
+    for preset, g in table.groupby("preset", sort=False):
+        g = g.sort_values("cols")
+        ax.plot(g["cols"], g["solve_s"] * 1e3, marker="o", ms=3, label=preset)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("model columns")
+    ax.set_ylabel("solve time (ms)")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8)
+    ax.set_title(title, fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
