@@ -159,10 +159,8 @@ class Simulator:
     def _round_state(self, t: float) -> RoundState:
         fl = self.fleet
         p = np.asarray(self.waiting, dtype=np.int64)
-        load = np.fromiter((len(a) + len(b) for a, b in zip(fl.onboard, fl.assigned)), dtype=np.int64,
-                           count=fl.n)
-        v0 = np.flatnonzero((load == 0) & fl.on_duty)
-        v1 = np.flatnonzero((load == 1) & ~fl.paired & fl.on_duty)
+        v0 = np.flatnonzero((fl.load == 0) & fl.on_duty)
+        v1 = np.flatnonzero((fl.load == 1) & ~fl.paired & fl.on_duty)
         _, v0_node, v0_pre = fl.positions(v0, t)
         v1_node = np.empty(len(v1), np.int64)
         v1_delta = np.zeros(len(v1))
@@ -259,6 +257,7 @@ class Simulator:
         self.state[order] = ASSIGNED
         self.vehicle_of[order] = v
         self.fleet.assigned[v].append(order)
+        self.fleet.load[v] += 1
         self.waiting.remove(order)
         kind = {Kind.VACANT: "vacant", Kind.JOIN: "join", Kind.TRIP2: "trip2"}[Kind(int(rm.kind[c]))]
         self._event(t, "assign", order, v, -1, kind, float(rm.utility_m[c]), float(rm.pickup_m[c]), partner,
@@ -277,6 +276,7 @@ class Simulator:
                 self._event(when, "pickup", o, v, node)
             else:
                 fl.onboard[v].remove(o)
+                fl.load[v] -= 1
                 self.state[o] = DONE
                 self._event(when, "dropoff", o, v, node)
                 if not fl.onboard[v] and not fl.assigned[v]:

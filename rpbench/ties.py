@@ -58,67 +58,78 @@ def _repair(model, chosen: np.ndarray, resource: np.ndarray, items: tuple[np.nda
     values = model.values
     start, rows = model.column_rows()
     exact = model.row_exact()
+    n = model.n_cols
 
     def rows_of(c: int) -> np.ndarray:
         return rows[start[c]:start[c + 1]]
 
+    # Replacement candidates share the value and the "exactly one" rows of the column they replace
+    # (for an assignment: the same passenger), so waiting options of other passengers never qualify.
+    exact_key = np.full(n, -1, dtype=np.int64)
+    if exact.any():
+        col_of_entry = np.repeat(np.arange(n), np.diff(start))
+        is_exact = exact[rows]
+        exact_key[col_of_entry[is_exact][::-1]] = rows[is_exact][::-1]
+    # Smallest column index with the same (exact rows, value): a column can only be replaced by an
+    # earlier peer, so most rounds are settled by one vectorised test.
+    order = np.lexsort((np.arange(n), values, exact_key))
+    new_group = np.r_[True, (np.diff(exact_key[order]) != 0) | (np.diff(values[order]) != 0)]
+    first_of_group = np.empty(n, dtype=np.int64)
+    first_of_group[order] = order[np.flatnonzero(new_group)[np.cumsum(new_group) - 1]]
+
     # Integer key of (items, resource) per column, for "does the exchanged column exist?"
-    key = np.zeros(model.n_cols, dtype=np.int64)
+    key = np.zeros(n, dtype=np.int64)
     for a in items + (resource,):
         key = key * (int(a.max(initial=0)) + 2) + (a + 1)
     key_order = np.argsort(key, kind="stable")
     sorted_keys = key[key_order]
     item_key = key - (resource + 1)                    # the same key with the resource zeroed
 
-    def column_with(item_part: int, res: int) -> int | None:
+    def columns_with(item_part: np.ndarray, res: np.ndarray) -> np.ndarray:
         q = item_part + res + 1
-        pos = int(np.searchsorted(sorted_keys, q))
-        return int(key_order[pos]) if pos < len(sorted_keys) and sorted_keys[pos] == q else None
+        pos = np.minimum(np.searchsorted(sorted_keys, q), n - 1)
+        return np.where(sorted_keys[pos] == q, key_order[pos], -1)
 
     moves = 0
-    changed = True
-    while changed:
-        changed = False
+    while True:
         chosen = np.sort(chosen)
-        used = np.zeros(model.n_rows, dtype=bool)
-        for c in chosen:
-            used[rows_of(c)] = True
-        # 1. replace a chosen column by an earlier one of equal value
-        for pos, c in enumerate(chosen):
-            mine = rows_of(c)
-            used[mine] = False
-            need = mine[exact[mine]]
-            for c2 in np.flatnonzero(values[:c] == values[c]):
-                r2 = rows_of(c2)
-                if used[r2].any() or not np.isin(need, r2).all():
-                    continue
-                chosen[pos], mine = c2, r2
-                moves += 1
-                changed = True
-                break
-            used[mine] = True
-            if changed:
-                break
-        if changed:
+        if (first_of_group[chosen] < chosen).any() and _replace_once(chosen, values, exact_key, exact, rows_of,
+                                                                     model.n_rows):
+            moves += 1
             continue
-        # 2. swap the resources of two chosen columns
-        for x in range(len(chosen)):
-            for y in range(x + 1, len(chosen)):
-                rx, ry = int(resource[chosen[x]]), int(resource[chosen[y]])
-                if rx < 0 or ry < 0 or rx == ry:
-                    continue
-                cx = column_with(int(item_key[chosen[x]]), ry)
-                cy = column_with(int(item_key[chosen[y]]), rx)
-                if cx is None or cy is None:
-                    continue
-                if values[cx] + values[cy] != values[chosen[x]] + values[chosen[y]]:
-                    continue
-                if min(cx, cy) >= min(chosen[x], chosen[y]):
-                    continue
-                chosen[x], chosen[y] = cx, cy
-                moves += 1
-                changed = True
-                break
-            if changed:
-                break
+        x, y = np.triu_indices(len(chosen), k=1)
+        cx, cy = chosen[x], chosen[y]
+        rx, ry = resource[cx], resource[cy]
+        ok = (rx >= 0) & (ry >= 0) & (rx != ry)
+        nx = columns_with(item_key[cx], ry)            # item set of x on y's resource
+        ny = columns_with(item_key[cy], rx)
+        ok &= (nx >= 0) & (ny >= 0)
+        ok &= values[np.maximum(nx, 0)] + values[np.maximum(ny, 0)] == values[cx] + values[cy]
+        ok &= np.minimum(nx, ny) < np.minimum(cx, cy)
+        if not ok.any():
+            break
+        i = int(np.flatnonzero(ok)[0])
+        chosen[x[i]], chosen[y[i]] = nx[i], ny[i]
+        moves += 1
     return np.sort(chosen), moves
+
+
+def _replace_once(chosen, values, exact_key, exact, rows_of, n_rows) -> bool:
+    """Apply the first value-neutral replacement by an earlier column; False when there is none."""
+    used = np.zeros(n_rows, dtype=bool)
+    for c in chosen:
+        used[rows_of(c)] = True
+    for pos, c in enumerate(chosen):
+        peers = np.flatnonzero((values[:c] == values[c]) & (exact_key[:c] == exact_key[c]))
+        if len(peers) == 0:
+            continue
+        mine = rows_of(c)
+        used[mine] = False
+        need = mine[exact[mine]]
+        for c2 in peers:
+            r2 = rows_of(c2)
+            if not used[r2].any() and np.isin(need, r2).all():
+                chosen[pos] = c2
+                return True
+        used[mine] = True
+    return False

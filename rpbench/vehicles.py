@@ -61,6 +61,7 @@ class Fleet:
         self.plans: list[Plan] = [self._still(int(node), 0.0, 0.0) for node in initial_nodes]
         self.onboard: list[list[int]] = [[] for _ in range(n)]
         self.assigned: list[list[int]] = [[] for _ in range(n)]     # assigned, not yet picked up
+        self.load = np.zeros(n, dtype=np.int64)                     # passengers assigned or on board
         self.paired = np.zeros(n, dtype=bool)                       # carries (or will carry) a pooled pair
         self.on_duty = np.zeros(n, dtype=bool)
         self._version = np.zeros(n, dtype=np.int64)
@@ -70,6 +71,10 @@ class Fleet:
         self._next_node = np.asarray(initial_nodes, dtype=np.int64).copy()
         self._next_tt = np.full(n, -np.inf)
         self._idle = np.zeros(n, dtype=bool)
+        # Out-neighbours per node as plain lists: the random walk steps one node at a time.
+        heads = network.arc_head[network.out_arcs]
+        off = network.out_offsets
+        self._successors = [heads[off[u]:off[u + 1]].tolist() for u in range(network.n_nodes)]
 
     # --------------------------------------------------------------- plans
     def _still(self, node: int, t: float, odo: float) -> Plan:
@@ -186,15 +191,13 @@ class Fleet:
         return self._random_walk(node, prev)
 
     def _random_walk(self, node: int, prev: int) -> np.ndarray:
-        net = self.network
+        succ = self._successors
         out = []
-        draws = self.rng.random(CRUISE_ARCS)
-        for u in draws:
-            lo, hi = net.out_offsets[node], net.out_offsets[node + 1]
-            heads = net.arc_head[net.out_arcs[lo:hi]]
+        for u in self.rng.random(CRUISE_ARCS).tolist():
+            heads = succ[node]
             if len(heads) > 1 and prev >= 0:
-                heads = heads[heads != prev]          # no U-turn unless at a dead end
-            nxt = int(heads[int(u * len(heads))])
+                heads = [h for h in heads if h != prev] or heads    # no U-turn unless at a dead end
+            nxt = heads[int(u * len(heads))]
             out.append(nxt)
             prev, node = node, nxt
         return np.asarray(out, dtype=np.int32)
