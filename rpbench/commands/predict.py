@@ -1,0 +1,146 @@
+"""``rpbench predict``: solve the seeker/taker prediction model and write the per-OD table.
+
+``--rates month`` is the 21-day table (the paper's choice), ``--rates day``
+one date's peak-hour orders (count per OD / 3600 s), ``--rates day-table``
+the 2017-05-01 per-day OD table the authors predicted for, or a path to any
+OD table in the ``month_5_OD`` format.  ``--validate-fcfs`` also simulates a
+first-come-first-served dispatcher on Poisson demand from the same rates and
+reports MAPE/RMSE; ``--compare-authors`` compares with the authors' published
+2017-05-01 predictions.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+from ..exceptions import ParameterError
+from ..paths import require_data_dir
+from ..scenario import Params
+from ..scenarios.common import haikou_network
+from ._common import add_data_arg, note, parse_param_overrides, print_json
+
+RATE_KINDS = ("month", "day", "day-table")
+DEFAULT_DATE = "2017-05-01"
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    from ..predict.config import ACCELERATIONS, PRIORITIES
+    p = sub.add_parser("predict", help="predict pairing probabilities and expected savings per OD",
+                       description="Solve the seeker/taker fixed point (TR-B 2021 model as used by the FL "
+                                   "strategy) for an OD rate table and write one CSV row per OD.")
+    p.add_argument("--rates", default="month", metavar="KIND",
+                   help="month (21-day table, default), day (a date's peak orders), day-table "
+                        "(the 2017-05-01 per-day OD table), or a path to an OD table CSV")
+    p.add_argument("--date", default=None, help=f"date for --rates day (default {DEFAULT_DATE})")
+    add_data_arg(p)
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--out", metavar="FILE.csv", default=None,
+                   help="per-OD CSV (default: prediction-<rates>[-<date>].csv in the current folder)")
+    p.add_argument("--tau0", type=float, default=None, metavar="S",
+                   help="sojourn of the origin taker state, e.g. a calibrated mean pick-up time (default 120)")
+    p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                   help="override a parameter (max_pickup_m, max_detour_m, speed_mps, ...)")
+    p.add_argument("--priority", choices=PRIORITIES, default=None, help="seeker priority order (default net_saving)")
+    p.add_argument("--accel", choices=ACCELERATIONS, default=None,
+                   help="fixed-point acceleration (default none: the plain damped iteration)")
+    p.add_argument("--no-cache", action="store_true", help="recompute even when a cached result exists")
+    p.add_argument("--validate-fcfs", action="store_true",
+                   help="also simulate an FCFS dispatcher on Poisson demand and report MAPE/RMSE")
+    p.add_argument("--hours", type=float, default=100.0, help="simulated hours for --validate-fcfs (default 100)")
+    p.add_argument("--min-samples", type=int, default=20,
+                   help="compare ODs with at least this many simulated orders (default 20)")
+    p.add_argument("--seed", type=int, default=0, help="random seed of the FCFS simulation (default 0)")
+    p.add_argument("--compare-authors", action="store_true",
+                   help="compare with the authors' published 2017-05-01 predictions")
+    p.set_defaults(handler=run)
+
+
+def load_rates(kind: str, date: str | None, network, data_dir: Path):
+    """The OD rates named by ``--rates`` (errors are one clear line)."""
+    from ..predict import day_table_rates, month_rates, peak_order_rates, table_rates
+    if date is not None and kind != "day":
+        raise ParameterError(f"--date only applies to --rates day (got --rates {kind})")
+    if kind == "month":
+        return month_rates(network, data_dir)
+    if kind == "day":
+        return peak_order_rates(network, data_dir, date or DEFAULT_DATE)
+    if kind == "day-table":
+        return day_table_rates(network, data_dir)
+    path = Path(kind)
+    if path.is_file():
+        return table_rates(network, path)
+    raise ParameterError(f"--rates {kind!r}: expected one of {', '.join(RATE_KINDS)} or the path of an OD "
+                         "table CSV (OD_id, origin_id, destination_id, lambda per minute)")
+
+
+def default_csv(kind: str, date: str | None) -> Path:
+    label = kind if kind in RATE_KINDS else Path(kind).name.split(".")[0]
+    if kind == "day":
+        label += f"-{date or DEFAULT_DATE}"
+    return Path(f"prediction-{label}.csv")
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..predict import PredictConfig, build_model, predict, solve_model
+    t0 = time.perf_counter()
+    if args.hours <= 0 or args.min_samples < 1 or args.seed < 0:
+        raise ParameterError("--hours must be > 0, --min-samples >= 1 and --seed >= 0")
+    data_dir = require_data_dir(args.data, what="rpbench predict")
+    params = Params().replace(**parse_param_overrides(args.param))
+    changes = {k: v for k, v in (("tau0_s", args.tau0), ("priority", args.priority), ("accel", args.accel))
+               if v is not None}
+    config = PredictConfig().replace(**changes)
+    network = haikou_network(data_dir)
+    rates = load_rates(args.rates, args.date, network, data_dir)
+    if not args.json:
+        note(f"rpbench predict: {len(rates)} ODs from {rates.source}; building the model ...")
+    out: dict = {}
+    if args.validate_fcfs:
+        from ..predict.fcfs import simulate, validate
+        model = build_model(network, rates, params, config)
+        prediction = solve_model(model)
+        result = simulate(model, hours=args.hours, seed=args.seed)
+        del model
+        out["fcfs"], _ = validate(prediction, result, min_samples=args.min_samples)
+    else:
+        prediction = predict(network, rates, params, config, use_cache=not args.no_cache)
+    csv_path = Path(args.out) if args.out else default_csv(args.rates, args.date)
+    prediction.per_od_table().to_csv(csv_path, index=False)
+    if args.compare_authors:
+        from ..predict.compare import compare
+        out["authors"], _ = compare(prediction, data_dir)
+    summary = {k: v for k, v in prediction.summary().items() if k not in ("config", "params")}
+    result = {**summary, "csv": str(csv_path), "wall_s": round(time.perf_counter() - t0, 3), **out,
+              "params": prediction.summary().get("params"), "config": prediction.summary().get("config")}
+    if args.json:
+        print_json(result)
+        return 0
+    _print_human(result)
+    return 0
+
+
+def _print_human(r: dict) -> None:
+    print(f"{r['ods']} ODs ({r['rates_source']}), {r['states']} taker states, "
+          f"{r['candidate_pairs']:,} candidate seeker-taker pairs")
+    state = "converged" if r["converged"] else "NOT converged"
+    took = "from cache" if r["from_cache"] else "%.1f s" % r.get("time_s", r["wall_s"])
+    print(f"fixed point: {state} in {r['iterations']} iterations, residual {r['residual']:.2e}, "
+          f"{r['clip_count']} clipped; {took}")
+    print(f"mean pairing probability {r['mean_pairing_prob']:.3f} (seeker {r['mean_p_seeker']:.3f}); "
+          f"per-OD table: {r['csv']}")
+    if "fcfs" in r:
+        f = r["fcfs"]
+        print(f"FCFS validation ({f['hours']:g} h, {f['simulated_orders']:,} orders, {f['ods_compared']} ODs "
+              f"with >= {f['min_samples']} orders):")
+        for name in ("pairing_prob", "ride_m", "shared_m"):
+            m = f[name]
+            print(f"  {name:<13} MAPE {m['mape_pct']:.2f} %  RMSE {m['rmse']:.4g}  "
+                  f"(mean predicted {m['mean_pred']:.4g}, simulated {m['mean_sim']:.4g})")
+    if "authors" in r:
+        a = r["authors"]
+        print(f"vs the authors' predictions ({a['ods_joined']} ODs joined):")
+        for c in a["columns"]:
+            print(f"  {c['column']:<28} ours {c['mean_ours']:10.4g}  authors {c['mean_authors']:10.4g}  "
+                  f"pearson {c['pearson'] if c['pearson'] is None else round(c['pearson'], 3)}")

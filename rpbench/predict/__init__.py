@@ -1,0 +1,49 @@
+"""The seeker/taker pairing-probability and expected-saving prediction model.
+
+This is the TR-B 2021 model as used by the seed paper's forward-looking (FL)
+dispatcher (paper §3.1-3.3 and Appendix A; ALGORITHMS.md §2 with the typos
+corrected and resolutions A1-A12).
+
+Public API (what the FL / FL-no_delay strategies call)::
+
+    from rpbench.predict import OdRates, PredictConfig, predict, month_rates
+
+    rates = month_rates(network, data_dir)                 # or peak_order_rates / scenario_rates / OdRates.from_arrays
+    prediction = predict(network, rates, params, PredictConfig(tau0_s=120.0))   # cached on disk
+
+    look = prediction.lookup(origin_nodes, destination_nodes)
+    look.e_vacant      # ē(p): expected saving if matched with a vacant vehicle (Eq. 9)
+    look.p_seeker      # p_s(w)
+    look.e_seeker      # ē(s(w)) (Eq. 11)
+    look.pairing_prob  # P_w
+    look.known         # OD present in the rate table (else every value is 0, §2.1)
+
+    prediction.e_wait(origin_nodes, destination_nodes, k_p, params)
+        # ē(0,p) of Eq. (10): [1 - (1 - r_w)^n_rem] [p_s ē(s) + (1 - p_s) ē(p)],
+        # n_rem = max(0, floor(K̄/Δt) - k_p), K̄ = params.planner_patience_s, r_w = params.response_rate
+
+    prediction.per_od_table()   # pandas DataFrame, one row per OD (P_w, p_s, ē values, distances)
+    prediction.summary()        # dict: ODs, states, candidate pairs, iterations, residual, converged, ...
+
+Node arguments are the network's *internal* node indices (as in
+:class:`rpbench.scenario.Orders`).  Savings are the pair's total distance
+saving in metres (A12: not doubled).
+
+Modules, one concept each: :mod:`.rates` (λ_w), :mod:`.config`,
+:mod:`.states` (seeker/taker states, taker classes), :mod:`.matching`
+(T_s, E, priority), :mod:`.fixed_point` ((A1)-(A6) and the damped solver),
+:mod:`.savings` (ē and expected distances), :mod:`.prediction` (the entry
+point), :mod:`.cache`, :mod:`.fcfs` (validation simulator), :mod:`.compare`
+(vs the authors' published predictions).
+"""
+
+from .config import ACCELERATIONS, PRIORITIES, RHO_MODES, PredictConfig
+from .prediction import Lookup, Model, Prediction, build_model, predict, solve_model
+from .rates import (OdRates, day_table_rates, month_rates, order_rates, peak_order_rates, scenario_rates,
+                    table_rates)
+
+__all__ = [
+    "ACCELERATIONS", "Lookup", "Model", "OdRates", "PRIORITIES", "PredictConfig", "Prediction", "RHO_MODES", "build_model",
+    "day_table_rates", "month_rates", "order_rates", "peak_order_rates", "predict", "scenario_rates",
+    "solve_model", "table_rates",
+]

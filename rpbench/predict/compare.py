@@ -1,0 +1,62 @@
+"""rpbench's 2017-05-01 predictions vs the authors' published ones (ALGORITHMS.md §2.7, A12).
+
+The authors' file ``predict_result_2017-05-01_0800-0900.csv.gz`` is keyed by
+the ``OD_id`` of the per-day OD table; rpbench's per-OD table is joined to it
+through ``(origin_id, destination_id)``.  Column meanings follow the authors'
+prediction code (TR-B conventions): ``matching_prob`` = P_w; ``ride_distance``,
+``detour_distance``, ``shared_distance``, ``saved_distance`` = expectations over
+all orders of the OD; ``*_for_taker`` = given the order became a taker;
+``*_for_seeker`` = ``p_s`` x (mean given paired as seeker) [+ ``(1-p_s) l_w``
+for the ride].  Saved distances are the pair's total saving, not doubled.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from scipy import stats
+
+from ..data import read_authors_predictions, read_day_od_shares
+from .prediction import Prediction
+
+COLUMNS = ("matching_prob", "ride_distance", "detour_distance", "shared_distance", "saved_distance",
+           "ride_distance_for_taker", "detour_distance_for_taker", "shared_distance_for_taker",
+           "saved_distance_for_taker", "ride_distance_for_seeker", "detour_distance_for_seeker",
+           "shared_distance_for_seeker", "saved_distance_for_seeker")
+
+
+def joined(prediction: Prediction, data_dir: Path) -> pd.DataFrame:
+    """One row per OD present in both: ``<column>_ours`` and ``<column>_authors``."""
+    ours = prediction.per_od_table().drop(columns=["od_id"])
+    keys = read_day_od_shares(data_dir)[["od_id", "origin_id", "destination_id"]]
+    theirs = read_authors_predictions(data_dir)
+    frame = keys.merge(ours, on=["origin_id", "destination_id"], how="inner")
+    return frame.merge(theirs, on="od_id", how="inner", suffixes=("_ours", "_authors"))
+
+
+def compare(prediction: Prediction, data_dir: Path) -> tuple[dict, pd.DataFrame]:
+    """Per-column agreement statistics and the joined per-OD frame."""
+    frame = joined(prediction, data_dir)
+    rows = []
+    for col in COLUMNS:
+        ours, theirs = frame[f"{col}_ours"].to_numpy(), frame[f"{col}_authors"].to_numpy()
+        ok = np.isfinite(ours) & np.isfinite(theirs)
+        ours, theirs = ours[ok], theirs[ok]
+        varied = len(ours) > 2 and np.std(ours) > 0 and np.std(theirs) > 0
+        rows.append({
+            "column": col, "n": int(ok.sum()),
+            "mean_ours": float(ours.mean()) if len(ours) else None,
+            "mean_authors": float(theirs.mean()) if len(theirs) else None,
+            "mean_diff": float((ours - theirs).mean()) if len(ours) else None,
+            "mean_abs_diff": float(np.abs(ours - theirs).mean()) if len(ours) else None,
+            "median_ratio": float(np.median(ours[theirs != 0] / theirs[theirs != 0])) if (theirs != 0).any() else None,
+            "pearson": float(stats.pearsonr(ours, theirs)[0]) if varied else None,
+            "spearman": float(stats.spearmanr(ours, theirs)[0]) if varied else None,
+        })
+    table = pd.DataFrame(rows)
+    summary = {"ods_joined": int(len(frame)), "ods_ours": int(len(prediction.rates)),
+               "ods_authors": int(len(read_authors_predictions(data_dir))),
+               "columns": table.to_dict(orient="records")}
+    return summary, frame

@@ -1,0 +1,237 @@
+"""The fixed-point system (A1)-(A6) and its damped solver (ALGORITHMS.md §2.5-§2.6).
+
+The system reduces to a map on ρ (one value per taker state).  One
+evaluation, :func:`evaluate`, computes from ρ::
+
+    Q_c          = Π_{t∈c} (1 - ρ_t)                       per taker class c
+    η_t^{s}      = λ_{w'} Π_{t' ≻_s t} (1 - ρ_t')          (A4)  running product along s's list
+    p_s          = 1 - Π_{t∈T_s} (1 - ρ_t)                 (A1)
+    η_t          = Σ_s η_t^s                                (A3)
+    p_t          = 1 - exp(-η_t τ_t)                       (A2)
+    λ_t(0,w)     = λ_w (1 - p_s(w)),  λ_t(k) = λ_t(k-1) (1 - p_t(k-1))     (A6, corrected, A2 of §5)
+    ρ'_t         = λ_t (1 - e^{-η_t τ_t}) / η_t            (A5 with the /η of A1; λ_t τ_t at η = 0)
+
+Seeker lists hold taker classes (:mod:`.states`): the members of a class are
+adjacent in every list, so a seeker's running product is carried per class
+(``Q_c``) and the opportunity rate of member t is ``η_t = r_t H_c`` with
+``H_c = Σ_s λ_s Π_{c' ≻_s c} Q_c'`` and ``r_t`` the product over earlier
+members of the same class.  Running products are sums of ``log1p(-ρ)``
+(segmented cumulative sums that restart per seeker), ``1 - e^{-x}`` is
+``-expm1(-x)``, and ``log(1 - p_t) = -η_t τ_t`` exactly.  Everything is float64.
+
+:func:`solve` iterates ``ρ <- (1-β)ρ + β clip(ρ')`` from ρ = 0 (A9): β halves
+after ``grow_patience`` growing residuals in a row (floor ``beta_floor``), the
+stop is ``max|ρ' - ρ| <= tol`` or ``max_iter``, and the returned evaluation is
+recomputed from the final ρ so that all reported quantities are mutually
+consistent.  ρ' is clipped to ``[0, rho_cap]`` (A8) and the clips counted.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from ._arrays import segment_exclusive_cumsum, segment_sums
+from .config import PredictConfig
+from .matching import Block, Matching
+from .states import StateSpace
+
+_LOG_ZERO = -1e4               # log λ for λ = 0: exp() underflows to exactly 0
+
+
+@dataclass(frozen=True, eq=False)
+class System:
+    """Everything one evaluation of the map needs (read-only)."""
+
+    space: StateSpace
+    matching: Matching
+    rate_per_s: np.ndarray       # λ_w per OD
+    config: PredictConfig
+
+    @classmethod
+    def build(cls, space: StateSpace, matching: Matching, rate_per_s: np.ndarray,
+              config: PredictConfig) -> "System":
+        return cls(space, matching, np.asarray(rate_per_s, dtype=np.float64), config)
+
+
+@dataclass(frozen=True, eq=False)
+class Evaluation:
+    """All variables computed from one ρ (per state unless noted)."""
+
+    rho: np.ndarray              # the input ρ
+    rho_next: np.ndarray         # clip(ρ'), the map's output
+    clipped: np.ndarray          # bool: the clip of A8 was active
+    eta: np.ndarray              # η_t
+    p_taker: np.ndarray          # p_t
+    lam_taker: np.ndarray        # λ_t
+    log_not_taker: np.ndarray    # Σ_{j<k} η_j τ_j along the path (log of 1/Π_{j<k}(1-p_j))
+    p_seeker: np.ndarray         # p_s per OD
+    class_log_q: np.ndarray      # log Q_c per class
+    class_h: np.ndarray          # H_c per class
+    member_log_r: np.ndarray     # log r_t per state
+
+    @property
+    def residual(self) -> float:
+        return float(np.max(np.abs(self.rho_next - self.rho))) if len(self.rho) else 0.0
+
+    @property
+    def clip_count(self) -> int:
+        return int(self.clipped.sum())
+
+
+@dataclass(frozen=True)
+class SolveInfo:
+    converged: bool
+    residual: float
+    iterations: int
+    clip_count: int
+    beta: float                  # damping in force at the end
+    time_s: float
+    history: tuple = ()          # residual per iteration
+
+
+ChunkHook = Callable[[Block, np.ndarray, np.ndarray, np.ndarray], None]
+
+
+def sweep(system: System, class_log_q: np.ndarray, hook: ChunkHook | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """One pass over all seeker lists: returns (H_c per class, log(1 - p_s) per OD).
+
+    ``hook(block, classes, weight, log_q)`` sees each block's pair weights
+    ``λ_s Π_{c' ≻_s c} Q_c'`` and gathered ``log Q_c`` (used by :mod:`.savings`).
+    """
+    n_classes = len(class_log_q)
+    h = np.zeros(n_classes)
+    log_not_paired = np.zeros(len(system.rate_per_s))
+    with np.errstate(divide="ignore"):
+        log_lam = np.where(system.rate_per_s > 0, np.log(system.rate_per_s), _LOG_ZERO)
+    for block in system.matching.blocks:
+        off = block.off
+        if off[-1] == 0:
+            continue
+        c = block.cls.astype(np.intp)                        # one conversion serves gather and bincount
+        v = class_log_q[c]                                   # log Q of each listed class
+        nonempty = np.flatnonzero(off[1:] > off[:-1])
+        starts = off[nonempty]
+        totals = np.add.reduceat(v, starts)                  # log(1 - p_s)
+        seekers = block.s0 + nonempty
+        log_not_paired[seekers] = totals
+        # Exclusive running sum restarted per seeker and started at log λ_s: shift by one and, at
+        # each seeker start, replace the carried sum (previous seeker's total) by log λ_s.
+        run = np.empty_like(v)
+        run[0] = 0.0
+        run[1:] = v[:-1]
+        lam_start = log_lam[seekers]
+        run[starts[1:]] += lam_start[1:] - totals[:-1] - lam_start[:-1]
+        run[0] = lam_start[0]
+        np.cumsum(run, out=run)
+        np.exp(run, out=run)                                 # λ_s Π_{c' ≻ c} Q_c'
+        h += np.bincount(c, weights=run, minlength=n_classes)
+        if hook is not None:
+            hook(block, c, run, v)
+    return h, log_not_paired
+
+
+def evaluate(system: System, rho: np.ndarray, hook: ChunkHook | None = None) -> Evaluation:
+    """All variables of (A1)-(A6) from ρ, and the map's output clip(ρ')."""
+    sp, cfg = system.space, system.config
+    log_1m_rho = np.log1p(-rho)
+    members = sp.class_members
+    in_class = log_1m_rho[members]
+    class_log_q = segment_sums(in_class, sp.class_off)
+    member_log_r = np.empty(sp.n_states)
+    member_log_r[members] = segment_exclusive_cumsum(in_class, sp.class_off)
+    class_h, log_not_paired = sweep(system, class_log_q, hook)
+    p_seeker = -np.expm1(log_not_paired)
+    eta = np.exp(member_log_r) * class_h[sp.cls]
+    x = eta * sp.tau_s
+    p_taker = -np.expm1(-x)
+    log_not_taker = segment_exclusive_cumsum(x, sp.od_state_off)     # Σ_{j<k} η_j τ_j
+    lam_w = system.rate_per_s[sp.od]
+    lam_taker = lam_w * np.exp(log_not_paired[sp.od] - log_not_taker)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        g = np.where(x > 0, p_taker / x, 1.0)                       # (1 - e^{-x})/x, 1 at x = 0
+    load = lam_taker * sp.tau_s * g                                 # Little's law (A5)
+    rho_raw = -np.expm1(-load) if cfg.rho_mode == "poisson" else load
+    clipped = rho_raw > cfg.rho_cap
+    rho_next = np.clip(rho_raw, 0.0, cfg.rho_cap)
+    return Evaluation(rho=rho, rho_next=rho_next, clipped=clipped, eta=eta, p_taker=p_taker, lam_taker=lam_taker,
+                      log_not_taker=log_not_taker, p_seeker=p_seeker, class_log_q=class_log_q, class_h=class_h,
+                      member_log_r=member_log_r)
+
+
+def solve(system: System, *, progress: Callable[[int, float], None] | None = None) -> tuple[Evaluation, SolveInfo]:
+    """Damped fixed-point iteration (§2.6) from ρ = 0; returns the final consistent evaluation.
+
+    With ``config.accel == "anderson"`` each damped step is replaced by an
+    Anderson-accelerated one (type II, depth ``anderson_depth``, on the same
+    damped map; the history restarts whenever the residual grows, so the
+    plain damped step is the fallback).  The fixed point, the stopping rule
+    and the final re-evaluation are the same; only the number of sweeps changes.
+    """
+    cfg = system.config
+    t0 = time.perf_counter()
+    rho = np.zeros(system.space.n_states)
+    beta = cfg.beta
+    history: list[float] = []
+    growing = 0
+    converged = False
+    accel = _Anderson(cfg.anderson_depth) if cfg.accel == "anderson" else None
+    for it in range(1, cfg.max_iter + 1):
+        ev = evaluate(system, rho)
+        res = ev.residual
+        history.append(res)
+        if progress is not None:
+            progress(it, res)
+        if res <= cfg.tol:
+            converged = True
+            break
+        grew = len(history) > 1 and res > history[-2]
+        growing = growing + 1 if grew else 0
+        if growing >= cfg.grow_patience and beta > cfg.beta_floor:
+            beta = max(cfg.beta_floor, beta / 2.0)
+            growing = 0
+        step = beta * (ev.rho_next - rho)
+        if accel is not None:
+            if grew:
+                accel.restart()
+            step = accel.step(rho, ev.rho_next - rho, step, beta)
+        rho = np.clip(rho + step, 0.0, cfg.rho_cap)
+    # The last evaluation already used the final ρ unless the cap was hit with an update after it.
+    if not converged:
+        ev = evaluate(system, rho)
+    info = SolveInfo(converged=converged, residual=ev.residual, iterations=len(history), clip_count=ev.clip_count,
+                     beta=beta, time_s=time.perf_counter() - t0, history=tuple(history))
+    return ev, info
+
+
+class _Anderson:
+    """Type-II Anderson mixing over the last ``depth`` iterates (Walker & Ni 2011)."""
+
+    def __init__(self, depth: int) -> None:
+        self.depth = depth
+        self.restart()
+
+    def restart(self) -> None:
+        self.x_prev = self.f_prev = None
+        self.dx: list[np.ndarray] = []
+        self.df: list[np.ndarray] = []
+
+    def step(self, x: np.ndarray, f: np.ndarray, damped: np.ndarray, beta: float) -> np.ndarray:
+        if self.x_prev is not None:
+            self.dx.append(x - self.x_prev)
+            self.df.append(f - self.f_prev)
+            if len(self.dx) > self.depth:
+                self.dx.pop(0)
+                self.df.pop(0)
+        self.x_prev, self.f_prev = x, f
+        if not self.df:
+            return damped
+        df = np.stack(self.df, axis=1)
+        gamma, *_ = np.linalg.lstsq(df, f, rcond=None)
+        if not np.all(np.isfinite(gamma)):
+            self.restart()
+            return damped
+        return damped - (np.stack(self.dx, axis=1) + beta * df) @ gamma

@@ -1,0 +1,234 @@
+"""The public entry point: :func:`predict` and the :class:`Prediction` the dispatcher queries.
+
+``predict(network, rates, params, config)`` builds the states (:mod:`.states`)
+and matching sets (:mod:`.matching`), solves the fixed point
+(:mod:`.fixed_point`), derives the expected savings (:mod:`.savings`) and
+caches the result on disk (:mod:`.cache`).  The heavy matching structure is
+not kept: a :class:`Prediction` holds per-OD and per-state arrays only.
+"""
+
+from __future__ import annotations
+
+import resource
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from ..exceptions import ParameterError
+from ..network import RoadNetwork
+from ..scenario import Params
+from . import cache
+from .config import PredictConfig
+from .fixed_point import SolveInfo, System, solve
+from .matching import Matching, build_matching
+from .rates import OdRates
+from .savings import Outcome, outcome
+from .states import StateSpace, build_states
+
+
+@dataclass(frozen=True)
+class Lookup:
+    """Per-passenger predictions for arrays of (origin, destination) node indices (0 where unknown)."""
+
+    e_vacant: np.ndarray       # ē(p): expected saving when matched with a vacant vehicle (Eq. 9)
+    p_seeker: np.ndarray       # p_s(w)
+    e_seeker: np.ndarray       # ē(s(w)) (Eq. 11)
+    pairing_prob: np.ndarray   # P_w
+    known: np.ndarray          # bool: the OD is in the rate table
+
+
+@dataclass(frozen=True, eq=False)
+class Model:
+    """The full model before solving: states, matching sets and rates (large; not cached)."""
+
+    network: RoadNetwork
+    rates: OdRates
+    params: Params
+    config: PredictConfig
+    space: StateSpace
+    matching: Matching
+    build_s: dict
+
+    @property
+    def system(self) -> System:
+        return System.build(self.space, self.matching, self.rates.rate_per_s, self.config)
+
+
+@dataclass(frozen=True, eq=False)
+class Prediction:
+    """Solved prediction: per-OD and per-state results plus solver facts."""
+
+    node_id: np.ndarray                    # file node ids of the network (index -> id)
+    rates: OdRates
+    params: dict
+    config: PredictConfig
+    od: Outcome
+    state_od: np.ndarray                   # per state: OD index
+    state_k: np.ndarray                    # per state: k (0 = origin state)
+    state_head: np.ndarray                 # per state: head node index
+    state_tau_s: np.ndarray
+    rho: np.ndarray
+    p_taker: np.ndarray
+    eta: np.ndarray
+    lam_taker: np.ndarray
+    info: dict                             # summary facts (see summary())
+    from_cache: bool = False
+    _keys: np.ndarray = field(default=None, repr=False)
+
+    # ------------------------------------------------------------------ queries
+    def _index(self, origins, destinations) -> tuple[np.ndarray, np.ndarray]:
+        o = np.asarray(origins, dtype=np.int64)
+        d = np.asarray(destinations, dtype=np.int64)
+        n = len(self.node_id)
+        keys = self.rates.key(n)
+        q = o * n + d
+        pos = np.clip(np.searchsorted(keys, q), 0, max(len(keys) - 1, 0))
+        known = (keys[pos] == q) if len(keys) else np.zeros(q.shape, dtype=bool)
+        return pos, known
+
+    def lookup(self, origins, destinations) -> Lookup:
+        """ē(p), p_s, ē(s), P_w for OD node-index arrays; an OD missing from the table gets 0 (§2.1)."""
+        pos, known = self._index(origins, destinations)
+
+        def take(values: np.ndarray) -> np.ndarray:
+            return np.where(known, values[pos], 0.0) if len(values) else np.zeros(pos.shape)
+
+        od = self.od
+        return Lookup(e_vacant=take(od.e_vacant), p_seeker=take(od.p_seeker), e_seeker=take(od.e_seeker),
+                      pairing_prob=take(od.pairing_prob), known=known)
+
+    def e_wait(self, origins, destinations, k_p, params: Params) -> np.ndarray:
+        """ē(0,p) of Eq. (10'): ``[1 - (1 - r_w)^{n_rem}] [p_s ē(s) + (1 - p_s) ē(p)]``.
+
+        ``n_rem = max(0, floor(K̄/Δt) - k_p)`` with the planner patience K̄ (A10);
+        ``k_p`` is the passenger's round number (1 at the first batch that sees it).
+        """
+        pos, known = self._index(origins, destinations)
+        k_p = np.asarray(k_p, dtype=np.float64)
+        rounds = np.floor(params.planner_patience_s / params.dt_s + 1e-9)
+        n_rem = np.maximum(0.0, rounds - k_p)
+        reach = 1.0 - (1.0 - params.response_rate) ** n_rem
+        bracket = self.od.e_bracket
+        return np.where(known, reach * (bracket[pos] if len(bracket) else 0.0), 0.0)
+
+    # ------------------------------------------------------------------ reports
+    def per_od_table(self) -> pd.DataFrame:
+        """One row per OD: rates, probabilities, expected distances and savings (metres).
+
+        Columns ``matching_prob`` .. ``saved_distance_for_seeker`` follow the
+        definitions of the authors' published predictions (A12: not doubled).
+        """
+        od, r = self.od, self.rates
+        lam = r.rate_per_s
+        return pd.DataFrame({
+            "od_id": r.od_id, "origin_id": self.node_id[r.origin], "destination_id": self.node_id[r.destination],
+            "rate_per_s": lam, "solo_distance": od.solo_m,
+            "p_seeker": od.p_seeker, "matching_prob": od.pairing_prob, "p_paired_as_taker": od.taker_paired,
+            "e_seeker": od.e_seeker, "e_vacant": od.e_vacant, "e_assigned": od.e_bracket,
+            "ride_distance": od.ride_m, "detour_distance": od.detour_m, "shared_distance": od.shared_m,
+            "saved_distance": od.e_bracket,
+            "ride_distance_for_taker": od.taker_ride_m, "detour_distance_for_taker": od.taker_detour_m,
+            "shared_distance_for_taker": od.taker_shared_m, "saved_distance_for_taker": od.e_vacant,
+            "ride_distance_for_seeker": od.p_seeker * (od.solo_m + od.seeker_detour_m)
+            + (1.0 - od.p_seeker) * od.solo_m,
+            "detour_distance_for_seeker": od.p_seeker * od.seeker_detour_m,
+            "shared_distance_for_seeker": od.p_seeker * od.seeker_shared_m,
+            "saved_distance_for_seeker": od.p_seeker * od.e_seeker,
+        })
+
+    def summary(self) -> dict[str, Any]:
+        """Facts for ``rpbench predict --json`` (ODs, states, pairs, iterations, residual, converged, ...)."""
+        lam = self.rates.rate_per_s
+        total = float(lam.sum())
+        out = dict(self.info)
+        out.update({
+            "from_cache": self.from_cache,
+            "mean_pairing_prob": float((lam * self.od.pairing_prob).sum() / total) if total > 0 else 0.0,
+            "mean_p_seeker": float((lam * self.od.p_seeker).sum() / total) if total > 0 else 0.0,
+        })
+        return out
+
+
+# ---------------------------------------------------------------------- build
+def build_model(network: RoadNetwork, rates: OdRates, params: Params | None = None,
+                config: PredictConfig | None = None) -> Model:
+    """States and matching sets (the expensive, uncached part)."""
+    params = params or Params()
+    config = config or PredictConfig()
+    if len(rates) and (rates.origin.max() >= network.n_nodes or rates.destination.max() >= network.n_nodes):
+        raise ParameterError("OD rates refer to nodes outside this network; build them for the same network")
+    t0 = time.perf_counter()
+    oracle = network.distances()
+    dist = np.ascontiguousarray(oracle.dist)
+    dist_t = np.ascontiguousarray(dist.T)
+    t1 = time.perf_counter()
+    space = build_states(network, oracle, rates, tau0_s=config.tau0_s, speed_mps=params.speed_mps,
+                         include_origin_state=config.include_origin_state)
+    t2 = time.perf_counter()
+    matching = build_matching(space, rates, dist, params, config, dist_t)
+    t3 = time.perf_counter()
+    return Model(network, rates, params, config, space, matching,
+                 {"distances_s": t1 - t0, "states_s": t2 - t1, "matching_s": t3 - t2})
+
+
+def solve_model(model: Model, *, progress=None) -> Prediction:
+    """Solve the fixed point of a built model and derive the per-OD outcome."""
+    system = model.system
+    ev, info = solve(system, progress=progress)
+    t0 = time.perf_counter()
+    ev, out = outcome(system, ev.rho)
+    savings_s = time.perf_counter() - t0
+    return _prediction(model, ev, out, info, savings_s)
+
+
+def predict(network: RoadNetwork, rates: OdRates, params: Params | None = None,
+            config: PredictConfig | None = None, *, use_cache: bool = True, progress=None) -> Prediction:
+    """The prediction for ``rates`` on ``network`` (cached on disk by inputs, parameters and network)."""
+    params = params or Params()
+    config = config or PredictConfig()
+    key = cache.cache_key(network, rates, params, config)
+    if use_cache:
+        hit = cache.load(key, network, rates, config)
+        if hit is not None:
+            return hit
+    t0 = time.perf_counter()
+    model = build_model(network, rates, params, config)
+    prediction = solve_model(model, progress=progress)
+    del model
+    prediction.info["time_s"] = round(time.perf_counter() - t0, 4)
+    prediction.info["peak_rss_mb"] = round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0, 1)
+    if use_cache:
+        cache.save(key, prediction)
+    return prediction
+
+
+def _prediction(model: Model, ev, out: Outcome, info: SolveInfo, savings_s: float) -> Prediction:
+    sp, m = model.space, model.matching
+    relevant = {k: getattr(model.params, k) for k in cache.PARAM_FIELDS}
+    facts = {
+        "rates_source": model.rates.source,
+        "ods": len(model.rates),
+        "orders_per_hour": round(float(model.rates.rate_per_s.sum()) * 3600.0, 3),
+        "states": sp.n_states,
+        "taker_classes": sp.n_classes,
+        "candidate_pairs": m.n_state_pairs(sp),
+        "class_pairs": m.n_pairs,
+        "stage1_candidates": int(m.stats.get("stage1_candidates", 0)),
+        "iterations": info.iterations,
+        "residual": info.residual,
+        "converged": bool(info.converged),
+        "clip_count": info.clip_count,
+        "beta_final": info.beta,
+        "timings_s": {**{k: round(v, 4) for k, v in model.build_s.items()},
+                      "solve_s": round(info.time_s, 4), "savings_s": round(savings_s, 4)},
+        "matching_mb": round(m.nbytes / 2**20, 1),
+        "params": relevant,
+        "config": model.config.as_dict(),
+    }
+    return Prediction(node_id=model.network.node_id, rates=model.rates, params=relevant, config=model.config,
+                      od=out, state_od=sp.od, state_k=sp.k, state_head=sp.head, state_tau_s=sp.tau_s,
+                      rho=ev.rho, p_taker=ev.p_taker, eta=ev.eta, lam_taker=ev.lam_taker, info=facts)
+

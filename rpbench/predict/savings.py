@@ -1,0 +1,118 @@
+"""Expected savings and distances from a solved fixed point (ALGORITHMS.md §2.7, paper Eqs. 8-11).
+
+One more sweep over the seeker lists with the final ρ accumulates, per taker
+class c, the opportunity-weighted sums ``Σ_s η^s E`` (weights
+``λ_s Π_{c' ≻_s c} Q_c'``) and, per seeker, the pairing-rate-weighted sums
+``Σ_t ρ_t η_t^s E`` (over a class: ``λ_s Π_{c' ≻ c} Q_c' (1 - Q_c)``, by
+telescoping).  Then::
+
+    (8')  ē(t)   = Σ_s η_t^s E / Σ_s η_t^s                     (0 when η_t = 0)
+    (9')  ē(p)   = Σ_k π_k ē(t_k),  π_k = p_{t_k} Π_{j<k} (1 - p_{t_j})
+    (11') ē(s)   = Σ_t E ρ_t η_t^s / Σ_t ρ_t η_t^s            (0 when p_s = 0)
+          P_w    = p_s + (1 - p_s) Σ_k π_k
+    (10') ē(0,p) = [1 - (1 - r_w)^{n_rem}] [p_s ē(s) + (1 - p_s) ē(p)]   (at dispatch time, see Prediction.e_wait)
+
+The same weights give the TR-B per-OD outputs: expected ride, shared and
+detour distance (unconditional, as a seeker, as a taker), in the column
+conventions of the authors' published predictions (A12: savings are *not*
+doubled; ``E`` is already the pair's total saving).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ._arrays import segment_sums
+from .fixed_point import Evaluation, System, evaluate
+
+
+@dataclass(frozen=True, eq=False)
+class Outcome:
+    """Per-OD and per-state results (arrays; distances in metres)."""
+
+    # per OD
+    p_seeker: np.ndarray              # p_s
+    pairing_prob: np.ndarray          # P_w
+    taker_paired: np.ndarray          # Σ_k π_k: P(paired | became a taker)
+    e_seeker: np.ndarray              # ē(s)
+    e_vacant: np.ndarray              # ē(p)
+    solo_m: np.ndarray                # l_w
+    seeker_detour_m: np.ndarray       # mean detour when paired as seeker
+    seeker_shared_m: np.ndarray       # mean shared distance when paired as seeker
+    taker_ride_m: np.ndarray          # E[ride | taker] (unpaired takers ride l_w)
+    taker_detour_m: np.ndarray        # E[detour | taker]
+    taker_shared_m: np.ndarray        # E[shared | taker]
+    ride_m: np.ndarray                # E[ride]  (TR-B L_w)
+    shared_m: np.ndarray              # E[shared] (TR-B E_w)
+    # per state
+    e_taker: np.ndarray               # ē(t)
+    state_pair_prob: np.ndarray       # π_k (conditional on being a taker)
+    state_ride_m: np.ndarray          # taker's ride when paired in this state
+    state_shared_m: np.ndarray
+    state_detour_m: np.ndarray
+
+    @property
+    def detour_m(self) -> np.ndarray:
+        return self.ride_m - self.solo_m
+
+    @property
+    def e_bracket(self) -> np.ndarray:
+        """``p_s ē(s) + (1 - p_s) ē(p)``: the expected saving once assigned (second bracket of Eq. 10)."""
+        return self.p_seeker * self.e_seeker + (1.0 - self.p_seeker) * self.e_vacant
+
+
+class _Accumulator:
+    """Sweep hook summing pair quantities with the final weights."""
+
+    def __init__(self, system: System) -> None:
+        n_classes, n_od = system.space.n_classes, len(system.rate_per_s)
+        self.cls_sums = np.zeros((4, n_classes))     # Σ w, Σ w E, Σ w shared, Σ w seeker-detour
+        self.seek_sums = np.zeros((4, n_od))         # same with w' = w (1 - Q_c)
+
+    def __call__(self, block, c, weight, log_q) -> None:
+        n_classes = self.cls_sums.shape[1]
+        pair = weight * -np.expm1(log_q)             # pairing rate of the seeker with class c (telescoped)
+        s0, s1, off = block.s0, block.s1, block.off
+        self.seek_sums[0, s0:s1] += segment_sums(pair, off)
+        for i, values in enumerate((block.saving_m, block.shared_m, block.seeker_detour_m), start=1):
+            self.cls_sums[i] += np.bincount(c, weights=weight * values, minlength=n_classes)
+            self.seek_sums[i, s0:s1] += segment_sums(pair * values, off)
+
+
+def outcome(system: System, rho: np.ndarray) -> tuple[Evaluation, Outcome]:
+    """Re-evaluate the map at ``rho`` (the solver's final ρ) and derive every expected quantity."""
+    acc = _Accumulator(system)
+    ev = evaluate(system, rho, hook=acc)
+    sp = system.space
+    h = ev.class_h
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cls_mean = np.where(h > 0, acc.cls_sums[1:] / h, 0.0)           # E, shared, seeker detour | class
+        s_rate = acc.seek_sums[0]
+        seek_mean = np.where(s_rate > 0, acc.seek_sums[1:] / s_rate, 0.0)
+    e_cls, shared_cls, sdet_cls = cls_mean
+    c = sp.cls
+    e_taker = e_cls[c]
+    state_shared = shared_cls[c]
+    ride_from_h = sp.class_rest_m[c] - e_cls[c] - sdet_cls[c] + state_shared
+    state_ride = sp.delta_m + ride_from_h
+    solo = sp.solo_m
+    state_detour = state_ride - solo[sp.od]
+    pi = ev.p_taker * np.exp(-ev.log_not_taker)                        # P(paired in state k | taker)
+    off = sp.od_state_off
+    taker_paired = segment_sums(pi, off)
+    e_vacant = segment_sums(pi * e_taker, off)
+    taker_ride = segment_sums(pi * state_ride, off) + (1.0 - taker_paired) * solo
+    taker_detour = segment_sums(pi * state_detour, off)
+    taker_shared = segment_sums(pi * state_shared, off)
+    p_s = ev.p_seeker
+    e_seeker, seeker_shared, seeker_detour = seek_mean
+    ride = p_s * (solo + seeker_detour) + (1.0 - p_s) * taker_ride
+    shared = p_s * seeker_shared + (1.0 - p_s) * taker_shared
+    return ev, Outcome(
+        p_seeker=p_s, pairing_prob=p_s + (1.0 - p_s) * taker_paired, taker_paired=taker_paired,
+        e_seeker=e_seeker, e_vacant=e_vacant, solo_m=solo, seeker_detour_m=seeker_detour,
+        seeker_shared_m=seeker_shared, taker_ride_m=taker_ride, taker_detour_m=taker_detour,
+        taker_shared_m=taker_shared, ride_m=ride, shared_m=shared, e_taker=e_taker, state_pair_prob=pi,
+        state_ride_m=state_ride, state_shared_m=state_shared, state_detour_m=state_detour)
