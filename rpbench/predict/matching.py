@@ -128,13 +128,13 @@ class Matching:
 
 
 def build_matching(space: StateSpace, rates: OdRates, dist: np.ndarray, params: Params,
-                   config: PredictConfig, dist_t: np.ndarray | None = None) -> Matching:
+                   config: PredictConfig) -> Matching:
     """Matching sets of every seeker (see the module docstring for the method)."""
     t0 = time.perf_counter()
     writer = _BlockWriter(len(rates))
     origin = rates.origin
     if len(origin):
-        builder = _Builder(space, rates, dist, params, config, dist_t)
+        builder = _Builder(space, rates, dist, params, config)
         bounds = np.flatnonzero(np.diff(origin)) + 1
         starts = np.concatenate([[0], bounds]).astype(np.int64)
         ends = np.concatenate([bounds, [len(origin)]]).astype(np.int64)
@@ -205,10 +205,9 @@ class _Builder:
     """Per-origin construction of the sorted matching lists."""
 
     def __init__(self, space: StateSpace, rates: OdRates, dist: np.ndarray, params: Params,
-                 config: PredictConfig, dist_t: np.ndarray | None) -> None:
+                 config: PredictConfig) -> None:
         self.space, self.config = space, config
         self.dist = dist
-        self.dist_t = np.ascontiguousarray(dist.T) if dist_t is None else dist_t
         self.r_lim = params.max_pickup_m + TOLERANCE_M
         self.d_lim = params.max_detour_m + TOLERANCE_M
         self.dest = rates.destination.astype(np.int64)
@@ -222,11 +221,12 @@ class _Builder:
     def origin_block(self, o: int, w0: int, w1: int, writer: _BlockWriter) -> None:
         """Sorted lists of the seekers ``w0..w1-1`` (all with origin ``o``), handed to ``writer``."""
         sp, cfg = self.space, self.config
-        near = np.flatnonzero(self.dist_t[o] <= self.r_lim)                 # l(h, o) <= R̄
+        to_o = np.ascontiguousarray(self.dist[:, o])                          # l(h, o) for every node h
+        near = np.flatnonzero(to_o <= self.r_lim)                            # within R̄ of the seekers
         cand = expand_ranges(self.head_off[near], self.head_off[near + 1])   # sorted by class index
         self.stats["stage1_candidates"] += len(cand)
         row_o = self.dist[o]
-        p = self.dist_t[o][sp.class_head[cand]]
+        p = to_o[sp.class_head[cand]]
         pk = sp.class_pre_m[cand] + p
         rest = sp.class_rest_m[cand]
         d_a = sp.class_dest[cand]
@@ -249,7 +249,7 @@ class _Builder:
         d_b = self.dest[w0:w1]
         l_b = self.solo[w0:w1][:, None]
         d_ba = self.dist[np.ix_(d_b, g.dest)]                    # l(d_B, d_A)   (m x U)
-        d_ab = self.dist_t[np.ix_(d_b, g.dest)]                  # l(d_A, d_B)
+        d_ab = self.dist[np.ix_(g.dest, d_b)].T                  # l(d_A, d_B)
         f_ok = (g.d_oa + d_ab - l_b <= self.d_lim).ravel()       # FOFO detour of B
         g_f = (l_b - g.d_oa - d_ab).ravel()                      # E_FOFO = g_f - a
         g_l = (-d_ba).ravel()                                    # E_FOLO = g_l - a
@@ -425,9 +425,9 @@ def _priority(kind: str, e, pk, shared, seeker_detour, rest, l_b) -> np.ndarray:
     """Priority value of each entry, larger = served first (§2.4)."""
     if kind == "net_saving":
         return e - pk
-    if kind == "fl_utility":                     # e²/(e+pk), the FL V1 utility (Eq. 15) without α^k
-        with np.errstate(divide="ignore", invalid="ignore"):
-            return np.where(e > 0, e * e / (e + pk), e - pk)
+    if kind == "fl_utility":                     # e²/(e+pk), the FL V1 utility (Eq. 15) without α^k;
+        with np.errstate(divide="ignore", invalid="ignore"):     # e <= 0 (kept on request): e, continuous at 0
+            return np.where(e > 0, e * e / (e + pk), e)
     if kind == "pickup":                         # nearest first (the TR-B simulators)
         return -pk
     if kind == "vehicle_distance":               # ascending distance the vehicle drives from h

@@ -163,12 +163,11 @@ def build_model(network: RoadNetwork, rates: OdRates, params: Params | None = No
     t0 = time.perf_counter()
     oracle = network.distances()
     dist = np.ascontiguousarray(oracle.dist)
-    dist_t = np.ascontiguousarray(dist.T)
     t1 = time.perf_counter()
     space = build_states(network, oracle, rates, tau0_s=config.tau0_s, speed_mps=params.speed_mps,
                          include_origin_state=config.include_origin_state)
     t2 = time.perf_counter()
-    matching = build_matching(space, rates, dist, params, config, dist_t)
+    matching = build_matching(space, rates, dist, params, config)
     t3 = time.perf_counter()
     return Model(network, rates, params, config, space, matching,
                  {"distances_s": t1 - t0, "states_s": t2 - t1, "matching_s": t3 - t2})

@@ -101,7 +101,8 @@ def outcome(system: System, rho: np.ndarray) -> tuple[Evaluation, Outcome]:
     state_detour = state_ride - solo[sp.od]
     pi = ev.p_taker * np.exp(-ev.log_not_taker)                        # P(paired in state k | taker)
     off = sp.od_state_off
-    taker_paired = segment_sums(pi, off)
+    x = ev.eta * sp.tau_s
+    taker_paired = -np.expm1(-segment_sums(x, off))                    # Σ_k π_k, telescoped (never > 1)
     e_vacant = segment_sums(pi * e_taker, off)
     taker_ride = segment_sums(pi * state_ride, off) + (1.0 - taker_paired) * solo
     taker_detour = segment_sums(pi * state_detour, off)
@@ -111,7 +112,7 @@ def outcome(system: System, rho: np.ndarray) -> tuple[Evaluation, Outcome]:
     ride = p_s * (solo + seeker_detour) + (1.0 - p_s) * taker_ride
     shared = p_s * seeker_shared + (1.0 - p_s) * taker_shared
     return ev, Outcome(
-        p_seeker=p_s, pairing_prob=p_s + (1.0 - p_s) * taker_paired, taker_paired=taker_paired,
+        p_seeker=p_s, pairing_prob=np.minimum(1.0, p_s + (1.0 - p_s) * taker_paired), taker_paired=taker_paired,
         e_seeker=e_seeker, e_vacant=e_vacant, solo_m=solo, seeker_detour_m=seeker_detour,
         seeker_shared_m=seeker_shared, taker_ride_m=taker_ride, taker_detour_m=taker_detour,
         taker_shared_m=taker_shared, ride_m=ride, shared_m=shared, e_taker=e_taker, state_pair_prob=pi,

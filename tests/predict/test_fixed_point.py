@@ -60,7 +60,7 @@ def test_vectorised_map_equals_reference(seed, rate, tau0):
 
 # ---------------------------------------------------------------- invariants
 @settings(max_examples=15, deadline=None)
-@given(seed=st.integers(0, 10_000), rate=st.sampled_from([1.0, 10.0, 60.0]),
+@given(seed=st.integers(0, 10_000), rate=st.sampled_from([1.0, 10.0, 60.0, 300.0]),
        priority=st.sampled_from(["net_saving", "pickup", "vehicle_distance", "authors_feng_grid"]))
 def test_invariants_at_the_fixed_point(seed, rate, priority):
     inst = make_instance(seed=seed, size=5, n_od=14, rate_per_h=rate, priority=priority)

@@ -29,11 +29,12 @@ def brute_force(model, w):
                max_pickup_m=model.params.max_pickup_m, max_detour_m=model.params.max_detour_m,
                order_rule=cfg.order_rule)
     ok = res.feasible if cfg.keep_nonpositive else res.feasible & (res.saving > 0)
-    ambiguous = set(t[res.feasible & (np.abs(res.saving) <= AMBIGUOUS_M)]) if not cfg.keep_nonpositive else set()
+    # |E| this small: rounding decides its sign (and, kept, its place) while the model computes E = 0.
+    ambiguous = set(t[res.feasible & (np.abs(res.saving) <= AMBIGUOUS_M)].tolist())
     idx = t[ok]
     e, pk = res.saving[ok], res.pk[ok]
     prio = {"net_saving": e - pk, "pickup": -pk,
-            "fl_utility": np.where(e > 0, e * e / np.maximum(e + pk, 1e-300), e - pk)}[cfg.priority]
+            "fl_utility": np.where(e > 0, e * e / np.maximum(e + pk, 1e-300), e)}[cfg.priority]
     order = np.lexsort((sp.k[idx], sp.od[idx], sp.cls[idx], np.floor(pk * GRID), np.floor(-prio * GRID)))
     return idx[order], e[order], ambiguous, res
 
@@ -50,6 +51,8 @@ def check_against_brute_force(model):
     for w in range(len(model.rates)):
         expected, e_exp, ambiguous, _ = brute_force(model, w)
         got, e_got = model_list(model, w)
+        if model.config.keep_nonpositive:           # feasibility does not depend on the sign of E
+            assert ambiguous <= set(got.tolist()) and ambiguous <= set(expected.tolist())
         if ambiguous:
             got_keep, exp_keep = ~np.isin(got, list(ambiguous)), ~np.isin(expected, list(ambiguous))
             got, e_got, expected, e_exp = got[got_keep], e_got[got_keep], expected[exp_keep], e_exp[exp_keep]
