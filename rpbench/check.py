@@ -74,8 +74,9 @@ def check_folder(folder: str | Path) -> list[RunCheck]:
     out = []
     for name in names:
         run_dir = folder / "runs" / name
-        if not (run_dir / "events.csv.gz").is_file():
-            continue       # oracle runs carry pairs, not event logs
+        if (run_dir / "pairs.csv.gz").is_file():
+            out.append(_check_oracle(name, run_dir, meta, orders, solo, dist, reported[reported["run"] == name]))
+            continue
         rc = RunCheck(name)
         events = results.read_csv(run_dir / "events.csv.gz")
         traj = results.load_trajectories(run_dir / "trajectories.npz")
@@ -266,6 +267,56 @@ def _check_kpis(rc: RunCheck, events, orders, solo, traj, params: Params, report
         if not np.isclose(rep, value, rtol=KPI_RTOL, atol=1e-6):
             rc.fail("kpi", f"KPI {key}: reported {rep!r}, recomputed {value!r}")
     rc.checked["kpis"] = len(recomputed)
+
+
+# --------------------------------------------------------------------- oracle
+def _check_oracle(name: str, run_dir: Path, meta: dict, orders: pd.DataFrame, solo: np.ndarray, dist: np.ndarray,
+                  reported: pd.DataFrame) -> RunCheck:
+    """An oracle run: a matching of feasible pairs (§4.2) whose KPIs equal the reported ones."""
+    from .geometry import pool
+    rc = RunCheck(name)
+    rules = meta["runs"][name]["rules"]
+    pairs = results.read_csv(run_dir / "pairs.csv.gz")
+    index = pd.Series(np.arange(len(orders)), index=orders["order_id"].to_numpy())
+    unknown = ~pairs["first_id"].isin(index.index) | ~pairs["second_id"].isin(index.index)
+    if unknown.any():
+        rc.fail("oracle-pairs", f"{int(unknown.sum())} pairs name unknown order ids")
+        return rc
+    a = index[pairs["first_id"]].to_numpy()
+    b = index[pairs["second_id"]].to_numpy()
+    counts = np.bincount(np.concatenate([a, b]), minlength=len(orders))
+    if (counts > 1).any():
+        rc.fail("oracle-pairs", f"order {int(np.argmax(counts))} appears in {int(counts.max())} pairs")
+    req = orders["request_s"].to_numpy()
+    late = np.abs(req[b] - req[a]) > rules["planner_patience_s"] + TOL_S
+    if late.any():
+        rc.fail("oracle-pairs", f"{int(late.sum())} pairs request more than K̄ apart")
+    direct = ~pairs["enroute"].to_numpy().astype(bool)
+    o, d = orders["origin"].to_numpy(), orders["destination"].to_numpy()
+    r = pool(dist, o[a[direct]], d[a[direct]], o[b[direct]], d[b[direct]],
+             max_pickup_m=rules["max_pickup_m"] if rules["pickup_check"] else np.inf,
+             max_detour_m=rules["max_detour_m"], order_rule=rules["order_rule"])
+    if not r.feasible.all():
+        rc.fail("oracle-pairs", f"{int((~r.feasible).sum())} pairs are not feasible under the rules")
+    if not np.allclose(r.saving, pairs["saving_m"].to_numpy()[direct], rtol=0, atol=1e-6):
+        rc.fail("oracle-pairs", "stored pair savings differ from the recomputed POOL savings")
+    over = np.maximum(pairs["detour_first_m"], pairs["detour_second_m"]) > rules["max_detour_m"] + TOL_M
+    if over.any():
+        rc.fail("max-detour", f"{int(over.sum())} pairs detour a passenger by more than D̄")
+    have = dict(zip(reported["kpi"], reported["value"]))
+    n = len(orders)
+    detours = np.concatenate([pairs["detour_first_m"], pairs["detour_second_m"]])
+    recomputed = {"orders": n, "pairs": len(pairs), "pooled_passengers": 2 * len(pairs),
+                  "pairing_ratio": 2 * len(pairs) / n if n else float("nan"),
+                  "avg_detour_m": float(detours.mean()) if len(pairs) else float("nan"),
+                  "avg_shared_m": float(pairs["shared_m"].mean()) if len(pairs) else float("nan"),
+                  "total_saving_km": float(pairs["saving_m"].sum()) / 1000.0}
+    for key, value in recomputed.items():
+        rep = float(have.get(key, np.nan))
+        if not (np.isnan(value) and np.isnan(rep)) and not np.isclose(rep, value, rtol=KPI_RTOL, atol=1e-6):
+            rc.fail("kpi", f"KPI {key}: reported {rep!r}, recomputed {value!r}")
+    rc.checked.update({"pairs": len(pairs), "orders": n})
+    return rc
 
 
 def format_report(checks: list[RunCheck]) -> str:

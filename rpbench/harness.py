@@ -9,6 +9,7 @@ with a report.  The offline oracles join the comparison as runs named
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 import time
 from dataclasses import dataclass, field
@@ -96,20 +97,32 @@ def evaluate(scenario: Scenario, sim: SimResult, name: str, options: dict[str, A
 
 def run_comparison(scenario: Scenario, strategies: list[str], preset_name: str, *, out: str | Path | None = None,
                    strategy_options: dict[str, dict[str, Any]] | None = None, progress: bool | None = None,
-                   scenario_args: dict[str, Any] | None = None, command: str | None = None) -> tuple[Path, pd.DataFrame]:
-    """Run every strategy (and oracle) on ``scenario`` and write one results folder."""
+                   scenario_args: dict[str, Any] | None = None, command: str | None = None,
+                   oracle_solver: str | None = None) -> tuple[Path, pd.DataFrame]:
+    """Run every strategy (and oracle) on ``scenario`` and write one results folder.
+
+    The oracles are solved with ``oracle_solver`` (a preset name), by default
+    the comparison's own preset.
+    """
     preset = load_preset(preset_name)
     strategy_options = strategy_options or {}
     runs: list[StrategyRun] = []
     oracle_results = {}
+    done: dict[str, StrategyRun] = {}
     for name in strategies:
         if name in ORACLES:
             continue
-        runs.append(simulate_strategy(scenario, name, preset, options=strategy_options.get(name), progress=progress))
-    for name in strategies:
-        if name in ORACLES:
-            from .oracle import solve_oracle_for_harness
-            oracle_results[name] = solve_oracle_for_harness(scenario, name, preset)
+        options = dict(strategy_options.get(name) or {})
+        if name in CALIBRATED:
+            options = calibrated_options(scenario, preset, options, done, progress)
+        run = done.get(name) if name == "mb" and not options else None
+        run = run or simulate_strategy(scenario, name, preset, options=options, progress=progress)
+        done[name] = run
+        runs.append(run)
+    wanted = [n for n in strategies if n in ORACLES]
+    if wanted:
+        oracle_preset = load_preset(oracle_solver) if oracle_solver else preset
+        oracle_results = solve_oracles(scenario, wanted, oracle_preset, strategy_options)
     table = kpi_table(runs, oracle_results, strategies)
     stamp = results.timestamp()
     default = f"{stamp}_{scenario.name}_{preset.name}"
@@ -119,11 +132,66 @@ def run_comparison(scenario: Scenario, strategies: list[str], preset_name: str, 
     return final, table
 
 
+CALIBRATED = ("fl", "fl-nd")
+
+
+def calibrated_options(scenario: Scenario, preset: Preset, options: dict[str, Any], done: dict[str, StrategyRun],
+                       progress: bool | None) -> dict[str, Any]:
+    """Fill FL's ``tau0_s`` (A4) and ``mean_pickup_m`` (l̄) from an MB calibration run on the same scenario.
+
+    ALGORITHMS.md §1-§2: τ_0 = the mean pick-up time and l̄ = the mean pick-up
+    distance of an MB run "for the same hour" — per hour when the scenario
+    spans several.  The MB run is shared with the comparison's own MB column
+    (it is deterministic, so running it once or twice gives the same numbers).
+    """
+    if "tau0_s" in options and "mean_pickup_m" in options:
+        return options
+    mb = done.get("mb")
+    if mb is None:
+        mb = simulate_strategy(scenario, "mb", preset, progress=progress)
+        done["mb"] = mb
+    hours = max(1, int(np.ceil(scenario.horizon_s / 3600.0)))
+    if hours == 1:
+        values = {"tau0_s": mb.kpis["avg_pickup_time_s"], "mean_pickup_m": mb.kpis["avg_pickup_distance_m"]}
+    else:
+        h = mb.hourly.set_index("hour").reindex(range(hours))
+        values = {"tau0_s": [round(float(x), 3) for x in h["avg_pickup_time_s"]],
+                  "mean_pickup_m": [round(float(x), 3) for x in h["avg_pickup_m"]]}
+    return {**{k: v for k, v in values.items() if k not in options}, **options}
+
+
+ORACLE_FLAGS = ("both_pickup_orders", "pickup_check", "allow_enroute")
+
+
+def solve_oracles(scenario: Scenario, names: list[str], preset: Preset, strategy_options: dict) -> dict:
+    """Oracle-1/Oracle-2 over the scenario's orders, sharing one candidate enumeration when the rules agree."""
+    from .oracle import PairRules, find_candidates, solve_oracle
+    out = {}
+    cache: dict = {}
+    for name in names:
+        flags = dict(strategy_options.get(name) or {})
+        unknown = set(flags) - set(ORACLE_FLAGS)
+        if unknown:
+            raise ParameterError(f"{name}: unknown option(s) {', '.join(sorted(unknown))}; known: "
+                                 f"{', '.join(ORACLE_FLAGS)}")
+        rules = PairRules.from_params(scenario.params, **{k: bool(v) for k, v in flags.items()})
+        if rules not in cache:
+            cache[rules] = find_candidates(scenario.network.distances(), scenario.orders, rules)
+        out[name] = solve_oracle(scenario, 1 if name == "oracle1" else 2, preset, candidates=cache[rules])
+    return out
+
+
+def oracle_kpis(result) -> dict[str, float]:
+    """The numeric KPIs of an oracle result (solver facts go to meta.json)."""
+    return {k: float(v) for k, v in result.kpis().items() if isinstance(v, (int, float, np.number))
+            and not isinstance(v, bool) and k not in ("variant",)}
+
+
 def kpi_table(runs: list[StrategyRun], oracle_results: dict, order: list[str]) -> pd.DataFrame:
     """Wide table: KPI rows x run columns (in the requested order), with the competitive ratio."""
     cols = {r.name: r.kpis for r in runs}
     for name, res in oracle_results.items():
-        cols[name] = res.kpis()
+        cols[name] = oracle_kpis(res)
     frame = pd.DataFrame({name: cols[name] for name in order if name in cols})
     if "oracle1" in frame.columns and "total_saving_km" in frame.index:
         best = frame.loc["total_saving_km", "oracle1"]
@@ -156,9 +224,14 @@ def write_folder(folder: Path, scenario: Scenario, runs: list[StrategyRun], orac
     for name, res in oracle_results.items():
         d = folder / "runs" / name
         d.mkdir(parents=True)
-        res.pairs_frame().to_csv(d / "pairs.csv.gz", index=False)
-        tidy += [{"run": name, "kpi": k, "value": v} for k, v in res.kpis().items()]
-        meta_runs[name] = {"kind": "oracle", **res.meta()}
+        res.pairs.to_csv(d / "pairs.csv.gz", index=False)
+        tidy += [{"run": name, "kpi": k, "value": v} for k, v in oracle_kpis(res).items()]
+        facts = res.kpis()
+        meta_runs[name] = {"kind": "oracle", "variant": res.variant, "solver": res.solver,
+                           "status": facts["status"], "rules": dataclasses.asdict(res.rules),
+                           "objective_m": facts["objective_m"], "bound_m": facts["bound_m"], "gap": facts["gap"],
+                           "candidates": res.n_candidates, "evaluated": res.n_evaluated,
+                           "timings_s": res.timings}
     pd.DataFrame(tidy).to_csv(folder / "kpis.csv", index=False)
     if rounds:
         pd.concat(rounds, ignore_index=True).to_csv(folder / "rounds.csv.gz", index=False)

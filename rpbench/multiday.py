@@ -60,6 +60,7 @@ class DayTask:
     preset: str
     strategy_options: dict
     command: str | None
+    oracle_solver: str | None = None
 
 
 def run_day(task: DayTask) -> str:
@@ -74,21 +75,21 @@ def run_day(task: DayTask) -> str:
                                scenario_args={"date": task.date, "sample": task.sample, "seed": task.seed,
                                               "params": task.param_overrides,
                                               "fleet_placement": task.fleet_placement},
-                               command=task.command)
+                               command=task.command, oracle_solver=task.oracle_solver)
     return str(folder)
 
 
 def run_days(dates: list[str], *, data_dir: str | None, sample: float | None, seed: int,
              param_overrides: dict[str, Any], fleet_placement: str, strategies: list[str], preset: str,
              strategy_options: dict, out: str | None, workers: int | None, scheduler: str | None,
-             command: str | None) -> Path:
+             command: str | None, oracle_solver: str | None = None) -> Path:
     folder_data = str(require_data_dir(data_dir, what="multi-day runs"))
     default = f"{results.timestamp()}_haikou-peak_{dates[0]}..{dates[-1]}_{preset}"
     with results.new_results_folder(out, default) as (tmp, final):
         tasks = [DayTask(date=d, out=str(tmp / d), data_dir=folder_data, sample=sample, seed=seed,
                          param_overrides=param_overrides, fleet_placement=fleet_placement,
                          strategies=tuple(strategies), preset=preset, strategy_options=strategy_options,
-                         command=command) for d in dates]
+                         command=command, oracle_solver=oracle_solver) for d in dates]
         run_tasks(run_day, tasks, workers=workers, scheduler=scheduler, label="days")
         results.write_json(tmp / "meta.json", {"rpbench_results": 1, "kind": "multi-day", "dates": dates,
                                                "strategies": strategies, "preset": preset, "sample": sample,

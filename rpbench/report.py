@@ -27,9 +27,10 @@ def fmt(kpi: str, value) -> str:
     """Format a KPI value the way the paper prints it ("/" for undefined)."""
     if value is None or (isinstance(value, float) and math.isnan(value)):
         return "/"
-    value = float(value) + 0.0        # no "-0"
+    value = float(value) + 0.0
     if kpi in _DECIMALS:
-        return f"{value:.{_DECIMALS[kpi]}f}"
+        text = f"{value:.{_DECIMALS[kpi]}f}"
+        return text[1:] if text.startswith("-") and float(text) == 0 else text   # no "-0.000"
     if abs(value) >= 100 or kpi.endswith("_s") or kpi.endswith("_m"):
         text = f"{value:,.0f}"
     else:

@@ -23,6 +23,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--strategies", default=DEFAULT_STRATEGIES,
                    help=f"comma-separated strategies and oracles (default {DEFAULT_STRATEGIES})")
     p.add_argument("--solver", default="highs", help="solver preset, solvers/NAME.toml (default highs)")
+    p.add_argument("--oracle-solver", default=None, metavar="PRESET",
+                   help="preset for Oracle-1/Oracle-2 (default: --solver; `matching` is the fastest exact one)")
     p.add_argument("--opt", action="append", default=[], metavar="STRATEGY.KEY=VALUE",
                    help="strategy option, e.g. --opt rtv.c_ko=large (repeatable)")
     p.add_argument("--out", default=None, help="results folder to create (default ./rpbench-runs/<stamp>_...)")
@@ -80,7 +82,7 @@ def run(args: argparse.Namespace) -> int:
                      "fleet_placement": args.fleet_placement}
     folder, table = run_comparison(scenario, strategies, args.solver, out=args.out, strategy_options=options,
                                    progress=False if args.no_progress else None, scenario_args=scenario_args,
-                                   command=command)
+                                   command=command, oracle_solver=args.oracle_solver)
     if args.json:
         print_json({"results_dir": str(folder), "scenario": scenario.label,
                     "kpis": {col: table[col].to_dict() for col in table.columns}})
@@ -102,7 +104,8 @@ def run_many_days(args: argparse.Namespace, strategies: list[str], options: dict
     folder = run_days(dates, data_dir=args.data, sample=args.sample, seed=args.seed,
                       param_overrides=kwargs["param_overrides"], fleet_placement=args.fleet_placement,
                       strategies=strategies, preset=args.solver, strategy_options=options, out=args.out,
-                      workers=args.workers, scheduler=args.scheduler, command=command)
+                      workers=args.workers, scheduler=args.scheduler, command=command,
+                      oracle_solver=args.oracle_solver)
     import pandas as pd
     summary = pd.read_csv(folder / "summary.csv")
     mean = summary.pivot(index="kpi", columns="run", values="mean")[[s for s in strategies]]
