@@ -21,8 +21,7 @@ from ..scenario import Params
 from ..scenarios.common import haikou_network
 from ._common import add_data_arg, note, parse_param_overrides, print_json
 
-RATE_KINDS = ("month", "day", "day-table")
-DEFAULT_DATE = "2017-05-01"
+from ..predict.rates import DEFAULT_DATE, RATE_KINDS, load_rates
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -57,24 +56,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(handler=run)
 
 
-def load_rates(kind: str, date: str | None, network, data_dir: Path):
-    """The OD rates named by ``--rates`` (errors are one clear line)."""
-    from ..predict import day_table_rates, month_rates, peak_order_rates, table_rates
-    if date is not None and kind != "day":
-        raise ParameterError(f"--date only applies to --rates day (got --rates {kind})")
-    if kind == "month":
-        return month_rates(network, data_dir)
-    if kind == "day":
-        return peak_order_rates(network, data_dir, date or DEFAULT_DATE)
-    if kind == "day-table":
-        return day_table_rates(network, data_dir)
-    path = Path(kind)
-    if path.is_file():
-        return table_rates(network, path)
-    raise ParameterError(f"--rates {kind!r}: expected one of {', '.join(RATE_KINDS)} or the path of an OD "
-                         "table CSV (OD_id, origin_id, destination_id, lambda per minute)")
-
-
 def default_csv(kind: str, date: str | None) -> Path:
     label = kind if kind in RATE_KINDS else Path(kind).name.split(".")[0]
     if kind == "day":
@@ -93,7 +74,7 @@ def run(args: argparse.Namespace) -> int:
                if v is not None}
     config = PredictConfig().replace(**changes)
     network = haikou_network(data_dir)
-    rates = load_rates(args.rates, args.date, network, data_dir)
+    rates = load_rates(args.rates, network, data_dir, args.date)
     if not args.json:
         note(f"rpbench predict: {len(rates)} ODs from {rates.source}; building the model ...")
     out: dict = {}

@@ -8,7 +8,8 @@ Public API (what the FL / FL-no_delay strategies call)::
 
     from rpbench.predict import OdRates, PredictConfig, predict, month_rates
 
-    rates = month_rates(network, data_dir)                 # or peak_order_rates / scenario_rates / OdRates.from_arrays
+    rates = load_rates("month", network, data_dir)          # or "day" (+date), "day-table", a CSV path;
+                                                            # or scenario_rates(scenario) / OdRates.from_arrays
     prediction = predict(network, rates, params, PredictConfig(tau0_s=120.0))   # cached on disk
 
     look = prediction.lookup(origin_nodes, destination_nodes)
@@ -39,11 +40,11 @@ point), :mod:`.cache`, :mod:`.fcfs` (validation simulator), :mod:`.compare`
 
 from .config import ACCELERATIONS, PRIORITIES, RHO_MODES, PredictConfig
 from .prediction import Lookup, Model, Prediction, build_model, predict, solve_model
-from .rates import (OdRates, day_table_rates, month_rates, order_rates, peak_order_rates, scenario_rates,
-                    table_rates)
+from .rates import (RATE_KINDS, OdRates, day_table_rates, load_rates, month_rates, order_rates, peak_order_rates,
+                    scenario_rates, table_rates)
 
 __all__ = [
     "ACCELERATIONS", "Lookup", "Model", "OdRates", "PRIORITIES", "PredictConfig", "Prediction", "RHO_MODES", "build_model",
-    "day_table_rates", "month_rates", "order_rates", "peak_order_rates", "predict", "scenario_rates",
+    "RATE_KINDS", "day_table_rates", "load_rates", "month_rates", "order_rates", "peak_order_rates", "predict", "scenario_rates",
     "solve_model", "table_rates",
 ]

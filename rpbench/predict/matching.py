@@ -190,8 +190,9 @@ class _BlockWriter:
         lens = np.concatenate(self.lens)
         if self.buf is None:
             self.buf = (np.zeros(0, dtype=np.int32),) + tuple(np.zeros(0, dtype=np.float32) for _ in range(3))
-        cols = [b[:self.fill] for b in self.buf]
-        self.blocks.append(Block(self.start, self.next, offsets_from_counts(lens), *cols))
+        for b in self.buf:          # give back the unused tail (realloc shrinks in place; no views remain)
+            b.resize(self.fill, refcheck=False)
+        self.blocks.append(Block(self.start, self.next, offsets_from_counts(lens), *self.buf))
         self.start, self.lens, self.buf, self.fill = self.next, [], None, 0
 
     def finish(self) -> list[Block]:
@@ -308,12 +309,13 @@ class _Builder:
         piece = np.repeat(np.arange(i0, i1), n)
         col = expand_ranges(pc.start[i0:i1], pc.start[i0:i1] + n)
         if self.config.priority == "net_saving":
-            prio = pc.g[piece] + g.kappa[col]                 # E - pk = g - a - pk
+            prio = np.repeat(pc.g[i0:i1], n)
+            prio += g.kappa[col]                               # E - pk = g - a - pk
         else:
             e = pc.g[piece] - g.a[col]
             prio = _priority(self.config.priority, e, g.pk[col], pc.shared[piece], pc.det[piece],
                              g.rest[col], self.solo[w0 + pc.row[piece]])
-        perm = _priority_order(pc.row[piece] - r0, prio, g.tie_rank[col], g.tie_bits)
+        perm = _priority_order(pc.row[i0:i1] - r0, n, prio, g.tie_rank[col], g.tie_bits)
         col = col[perm]
         piece = piece[perm]
         cls, saving, shared, detour = out
@@ -437,21 +439,22 @@ def _priority(kind: str, e, pk, shared, seeker_detour, rest, l_b) -> np.ndarray:
     return -0.5 * (seeker_detour + taker_detour) - 0.3 * pk + 0.2 * shared
 
 
-def _priority_order(row, prio, tie_rank, tie_bits: int) -> np.ndarray:
+def _priority_order(piece_row, piece_len, prio, tie_rank, tie_bits: int) -> np.ndarray:
     """Permutation sorting entries by (row, descending priority on the 2^-20 m grid, tie rank).
 
-    The three keys are packed into one uint64 (row | quantised priority |
-    tie rank); keys are unique, so the unstable quicksort is deterministic.
+    Entries come in runs (pieces) of one seeker row each.  The three keys
+    are packed into one uint64 (row | quantised priority | tie rank); keys
+    are unique, so the unstable quicksort is deterministic.
     """
     row_bits = 64 - Q_BITS - tie_bits
-    if row_bits >= 1 and int(row.max()).bit_length() <= row_bits and np.abs(prio).max() < _Q_LIMIT:
+    if row_bits >= 1 and int(piece_row.max()).bit_length() <= row_bits and np.abs(prio).max() < _Q_LIMIT:
         desc = np.multiply(prio, -GRID)
         desc += float(1 << (Q_BITS - 1))                    # in (0, 2^Q_BITS): larger priority, smaller key
-        np.floor(desc, out=desc)
-        key = desc.astype(np.uint64)
+        key = desc.astype(np.uint64)                        # positive: truncation is the floor
         key <<= np.uint64(tie_bits)
         key |= tie_rank.astype(np.uint64)
-        key |= row.astype(np.uint64) << np.uint64(Q_BITS + tie_bits)
+        key |= np.repeat(piece_row.astype(np.uint64) << np.uint64(Q_BITS + tie_bits), piece_len)
         return np.argsort(key)
     # Huge distances (beyond 2^18 m) or huge groups: the same order through a slower lexsort.
+    row = np.repeat(piece_row, piece_len)
     return np.lexsort((tie_rank, np.floor(np.multiply(prio, -GRID)), row))

@@ -32,6 +32,9 @@ from ..exceptions import DataError, ParameterError
 from ..network import RoadNetwork
 
 HOUR_S = 3600.0
+#: Named rate sources of :func:`load_rates` (a path to an OD table CSV is accepted too).
+RATE_KINDS = ("month", "day", "day-table")
+DEFAULT_DATE = "2017-05-01"
 
 
 @dataclass(frozen=True, eq=False)
@@ -174,3 +177,21 @@ def scenario_rates(scenario) -> OdRates:
     o = scenario.orders
     return order_rates(scenario.network, o.origin, o.destination, scenario.horizon_s,
                        source=f"{scenario.name} orders (count/{scenario.horizon_s:g} s)")
+
+
+def load_rates(kind: str, network: RoadNetwork, data_dir: Path, date: str | None = None) -> OdRates:
+    """Rates by name: ``month`` (21-day table), ``day`` (``date``'s peak orders, default 2017-05-01),
+    ``day-table`` (the 2017-05-01 per-day OD table) or the path of an OD table CSV."""
+    if date is not None and kind != "day":
+        raise ParameterError(f"--date only applies to --rates day (got --rates {kind})")
+    if kind == "month":
+        return month_rates(network, data_dir)
+    if kind == "day":
+        return peak_order_rates(network, data_dir, date or DEFAULT_DATE)
+    if kind == "day-table":
+        return day_table_rates(network, data_dir)
+    path = Path(kind)
+    if path.is_file():
+        return table_rates(network, path)
+    raise ParameterError(f"--rates {kind!r}: expected one of {', '.join(RATE_KINDS)} or the path of an OD "
+                         "table CSV (OD_id, origin_id, destination_id, lambda per minute)")
