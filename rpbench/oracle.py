@@ -35,6 +35,13 @@ from .solver_presets import Preset, load_preset
 #: Oracle variant -> PairingModel objective (§4.3).
 VARIANTS = {1: "weight", 2: "cardinality_then_weight"}
 
+#: Resolution of the savings in the model (1 cm).  Exact integer algorithms have a
+#: bounded range -- PyMatching keeps weights exact only below 2**24, and its
+#: reduction needs about twice the largest saving (plus Oracle-2's bonus) --
+#: so 1 mm overflows on Haikou trips of 30+ km while 1 cm does not.  Every
+#: backend sees the same rounded values; reported savings are the unrounded sums.
+UNIT_M = 0.01
+
 #: KPI keys shared with the strategies' reports (NaN where undefined).
 KPI_KEYS = ("orders", "pairs", "pooled_passengers", "pairing_ratio", "avg_detour_m", "avg_shared_m",
             "total_saving_km")
@@ -117,7 +124,7 @@ def check_variant(variant) -> int:
     return v
 
 
-def oracle_model(candidates: CandidatePairs, variant: int, *, unit_m: float = 1e-3) -> tuple[PairingModel, np.ndarray]:
+def oracle_model(candidates: CandidatePairs, variant: int, *, unit_m: float = UNIT_M) -> tuple[PairingModel, np.ndarray]:
     """The PairingModel of a variant and, per column, its row in ``candidates``.
 
     Oracle-1 keeps the pairs whose quantised saving is positive (a pair with
@@ -166,12 +173,13 @@ def pairing_backends() -> list[str]:
 
 def solve_oracle(scenario: Scenario, variant: int = 1, solver: str | Preset | Backend = "matching", *,
                  rules: PairRules | None = None, candidates: CandidatePairs | None = None,
-                 options: SolveOptions | None = None, unit_m: float = 1e-3) -> OracleResult:
+                 options: SolveOptions | None = None, unit_m: float = UNIT_M) -> OracleResult:
     """Solve Oracle-``variant`` over all orders of ``scenario``.
 
     ``rules`` default to the scenario's K̄, D̄, R̄, v with the authors' flags
     (§4.2).  Pass ``candidates`` (from :func:`find_candidates`) to share one
-    enumeration between both variants; ``options`` override the preset's.
+    enumeration between both variants; ``options`` override the preset's;
+    ``unit_m`` is the savings' resolution in the model (see :data:`UNIT_M`).
     """
     variant = check_variant(variant)
     backend, opts, label = resolve_solver(solver, options)
@@ -215,6 +223,6 @@ def check_matching(model: PairingModel, solution: Solution, solver: str) -> None
                           f"{int(np.argmax(use))} is in {int(use.max())} pairs")
 
 
-__all__ = ["KPI_KEYS", "VARIANTS", "CandidatePairs", "OracleResult", "PairRules", "check_matching",
+__all__ = ["KPI_KEYS", "UNIT_M", "VARIANTS", "CandidatePairs", "OracleResult", "PairRules", "check_matching",
            "competitive_ratio", "find_candidates", "oracle_model", "pairing_backends", "resolve_solver",
            "solve_oracle"]

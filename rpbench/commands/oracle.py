@@ -6,7 +6,7 @@ import argparse
 import math
 
 from ..exceptions import ParameterError
-from ..oracle import PairRules, check_variant, find_candidates, solve_oracle
+from ..oracle import UNIT_M, PairRules, check_variant, find_candidates, solve_oracle
 from ..scenarios import build_scenario, default_scenario_name
 from ._common import add_scenario_args, note, print_json, scenario_kwargs
 
@@ -27,6 +27,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="require the pick-up distance to the second order <= R̄ (oracle_pickup_check)")
     p.add_argument("--allow-enroute", action="store_true",
                    help="also pair an order requested while the first one rides (oracle_allow_enroute)")
+    p.add_argument("--unit-m", type=float, default=UNIT_M, metavar="M",
+                   help=f"resolution of the savings in the model, in metres (default {UNIT_M:g}; coarser if an "
+                        "integer algorithm reports an overflow)")
     p.add_argument("--pairs", metavar="CSV", default=None, help="write the chosen pairs to this CSV file")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(handler=run)
@@ -41,7 +44,8 @@ def run(args: argparse.Namespace) -> int:
     rules = PairRules.from_params(scenario.params, both_pickup_orders=args.both_pickup_orders,
                                   pickup_check=args.pickup_check, allow_enroute=args.allow_enroute)
     candidates = find_candidates(scenario.network.distances(), scenario.orders, rules)
-    results = {v: solve_oracle(scenario, v, args.solver, candidates=candidates) for v in variants}
+    results = {v: solve_oracle(scenario, v, args.solver, candidates=candidates, unit_m=args.unit_m)
+               for v in variants}
     for v, r in results.items():
         if r.status.value != "optimal":
             note(f"rpbench: Oracle-{v} stopped with status {r.status.value} (gap {r.kpis()['gap']:.3g}); "
