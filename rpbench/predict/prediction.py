@@ -11,7 +11,8 @@ from __future__ import annotations
 
 import resource
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -76,15 +77,17 @@ class Prediction:
     lam_taker: np.ndarray
     info: dict                             # summary facts (see summary())
     from_cache: bool = False
-    _keys: np.ndarray = field(default=None, repr=False)
 
     # ------------------------------------------------------------------ queries
+    @cached_property
+    def _keys(self) -> np.ndarray:
+        return self.rates.key(len(self.node_id))           # sorted: the rates are canonical
+
     def _index(self, origins, destinations) -> tuple[np.ndarray, np.ndarray]:
         o = np.asarray(origins, dtype=np.int64)
         d = np.asarray(destinations, dtype=np.int64)
-        n = len(self.node_id)
-        keys = self.rates.key(n)
-        q = o * n + d
+        keys = self._keys
+        q = o * len(self.node_id) + d
         pos = np.clip(np.searchsorted(keys, q), 0, max(len(keys) - 1, 0))
         known = (keys[pos] == q) if len(keys) else np.zeros(q.shape, dtype=bool)
         return pos, known
@@ -193,11 +196,12 @@ def predict(network: RoadNetwork, rates: OdRates, params: Params | None = None,
         hit = cache.load(key, network, rates, config)
         if hit is not None:
             return hit
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     model = build_model(network, rates, params, config)
     prediction = solve_model(model, progress=progress)
     del model
     prediction.info["time_s"] = round(time.perf_counter() - t0, 4)
+    prediction.info["cpu_s"] = round(time.process_time() - c0, 4)     # wall > cpu when the machine is shared
     prediction.info["peak_rss_mb"] = round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0, 1)
     if use_cache:
         cache.save(key, prediction)
