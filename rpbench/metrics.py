@@ -72,7 +72,7 @@ def passenger_table(events: pd.DataFrame, solo_m: np.ndarray, request_s: np.ndar
     for name in ("assign", "pickup", "dropoff", "cancel"):
         sel = events[events["event"] == name]
         col = np.full(n, np.nan)
-        col[sel["order"].to_numpy()] = sel["t_s"].to_numpy()
+        col[sel["order"].to_numpy(dtype=np.int64)] = sel["t_s"].to_numpy(dtype=np.float64)
         tab[f"{name}_s"] = col
     assign = events[events["event"] == "assign"]
     vehicle = np.full(n, -1, dtype=np.int64)

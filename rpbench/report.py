@@ -35,7 +35,7 @@ def fmt(kpi: str, value) -> str:
         text = f"{value:,.0f}"
     else:
         text = f"{value:.1f}"
-    return "0" if text in ("-0", "-0.0") else text
+    return text[1:] if text.startswith("-") and float(text.replace(",", "")) == 0 else text
 
 
 def load_kpis(folder: Path) -> pd.DataFrame:

@@ -42,6 +42,9 @@ from .vehicles import DROPOFF, PICKUP, Fleet, Stop
 PENDING, WAITING, ASSIGNED, ONBOARD, DONE, CANCELLED = range(6)
 EVENT_COLUMNS = ["t_s", "event", "order", "vehicle", "node", "kind", "utility_m", "pickup_plan_m", "partner",
                  "fofo"]
+EVENT_DTYPES = {"t_s": "float64", "event": "object", "order": "int64", "vehicle": "int64", "node": "int64",
+                "kind": "object", "utility_m": "float64", "pickup_plan_m": "float64", "partner": "int64",
+                "fofo": "bool"}
 ROUND_COLUMNS = ["round", "t_s", "waiting", "v0", "v1", "rows", "cols", "nonzeros", "strategy_build_s",
                  "solver_build_s", "solve_s", "extract_s", "status", "objective_m", "gap", "assigned",
                  "tie_moves"]
@@ -120,7 +123,7 @@ class Simulator:
         self._process_stops(math.inf)
         end = max([t] + [e[0] for e in self.events])
         return SimResult(strategy=self.strategy.name,
-                         events=pd.DataFrame(self.events, columns=EVENT_COLUMNS).sort_values(
+                         events=pd.DataFrame(self.events, columns=EVENT_COLUMNS).astype(EVENT_DTYPES).sort_values(
                              ["t_s", "order", "event"], kind="stable").reset_index(drop=True),
                          rounds=pd.DataFrame(self.rounds, columns=ROUND_COLUMNS),
                          trajectories=self._trajectories(end), wall_s=time.perf_counter() - t0, end_s=end)
