@@ -29,7 +29,7 @@ consistent.  ρ' is clipped to ``[0, rho_cap]`` (A8) and the clips counted.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
@@ -50,11 +50,23 @@ class System:
     matching: Matching
     rate_per_s: np.ndarray       # λ_w per OD
     config: PredictConfig
+    work: dict = field(default_factory=dict, repr=False)    # sweep buffers, reused across iterations
 
     @classmethod
     def build(cls, space: StateSpace, matching: Matching, rate_per_s: np.ndarray,
               config: PredictConfig) -> "System":
         return cls(space, matching, np.asarray(rate_per_s, dtype=np.float64), config)
+
+    def buffers(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(classes as intp, gathered log Q, running sums) sized for the largest block.
+
+        Allocated once: fresh multi-megabyte temporaries in every sweep would
+        cost page faults (a large share of the time on a virtual machine).
+        """
+        if "buffers" not in self.work:
+            n = max((len(b.cls) for b in self.matching.blocks), default=0)
+            self.work["buffers"] = (np.empty(n, dtype=np.intp), np.empty(n), np.empty(n))
+        return self.work["buffers"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -107,12 +119,15 @@ def sweep(system: System, class_log_q: np.ndarray, hook: ChunkHook | None = None
     log_not_paired = np.zeros(len(system.rate_per_s))
     with np.errstate(divide="ignore"):
         log_lam = np.where(system.rate_per_s > 0, np.log(system.rate_per_s), _LOG_ZERO)
+    c_buf, v_buf, run_buf = system.buffers()
     for block in system.matching.blocks:
         off = block.off
-        if off[-1] == 0:
+        n = int(off[-1])
+        if n == 0:
             continue
-        c = block.cls.astype(np.intp)                        # one conversion serves gather and bincount
-        v = class_log_q[c]                                   # log Q of each listed class
+        c, v, run = c_buf[:n], v_buf[:n], run_buf[:n]
+        np.copyto(c, block.cls)                              # one conversion serves gather and bincount
+        np.take(class_log_q, c, out=v)                       # log Q of each listed class
         nonempty = np.flatnonzero(off[1:] > off[:-1])
         starts = off[nonempty]
         totals = np.add.reduceat(v, starts)                  # log(1 - p_s)
@@ -120,7 +135,6 @@ def sweep(system: System, class_log_q: np.ndarray, hook: ChunkHook | None = None
         log_not_paired[seekers] = totals
         # Exclusive running sum restarted per seeker and started at log λ_s: shift by one and, at
         # each seeker start, replace the carried sum (previous seeker's total) by log λ_s.
-        run = np.empty_like(v)
         run[0] = 0.0
         run[1:] = v[:-1]
         lam_start = log_lam[seekers]
