@@ -8,8 +8,8 @@ evaluation, :func:`evaluate`, computes from ρ::
     p_s          = 1 - Π_{t∈T_s} (1 - ρ_t)                 (A1)
     η_t          = Σ_s η_t^s                                (A3)
     p_t          = 1 - exp(-η_t τ_t)                       (A2)
-    λ_t(0,w)     = λ_w (1 - p_s(w)),  λ_t(k) = λ_t(k-1) (1 - p_t(k-1))     (A6, corrected, A2 of §5)
-    ρ'_t         = λ_t (1 - e^{-η_t τ_t}) / η_t            (A5 with the /η of A1; λ_t τ_t at η = 0)
+    λ_t(0,w)     = λ_w (1 - p_s(w)),  λ_t(k) = λ_t(k-1) (1 - p_t(k-1))     (A6, index typo fixed: resolution A2)
+    ρ'_t         = λ_t (1 - e^{-η_t τ_t}) / η_t            (A5 with the missing /η: resolution A1; λ_t τ_t at η = 0)
 
 Seeker lists hold taker classes (:mod:`.states`): the members of a class are
 adjacent in every list, so a seeker's running product is carried per class

@@ -26,7 +26,7 @@ from .config import PredictConfig
 from .fixed_point import SolveInfo, System, solve
 from .matching import Matching, build_matching
 from .rates import OdRates
-from .savings import Outcome, outcome
+from .savings import Outcome, outcome, waiting_saving
 from .states import StateSpace, build_states
 
 
@@ -104,18 +104,17 @@ class Prediction:
                       pairing_prob=take(od.pairing_prob), known=known)
 
     def e_wait(self, origins, destinations, k_p, params: Params) -> np.ndarray:
-        """ē(0,p) of Eq. (10'): ``[1 - (1 - r_w)^{n_rem}] [p_s ē(s) + (1 - p_s) ē(p)]``.
+        """ē(0,p) of Eq. (10'): ``[1 - (1 - r_w)^{n_rem}] [p_s ē(s) + (1 - p_s) ē(p)]`` (0 for unknown ODs).
 
-        ``n_rem = max(0, floor(K̄/Δt) - k_p)`` with the planner patience K̄ (A10);
-        ``k_p`` is the passenger's round number (1 at the first batch that sees it).
+        ``n_rem = max(0, floor(K̄/Δt) - k_p)`` with the planner patience
+        ``params.planner_patience_s`` (A10), ``r_w = params.response_rate``; ``k_p``
+        is the passenger's round number (1 at the first batch that sees it).
         """
         pos, known = self._index(origins, destinations)
-        k_p = np.asarray(k_p, dtype=np.float64)
-        rounds = np.floor(params.planner_patience_s / params.dt_s + 1e-9)
-        n_rem = np.maximum(0.0, rounds - k_p)
-        reach = 1.0 - (1.0 - params.response_rate) ** n_rem
-        bracket = self.od.e_bracket
-        return np.where(known, reach * (bracket[pos] if len(bracket) else 0.0), 0.0)
+        bracket = self.od.e_bracket[pos] if len(self.od.e_bracket) else np.zeros(pos.shape)
+        value = waiting_saving(bracket, k_p, planner_patience_s=params.planner_patience_s, dt_s=params.dt_s,
+                               response_rate=params.response_rate)
+        return np.where(known, value, 0.0)
 
     # ------------------------------------------------------------------ reports
     def per_od_table(self) -> pd.DataFrame:

@@ -117,3 +117,15 @@ def outcome(system: System, rho: np.ndarray) -> tuple[Evaluation, Outcome]:
         seeker_shared_m=seeker_shared, taker_ride_m=taker_ride, taker_detour_m=taker_detour,
         taker_shared_m=taker_shared, ride_m=ride, shared_m=shared, e_taker=e_taker, state_pair_prob=pi,
         state_ride_m=state_ride, state_shared_m=state_shared, state_detour_m=state_detour)
+
+
+def waiting_saving(bracket: np.ndarray, k_p, *, planner_patience_s: float, dt_s: float,
+                   response_rate: float) -> np.ndarray:
+    """ē(0,p) of Eq. (10'): ``[1 - (1 - r_w)^{n_rem}] * bracket``, ``bracket = p_s ē(s) + (1 - p_s) ē(p)``.
+
+    ``n_rem = max(0, floor(K̄/Δt) - k_p)`` with the planner patience K̄ (A10) and
+    ``k_p = ceil((t - t_req)/Δt)``, the passenger's round (1 at the first batch that sees it).
+    """
+    rounds = np.floor(planner_patience_s / dt_s + 1e-9)      # guard 90/10 = 8.999... style rounding
+    n_rem = np.maximum(0.0, rounds - np.asarray(k_p, dtype=np.float64))
+    return (1.0 - (1.0 - response_rate) ** n_rem) * bracket
