@@ -176,8 +176,13 @@ def evaluate(system: System, rho: np.ndarray, hook: ChunkHook | None = None) -> 
                       member_log_r=member_log_r)
 
 
-def solve(system: System, *, progress: Callable[[int, float], None] | None = None) -> tuple[Evaluation, SolveInfo]:
+def solve(system: System, *, progress: Callable[[int, float], None] | None = None,
+          rho0: np.ndarray | None = None) -> tuple[Evaluation, SolveInfo]:
     """Damped fixed-point iteration (§2.6) from ρ = 0; returns the final consistent evaluation.
+
+    ``rho0`` warm-starts the iteration (e.g. from the solution at a nearby
+    demand level); the stopping rule is unchanged, so the result is the same
+    fixed point to within the tolerance whenever that fixed point is unique.
 
     With ``config.accel == "anderson"`` each damped step is replaced by an
     Anderson-accelerated one (type II, depth ``anderson_depth``, on the same
@@ -187,7 +192,9 @@ def solve(system: System, *, progress: Callable[[int, float], None] | None = Non
     """
     cfg = system.config
     t0 = time.perf_counter()
-    rho = np.zeros(system.space.n_states)
+    rho = np.zeros(system.space.n_states) if rho0 is None else np.array(rho0, dtype=np.float64)
+    if rho.shape != (system.space.n_states,):
+        raise ValueError(f"rho0 has shape {rho.shape}, expected ({system.space.n_states},)")
     beta = cfg.beta
     history: list[float] = []
     growing = 0

@@ -175,10 +175,10 @@ def build_model(network: RoadNetwork, rates: OdRates, params: Params | None = No
                  {"distances_s": t1 - t0, "states_s": t2 - t1, "matching_s": t3 - t2})
 
 
-def solve_model(model: Model, *, progress=None) -> Prediction:
-    """Solve the fixed point of a built model and derive the per-OD outcome."""
+def solve_model(model: Model, *, progress=None, rho0: np.ndarray | None = None) -> Prediction:
+    """Solve the fixed point of a built model (optionally warm-started) and derive the per-OD outcome."""
     system = model.system
-    ev, info = solve(system, progress=progress)
+    ev, info = solve(system, progress=progress, rho0=rho0)
     t0 = time.perf_counter()
     ev, out = outcome(system, ev.rho)
     savings_s = time.perf_counter() - t0

@@ -25,9 +25,13 @@ Options (``--opt fl.NAME=VALUE``):
   ``mean_pickup_m``: l̄ of the waiting utility.  Both default to the mean
   pick-up time / distance of an MB calibration run on the same scenario
   (per hour where the scenario spans hours), which the harness computes;
-  without it the fallbacks are 120 s and 900 m.
-* ``priority``, ``include_origin_state``, ``rho_mode``: prediction options
-  (:class:`rpbench.predict.PredictConfig`).
+  without it the fallbacks are 120 s and 900 m.  τ_0 is rounded to 10 s so
+  that runs with nearly equal calibrations share one cached prediction.
+* ``priority``, ``include_origin_state``, ``rho_mode``, ``accel``:
+  prediction options (:class:`rpbench.predict.PredictConfig`); FL solves the
+  fixed point with Anderson mixing by default (the same fixed point as the
+  spec's damped iteration, in about half the sweeps).  Hours of the full-day
+  stand-in share one built model and warm-start from the previous hour.
 """
 
 from __future__ import annotations
@@ -40,7 +44,7 @@ import numpy as np
 
 from ..exceptions import ParameterError
 from ..model import Structure
-from ..predict import PredictConfig, Prediction, build_model, month_rates, order_rates, predict, solve_model
+from ..predict import PredictConfig, Prediction, build_model, month_rates, order_rates, solve_model
 from ..predict import cache as prediction_cache
 from ..scenario import Scenario
 from .base import RoundModel, RoundState, Strategy
@@ -49,7 +53,7 @@ from .candidates import NO_WAIT_UTILITY_M, JoinOptions, assignment_round, join_o
 FALLBACK_TAU0_S = 120.0
 FALLBACK_MEAN_PICKUP_M = 900.0
 RATE_SOURCES = ("auto", "month", "scenario")
-_PREDICT_OPTIONS = ("priority", "include_origin_state", "rho_mode")
+_PREDICT_OPTIONS = ("priority", "include_origin_state", "rho_mode", "accel")
 
 
 def fraction(num: np.ndarray, den: np.ndarray) -> np.ndarray:
@@ -82,7 +86,9 @@ class _ForwardBase(Strategy):
         tau0 = _per_hour(self.options.get("tau0_s"), hours, FALLBACK_TAU0_S, "tau0_s")
         self.mean_pickup_m = _per_hour(self.options.get("mean_pickup_m"), hours, FALLBACK_MEAN_PICKUP_M,
                                        "mean_pickup_m")
-        config = PredictConfig(**{k: self.options[k] for k in _PREDICT_OPTIONS if k in self.options})
+        # Anderson mixing reaches the same fixed point as the plain damped map in about half the sweeps.
+        config = PredictConfig(**{"accel": "anderson",
+                                  **{k: self.options[k] for k in _PREDICT_OPTIONS if k in self.options}})
         self.predictions = hourly_predictions(scenario, self.rates_source, tau0, config)
 
     def prediction_at(self, t_s: float) -> tuple[Prediction, int]:
@@ -141,10 +147,19 @@ def _per_hour(value, hours: int, fallback: float, name: str) -> np.ndarray:
 
 
 # ---------------------------------------------------------------------- rates
+#: τ_0 is rounded to this resolution, so runs whose calibrations differ by a few
+#: seconds (peak hours of different days, sweep points) share one prediction.
+TAU0_RESOLUTION_S = 10.0
+#: The last built prediction model of this process: its matching sets depend only on the OD set,
+#: the geometry and the priority rule, and take minutes and gigabytes for the 39,510-OD table.
+_BUILT: dict[tuple, Any] = {}
+
+
 def hourly_predictions(scenario: Scenario, source: str, tau0_s: np.ndarray,
                        config: PredictConfig) -> list[Prediction]:
-    """One prediction per scenario hour (a single one when nothing changes between hours)."""
+    """One prediction per scenario hour (shared objects where hours have the same inputs)."""
     hours = len(tau0_s)
+    tau0_s = np.maximum(TAU0_RESOLUTION_S, np.round(tau0_s / TAU0_RESOLUTION_S) * TAU0_RESOLUTION_S)
     net, params = scenario.network, scenario.params
     data_dir = scenario.provenance.get("data_dir")
     if source == "auto":
@@ -157,43 +172,48 @@ def hourly_predictions(scenario: Scenario, source: str, tau0_s: np.ndarray,
         if scenario.name == "haikou-day":
             # The stand-in draws hour h's orders from this table: λ_w(h) = n_h · λ_w / Σλ / 3600.
             per_hour = np.asarray(scenario.provenance["orders_per_hour"], dtype=float)
-            factors = per_hour / (base.total_per_s * 3600.0)
-            return _scaled_predictions(net, base, factors, params, tau0_s, config)
-        return [predict(net, base, params, config.replace(tau0_s=float(tau0_s[h]))) for h in range(hours)] \
-            if len(set(tau0_s.tolist())) > 1 else [predict(net, base, params, config.replace(tau0_s=float(tau0_s[0])))]
-    # the scenario's own orders, hour by hour
-    o = scenario.orders
-    hour_of = np.minimum((o.request_s // 3600.0).astype(int), hours - 1)
-    out = []
+            rates = [base.scaled(float(n / (base.total_per_s * 3600.0))) for n in per_hour[:hours]]
+        else:
+            rates = [base] * hours
+    else:   # the scenario's own orders, hour by hour
+        o = scenario.orders
+        hour_of = np.minimum((o.request_s // 3600.0).astype(int), hours - 1)
+        rates = [order_rates(net, o.origin[hour_of == h], o.destination[hour_of == h], 3600.0,
+                             source=f"{scenario.name} orders of hour {h} (count/3600 s)") for h in range(hours)]
+    out: list[Prediction] = []
+    memo: dict[tuple, Prediction] = {}
+    previous: Prediction | None = None
     for h in range(hours):
-        sel = hour_of == h
-        rates = order_rates(net, o.origin[sel], o.destination[sel], 3600.0,
-                            source=f"{scenario.name} orders of hour {h} (count/3600 s)")
-        out.append(predict(net, rates, params, config.replace(tau0_s=float(tau0_s[h]))))
+        cfg = config.replace(tau0_s=float(tau0_s[h]))
+        key = (id(rates[h]), cfg.tau0_s)
+        if key not in memo:
+            # Warm-start from the previous hour when the OD set is the same (only the demand level moved).
+            same_ods = previous is not None and len(previous.rates) == len(rates[h]) and \
+                np.array_equal(previous.rates.origin, rates[h].origin) and \
+                np.array_equal(previous.rates.destination, rates[h].destination)
+            warm = previous.rho if same_ods else None
+            memo[key] = solve_cached(net, rates[h], params, cfg, rho0=warm)
+            previous = memo[key]
+        out.append(memo[key])
     return out
 
 
-def _scaled_predictions(net, base, factors: np.ndarray, params, tau0_s: np.ndarray,
-                        config: PredictConfig) -> list[Prediction]:
-    """Predictions for one OD set at several demand levels, building the matching sets once."""
-    out: list[Prediction | None] = [None] * len(factors)
-    missing = []
-    for h, f in enumerate(factors):
-        cfg = config.replace(tau0_s=float(tau0_s[h]))
-        rates = base.scaled(float(f))
-        key = prediction_cache.cache_key(net, rates, params, cfg)
-        hit = prediction_cache.load(key, net, rates, cfg)
-        if hit is None:
-            missing.append((h, rates, cfg, key))
-        out[h] = hit
-    model = None
-    for h, rates, cfg, key in missing:
-        # The matching sets depend on the OD set and the geometry only; the demand level and τ_0 enter
-        # the fixed point alone, so one built model serves every hour.
-        if model is None:
-            model = build_model(net, rates, params, cfg)
-        space = dataclasses.replace(model.space, tau_s=np.where(model.space.k == 0, cfg.tau0_s, model.space.tau_s))
-        pred = solve_model(dataclasses.replace(model, rates=rates, config=cfg, space=space))
-        prediction_cache.save(key, pred)
-        out[h] = pred
-    return out  # type: ignore[return-value]
+def solve_cached(net, rates, params, config: PredictConfig, *, rho0: np.ndarray | None = None) -> Prediction:
+    """:func:`rpbench.predict.predict` with the built model kept in memory across demand levels and τ_0."""
+    key = prediction_cache.cache_key(net, rates, params, config)
+    hit = prediction_cache.load(key, net, rates, config)
+    if hit is not None:
+        return hit
+    structure = (net.content_hash, len(rates), hash(rates.key(net.n_nodes).tobytes()),
+                 tuple(getattr(params, f) for f in prediction_cache.PARAM_FIELDS),
+                 config.include_origin_state, config.priority, config.keep_nonpositive, config.order_rule)
+    model = _BUILT.get(structure)
+    if model is None:
+        _BUILT.clear()                      # keep one model: the month table's takes gigabytes
+        model = build_model(net, rates, params, config)
+        _BUILT[structure] = model
+    # The demand level and τ_0 enter the fixed point only (the origin states' sojourn).
+    space = dataclasses.replace(model.space, tau_s=np.where(model.space.k == 0, config.tau0_s, model.space.tau_s))
+    prediction = solve_model(dataclasses.replace(model, rates=rates, config=config, space=space), rho0=rho0)
+    prediction_cache.save(key, prediction)
+    return prediction
