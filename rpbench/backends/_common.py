@@ -1,0 +1,167 @@
+"""Machinery shared by the backends: timing, the generic 0/1 program, status rules, checks.
+
+Every backend returns solutions through :func:`finish`, which checks the
+chosen columns against the model (integral, feasible) and turns a solver's
+raw outcome into a :class:`~rpbench.model.Status` with the same rules
+everywhere:
+
+* values are integral, so a dual bound ``< objective + 1`` proves the
+  incumbent optimal even when a time limit stopped the solver;
+* a solve stopped by the time limit returns its incumbent as ``TIME_LIMIT``;
+  without an incumbent, packing and pairing return ``x = 0`` (always
+  feasible) and the assignment raises :class:`SolverError` (it has no
+  trivially feasible answer);
+* a solver that answers with a non-integral or infeasible ``x`` raises
+  :class:`SolverError` — never a silently wrong answer.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..exceptions import SolverError
+from ..model import Model, Solution, Status, Structure, make_solution
+
+#: Raw solver outcomes: proven optimal, stopped by a limit, or proven infeasible.
+OPTIMAL, LIMIT, INFEASIBLE = "optimal", "limit", "infeasible"
+#: Largest deviation of a "binary" solver value from 0/1 accepted as integral.
+INT_TOL = 1e-6
+
+
+class Clock:
+    """Accumulates wall time per phase (``build_s``, ``solve_s``, ``extract_s``)."""
+
+    def __init__(self) -> None:
+        self.times = {"build_s": 0.0, "solve_s": 0.0, "extract_s": 0.0}
+        self.start = time.perf_counter()
+
+    @contextmanager
+    def __call__(self, phase: str):
+        t0 = time.perf_counter()
+        try:
+            yield
+        finally:
+            self.times[phase] += time.perf_counter() - t0
+
+    def elapsed(self) -> float:
+        return time.perf_counter() - self.start
+
+    def remaining(self, limit: float | None) -> float | None:
+        return None if limit is None else max(0.0, limit - self.elapsed())
+
+
+@dataclass(frozen=True)
+class Program:
+    """``maximise c·x  s.t.  lo <= A x <= hi,  x ∈ {0,1}^n`` (or ``[0,1]^n`` relaxed).
+
+    ``A`` is the model's 0/1 incidence matrix (CSC), optionally with one extra
+    row ``Σ x >= k`` (the cardinality stage of Oracle-2).
+    """
+
+    c: np.ndarray
+    A: sp.csc_matrix
+    lo: np.ndarray
+    hi: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return self.A.shape[1]
+
+
+def program(model: Model, c: np.ndarray | None = None, min_count: int | None = None) -> Program:
+    """The model as a 0/1 program; ``c`` defaults to its values."""
+    A = model.incidence()
+    exact = model.row_exact()
+    lo = np.where(exact, 1.0, -np.inf)
+    hi = np.ones(model.n_rows)
+    if min_count is not None:
+        A = sp.vstack([A, sp.csr_matrix(np.ones((1, model.n_cols)))], format="csc")
+        lo, hi = np.append(lo, float(min_count)), np.append(hi, np.inf)
+    A.sort_indices()
+    return Program(c=np.asarray(model.values if c is None else c, dtype=np.float64), A=A, lo=lo, hi=hi)
+
+
+@dataclass
+class Raw:
+    """A solver's answer before checking: ``x`` (``None`` = no incumbent), state, dual bound."""
+
+    x: np.ndarray | None
+    state: str
+    bound: float | None = None
+    message: str = ""
+    extra: dict = field(default_factory=dict)
+
+
+# ------------------------------------------------------------------ checks
+def chosen_columns(model: Model, x: np.ndarray, backend: str) -> np.ndarray:
+    """Indices of the columns set to 1, after checking integrality and feasibility."""
+    x = np.asarray(x, dtype=np.float64)
+    if x.shape != (model.n_cols,):
+        raise SolverError(f"backend {backend!r} returned {x.shape} values for {model.n_cols} columns of {model.name!r}")
+    off = np.abs(x - np.round(x))
+    if len(x) and off.max() > INT_TOL:
+        c = int(off.argmax())
+        raise SolverError(f"backend {backend!r} returned a fractional value x[{c}] = {x[c]!r} on {model.name!r}")
+    return check_feasible(model, np.flatnonzero(x > 0.5), backend)
+
+
+def check_feasible(model: Model, chosen: np.ndarray, backend: str) -> np.ndarray:
+    bad = model.violations(chosen)
+    if bad:
+        raise SolverError(f"backend {backend!r} returned an infeasible solution of {model.name!r}: {bad[0]}")
+    return np.asarray(chosen, dtype=np.int64)
+
+
+def integral_bound(bound: float | None) -> float | None:
+    """A solver's dual bound rounded down to the integral grid of the values (with a tolerance)."""
+    if bound is None or not math.isfinite(bound):
+        return None
+    return float(math.floor(bound + 1e-6 * max(1.0, abs(bound))))
+
+
+def classify(state: str, objective: float, bound: float | None, rel_gap: float) -> Status:
+    """Status of an incumbent from the solver's state and its (integral) bound."""
+    proven = bound is not None and bound <= objective
+    if state == OPTIMAL:
+        return Status.FEASIBLE if (rel_gap > 0 and bound is not None and not proven) else Status.OPTIMAL
+    return Status.OPTIMAL if proven else Status.TIME_LIMIT
+
+
+def finish(model: Model, raw: Raw, backend: str, clock: Clock, rel_gap: float = 0.0, message: str = "") -> Solution:
+    """Check a raw answer and wrap it as a :class:`Solution` (see the module docstring)."""
+    note = "; ".join(m for m in (message, raw.message) if m)
+    if raw.state == INFEASIBLE:
+        if model.structure is not Structure.ASSIGNMENT:
+            raise SolverError(f"backend {backend!r} reports {model.name!r} infeasible, but x = 0 is feasible")
+        return make_solution(model, np.zeros(0, np.int64), Status.INFEASIBLE, backend, message=note or "infeasible",
+                             **clock.times)
+    if raw.x is None:
+        if raw.state == OPTIMAL:
+            raise SolverError(f"backend {backend!r} reports an optimum of {model.name!r} but returned no solution")
+        if model.structure is Structure.ASSIGNMENT:
+            raise SolverError(f"backend {backend!r} stopped on {model.name!r} (time limit) before finding any "
+                              "feasible assignment; raise time_limit_s or use a faster preset (matching, ortools)")
+        chosen = np.zeros(0, np.int64)
+        note = note or "time limit before any incumbent: returning x = 0"
+    else:
+        chosen = chosen_columns(model, raw.x, backend)
+    objective = model.objective_of(chosen)
+    bound = integral_bound(raw.bound)
+    if bound is not None and bound < objective:
+        bound = objective                     # a tolerance artefact: the incumbent itself is a lower bound
+    status = classify(raw.state, objective, bound, rel_gap)
+    if status is Status.OPTIMAL:
+        bound = objective
+    gap = None if bound is None else (bound - objective) / max(1.0, abs(objective))
+    return make_solution(model, chosen, status, backend, bound=bound, gap=gap, message=note, **clock.times)
+
+
+def require(model: Model, structures: frozenset[Structure], backend: str) -> None:
+    if model.structure not in structures:
+        raise SolverError(f"backend {backend!r} does not solve {model.structure.value} models")

@@ -1,0 +1,107 @@
+"""Backends that solve the generic 0/1 program of a model (HiGHS, SciPy, Pyomo, CVXPY, CP-SAT).
+
+A subclass implements :meth:`ProgramBackend.run` — one solve of a
+:class:`~rpbench.backends._common.Program` — and inherits:
+
+* the assignment as an LP (``method = "lp"``, the default): its constraint
+  matrix is the incidence matrix of a bipartite graph, totally unimodular,
+  so a simplex vertex is integral (paper Eqs. 1-4); the answer is checked
+  and, should it be fractional, re-solved as a MIP;
+* Oracle-2 (``objective = "cardinality_then_weight"``, ALGORITHMS.md §4.3) in
+  two exact stages: stage 1 maximises the number of pairs ``k*``; stage 2
+  maximises the value subject to ``Σ x >= k*``, warm-started from stage 1
+  where the solver accepts a hint.  The time limit covers both stages.
+"""
+
+from __future__ import annotations
+
+from abc import abstractmethod
+from dataclasses import replace
+
+import numpy as np
+
+from ..exceptions import SolverError
+from ..model import Model, Solution, Structure, empty_solution
+from .base import Backend, SolveOptions
+from ._common import LIMIT, OPTIMAL, Clock, Program, Raw, finish, integral_bound, program
+
+ALL = frozenset(Structure)
+
+
+class ProgramBackend(Backend):
+    exact = ALL
+    #: Backends whose ``run`` can solve the LP relaxation.
+    can_relax = True
+
+    @abstractmethod
+    def run(self, prog: Program, options: SolveOptions, clock: Clock, *, relax: bool = False,
+            time_limit: float | None = None, hint: np.ndarray | None = None) -> Raw:
+        """Solve ``prog`` once (``relax``: x in [0, 1]); times go to ``clock``."""
+
+    def solve(self, model: Model, options: SolveOptions, hint: np.ndarray | None = None) -> Solution:
+        """Solve ``model``; ``hint`` (0/1 per column, feasible) warm-starts packing and pairing MIPs."""
+        self.ensure_installed()
+        if model.n_cols == 0:
+            return empty_solution(model, self.name)
+        clock = Clock()
+        if model.structure is Structure.ASSIGNMENT:
+            return self.solve_assignment(model, options, clock)
+        if model.structure is Structure.PAIRING and model.objective == "cardinality_then_weight":
+            return self.solve_lexicographic(model, options, clock, hint)
+        raw = self.run(program(model), options, clock, time_limit=options.time_limit_s, hint=hint)
+        if raw.x is None and hint is not None and raw.state == LIMIT:
+            raw.x = np.round(hint)             # stopped before adopting the (feasible) warm start
+        return finish(model, raw, self.name, clock, options.mip_rel_gap)
+
+    def solve_assignment(self, model: Model, options: SolveOptions, clock: Clock) -> Solution:
+        method = options.method or ("lp" if self.can_relax else "mip")
+        if method not in ("lp", "mip"):
+            raise SolverError(f"backend {self.name!r}: method {method!r} unknown for the assignment; use lp or mip")
+        prog = program(model)
+        if method == "lp":
+            raw = self.run(prog, options, clock, relax=True, time_limit=options.time_limit_s)
+            x = raw.x
+            if raw.state != OPTIMAL or x is None or np.abs(x - np.round(x)).max(initial=0.0) <= 1e-6:
+                return finish(model, raw, self.name, clock, options.mip_rel_gap)
+            note = "LP vertex was fractional (numerical trouble); re-solved as a MIP"
+            raw = self.run(prog, options, clock, time_limit=clock.remaining(options.time_limit_s))
+            return finish(model, raw, self.name, clock, options.mip_rel_gap, message=note)
+        raw = self.run(prog, options, clock, time_limit=options.time_limit_s)
+        return finish(model, raw, self.name, clock, options.mip_rel_gap)
+
+    def solve_lexicographic(self, model: Model, options: SolveOptions, clock: Clock,
+                            hint: np.ndarray | None = None) -> Solution:
+        limit = options.time_limit_s
+        exact_k = replace(options, mip_rel_gap=0.0)        # stage 2 is only exact for the true k*
+        stage1 = self.run(program(model, c=np.ones(model.n_cols)), exact_k, clock, time_limit=limit, hint=hint)
+        if stage1.x is None and hint is not None and stage1.state == LIMIT:
+            stage1.x = np.round(hint)          # stopped before adopting the (feasible) warm start
+        if stage1.x is None:
+            return finish(model, stage1, self.name, clock, message="stage 1 (maximum cardinality) found nothing")
+        x1 = np.round(stage1.x)
+        k = int(x1.sum())
+        bound1 = integral_bound(stage1.bound)
+        proven = stage1.state == OPTIMAL or (bound1 is not None and bound1 <= k)
+        if not proven:
+            # the incumbent is a matching but k* is unknown, so its weight has no meaningful bound
+            raw = Raw(x=x1, state=LIMIT, message="stage 1 (maximum cardinality) not proven optimal")
+            return finish(model, raw, self.name, clock)
+        remaining = clock.remaining(limit)
+        if remaining is not None and remaining <= 0:
+            return finish(model, Raw(x=x1, state=LIMIT, message="time limit after stage 1"), self.name, clock)
+        if hint is not None and np.round(hint).sum() >= k:
+            x1 = np.round(hint)                # the caller's start has k* pairs and, likely, more weight
+        stage2 = self.run(program(model, min_count=k), options, clock, time_limit=remaining, hint=x1)
+        if stage2.x is None:
+            stage2.x = x1                      # stage 1's matching is feasible for stage 2
+        return finish(model, stage2, self.name, clock, options.mip_rel_gap)
+
+
+def time_options(options: SolveOptions, time_limit: float | None) -> dict:
+    """The common options as a plain dict (for solvers configured by name)."""
+    out = {"mip_rel_gap": float(options.mip_rel_gap)}
+    if time_limit is not None:
+        out["time_limit"] = max(float(time_limit), 1e-3)
+    if options.threads is not None:
+        out["threads"] = int(options.threads)
+    return out

@@ -1,0 +1,90 @@
+"""HiGHS through highspy, the model passed in bulk as CSC arrays (``Highs.passModel``).
+
+The assignment is solved as an LP by the simplex method (integral by total
+unimodularity, checked), trip packing and pairing as MIPs; Oracle-2 in two
+stages (see :mod:`rpbench.backends._milp`).  HiGHS is deterministic for a
+given thread count (default 1) and ``random_seed`` (fixed to 0).
+
+highspy must be 1.12-1.14: 1.15 ships ``libhighs.so.1``, the soname of the
+HiGHS bundled in OR-Tools 9.15, and the two then cannot load in one process.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..exceptions import SolverError
+from .base import SolveOptions
+from ._common import INFEASIBLE, LIMIT, OPTIMAL, Clock, Program, Raw
+from ._milp import ProgramBackend
+
+_LIMIT_STATES = ("kTimeLimit", "kIterationLimit", "kSolutionLimit", "kObjectiveBound", "kObjectiveTarget",
+                 "kInterrupt", "kHighsInterrupt", "kMemoryLimit")
+
+
+def highs_state(name: str) -> str | None:
+    """HiGHS model status name -> raw state (``None`` = an error)."""
+    if name == "kOptimal":
+        return OPTIMAL
+    if name in ("kInfeasible", "kUnboundedOrInfeasible"):   # x in [0,1]: never unbounded
+        return INFEASIBLE
+    if name in _LIMIT_STATES:
+        return LIMIT
+    return None
+
+
+def configure(h, options: SolveOptions, time_limit: float | None, *, relax: bool) -> None:
+    """Silence HiGHS and apply the preset's options (unknown ``extra`` names are errors)."""
+    settings: dict = {"output_flag": False, "random_seed": 0, "mip_rel_gap": float(options.mip_rel_gap)}
+    if options.threads is not None:
+        settings["threads"] = int(options.threads)
+    if time_limit is not None:
+        settings["time_limit"] = max(float(time_limit), 1e-3)
+    if relax:
+        settings["solver"] = "simplex"      # a vertex, hence integral for the assignment
+    settings.update(options.extra)
+    for key, value in settings.items():
+        if h.setOptionValue(key, value).name == "kError":
+            raise SolverError(f"HiGHS rejected option {key} = {value!r}; see the HiGHS option list")
+
+
+class HighsBackend(ProgramBackend):
+    name = "highs"
+    requires = ("highspy",)
+    description = "HiGHS via highspy (bulk CSC arrays): simplex LP for the assignment, MIP for packing and pairing"
+
+    def run(self, prog: Program, options: SolveOptions, clock: Clock, *, relax: bool = False,
+            time_limit: float | None = None, hint: np.ndarray | None = None) -> Raw:
+        import highspy
+
+        with clock("build_s"):
+            h = highspy.Highs()
+            configure(h, options, time_limit, relax=relax)
+            A = prog.A
+            n, m = prog.n, A.shape[0]
+            inf = highspy.kHighsInf
+            integrality = np.full(n, 0 if relax else int(highspy.HighsVarType.kInteger), dtype=np.int32)
+            status = h.passModel(n, m, int(A.nnz), int(highspy.MatrixFormat.kColwise),
+                                 int(highspy.ObjSense.kMaximize), 0.0, prog.c, np.zeros(n), np.ones(n),
+                                 np.where(np.isfinite(prog.lo), prog.lo, -inf), np.where(np.isfinite(prog.hi), prog.hi, inf),
+                                 A.indptr.astype(np.int32), A.indices.astype(np.int32), A.data.astype(np.float64),
+                                 integrality)
+            if status.name == "kError":
+                raise SolverError("HiGHS rejected the model passed by rpbench (passModel returned kError)")
+            if hint is not None and not relax:
+                h.setSolution(n, np.arange(n, dtype=np.int32), np.asarray(hint, dtype=np.float64))
+        with clock("solve_s"):
+            h.run()
+        with clock("extract_s"):
+            status = h.getModelStatus().name
+            state = highs_state(status)
+            if state is None:
+                raise SolverError(f"HiGHS failed with model status {status}")
+            info = h.getInfo()
+            has_x = info.primal_solution_status == 2            # kSolutionStatusFeasible
+            x = np.asarray(h.getSolution().col_value, dtype=np.float64) if has_x else None
+            if relax:
+                bound = info.objective_function_value if state == OPTIMAL else None
+            else:
+                bound = info.mip_dual_bound
+        return Raw(x=x, state=state, bound=bound, message="" if state == OPTIMAL else f"HiGHS status {status}")

@@ -1,0 +1,396 @@
+"""The fastest exact special-purpose algorithms for rpbench's structures.
+
+* **Assignment** (paper Eqs. 1-4, 16): sparse Jonker-Volgenant, ``lap.lapmod``,
+  on a square ``(P + V) x (V + P)`` cost matrix — see :func:`lapmod_assignment`.
+* **Pairing** (ALGORITHMS.md §4): maximum-weight general matching by
+  PyMatching's sparse blossom through the reduction to a minimum-weight
+  T-join — see :func:`max_weight_matching`.  Oracle-2 via a Lagrangian bonus
+  per pair (:func:`max_weight_max_cardinality`).
+* **Trip packing** (ALGORITHMS.md §3.3): no special-purpose algorithm; it is
+  delegated to the HiGHS MIP (exact), and the solution says so.
+
+Exactness.  Both libraries compute in fixed or floating point with
+sentinels, so the inputs are shaped to make them exact:
+
+* PyMatching keeps integral edge weights unscaled when *every* weight is
+  integral and none exceeds ``2**24 - 1`` (``NUM_DISTINCT_WEIGHTS - 1``;
+  otherwise it rescales by ``(2**24 - 1) / max|w|`` and rounds, or refuses).
+  The reduction's costs are integers below that limit, checked before every
+  call; values whose reduction would exceed it raise a clear error (or, with
+  ``[options.extra] overflow = "coarsen"``, are rounded to a power-of-two
+  grid and the answer is returned as ``feasible`` with a proven bound).
+  Values are first divided by their greatest common divisor (exact).
+* ``lap.lapmod`` uses ``LARGE = 1e6`` as infinity, so costs are scaled by a
+  power of two — exact in binary floating point — until every possible
+  path length stays far below it.
+
+Neither algorithm can be interrupted, so ``time_limit_s`` does not apply
+(both are polynomial; see the benchmark for their times).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import replace
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..exceptions import SolverError
+from ..model import AssignmentModel, Model, PairingModel, Solution, Status, Structure, empty_solution, make_solution
+from .base import Backend, SolveOptions
+from ._common import Clock, check_feasible
+
+#: Largest edge weight PyMatching accepts and keeps unscaled when all weights are integral.
+PM_MAX_WEIGHT = 2 ** 24 - 1
+#: lap's "infinity"; costs are scaled so path lengths stay below LAP_SAFE.
+LAP_LARGE = 1e6
+LAP_SAFE = 2.0 ** 18
+
+
+class MatchingBackend(Backend):
+    name = "matching"
+    requires = ("lap", "pymatching", "highspy")
+    exact = frozenset(Structure)
+    description = ("lap.lapmod (sparse Jonker-Volgenant) for the assignment, PyMatching sparse blossom for "
+                   "pairing; trip packing delegated to the HiGHS MIP")
+
+    def solve(self, model: Model, options: SolveOptions) -> Solution:
+        self.ensure_installed()
+        if model.n_cols == 0:
+            return empty_solution(model, self.name)
+        if model.structure is Structure.TRIP_PACKING:
+            from .highs import HighsBackend
+
+            sol = HighsBackend().solve(model, options)
+            note = "; ".join(m for m in ("trip packing solved by the HiGHS MIP", sol.message) if m)
+            return replace(sol, backend=self.name, message=note)
+        clock = Clock()
+        if model.structure is Structure.ASSIGNMENT:
+            chosen = lapmod_assignment(model, clock)
+            if chosen is None:
+                return make_solution(model, np.zeros(0, np.int64), Status.INFEASIBLE, self.name,
+                                     message="no assignment serves every passenger without a wait option",
+                                     **clock.times)
+            chosen = check_feasible(model, chosen, self.name)
+            obj = model.objective_of(chosen)
+            return make_solution(model, chosen, Status.OPTIMAL, self.name, bound=obj, gap=0.0, **clock.times)
+        return solve_pairing(model, options, clock, self.name)
+
+
+# ------------------------------------------------------------------ assignment
+def lapmod_assignment(model: AssignmentModel, clock: Clock) -> np.ndarray | None:
+    """Optimal columns of an assignment model by ``lap.lapmod`` (``None`` if infeasible).
+
+    Square construction, rows = passengers then one "idle" row per vehicle,
+    columns = vehicles then one wait slot per passenger: passenger ``p`` may
+    take vehicle ``v`` (cost ``-value``) or its own slot (its wait option);
+    vehicle row ``v`` takes vehicle ``v`` (cost 0, unused) or the slot of
+    any passenger that may ride ``v`` (cost 0, ``v`` serves that passenger).
+    Perfect matchings correspond to assignments with equal cost, so the
+    sparse matrix has ``2E + W + V`` entries instead of ``(P + V)²``.
+    """
+    import lap
+
+    with clock("build_s"):
+        P, V = model.n_passengers, model.n_vehicles
+        cp, cv, val = model.col_passenger.astype(np.int64), model.col_vehicle.astype(np.int64), model.values
+        ride = cv >= 0
+        has_wait = np.zeros(P, bool)
+        has_wait[cp[~ride]] = True
+        if not has_wait.all() and not _serves_all(model, ~has_wait):
+            return None
+        N = P + V
+        # per-passenger shift keeps costs >= 0 and leaves the argmin unchanged (every passenger row is matched once)
+        top = np.full(P, -np.inf)
+        np.maximum.at(top, cp, val)
+        cost = top[cp] - val
+        scale = _lap_scale(float(cost.max(initial=0.0)), N)
+        rows = np.concatenate([cp, P + np.arange(V), P + cv[ride]])
+        cols = np.concatenate([np.where(ride, cv, V + cp), np.arange(V), V + cp[ride]])
+        cc = np.concatenate([cost * scale, np.zeros(V + int(ride.sum()))])
+        col_id = np.concatenate([np.arange(model.n_cols), np.full(V + int(ride.sum()), -1)])
+        key = rows * N + cols
+        order = np.argsort(key, kind="stable")
+        key, cc, col_id = key[order], np.ascontiguousarray(cc[order]), col_id[order]
+        ii = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=N))]).astype(np.int32)
+        kk = (key % N).astype(np.int32)
+    with clock("solve_s"):
+        x, _ = lap.lapmod(N, cc, ii, kk, return_cost=False)
+    with clock("extract_s"):
+        want = np.arange(P, dtype=np.int64) * N + np.asarray(x[:P], dtype=np.int64)
+        pos = np.searchsorted(key, want)
+        pos = np.minimum(pos, len(key) - 1)
+        if np.any(key[pos] != want) or np.any(col_id[pos] < 0):
+            raise SolverError("lap.lapmod returned an assignment outside the sparse cost matrix")
+        return np.sort(col_id[pos])
+
+
+def _serves_all(model: AssignmentModel, must: np.ndarray) -> bool:
+    """Can every passenger in ``must`` (no wait option) get its own vehicle? (Hopcroft-Karp)"""
+    from scipy.sparse.csgraph import maximum_bipartite_matching
+
+    idx = np.flatnonzero(must)
+    sel = (model.col_vehicle >= 0) & must[model.col_passenger]
+    local = np.searchsorted(idx, model.col_passenger[sel])
+    g = sp.csr_matrix((np.ones(int(sel.sum())), (local, model.col_vehicle[sel])), shape=(len(idx), model.n_vehicles))
+    return bool(np.all(maximum_bipartite_matching(g, perm_type="column") >= 0))
+
+
+def _lap_scale(max_cost: float, n: int) -> float:
+    """A power of two bringing ``n * max_cost`` (a bound on any path length) below ``LAP_SAFE``."""
+    if max_cost <= 0:
+        return 1.0
+    k = math.ceil(math.log2(n * max_cost / LAP_SAFE))
+    return 2.0 ** -max(k, 0)
+
+
+# --------------------------------------------------------------------- pairing
+class RangeExceeded(Exception):
+    """The reduction's integral costs would exceed PM_MAX_WEIGHT."""
+
+    def __init__(self, needed: int):
+        super().__init__(needed)
+        self.needed = needed
+
+
+def reduction_costs(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Integral (pair costs, boundary costs) of the T-join reduction for weights ``w >= 1``.
+
+    Vertex ``v`` gets a boundary edge of cost ``β_v = ⌊(t1_v + t2_v) / 2⌋ + 1``
+    (``t1, t2`` its two largest incident weights, 0 if missing) and pair
+    ``(u, v)`` costs ``β_u + β_v - w_uv > 0``.  A T-join (every vertex of odd
+    degree) made of a matching ``M`` plus boundary edges costs ``Σβ - w(M)``.
+    A vertex ``v`` of degree >= 3 has two pair edges ``(v, x), (v, y)``;
+    trading them for the boundary edges of ``x`` and ``y`` changes the cost by
+    ``w_vx + w_vy - 2β_v < 0``, so every optimal T-join is a matching — a
+    maximum-weight one.  Per-vertex β keep the costs (hence PyMatching's
+    exact range) as small as this argument allows.
+    """
+    ends = np.concatenate([a, b])
+    ww = np.concatenate([w, w])
+    order = np.lexsort((-ww, ends))
+    ends, ww = ends[order], ww[order]
+    first = np.searchsorted(ends, np.arange(n))
+    deg = np.bincount(ends, minlength=n)
+    t1 = np.where(deg > 0, ww[np.minimum(first, len(ww) - 1)], 0)
+    t2 = np.where(deg > 1, ww[np.minimum(first + 1, len(ww) - 1)], 0)
+    beta = (t1 + t2) // 2 + 1
+    return beta[a] + beta[b] - w, beta
+
+
+def max_weight_matching(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, clock: Clock,
+                        deadline: float | None = None) -> np.ndarray:
+    """Indices of a maximum-weight matching for integral weights ``w >= 1``, by PyMatching.
+
+    Every vertex is a detection event; see :func:`reduction_costs` for why
+    the minimum-weight T-join PyMatching finds is a maximum-weight matching.
+    Raises :class:`RangeExceeded` when a cost would exceed ``PM_MAX_WEIGHT``
+    and :class:`Timeout` when ``deadline`` (a ``time.perf_counter`` value)
+    passes first: sparse blossom cannot be interrupted, so a solve with a
+    deadline runs in a forked child process that is killed then.
+    """
+    E = len(a)
+    if E == 0:
+        return np.zeros(0, np.int64)
+    with clock("build_s"):
+        pair_cost, beta = reduction_costs(n, a, b, w.astype(np.int64))
+        needed = int(max(pair_cost.max(), beta.max()))
+        if needed > PM_MAX_WEIGHT:
+            raise RangeExceeded(needed)
+    t0 = time.perf_counter()
+    pairs, build_s, _ = _in_child(_pymatching_pairs, (n, a, b, pair_cost, beta), deadline)
+    clock.times["build_s"] += build_s
+    clock.times["solve_s"] += time.perf_counter() - t0 - build_s       # includes the fork, if any
+    with clock("extract_s"):
+        pairs = pairs[pairs[:, 1] >= 0]
+        keys = a.astype(np.int64) * n + b
+        order = np.argsort(keys)
+        want = pairs.min(axis=1) * n + pairs.max(axis=1)
+        pos = np.minimum(np.searchsorted(keys[order], want), E - 1)
+        if np.any(keys[order][pos] != want):
+            raise SolverError("PyMatching matched two orders that are not a candidate pair (reduction violated)")
+        return order[pos]
+
+
+def _pymatching_pairs(n, a, b, pair_cost, beta) -> tuple[np.ndarray, float, float]:
+    """PyMatching's matched detection-event pairs (``-1`` = boundary), with build and solve times."""
+    import pymatching
+
+    t0 = time.perf_counter()
+    E = len(a)
+    indptr = np.concatenate([np.arange(0, 2 * E + 1, 2), 2 * E + np.arange(1, n + 1)])
+    indices = np.concatenate([np.column_stack([a, b]).ravel(), np.arange(n)])
+    H = sp.csc_matrix((np.ones(len(indices), np.uint8), indices, indptr), shape=(n, E + n))
+    matching = pymatching.Matching()
+    matching.load_from_check_matrix(H, weights=np.concatenate([pair_cost, beta]).astype(np.float64),
+                                    faults_matrix=sp.csc_matrix((0, E + n), dtype=np.uint8),
+                                    use_virtual_boundary_node=True)
+    t1 = time.perf_counter()
+    pairs = matching.decode_to_matched_dets_array(np.ones(n, dtype=np.uint8))
+    return np.asarray(pairs, dtype=np.int64).reshape(-1, 2), t1 - t0, time.perf_counter() - t1
+
+
+class Timeout(Exception):
+    """A PyMatching solve ran past its deadline (and was killed)."""
+
+
+def _in_child(fn, args, deadline: float | None):
+    """``fn(*args)``, in a forked child killed at ``deadline`` (in-process when there is none)."""
+    if deadline is None:
+        return fn(*args)
+    import multiprocessing
+
+    import pymatching  # noqa: F401  (imported once here, inherited by every child)
+
+    remaining = deadline - time.perf_counter()
+    if remaining <= 0:
+        raise Timeout()
+    ctx = multiprocessing.get_context("fork")        # the child inherits the arrays; nothing is pickled in
+    receive, send = ctx.Pipe(duplex=False)
+    child = ctx.Process(target=_child_main, args=(send, fn, args), daemon=True)
+    child.start()
+    send.close()
+    try:
+        if not receive.poll(remaining):
+            raise Timeout()
+        ok, result = receive.recv()
+    except EOFError:
+        ok, result = False, "the PyMatching child process died"
+    finally:
+        if child.is_alive():
+            child.kill()
+        child.join()
+        receive.close()
+    if not ok:
+        raise SolverError(f"PyMatching failed: {result}")
+    return result
+
+
+def _child_main(conn, fn, args) -> None:
+    try:
+        conn.send((True, fn(*args)))
+    except BaseException as exc:                      # report, never hang the parent
+        conn.send((False, f"{type(exc).__name__}: {exc}"))
+    finally:
+        conn.close()
+
+
+def cardinality_upper_bound(n: int, a: np.ndarray, b: np.ndarray) -> int:
+    """``Σ_C ⌊ν_f(C)⌋`` over connected components: an upper bound on the matching number.
+
+    ``ν_f`` (the largest fractional matching) is half the maximum matching of
+    the bipartite double cover (Hopcroft-Karp); per component its floor is
+    usually the matching number itself, which :func:`max_weight_max_cardinality`
+    then reaches and thereby proves.
+    """
+    from scipy.sparse.csgraph import connected_components, maximum_bipartite_matching
+
+    g = sp.csr_matrix((np.ones(2 * len(a)), (np.concatenate([a, b]), np.concatenate([b, a]))), shape=(n, n))
+    matched = maximum_bipartite_matching(g, perm_type="column") >= 0
+    _, label = connected_components(g, directed=False)
+    return int((np.bincount(label[matched], minlength=label.max(initial=0) + 1) // 2).sum())
+
+
+def max_weight_max_cardinality(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, clock: Clock,
+                               deadline: float | None = None) -> tuple[np.ndarray, bool]:
+    """A maximum-weight matching among the maximum-cardinality ones (Oracle-2), and whether it is proven.
+
+    With a bonus ``λ`` per pair, a maximum-weight matching for ``w + λ`` with
+    ``k*`` pairs beats every other ``k*``-matching by weight (all get the same
+    ``k*·λ``), so it is exact for any ``λ`` that reaches ``k*``; ``k*`` is
+    certified by reaching :func:`cardinality_upper_bound`.  λ starts at a
+    quarter of the value spread and doubles up to 4 x the spread: larger
+    bonuses make the costs nearly uniform, and sparse blossom then slows down
+    by orders of magnitude (it is built for sparse defects; here every
+    vertex is one).  Unproven, the matching with the most pairs is returned.
+    On :class:`Timeout` the best matching so far rides on the exception.
+    """
+    with clock("build_s"):
+        upper = cardinality_upper_bound(n, a, b)
+    best = np.zeros(0, np.int64)
+    if upper == 0:
+        return best, True
+    spread = int(w.max()) - int(w.min()) + 1
+    lam = max(1, spread // 4)
+    while lam <= 4 * spread:
+        wl = w + lam
+        keep = np.flatnonzero(wl > 0)      # a pair worth <= 0 never helps a maximum-weight matching
+        try:
+            sel = keep[max_weight_matching(n, a[keep], b[keep], wl[keep], clock, deadline)]
+        except Timeout as exc:
+            exc.best = best
+            raise
+        best = sel
+        if len(sel) == upper:
+            return sel, True
+        lam *= 2
+    return best, False
+
+
+def solve_pairing(model: PairingModel, options: SolveOptions, clock: Clock, backend: str) -> Solution:
+    """PyMatching when it can prove the optimum, else the HiGHS MIP warm-started from its best matching.
+
+    With a time limit, PyMatching gets half of it for Oracle-2 (the rest is
+    left to a fallback) and all of it for Oracle-1.
+    """
+    overflow = options.extra.get("overflow", "fallback")
+    if overflow not in ("fallback", "error"):
+        raise SolverError(f"backend {backend!r}: [options.extra] overflow = {overflow!r}; use \"fallback\" or \"error\"")
+    lexi = model.objective == "cardinality_then_weight"
+    limit = options.time_limit_s
+    deadline = None if limit is None else clock.start + (limit / 2 if lexi else limit)
+    with clock("build_s"):
+        v = model.values.astype(np.int64)
+        a, b = model.col_a.astype(np.int64), model.col_b.astype(np.int64)
+        g = int(np.gcd.reduce(np.abs(v))) if np.any(v) else 1
+        w = v // g                          # exact: every value is a multiple of g
+    step, why, sel, proven = 1, "", np.zeros(0, np.int64), False
+    while True:                             # step > 1: coarsened, only to warm-start the fallback
+        wc = w if step == 1 else np.round(w / step).astype(np.int64)
+        try:
+            if lexi:
+                sel, proven = max_weight_max_cardinality(model.n_orders, a, b, wc, clock, deadline)
+            else:
+                use = np.flatnonzero(wc > 0)     # Oracle-1: a pair worth <= 0 never helps
+                sel, proven = use[max_weight_matching(model.n_orders, a[use], b[use], wc[use], clock, deadline)], True
+            break
+        except RangeExceeded as exc:
+            if overflow == "error":
+                raise SolverError(_overflow_message(model, backend, g, exc.needed, lexi)) from None
+            why = why or f"values exceed PyMatching's exact range (reduction costs up to {exc.needed})"
+            step *= 2
+        except Timeout as exc:
+            sel, why = getattr(exc, "best", sel), why or "PyMatching ran out of its share of the time limit"
+            break
+    chosen = check_feasible(model, np.sort(sel), backend)
+    if step == 1 and proven and not why:
+        obj = model.objective_of(chosen)
+        return make_solution(model, chosen, Status.OPTIMAL, backend, bound=obj, gap=0.0, **clock.times)
+    why = why or "maximum cardinality not certified (fractional bound not reached)"
+    return _highs_fallback(model, options, clock, backend, chosen, why)
+
+
+def _highs_fallback(model: PairingModel, options: SolveOptions, clock: Clock, backend: str,
+                    start: np.ndarray, why: str) -> Solution:
+    """The exact HiGHS MIP (two stages for Oracle-2), warm-started with ``start``; honest status on a time limit."""
+    from .highs import HighsBackend
+
+    hint = np.zeros(model.n_cols)
+    hint[start] = 1.0
+    limit = clock.remaining(options.time_limit_s)
+    sol = HighsBackend().solve(model, replace(options, time_limit_s=limit), hint=hint)
+    times = {k: clock.times[k] + getattr(sol, k) for k in clock.times}
+    return replace(sol, backend=backend, message="; ".join(m for m in (f"{why}: solved by the HiGHS MIP "
+                                                                          "warm-started from PyMatching", sol.message) if m),
+                   **times)
+
+
+def _overflow_message(model: PairingModel, backend: str, g: int, needed: int, lexi: bool) -> str:
+    factor = 2 ** math.ceil(math.log2(needed / PM_MAX_WEIGHT))
+    what = "values plus the cardinality bonus" if lexi else "values"
+    return (f"backend {backend!r}: the {what} of {model.name!r} (up to {int(np.abs(model.values).max())} x "
+            f"{model.unit_m:g} m) need reduction costs up to {needed} > {PM_MAX_WEIGHT}, PyMatching's exact integer "
+            f"range; build the model with unit_m >= {model.unit_m * g * factor:g} m, or drop [options.extra] "
+            "overflow = \"error\" to fall back to the HiGHS MIP")
