@@ -24,7 +24,8 @@ tested it).  The weight is the saving ``e = l_A + l_B - L`` (Eq. 5).
 Enumeration is vectorised: orders sorted by (time, id), each order's window
 of later partners found by ``searchsorted``, and all (i, j) pairs of a block
 of consecutive ``i`` generated and evaluated as flat numpy arrays, in blocks
-of bounded size -- never a Python loop per pair.
+of bounded size -- never a Python loop per pair.  An exact necessary test on
+A's detour (two distance look-ups) discards most pairs before the full POOL.
 """
 
 from __future__ import annotations

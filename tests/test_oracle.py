@@ -184,7 +184,8 @@ def test_o_t2_small_instances_equal_exhaustive_search(toy, seed, n, span, both, 
 
 # ---------------------------------------------------------------------- O-T4
 @pytest.mark.parametrize("solver", SOLVERS)
-def test_o_t4_wider_rules_never_lower_the_optima(toy, solver):
+def test_o_t4_wider_rules_never_lower_the_optima(solver):
+    toy = build_scenario("toy", sample=0.3, seed=1)
     base = PairRules.from_params(toy.params)
     wider = [base.replace(planner_patience_s=180.0), base.replace(max_detour_m=6000.0),
              base.replace(both_pickup_orders=True), base.replace(allow_enroute=True),
@@ -419,14 +420,20 @@ def _cli_solver() -> str | None:
     return next((p for p in PRESETS if _preset_available(p)), None)
 
 
-def test_cli_json_and_table(capsys):
+def test_cli_json_and_table(capsys, tmp_path):
     solver = _cli_solver()
     if solver is None:
         pytest.skip("no pairing preset installed yet")
-    assert main(["oracle", "--scenario", "toy", "--sample", "0.3", "--solver", solver, "--json"]) == 0
+    csv = tmp_path / "pairs.csv"
+    assert main(["oracle", "--scenario", "toy", "--sample", "0.3", "--solver", solver, "--json",
+                 "--pairs", str(csv)]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["oracle1"]["status"] == "optimal" and out["oracle2"]["pairs"] >= out["oracle1"]["pairs"]
     assert set(KPI_KEYS) <= set(out["oracle1"])
+    import pandas as pd
+    written = pd.read_csv(csv)
+    assert (written["variant"] == 1).sum() == out["oracle1"]["pairs"]
+    assert (written["variant"] == 2).sum() == out["oracle2"]["pairs"]
     assert main(["oracle", "--scenario", "toy", "--sample", "0.3", "--solver", solver, "--variant", "1",
                  "--allow-enroute", "--both-pickup-orders", "--pickup-check"]) == 0
     text = capsys.readouterr().out
@@ -439,6 +446,9 @@ def test_cli_bad_inputs(capsys):
     with pytest.raises(SystemExit) as exc:
         main(["oracle", "--scenario", "toy", "--variant", "3"])
     assert exc.value.code == 2
+    if _cli_solver() is not None:
+        assert main(["oracle", "--scenario", "toy", "--solver", _cli_solver(), "--time-limit", "0"]) == 2
+        assert "--time-limit" in capsys.readouterr().err
 
 
 # -------------------------------------------------------------- Haikou data

@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 
 from ..exceptions import ParameterError
 from ..oracle import UNIT_M, PairRules, check_variant, find_candidates, solve_oracle
 from ..scenarios import build_scenario, default_scenario_name
+from ..solver_presets import load_preset
 from ._common import add_scenario_args, note, print_json, scenario_kwargs
 
 
@@ -27,6 +29,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="require the pick-up distance to the second order <= R̄ (oracle_pickup_check)")
     p.add_argument("--allow-enroute", action="store_true",
                    help="also pair an order requested while the first one rides (oracle_allow_enroute)")
+    p.add_argument("--time-limit", type=float, default=None, metavar="S",
+                   help="override the preset's time limit in seconds (a stopped solve reports its gap)")
     p.add_argument("--unit-m", type=float, default=UNIT_M, metavar="M",
                    help=f"resolution of the savings in the model, in metres (default {UNIT_M:g}; coarser if an "
                         "integer algorithm reports an overflow)")
@@ -44,12 +48,19 @@ def run(args: argparse.Namespace) -> int:
     rules = PairRules.from_params(scenario.params, both_pickup_orders=args.both_pickup_orders,
                                   pickup_check=args.pickup_check, allow_enroute=args.allow_enroute)
     candidates = find_candidates(scenario.network.distances(), scenario.orders, rules)
-    results = {v: solve_oracle(scenario, v, args.solver, candidates=candidates, unit_m=args.unit_m)
+    preset = load_preset(args.solver)
+    options = preset.options
+    if args.time_limit is not None:
+        if not args.time_limit > 0:
+            raise ParameterError(f"--time-limit {args.time_limit!r} must be > 0 seconds")
+        options = dataclasses.replace(options, time_limit_s=args.time_limit)
+    results = {v: solve_oracle(scenario, v, preset, candidates=candidates, options=options, unit_m=args.unit_m)
                for v in variants}
     for v, r in results.items():
         if r.status.value != "optimal":
-            note(f"rpbench: Oracle-{v} stopped with status {r.status.value} (gap {r.kpis()['gap']:.3g}); "
-                 "its value is not proven optimal")
+            gap = r.kpis()["gap"]
+            note(f"rpbench: Oracle-{v} stopped with status {r.status.value} "
+                 f"(gap {'unknown' if math.isnan(gap) else f'{gap:.3g}'}); its value is not proven optimal")
     if args.pairs:
         _write_pairs(args.pairs, results)
 
