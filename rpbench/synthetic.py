@@ -205,6 +205,7 @@ def trip_packing(n_requests: int, n_vehicles: int, *, seed: int = 0, vehicles_pe
 # ---------------------------------------------------------------- benchmark sets
 #: Named model sets for ``rpbench bench --synthetic --sizes NAME`` (structure, size arguments).
 SUITES: dict[str, list[tuple[str, tuple[int, ...]]]] = {
+    "tiny": [("assignment", (5, 12)), ("pairing", (30,)), ("trip_packing", (8, 5))],
     "small": [("assignment", (20, 100)), ("assignment", (100, 500)), ("pairing", (2_000,)),
               ("trip_packing", (200, 100))],
     "default": [("assignment", (20, 100)), ("assignment", (100, 500)), ("assignment", (500, 2_000)),

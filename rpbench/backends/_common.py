@@ -154,7 +154,7 @@ def finish(model: Model, raw: Raw, backend: str, clock: Clock, rel_gap: float = 
     objective = model.objective_of(chosen)
     bound = integral_bound(raw.bound)
     if bound is not None and bound < objective:
-        bound = objective                     # a tolerance artefact: the incumbent itself is a lower bound
+        bound = None                          # inconsistent with the incumbent: proves nothing, report nothing
     status = classify(raw.state, objective, bound, rel_gap)
     if status is Status.OPTIMAL:
         bound = objective

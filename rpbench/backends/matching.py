@@ -47,6 +47,8 @@ PM_MAX_WEIGHT = 2 ** 24 - 1
 #: lap's "infinity"; costs are scaled so path lengths stay below LAP_SAFE.
 LAP_LARGE = 1e6
 LAP_SAFE = 2.0 ** 18
+#: Pairings with fewer candidate pairs are solved in-process even under a time limit.
+SMALL_GRAPH = 5_000
 
 
 class MatchingBackend(Backend):
@@ -200,7 +202,8 @@ def max_weight_matching(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, clo
         if needed > PM_MAX_WEIGHT:
             raise RangeExceeded(needed)
     t0 = time.perf_counter()
-    pairs, build_s, _ = _in_child(_pymatching_pairs, (n, a, b, pair_cost, beta), deadline)
+    # small graphs finish in milliseconds: forking (~10 ms) to enforce the deadline would dominate
+    pairs, build_s, _ = _in_child(_pymatching_pairs, (n, a, b, pair_cost, beta), deadline if E >= SMALL_GRAPH else None)
     clock.times["build_s"] += build_s
     clock.times["solve_s"] += time.perf_counter() - t0 - build_s       # includes the fork, if any
     with clock("extract_s"):
@@ -237,10 +240,15 @@ class Timeout(Exception):
 
 
 def _in_child(fn, args, deadline: float | None):
-    """``fn(*args)``, in a forked child killed at ``deadline`` (in-process when there is none)."""
-    if deadline is None:
-        return fn(*args)
+    """``fn(*args)``, in a forked child killed at ``deadline``.
+
+    In-process when there is no deadline, or inside a daemonic process (a
+    ``multiprocessing.Pool`` worker), which may not start children.
+    """
     import multiprocessing
+
+    if deadline is None or multiprocessing.current_process().daemon:
+        return fn(*args)
 
     import pymatching  # noqa: F401  (imported once here, inherited by every child)
 
@@ -249,7 +257,7 @@ def _in_child(fn, args, deadline: float | None):
         raise Timeout()
     ctx = multiprocessing.get_context("fork")        # the child inherits the arrays; nothing is pickled in
     receive, send = ctx.Pipe(duplex=False)
-    child = ctx.Process(target=_child_main, args=(send, fn, args), daemon=True)
+    child = ctx.Process(target=_child_main, args=(send, fn, args))
     child.start()
     send.close()
     try:

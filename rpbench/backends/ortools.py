@@ -108,6 +108,6 @@ class OrtoolsBackend(ProgramBackend):
             has_x = status in (cp_model.OPTIMAL, cp_model.FEASIBLE)
             xs = np.asarray(solver.response_proto.solution, dtype=np.float64)[:prog.n] if has_x else None
             state = OPTIMAL if status == cp_model.OPTIMAL else LIMIT
-            bound = float(solver.best_objective_bound)
+            bound = float(solver.best_objective_bound) if has_x else None   # without a solution it may be 0
         return Raw(x=xs, state=state, bound=bound,
                    message="" if state == OPTIMAL else f"CP-SAT status {solver.status_name(status)}")

@@ -1,0 +1,93 @@
+"""``rpbench bench --synthetic``: time every solver preset on seeded synthetic models.
+
+One row per (model, preset): status, objective, build / solve / extract
+times, and whether the objective equals the proven optimum of the other
+presets (exit status 1 when two presets disagree).  A preset that hits its
+time limit reports ``time_limit``; one that overruns the hard timeout is
+killed and reports ``killed``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from ..benchmark import format_table, run_benchmark
+from ..exceptions import ParameterError
+from ..model import OBJECTIVES
+from ..solver_presets import load_preset
+from ..synthetic import SUITES, suite
+from ._common import note, print_json
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("bench", help="time every solver preset on the same models",
+                       description="Time every installed solver preset on the same decision models, build and "
+                                   "solve apart, and cross-check their objectives.")
+    p.add_argument("--synthetic", action="store_true",
+                   help="benchmark seeded synthetic models shaped like rpbench's (see --sizes)")
+    p.add_argument("--sizes", default="default", choices=sorted(SUITES),
+                   help="synthetic model set (default: default = assignment 20x100 .. 2000x5000, "
+                        "pairing 2,000 and 50,000 orders, two trip packings)")
+    p.add_argument("--objectives", default="weight",
+                   help="pairing objectives, comma-separated: weight (Oracle-1), cardinality_then_weight "
+                        "(Oracle-2) (default: weight)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the synthetic models (default 0)")
+    p.add_argument("--solver", action="append", default=None, metavar="NAME",
+                   help="preset to run (repeatable; default: every installed preset)")
+    p.add_argument("--time-limit", type=float, default=None, metavar="S",
+                   help="per-solve time limit for every preset (default: each preset's own)")
+    p.add_argument("--preset-time-limit", action="append", default=[], metavar="NAME=S",
+                   help="per-solve time limit of one preset, e.g. pyomo-highs=30 (repeatable)")
+    p.add_argument("--hard-timeout", type=float, default=None, metavar="S",
+                   help="kill a solve after S seconds (default: 2 x its time limit + 30)")
+    p.add_argument("--repeat", type=int, default=3, help="runs per solve; the fastest is kept (default 3)")
+    p.add_argument("--no-isolate", dest="isolate", action="store_false",
+                   help="solve in this process (no hard timeout)")
+    p.add_argument("--csv", metavar="PATH", default=None, help="also write the table as CSV")
+    p.add_argument("--json", action="store_true", help="print the table as JSON records")
+    p.set_defaults(handler=run)
+
+
+def _limits(items: list[str]) -> dict[str, float]:
+    out = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        try:
+            out[name.strip()] = float(value)
+        except ValueError:
+            sep = ""
+        if not sep or out[name.strip()] <= 0:
+            raise ParameterError(f"--preset-time-limit {item!r}: expected NAME=SECONDS with SECONDS > 0")
+    return out
+
+
+def run(args: argparse.Namespace) -> int:
+    if not args.synthetic:
+        raise ParameterError("nothing to benchmark: pass --synthetic (snapshot instance files are not supported yet)")
+    objectives = tuple(o.strip() for o in args.objectives.split(",") if o.strip())
+    bad = [o for o in objectives if o not in OBJECTIVES]
+    if bad or not objectives:
+        raise ParameterError(f"--objectives {args.objectives!r}: expected a comma-separated subset of "
+                             f"{', '.join(OBJECTIVES)}")
+    if args.time_limit is not None and args.time_limit <= 0:
+        raise ParameterError(f"--time-limit {args.time_limit!r} must be > 0")
+    if args.repeat < 1:
+        raise ParameterError(f"--repeat {args.repeat} must be >= 1")
+    limits = _limits(args.preset_time_limit)
+    presets = None if args.solver is None else [load_preset(name) for name in args.solver]   # fail before building
+    note(f"building the {args.sizes!r} synthetic models (seed {args.seed}) ...")
+    models = suite(args.sizes, seed=args.seed, objectives=objectives)
+    table = run_benchmark(models, presets, time_limit_s=args.time_limit, time_limits=limits, repeat=args.repeat,
+                          isolate=args.isolate, hard_timeout_s=args.hard_timeout,
+                          progress=None if args.json else note)
+    if args.csv:
+        table.to_csv(args.csv, index=False)
+    if args.json:
+        print_json(table.astype(object).where(table.notna(), None).to_dict(orient="records"))
+    else:
+        print(format_table(table))
+    if (table["agrees"] == False).any():  # noqa: E712  (pandas boolean with missing values)
+        print("rpbench: presets disagree on a proven optimum (see the rows marked NO)", file=sys.stderr)
+        return 1
+    return 0

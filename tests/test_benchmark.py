@@ -1,0 +1,94 @@
+"""The model benchmark: table, cross-check, failures as results, the `rpbench bench` command."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from rpbench import synthetic
+from rpbench.backends import Backend
+from rpbench.benchmark import COLUMNS, cross_check, format_table, run_benchmark
+from rpbench.cli import main
+from rpbench.exceptions import ParameterError, SolverError
+from rpbench.model import Status, Structure, make_solution
+from rpbench.solver_presets import Preset, SolveOptions
+
+MODELS = synthetic.suite("tiny", objectives=("weight", "cardinality_then_weight"))
+
+
+def test_table_has_one_row_per_model_and_preset():
+    table = run_benchmark(MODELS, ["highs", "matching"], repeat=2)
+    assert list(table.columns) == COLUMNS and len(table) == 2 * len(MODELS)
+    assert (table["status"] == "optimal").all() and table["agrees"].all()
+    assert (table["build_s"] >= 0).all() and (table["solve_s"] >= 0).all() and (table["repeats"] == 2).all()
+    assert table["model"].tolist()[:2] == [MODELS[0].name] * 2                   # grouped by model
+    text = format_table(table)
+    assert "matching" in text and "yes" in text and "NO" not in text
+
+
+def test_isolated_workers_give_the_same_answers():
+    inline = run_benchmark(MODELS[:2], ["matching"])
+    isolated = run_benchmark(MODELS[:2], ["matching"], isolate=True)
+    assert inline["objective"].tolist() == isolated["objective"].tolist()
+
+
+def test_cross_check_flags_disagreement_and_impossible_values():
+    rows = [{"model": "m", "status": "optimal", "objective": 5.0}, {"model": "m", "status": "optimal", "objective": 4.0},
+            {"model": "n", "status": "optimal", "objective": 5.0}, {"model": "n", "status": "time_limit", "objective": 6.0},
+            {"model": "n", "status": "time_limit", "objective": 3.0}, {"model": "n", "status": "error", "objective": np.nan}]
+    agrees = cross_check(pd.DataFrame(rows))["agrees"].tolist()
+    assert agrees[:4] == [False, False, True, False] and pd.isna(agrees[4]) and pd.isna(agrees[5])
+
+
+class _Broken(Backend):
+    name, requires, exact, description = "broken", (), frozenset(Structure), "returns x = 0 as 'optimal'"
+
+    def solve(self, model, options):
+        if model.n_cols > 5 and model.structure is Structure.PAIRING:
+            raise SolverError("broken on purpose")
+        return make_solution(model, [], Status.OPTIMAL, self.name)
+
+
+def test_errors_and_wrong_answers_are_rows_not_crashes(monkeypatch):
+    preset = Preset(name="broken", backend="highs", description="", options=SolveOptions(), path="-")
+    monkeypatch.setattr(Preset, "make_backend", lambda self: _Broken() if self.name == "broken" else
+                        __import__("rpbench.backends", fromlist=["get_backend"]).get_backend(self.backend))
+    table = run_benchmark(MODELS[1:3], ["matching", preset])
+    broken = table[table["preset"] == "broken"]
+    assert broken["status"].tolist() == ["error", "error"] and "broken on purpose" in broken["message"].iloc[0]
+
+
+def test_time_limit_is_a_result():
+    model = synthetic.pairing(1500, partners=30)
+    table = run_benchmark([model], ["highs"], time_limit_s=0.3)
+    assert table["status"].iloc[0] == "time_limit" and pd.isna(table["agrees"].iloc[0])
+
+
+def test_bad_repeat():
+    with pytest.raises(ParameterError, match="repeat"):
+        run_benchmark(MODELS, ["highs"], repeat=0)
+
+
+def test_bench_command_json(capsys, tmp_path):
+    csv = tmp_path / "bench.csv"
+    code = main(["bench", "--synthetic", "--sizes", "tiny", "--solver", "matching", "--solver", "scipy",
+                 "--repeat", "1", "--no-isolate", "--json", "--csv", str(csv),
+                 "--objectives", "weight,cardinality_then_weight", "--preset-time-limit", "scipy=20"])
+    assert code == 0
+    records = json.loads(capsys.readouterr().out)
+    assert len(records) == 8 and {r["status"] for r in records} == {"optimal"} and csv.exists()
+
+
+@pytest.mark.parametrize("argv, match", [
+    (["bench"], "pass --synthetic"),
+    (["bench", "--synthetic", "--objectives", "max"], "--objectives"),
+    (["bench", "--synthetic", "--preset-time-limit", "highs"], "NAME=SECONDS"),
+    (["bench", "--synthetic", "--time-limit", "0"], "must be > 0"),
+    (["bench", "--synthetic", "--sizes", "tiny", "--solver", "nope"], "unknown solver preset"),
+])
+def test_bench_command_errors(argv, match, capsys):
+    assert main(argv) == 2
+    assert match in capsys.readouterr().err

@@ -1,0 +1,117 @@
+"""Solver-agnostic models: validation with clear errors, structure views, solutions."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rpbench.exceptions import ModelError
+from rpbench.model import (MAX_EXACT_TOTAL, AssignmentModel, PairingModel, Status, Structure, TripPackingModel,
+                           empty_solution, make_solution, quantize)
+
+
+def assignment(**kw):
+    args = dict(n_passengers=2, n_vehicles=2, col_passenger=[0, 0, 1, 1], col_vehicle=[0, -1, 1, -1],
+                values=[-3, -5, -4, -6])
+    args.update(kw)
+    return AssignmentModel(args.pop("n_passengers"), args.pop("n_vehicles"), args.pop("col_passenger"),
+                           args.pop("col_vehicle"), args.pop("values"), **args)
+
+
+@pytest.mark.parametrize("kw, match", [
+    (dict(values=[-3, float("nan"), -4, -6]), "value of column 1 is nan; values must be finite"),
+    (dict(values=[-3, float("inf"), -4, -6]), "must be finite"),
+    (dict(values=[-3, -5.5, -4, -6]), "whole multiples of unit_m"),
+    (dict(col_vehicle=[0, -1, 2, -1]), "column 2 has vehicle 2, outside \\[-1, 1\\]"),
+    (dict(col_passenger=[0, 0, 1, 3]), "column 3 has passenger 3, outside"),
+    (dict(col_vehicle=[0, -1, 1]), "vehicle has 3 entries for 4 columns"),
+    (dict(col_passenger=[0, 0, 0, 0], col_vehicle=[0, -1, 0, 1]), "columns 0 and 2 are duplicates"),
+    (dict(n_passengers=3), "passenger 2 has no option at all"),
+    (dict(n_vehicles=-1), "negative number"),
+    (dict(unit_m=0.0), "unit_m=0.0 must be a positive number"),
+    (dict(values=[MAX_EXACT_TOTAL, MAX_EXACT_TOTAL, 0, 0]), "too large for exact float64 sums"),
+])
+def test_assignment_validation(kw, match):
+    with pytest.raises(ModelError, match=match):
+        assignment(**kw)
+
+
+@pytest.mark.parametrize("args, kw, match", [
+    ((3, [0, 1], [1, 3], [1, 2]), {}, "second order 3, outside"),
+    ((3, [0, 2], [1, 1], [1, 2]), {}, "must satisfy a < b"),
+    ((3, [0, 0], [1, 1], [1, 2]), {}, "duplicates"),
+    ((3, [0], [1], [float("nan")]), {}, "must be finite"),
+    ((3, [0], [1], [1]), {"objective": "pairs"}, "objective 'pairs' unknown"),
+    ((-1, [], [], []), {}, "negative number of orders"),
+])
+def test_pairing_validation(args, kw, match):
+    with pytest.raises(ModelError, match=match):
+        PairingModel(*args, **kw)
+
+
+@pytest.mark.parametrize("args, match", [
+    ((2, 1, [0], [1], [0], [1]), "must list its requests in increasing order"),
+    ((2, 1, [1], [0], [-1], [1]), "vehicle 1, outside"),
+    ((2, 1, [0, 0], [0, 0], [-1, -1], [1, 2]), "duplicates"),
+    ((2, 1, [0], [0], [-2], [1]), "second request -2"),
+])
+def test_trip_packing_validation(args, match):
+    with pytest.raises(ModelError, match=match):
+        TripPackingModel(*args)
+
+
+def test_models_are_frozen_and_typed():
+    m = assignment()
+    with pytest.raises(AttributeError):
+        m.values = np.zeros(4)
+    assert m.col_passenger.dtype == np.int32 and m.values.dtype == np.float64
+    assert m.structure is Structure.ASSIGNMENT and m.size == {"rows": 4, "cols": 4, "nonzeros": 6}
+
+
+def test_incidence_and_rows():
+    m = assignment()
+    A = m.incidence().toarray()
+    assert A.tolist() == [[1, 1, 0, 0], [0, 0, 1, 1], [1, 0, 0, 0], [0, 0, 1, 0]]
+    assert m.row_exact().tolist() == [True, True, False, False] and m.wait_columns.tolist() == [1, 3]
+    t = TripPackingModel(3, 2, [0, 1], [0, 1], [2, -1], [5, 1])
+    assert t.incidence().toarray()[:, 0].tolist() == [1, 0, 1, 1, 0] and not t.row_exact().any()
+    p = PairingModel(3, [0, 1], [1, 2], [1, 1])
+    assert p.incidence().toarray().tolist() == [[1, 0], [1, 1], [0, 1]]
+
+
+def test_violations():
+    m = assignment()
+    assert m.violations([0, 2]) == [] and m.violations([1, 3]) == []
+    assert m.violations([0]) == ["row 1 must be covered exactly once but is not covered"]
+    assert m.violations([0, 1, 2]) == ["row 0 is covered 2 times"]
+    assert "chosen twice" in m.violations([0, 0, 2])[0]
+    assert m.violations([7]) == ["chosen column index outside 0..3"]
+    p = PairingModel(3, [0, 1], [1, 2], [1, 1])
+    assert p.violations([]) == [] and p.violations([0, 1]) == ["row 1 is covered 2 times"]
+
+
+def test_violations_match_a_loop_on_random_choices():
+    rng = np.random.default_rng(0)
+    a, b = np.triu_indices(8, 1)
+    p = PairingModel(8, a, b, np.ones(len(a)))
+    start, rows = p.column_rows()
+    for _ in range(50):
+        chosen = rng.choice(p.n_cols, rng.integers(0, 6), replace=False)
+        counts = np.zeros(8, int)
+        for c in chosen:
+            counts[rows[start[c]:start[c + 1]]] += 1
+        assert (p.violations(chosen) == []) == (counts.max(initial=0) <= 1)
+
+
+def test_solutions_recompute_the_objective():
+    m = assignment()
+    sol = make_solution(m, [2, 0], Status.OPTIMAL, "test", bound=-7.0)
+    assert sol.chosen.tolist() == [0, 2] and sol.objective == -7.0 and sol.cardinality == 2
+    assert sol.objective_m(m) == pytest.approx(-0.007) and sol.total_s == 0.0
+    empty = empty_solution(PairingModel(0, [], [], []), "test")
+    assert empty.status is Status.OPTIMAL and empty.objective == 0.0 and empty.gap == 0.0
+
+
+def test_quantize_rounds_to_integral_units():
+    assert quantize([1.2344, 1.2346, -0.0004]).tolist() == [1234.0, 1235.0, -0.0]
+    assert quantize([1500.0], unit_m=1.0).tolist() == [1500.0]
