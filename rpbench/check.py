@@ -288,10 +288,17 @@ def _check_oracle(name: str, run_dir: Path, meta: dict, orders: pd.DataFrame, so
     if (counts > 1).any():
         rc.fail("oracle-pairs", f"order {int(np.argmax(counts))} appears in {int(counts.max())} pairs")
     req = orders["request_s"].to_numpy()
-    late = np.abs(req[b] - req[a]) > rules["planner_patience_s"] + TOL_S
-    if late.any():
-        rc.fail("oracle-pairs", f"{int(late.sum())} pairs request more than K̄ apart")
     direct = ~pairs["enroute"].to_numpy().astype(bool)
+    gap = np.abs(req[b] - req[a])
+    late = direct & (gap > rules["planner_patience_s"] + TOL_S)
+    if late.any():
+        rc.fail("oracle-pairs", f"{int(late.sum())} pairs of waiting orders request more than K̄ apart")
+    # en-route pairs: the second order requests while the first rides (it boards at t + K̄, §4.2)
+    early = ~direct & (gap <= rules["planner_patience_s"] - TOL_S)
+    if early.any():
+        rc.fail("oracle-pairs", f"{int(early.sum())} en-route pairs request before the first order could ride")
+    if (~direct).any() and not rules["allow_enroute"]:
+        rc.fail("oracle-pairs", "en-route pairs in an oracle whose rules do not allow them")
     o, d = orders["origin"].to_numpy(), orders["destination"].to_numpy()
     r = pool(dist, o[a[direct]], d[a[direct]], o[b[direct]], d[b[direct]],
              max_pickup_m=rules["max_pickup_m"] if rules["pickup_check"] else np.inf,

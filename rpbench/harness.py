@@ -4,7 +4,10 @@
 event log (:mod:`rpbench.metrics`); :func:`run_comparison` runs several on
 the same scenario and writes a results folder (:mod:`rpbench.results`)
 with a report.  The offline oracles join the comparison as runs named
-``oracle1``/``oracle2``.
+``oracle1``/``oracle2`` (the seed's pair rules, ALGORITHMS.md A18) and
+``oracle1-enroute`` (Oracle-1 that may also pair an order with one already
+riding, in either pick-up order: the bound on en-route pooling that the
+seed's rules lack, §4.2).
 """
 
 from __future__ import annotations
@@ -21,14 +24,17 @@ import pandas as pd
 
 from . import metrics, results
 from .exceptions import ParameterError
-from .report import write_report
+from .report import with_competitive_ratios, write_report
 from .scenario import Scenario
 from .sim import SimResult, Simulator
 from .solver_presets import Preset, load_preset
 from .strategies import REGISTRY as STRATEGY_REGISTRY
 from .strategies import make_strategy
 
-ORACLES = ("oracle1", "oracle2")
+#: Oracle run name -> (variant, pair-rule flags).
+ORACLE_RUNS = {"oracle1": (1, {}), "oracle2": (2, {}),
+               "oracle1-enroute": (1, {"allow_enroute": True, "both_pickup_orders": True})}
+ORACLES = tuple(ORACLE_RUNS)
 
 
 @dataclass
@@ -169,15 +175,16 @@ def solve_oracles(scenario: Scenario, names: list[str], preset: Preset, strategy
     out = {}
     cache: dict = {}
     for name in names:
+        variant, defaults = ORACLE_RUNS[name]
         flags = dict(strategy_options.get(name) or {})
         unknown = set(flags) - set(ORACLE_FLAGS)
         if unknown:
             raise ParameterError(f"{name}: unknown option(s) {', '.join(sorted(unknown))}; known: "
                                  f"{', '.join(ORACLE_FLAGS)}")
-        rules = PairRules.from_params(scenario.params, **{k: bool(v) for k, v in flags.items()})
+        rules = PairRules.from_params(scenario.params, **{**defaults, **{k: bool(v) for k, v in flags.items()}})
         if rules not in cache:
             cache[rules] = find_candidates(scenario.network.distances(), scenario.orders, rules)
-        out[name] = solve_oracle(scenario, 1 if name == "oracle1" else 2, preset, candidates=cache[rules])
+        out[name] = solve_oracle(scenario, variant, preset, candidates=cache[rules])
     return out
 
 
@@ -192,11 +199,7 @@ def kpi_table(runs: list[StrategyRun], oracle_results: dict, order: list[str]) -
     cols = {r.name: r.kpis for r in runs}
     for name, res in oracle_results.items():
         cols[name] = oracle_kpis(res)
-    frame = pd.DataFrame({name: cols[name] for name in order if name in cols})
-    if "oracle1" in frame.columns and "total_saving_km" in frame.index:
-        best = frame.loc["total_saving_km", "oracle1"]
-        frame.loc["competitive_ratio"] = frame.loc["total_saving_km"] / best if best else np.nan
-    return frame
+    return with_competitive_ratios(pd.DataFrame({name: cols[name] for name in order if name in cols}))
 
 
 def write_folder(folder: Path, scenario: Scenario, runs: list[StrategyRun], oracle_results: dict, preset: Preset,

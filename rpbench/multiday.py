@@ -127,4 +127,5 @@ def summarize(parent: Path) -> pd.DataFrame:
     return stats
 
 
-MULTIDAY_PLOT_KPIS = [k for k in KPI_ORDER if k != "platform_profit_cny"] + ["competitive_ratio"]
+MULTIDAY_PLOT_KPIS = [k for k in KPI_ORDER if k != "platform_profit_cny"] + ["competitive_ratio",
+                                                                             "competitive_ratio_enroute"]

@@ -10,7 +10,7 @@ from .metrics import KPI_LABELS
 
 RUN_STYLE = {"np": ("NP", "tab:gray"), "mb": ("MB", "tab:blue"), "rtv": ("RTV", "tab:orange"),
              "fl": ("FL", "tab:green"), "fl-nd": ("FL-no_delay", "tab:olive"), "oracle1": ("Oracle-1", "tab:red"),
-             "oracle2": ("Oracle-2", "tab:purple")}
+             "oracle2": ("Oracle-2", "tab:purple"), "oracle1-enroute": ("Oracle-1 (en-route)", "tab:brown")}
 HOURLY_PANELS = [("avg_shared_m", "(a) Average shared distance (m)"), ("avg_detour_m", "(b) Average detour (m)"),
                  ("total_saving_km", "(c) Distance saving (km)"), ("response_rate", "(d) Response rate")]
 

@@ -19,8 +19,11 @@ from .exceptions import ResultsError
 from .metrics import KPI_LABELS, KPI_ORDER
 
 RUN_LABELS = {"np": "NP", "mb": "MB", "rtv": "RTV", "fl": "FL", "fl-nd": "FL-no_delay", "oracle1": "Oracle-1",
-              "oracle2": "Oracle-2"}
-_DECIMALS = {"response_rate": 2, "pairing_ratio": 2, "competitive_ratio": 3, "pairing_ratio_of_orders": 2}
+              "oracle2": "Oracle-2", "oracle1-enroute": "Oracle-1 (en-route)"}
+#: Competitive-ratio rows: KPI name -> the oracle run whose total saving is the denominator.
+RATIO_ROWS = {"competitive_ratio": "oracle1", "competitive_ratio_enroute": "oracle1-enroute"}
+_DECIMALS = {"response_rate": 2, "pairing_ratio": 2, "competitive_ratio": 3, "competitive_ratio_enroute": 3,
+             "pairing_ratio_of_orders": 2}
 
 
 def fmt(kpi: str, value) -> str:
@@ -48,18 +51,20 @@ def load_kpis(folder: Path) -> pd.DataFrame:
     wide = tidy.pivot(index="kpi", columns="run", values="value")
     order = [r for r in meta.get("strategies", []) if r in wide.columns] + \
             [r for r in wide.columns if r not in meta.get("strategies", [])]
-    wide = wide[order]
-    if "oracle1" in wide.columns and "total_saving_km" in wide.index:
-        best = wide.loc["total_saving_km", "oracle1"]
-        wide.loc["competitive_ratio"] = wide.loc["total_saving_km"] / best if best else np.nan
+    return with_competitive_ratios(wide[order].drop(index=list(RATIO_ROWS), errors="ignore"))
+
+
+def with_competitive_ratios(wide: pd.DataFrame) -> pd.DataFrame:
+    """Add a strategy-saving / oracle-saving row for each oracle present (paper §4: FL = 63.2 % of Oracle-1)."""
+    for row, oracle in RATIO_ROWS.items():
+        if oracle in wide.columns and "total_saving_km" in wide.index:
+            best = wide.loc["total_saving_km", oracle]
+            wide.loc[row] = wide.loc["total_saving_km"] / best if best else np.nan
     return wide
 
 
 def table_rows(table: pd.DataFrame) -> list[str]:
-    rows = [k for k in KPI_ORDER if k in table.index]
-    if "competitive_ratio" in table.index:
-        rows.append("competitive_ratio")
-    return rows
+    return [k for k in KPI_ORDER if k in table.index] + [k for k in RATIO_ROWS if k in table.index]
 
 
 def text_table(table: pd.DataFrame, *, title: str | None = None) -> str:
@@ -90,8 +95,8 @@ def markdown_table(table: pd.DataFrame, paper_values: dict | None = None) -> str
         for c in cols:
             cell = fmt(k, table.loc[k, c])
             if paper_values is not None:
-                ref = paper_values.get(c, {}).get(k, float("nan")) if k != "competitive_ratio" else (
-                    paper.FL_COMPETITIVE_RATIO if c == "fl" else float("nan"))
+                ref = paper_values.get(c, {}).get(k, float("nan")) if k not in RATIO_ROWS else (
+                    paper.FL_COMPETITIVE_RATIO if c == "fl" and k == "competitive_ratio" else float("nan"))
                 cell += f" ({fmt(k, ref)})"
             cells.append(cell)
         out.append(f"| {KPI_LABELS.get(k, k)} | " + " | ".join(cells) + " |")
@@ -221,7 +226,7 @@ def write_multiday_report(parent: Path, name: str | None = None) -> Path:
         lines += ["Command:", "", f"    {meta['command']}", ""]
     lines += ["## Mean over days", "", markdown_table(mean), ""]
     key = ["total_saving_km", "avg_detour_m", "response_rate", "pairing_ratio"]
-    for kpi in key + (["competitive_ratio"] if "competitive_ratio" in set(table["kpi"]) else []):
+    for kpi in key + [r for r in RATIO_ROWS if r in set(table["kpi"])]:
         wide = table[table["kpi"] == kpi].pivot(index="date", columns="run", values="value")[runs]
         lines += [f"### {KPI_LABELS.get(kpi, kpi)} per day", "",
                   "| date | " + " | ".join(RUN_LABELS.get(r, r) for r in runs) + " |",
@@ -303,7 +308,7 @@ def check_metrics(metrics: list[str] | None) -> list[str] | None:
     if metrics is None:
         return None
     from .metrics import EXTRA_KPIS
-    known = KPI_ORDER + EXTRA_KPIS + ["competitive_ratio", "wall_s"]
+    known = KPI_ORDER + EXTRA_KPIS + list(RATIO_ROWS) + ["wall_s"]
     unknown = [m for m in metrics if m not in known]
     if unknown or not metrics:
         raise ResultsError(f"unknown metric {unknown[0] if unknown else '(none)'!r}; known metrics: "

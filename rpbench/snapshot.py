@@ -10,7 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from . import results
-from .harness import simulate_strategy
+from .harness import CALIBRATED, calibrated_options, simulate_strategy
 from .instances import save_instance
 from .scenario import Scenario
 from .solver_presets import load_preset
@@ -23,6 +23,7 @@ def take_snapshots(scenario: Scenario, strategies: list[str], preset_name: str, 
     preset = load_preset(preset_name)
     strategy_options = strategy_options or {}
     entries: list[dict] = []
+    done: dict = {}
     out = Path(out)
     with results.new_results_folder(out, out.name) as (tmp, final):
         for name in strategies:
@@ -32,8 +33,10 @@ def take_snapshots(scenario: Scenario, strategies: list[str], preset_name: str, 
                 if rounds is None or k in rounds:
                     seen.append((k, t, rm.model, solution.objective, solution.status.value))
 
-            simulate_strategy(scenario, name, preset, options=strategy_options.get(name), progress=False,
-                              capture=capture)
+            options = dict(strategy_options.get(name) or {})
+            if name in CALIBRATED:      # τ_0 and l̄ from an MB run, as in a comparison
+                options = calibrated_options(scenario, preset, options, done, progress=False)
+            simulate_strategy(scenario, name, preset, options=options, progress=False, capture=capture)
             picked = seen if rounds is not None else sorted(seen, key=lambda s: (-s[2].n_cols, s[0]))[:largest]
             for k, t, model, objective, status in sorted(picked, key=lambda s: s[0]):
                 stem = f"{scenario.name}_{name}_round{k:05d}"

@@ -12,7 +12,7 @@ from ..report import text_table
 from ..scenarios import build_scenario, default_scenario_name
 from ._common import add_scenario_args, note, print_json, scenario_kwargs
 
-DEFAULT_STRATEGIES = "np,mb,rtv,fl-nd,fl,oracle1,oracle2"
+DEFAULT_STRATEGIES = "np,mb,rtv,fl-nd,fl,oracle1,oracle2,oracle1-enroute"
 
 
 def register(sub: argparse._SubParsersAction) -> None:

@@ -37,6 +37,7 @@ Options (``--opt fl.NAME=VALUE``):
 from __future__ import annotations
 
 import dataclasses
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -210,6 +211,8 @@ def solve_cached(net, rates, params, config: PredictConfig, *, rho0: np.ndarray 
     model = _BUILT.get(structure)
     if model is None:
         _BUILT.clear()                      # keep one model: the month table's takes gigabytes
+        print(f"rpbench: building the seeker/taker prediction model for {len(rates):,} OD pairs "
+              f"({rates.source}); cached afterwards", file=sys.stderr)
         model = build_model(net, rates, params, config)
         _BUILT[structure] = model
     # The demand level and τ_0 enter the fixed point only (the origin states' sojourn).
