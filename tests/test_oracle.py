@@ -470,3 +470,24 @@ def test_haikou_peak_is_solved_to_optimality():
     k1, k2 = ref[1].kpis(), ref[2].kpis()
     assert 0 < k1["pairing_ratio"] <= k2["pairing_ratio"] <= 1
     assert k1["total_saving_km"] >= k2["total_saving_km"]
+
+
+def test_cardinality_upper_bound_certifies_oracle2():
+    """⌊ν_f⌋ bounds every matching and is met by Oracle-2 on these instances (the triangle: 1, not 1.5)."""
+    from rpbench.model import PairingModel
+    from rpbench.oracle import cardinality_upper_bound
+    triangle = PairingModel(3, [0, 0, 1], [1, 2, 2], [1, 1, 1])
+    assert cardinality_upper_bound(triangle) == 1
+    two_triangles = PairingModel(6, [0, 0, 1, 3, 3, 4, 2], [1, 2, 2, 4, 5, 5, 3], [1] * 7)
+    assert cardinality_upper_bound(two_triangles) == 3
+    assert cardinality_upper_bound(PairingModel(4, [], [], [])) == 0
+    import networkx as nx
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        n = int(rng.integers(2, 30))
+        pairs = {tuple(sorted(rng.choice(n, 2, replace=False))) for _ in range(int(rng.integers(1, 3 * n)))}
+        a, b = map(np.array, zip(*sorted(pairs)))
+        model = PairingModel(n, a, b, np.ones(len(a)))
+        g = nx.Graph(list(zip(a.tolist(), b.tolist())))
+        best = len(nx.max_weight_matching(g, maxcardinality=True))
+        assert cardinality_upper_bound(model) >= best
