@@ -36,9 +36,9 @@ def test_isolated_workers_give_the_same_answers():
 
 
 def test_cross_check_flags_disagreement_and_impossible_values():
-    rows = [{"model": "m", "status": "optimal", "objective": 5.0}, {"model": "m", "status": "optimal", "objective": 4.0},
-            {"model": "n", "status": "optimal", "objective": 5.0}, {"model": "n", "status": "time_limit", "objective": 6.0},
-            {"model": "n", "status": "time_limit", "objective": 3.0}, {"model": "n", "status": "error", "objective": np.nan}]
+    rows = [("m", "optimal", 5.0), ("m", "optimal", 4.0), ("n", "optimal", 5.0), ("n", "time_limit", 6.0),
+            ("n", "time_limit", 3.0), ("n", "error", np.nan)]
+    rows = [dict(zip(("model", "status", "objective"), r)) for r in rows]
     agrees = cross_check(pd.DataFrame(rows))["agrees"].tolist()
     assert agrees[:4] == [False, False, True, False] and pd.isna(agrees[4]) and pd.isna(agrees[5])
 

@@ -11,7 +11,8 @@ from rpbench.model import Structure
 
 
 def same(m1, m2) -> bool:
-    return all(np.array_equal(getattr(m1, f), getattr(m2, f)) for f in vars(m1) if isinstance(getattr(m1, f), np.ndarray))
+    arrays = [f for f in vars(m1) if isinstance(getattr(m1, f), np.ndarray)]
+    return all(np.array_equal(getattr(m1, f), getattr(m2, f)) for f in arrays)
 
 
 def test_generators_are_pure_functions_of_their_seed():

@@ -66,7 +66,8 @@ class HighsBackend(ProgramBackend):
             integrality = np.full(n, 0 if relax else int(highspy.HighsVarType.kInteger), dtype=np.int32)
             status = h.passModel(n, m, int(A.nnz), int(highspy.MatrixFormat.kColwise),
                                  int(highspy.ObjSense.kMaximize), 0.0, prog.c, np.zeros(n), np.ones(n),
-                                 np.where(np.isfinite(prog.lo), prog.lo, -inf), np.where(np.isfinite(prog.hi), prog.hi, inf),
+                                 np.where(np.isfinite(prog.lo), prog.lo, -inf),
+                                 np.where(np.isfinite(prog.hi), prog.hi, inf),
                                  A.indptr.astype(np.int32), A.indices.astype(np.int32), A.data.astype(np.float64),
                                  integrality)
             if status.name == "kError":

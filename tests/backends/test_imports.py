@@ -35,10 +35,14 @@ def test_importing_rpbench_loads_no_solver():
     assert out.strip() == "[]"
 
 
-@pytest.mark.parametrize("order", [SOLVER_LIBS, tuple(reversed(SOLVER_LIBS))], ids=["highspy-first", "ortools-first"])
+@pytest.mark.parametrize("order", [SOLVER_LIBS, tuple(reversed(SOLVER_LIBS))],
+                         ids=["highspy-first", "lap-first-highspy-last"])
 def test_every_solver_library_loads_and_solves_in_one_process(order):
-    imports = {"highspy": "import highspy", "ortools": "import ortools.sat.python.cp_model, ortools.graph.python.min_cost_flow, ortools.linear_solver.pywraplp",
-               "pyomo": "import pyomo.environ", "cvxpy": "import cvxpy", "pymatching": "import pymatching", "lap": "import lap"}
+    imports = {"highspy": "import highspy",
+               "ortools": "import ortools.sat.python.cp_model, ortools.graph.python.min_cost_flow, "
+                          "ortools.linear_solver.pywraplp",
+               "pyomo": "import pyomo.environ", "cvxpy": "import cvxpy", "pymatching": "import pymatching",
+               "lap": "import lap"}
     out = run_python("\n".join(imports[m] for m in order) + """
 from rpbench.backends import get_backend
 from rpbench.model import PairingModel, AssignmentModel
