@@ -1,7 +1,8 @@
 """Model benchmark: solve a list of models with each preset, cross-check, tabulate.
 
 :func:`run_benchmark` takes any models (synthetic ones from
-:mod:`rpbench.synthetic` today, snapshot instances later) and returns a tidy
+:mod:`rpbench.synthetic`, or snapshot instance files read by
+:func:`rpbench.instances.load_instances`) and returns a tidy
 :class:`pandas.DataFrame`, one row per (model, preset):
 
 * ``build_s`` / ``solve_s`` / ``extract_s`` as the backend measured them,
@@ -13,6 +14,8 @@
   (values are integral, so "equal" is exact).  ``False`` for a proven
   optimum that differs from another preset's, or for any solution claiming
   more than the optimum — a solver bug.  ``None`` when nothing is proven.
+  An instance frozen from a run may carry the optimum that run's preset
+  proved (``recorded``); it counts as one more proven optimum.
 
 Each preset is warmed up on a tiny model first so library imports are not
 timed.  With ``isolate=True`` (the default of ``rpbench bench``) every
@@ -37,7 +40,7 @@ from .model import Model, Status
 from .solver_presets import Preset, load_preset, preset_names
 
 COLUMNS = ["model", "structure", "rows", "cols", "nonzeros", "preset", "backend", "status", "objective", "bound",
-           "gap", "pairs", "agrees", "build_s", "solve_s", "extract_s", "total_s", "wall_s", "repeats", "message"]
+           "gap", "pairs", "recorded", "agrees", "build_s", "solve_s", "extract_s", "total_s", "wall_s", "repeats", "message"]
 
 
 def installed_presets(names: Iterable[str] | None = None) -> list[Preset]:
@@ -49,12 +52,14 @@ def installed_presets(names: Iterable[str] | None = None) -> list[Preset]:
 def run_benchmark(models: Sequence[Model], presets: Sequence[str | Preset] | None = None, *,
                   time_limit_s: float | None = None, time_limits: dict[str, float] | None = None,
                   repeat: int = 1, isolate: bool = False, hard_timeout_s: float | None = None,
-                  progress: Callable[[str], None] | None = None) -> pd.DataFrame:
+                  progress: Callable[[str], None] | None = None,
+                  recorded: dict[str, float] | None = None) -> pd.DataFrame:
     """Solve every model with every preset; one row per pair (see the module docstring).
 
     ``time_limit_s`` overrides every preset's limit, ``time_limits`` single
     presets' (by name).  ``hard_timeout_s`` (only with ``isolate``) defaults
-    to twice the solve's time limit plus 30 s.
+    to twice the solve's time limit plus 30 s.  ``recorded`` maps model names
+    to optima proven elsewhere (e.g. by the run a snapshot was taken from).
     """
     if not isinstance(repeat, int) or repeat < 1:
         raise ParameterError(f"repeat = {repeat!r} must be an integer >= 1")
@@ -71,7 +76,9 @@ def run_benchmark(models: Sequence[Model], presets: Sequence[str | Preset] | Non
             for model in models:
                 if progress:
                     progress(f"{preset.name:<12} {model.name}")
-                rows.append(_row(model, preset, runner.run(model, repeat)))
+                row = _row(model, preset, runner.run(model, repeat))
+                row["recorded"] = (recorded or {}).get(model.name, math.nan)
+                rows.append(row)
         finally:
             runner.close()
     table = pd.DataFrame(rows, columns=COLUMNS)
@@ -87,6 +94,8 @@ def cross_check(table: pd.DataFrame) -> pd.DataFrame:
     for _, r in table.iterrows():
         same = table[(table["model"] == r["model"]) & (table["status"] == Status.OPTIMAL.value)]
         optima = set(same["objective"])
+        if "recorded" in table and pd.notna(r["recorded"]):
+            optima.add(float(r["recorded"]))
         if r["status"] in ("error", "killed") or not optima:
             agrees.append(None)
         elif len(optima) > 1:
@@ -230,7 +239,8 @@ class _Worker:
 # ------------------------------------------------------------------ printing
 def format_table(table: pd.DataFrame) -> str:
     """A plain-text table: one line per (model, preset), times in milliseconds."""
-    head = f"{'model':<38} {'preset':<12} {'status':<10} {'objective':>16} {'gap':>8} " \
+    w = max([len("model"), *map(len, table["model"])])
+    head = f"{'model':<{w}} {'preset':<12} {'status':<10} {'objective':>16} {'gap':>8} " \
            f"{'build ms':>10} {'solve ms':>10} {'total ms':>10}  agrees"
     lines = [head, "-" * len(head)]
     for _, r in table.iterrows():
@@ -239,6 +249,6 @@ def format_table(table: pd.DataFrame) -> str:
         gap = "-" if r["gap"] is None or pd.isna(r["gap"]) else f"{r['gap']:.1e}"
         obj = "-" if pd.isna(r["objective"]) else f"{r['objective']:,.0f}"
         agree = {True: "yes", False: "NO"}.get(None if pd.isna(r["agrees"]) else bool(r["agrees"]), "-")
-        lines.append(f"{r['model']:<38} {r['preset']:<12} {r['status']:<10} {obj:>16} {gap:>8} "
+        lines.append(f"{r['model']:<{w}} {r['preset']:<12} {r['status']:<10} {obj:>16} {gap:>8} "
                      f"{ms(r['build_s']):>10} {ms(r['solve_s']):>10} {ms(r['total_s']):>10}  {agree}")
     return "\n".join(lines)

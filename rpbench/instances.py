@@ -102,3 +102,26 @@ def find_instances(paths: list[str | Path]) -> list[Path]:
     if not out:
         raise ResultsError(f"no snapshot instance files (*.npz) in {', '.join(map(str, paths))}")
     return out
+
+
+def load_instances(paths: list[str | Path]) -> tuple[list, dict[str, float]]:
+    """Models of every instance file under ``paths``, named uniquely, and the optima their runs proved.
+
+    Models are renamed after their file (``toy_mb_round00025``; the parent
+    folder is prefixed when two files share a name) so a benchmark table
+    tells them apart.  The second value maps a model name to the objective
+    recorded in its metadata when the run's solver proved it optimal.
+    """
+    files = list(dict.fromkeys(find_instances(paths)))          # a file named twice is solved once
+    stems = [f.stem for f in files]
+    models, recorded, used = [], {}, set()
+    for f, stem in zip(files, stems):
+        label = stem if stems.count(stem) == 1 else f"{f.parent.name}/{stem}"
+        label = label if label not in used else str(f)
+        used.add(label)
+        model, meta = load_instance(f)
+        model = model.renamed(label)
+        models.append(model)
+        if meta.get("status") == "optimal" and meta.get("objective") is not None:
+            recorded[label] = float(meta["objective"])
+    return models, recorded

@@ -30,6 +30,7 @@ metres into model values.  Models are frozen and validated on construction.
 
 from __future__ import annotations
 
+import copy
 import enum
 from dataclasses import dataclass, field
 from typing import ClassVar
@@ -92,6 +93,12 @@ class _Model:
         start, rows = self.column_rows()
         data = np.ones(len(rows), dtype=np.float64)
         return sp.csc_matrix((data, rows, start), shape=(self.n_rows, self.n_cols))
+
+    def renamed(self, name: str) -> "_Model":
+        """The same model under another name (arrays shared, no re-validation)."""
+        twin = copy.copy(self)
+        object.__setattr__(twin, "name", name)
+        return twin
 
     @property
     def size(self) -> dict[str, int]:

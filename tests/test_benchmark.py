@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -13,6 +14,7 @@ from rpbench.backends import Backend
 from rpbench.benchmark import COLUMNS, cross_check, format_table, run_benchmark
 from rpbench.cli import main
 from rpbench.exceptions import ParameterError, SolverError
+from rpbench.instances import save_instance
 from rpbench.model import Status, Structure, make_solution
 from rpbench.solver_presets import Preset, SolveOptions
 
@@ -84,6 +86,7 @@ def test_bench_command_json(capsys, tmp_path):
 
 @pytest.mark.parametrize("argv, match", [
     (["bench"], "pass --synthetic"),
+    (["bench", "no/such/folder"], "does not exist"),
     (["bench", "--synthetic", "--objectives", "max"], "--objectives"),
     (["bench", "--synthetic", "--preset-time-limit", "highs"], "NAME=SECONDS"),
     (["bench", "--synthetic", "--time-limit", "0"], "must be > 0"),
@@ -92,3 +95,28 @@ def test_bench_command_json(capsys, tmp_path):
 def test_bench_command_errors(argv, match, capsys):
     assert main(argv) == 2
     assert match in capsys.readouterr().err
+
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "instances" / "examples"
+
+
+def test_bench_command_on_the_committed_example_instances(capsys):
+    code = main(["bench", str(EXAMPLES), "--solver", "matching", "--solver", "highs", "--repeat", "1",
+                 "--no-isolate", "--json"])
+    records = json.loads(capsys.readouterr().out)
+    assert code == 0
+    files = sorted(p.stem for p in EXAMPLES.glob("*.npz"))
+    assert sorted({r["model"] for r in records}) == files and len(records) == 2 * len(files)
+    assert all(r["agrees"] is True for r in records)
+    frozen = [r for r in records if r["model"].startswith("toy_")]
+    assert frozen and all(r["recorded"] == r["objective"] for r in frozen)
+
+
+def test_a_recorded_optimum_the_solvers_do_not_reach_is_flagged(tmp_path, capsys):
+    model = synthetic.assignment(6, 10, seed=3)
+    best = run_benchmark([model], ["matching"])["objective"][0]
+    save_instance(tmp_path / "a.npz", model, {"status": "optimal", "objective": best + 1})
+    save_instance(tmp_path / "sub" / "a.npz", model, {"status": "optimal", "objective": best})
+    assert main(["bench", str(tmp_path), "--solver", "matching", "--repeat", "1", "--no-isolate", "--json"]) == 1
+    records = {r["model"]: r for r in json.loads(capsys.readouterr().out)}
+    assert records[f"{tmp_path.name}/a"]["agrees"] is False and records["sub/a"]["agrees"] is True

@@ -1,8 +1,11 @@
-"""``rpbench bench --synthetic``: time every solver preset on seeded synthetic models.
+"""``rpbench bench``: time every solver preset on the same models.
 
-One row per (model, preset): status, objective, build / solve / extract
-times, and whether the objective equals the proven optimum of the other
-presets (exit status 1 when two presets disagree).  A preset that hits its
+The models are snapshot instance files (``rpbench bench instances/examples``,
+files or folders searched recursively) and/or seeded synthetic models
+(``--synthetic``).  One row per (model, preset): status, objective, build /
+solve / extract times, and whether the objective equals the proven optimum
+of the other presets and of the run the instance was frozen from (exit
+status 1 on any disagreement).  A preset that hits its
 time limit reports ``time_limit``; one that overruns the hard timeout is
 killed and reports ``killed``.
 """
@@ -14,6 +17,7 @@ import sys
 
 from ..benchmark import format_table, run_benchmark
 from ..exceptions import ParameterError
+from ..instances import load_instances
 from ..model import OBJECTIVES
 from ..solver_presets import load_preset
 from ..synthetic import SUITES, suite
@@ -24,6 +28,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("bench", help="time every solver preset on the same models",
                        description="Time every installed solver preset on the same decision models, build and "
                                    "solve apart, and cross-check their objectives.")
+    p.add_argument("paths", nargs="*", metavar="PATH",
+                   help="instance files (.npz) or folders holding them, e.g. instances/examples")
     p.add_argument("--synthetic", action="store_true",
                    help="benchmark seeded synthetic models shaped like rpbench's (see --sizes)")
     p.add_argument("--sizes", default="default", choices=sorted(SUITES),
@@ -44,7 +50,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--repeat", type=int, default=3, help="runs per solve; the fastest is kept (default 3)")
     p.add_argument("--no-isolate", dest="isolate", action="store_false",
                    help="solve in this process (no hard timeout)")
-    p.add_argument("--csv", metavar="PATH", default=None, help="also write the table as CSV")
+    p.add_argument("--csv", metavar="FILE", default=None, help="also write the table as CSV")
     p.add_argument("--json", action="store_true", help="print the table as JSON records")
     p.set_defaults(handler=run)
 
@@ -63,8 +69,9 @@ def _limits(items: list[str]) -> dict[str, float]:
 
 
 def run(args: argparse.Namespace) -> int:
-    if not args.synthetic:
-        raise ParameterError("nothing to benchmark: pass --synthetic (snapshot instance files are not supported yet)")
+    if not args.synthetic and not args.paths:
+        raise ParameterError("nothing to benchmark: name instance files or folders (e.g. instances/examples) "
+                             "and/or pass --synthetic")
     objectives = tuple(o.strip() for o in args.objectives.split(",") if o.strip())
     bad = [o for o in objectives if o not in OBJECTIVES]
     if bad or not objectives:
@@ -76,11 +83,13 @@ def run(args: argparse.Namespace) -> int:
         raise ParameterError(f"--repeat {args.repeat} must be >= 1")
     limits = _limits(args.preset_time_limit)
     presets = None if args.solver is None else [load_preset(name) for name in args.solver]   # fail before building
-    note(f"building the {args.sizes!r} synthetic models (seed {args.seed}) ...")
-    models = suite(args.sizes, seed=args.seed, objectives=objectives)
+    models, recorded = load_instances(args.paths) if args.paths else ([], {})
+    if args.synthetic:
+        note(f"building the {args.sizes!r} synthetic models (seed {args.seed}) ...")
+        models += suite(args.sizes, seed=args.seed, objectives=objectives)
     table = run_benchmark(models, presets, time_limit_s=args.time_limit, time_limits=limits, repeat=args.repeat,
                           isolate=args.isolate, hard_timeout_s=args.hard_timeout,
-                          progress=None if args.json else note)
+                          progress=None if args.json else note, recorded=recorded)
     if args.csv:
         table.to_csv(args.csv, index=False)
     if args.json:
