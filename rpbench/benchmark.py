@@ -238,9 +238,9 @@ class _Worker:
 
 # ------------------------------------------------------------------ printing
 def format_table(table: pd.DataFrame) -> str:
-    """A plain-text table: one line per (model, preset), times in milliseconds."""
+    """A plain-text table: one line per (model, preset) with the model's size, times in milliseconds."""
     w = max([len("model"), *map(len, table["model"])])
-    head = f"{'model':<{w}} {'preset':<12} {'status':<10} {'objective':>16} {'gap':>8} " \
+    head = f"{'model':<{w}} {'rows x cols':>15} {'preset':<12} {'status':<10} {'objective':>16} {'gap':>8} " \
            f"{'build ms':>10} {'solve ms':>10} {'total ms':>10}  agrees"
     lines = [head, "-" * len(head)]
     for _, r in table.iterrows():
@@ -249,6 +249,7 @@ def format_table(table: pd.DataFrame) -> str:
         gap = "-" if r["gap"] is None or pd.isna(r["gap"]) else f"{r['gap']:.1e}"
         obj = "-" if pd.isna(r["objective"]) else f"{r['objective']:,.0f}"
         agree = {True: "yes", False: "NO"}.get(None if pd.isna(r["agrees"]) else bool(r["agrees"]), "-")
-        lines.append(f"{r['model']:<{w}} {r['preset']:<12} {r['status']:<10} {obj:>16} {gap:>8} "
+        size = f"{r['rows']:,} x {r['cols']:,}"
+        lines.append(f"{r['model']:<{w}} {size:>15} {r['preset']:<12} {r['status']:<10} {obj:>16} {gap:>8} "
                      f"{ms(r['build_s']):>10} {ms(r['solve_s']):>10} {ms(r['total_s']):>10}  {agree}")
     return "\n".join(lines)

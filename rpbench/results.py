@@ -182,3 +182,12 @@ def read_csv(path: Path) -> pd.DataFrame:
 def run_names(folder: Path) -> list[str]:
     runs = folder / "runs"
     return sorted(p.name for p in runs.iterdir() if p.is_dir()) if runs.is_dir() else []
+
+
+def run_folders(folder: str | os.PathLike) -> list[Path]:
+    """``folder`` itself if it holds runs, else the results folders below it (multi-day, sweep parents)."""
+    folder = Path(folder)
+    if not folder.is_dir() or run_names(folder):
+        return [folder]
+    found = sorted(p.parent for p in folder.rglob("runs") if p.is_dir() and (p.parent / "meta.json").is_file())
+    return found or [folder]

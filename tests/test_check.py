@@ -111,3 +111,14 @@ def test_not_a_results_folder(tmp_path):
     with pytest.raises(ResultsError, match="no meta.json"):
         check_folder(tmp_path)
     assert main(["check", str(tmp_path / "missing")]) == 2
+
+
+def test_a_parent_folder_checks_every_run_folder_inside_and_fails_if_one_fails(clean_run, tmp_path, capsys):
+    parent = tmp_path / "days"
+    for day in ("d1", "d2"):
+        shutil.copytree(clean_run, parent / day)
+    assert main(["check", str(parent)]) == 0
+    out = capsys.readouterr().out
+    assert f"== {parent / 'd1'}" in out and f"== {parent / 'd2'}" in out
+    edit_events(parent / "d2", "mb", lambda ev: ev[ev["event"] != "dropoff"])
+    assert main(["check", str(parent)]) == 1

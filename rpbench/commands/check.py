@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from ..check import check_folder, format_report
+from ..results import run_folders
 from ._common import print_json
 
 
@@ -12,7 +13,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("check", help="verify a results folder from its event logs",
                        description="Re-verify every run of results folders from their event logs alone; exit "
                                    "status 1 when any check fails, naming it.")
-    p.add_argument("folders", nargs="+", metavar="RESULTS_DIR")
+    p.add_argument("folders", nargs="+", metavar="RESULTS_DIR",
+                   help="results folders; a multi-day or sweep folder checks every run folder inside it")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(handler=run)
 
@@ -20,12 +22,13 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     failed = False
     report = {}
-    for folder in args.folders:
+    folders = [str(f) for given in args.folders for f in run_folders(given)]
+    for folder in folders:
         checks = check_folder(folder)
         failed |= any(not c.ok for c in checks)
         report[folder] = {c.run: {"ok": c.ok, "violations": c.violations, "checked": c.checked} for c in checks}
         if not args.json:
-            if len(args.folders) > 1:
+            if len(folders) > 1:
                 print(f"== {folder}")
             print(format_report(checks))
     if args.json:
