@@ -24,8 +24,10 @@ passengers.
 from __future__ import annotations
 
 import math
+import tempfile
 import time
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -137,14 +139,15 @@ class Simulator:
         model = rm.model
         if model.n_cols == 0:
             return
-        solution = self.backend.solve(model, self.options)
+        try:
+            solution = self.backend.solve(model, self.options)
+        except SolverError as exc:
+            raise self._round_failure(k, t, model, str(exc)) from None
         if solution.status in (Status.INFEASIBLE, Status.ERROR):
-            raise SolverError(f"round at t={t:g} s: backend {self.backend.name!r} returned {solution.status.value}: "
-                              f"{solution.message}")
+            raise self._round_failure(k, t, model, f"returned {solution.status.value}: {solution.message}")
         problems = model.violations(solution.chosen)
         if problems:
-            raise SolverError(f"round at t={t:g} s: backend {self.backend.name!r} returned an infeasible solution "
-                              f"({problems[0]})")
+            raise self._round_failure(k, t, model, f"returned an infeasible solution ({problems[0]})")
         if self.capture is not None:
             self.capture(k, t, rm, solution)
         moves = 0
@@ -158,6 +161,19 @@ class Simulator:
         self.rounds.append((k, t, state.n_passengers, state.n_v0, state.n_v1, size["rows"], size["cols"],
                             size["nonzeros"], build_s, solution.build_s, solution.solve_s, solution.extract_s,
                             solution.status.value, solution.objective * model.unit_m, solution.gap, assigned, moves))
+
+    def _round_failure(self, k: int, t: float, model, what: str) -> SolverError:
+        """A solver failure naming the strategy and round, with the round's model saved for `rpbench bench`."""
+        from .instances import save_instance
+
+        where = f"{self.strategy.name} round {k} (t={t:g} s): backend {self.backend.name!r} {what}"
+        path = Path(tempfile.gettempdir()) / f"rpbench-failed-{self.strategy.name}-round{k:05d}.npz"
+        try:
+            save_instance(path, model, {"scenario": self.scenario.name, "seed": self.scenario.seed,
+                                        "strategy": self.strategy.name, "round": k, "t_s": t, "error": what})
+        except OSError:
+            return SolverError(where)
+        return SolverError(f"{where}; the round's model is saved as {path} (reproduce: rpbench bench {path})")
 
     def _round_state(self, t: float) -> RoundState:
         fl = self.fleet

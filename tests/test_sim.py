@@ -104,3 +104,19 @@ def test_vehicles_respect_capacity_and_thresholds(preset):
         assert (served["detour_m"] <= sc.params.max_detour_m + 1e-6).all()
         assert (served[~served["pooled"]]["detour_m"].abs() < 1e-6).all()
         assert np.isin(served["partner"][served["pooled"]], served.index).all()
+
+
+def test_a_solver_failure_names_the_round_and_saves_its_model(monkeypatch, tmp_path):
+    from rpbench.backends.highs import HighsBackend
+    from rpbench.exceptions import SolverError
+    from rpbench.instances import load_instance
+
+    def broken(self, model, options, **kw):
+        raise SolverError("HiGHS failed with model status kUnknown")
+    monkeypatch.setattr(HighsBackend, "solve", broken)
+    monkeypatch.setattr("tempfile.tempdir", str(tmp_path))
+    sc = scenario_of(line_network(6), [(0.0, 0, 3), (10.0, 1, 5)], vehicles=[0])
+    with pytest.raises(SolverError, match=r"mb round 0 \(t=0 s\): backend 'highs' HiGHS failed .*rpbench bench"):
+        simulate_strategy(sc, "mb", load_preset("highs"), progress=False)
+    model, meta = load_instance(tmp_path / "rpbench-failed-mb-round00000.npz")
+    assert model.n_passengers == 1 and meta["strategy"] == "mb" and meta["round"] == 0

@@ -59,7 +59,14 @@ class ProgramBackend(Backend):
             raise SolverError(f"backend {self.name!r}: method {method!r} unknown for the assignment; use lp or mip")
         prog = program(model)
         if method == "lp":
-            raw = self.run(prog, options, clock, relax=True, time_limit=options.time_limit_s)
+            try:
+                raw = self.run(prog, options, clock, relax=True, time_limit=options.time_limit_s)
+            except SolverError as exc:
+                # seen on a full-day FL-nd round: HiGHS's presolved simplex ends "kUnknown" when wait
+                # values (-1e9) dwarf the rest; the MIP (same solver) proves the optimum
+                note = f"LP failed ({exc}); re-solved as a MIP"
+                raw = self.run(prog, options, clock, time_limit=clock.remaining(options.time_limit_s))
+                return finish(model, raw, self.name, clock, options.mip_rel_gap, message=note)
             x = raw.x
             if raw.state != OPTIMAL or x is None or np.abs(x - np.round(x)).max(initial=0.0) <= 1e-6:
                 return finish(model, raw, self.name, clock, options.mip_rel_gap)

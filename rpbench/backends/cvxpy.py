@@ -61,7 +61,10 @@ class CvxpyBackend(ProgramBackend):
         with clock("extract_s"):
             with warnings.catch_warnings():           # "may be inaccurate" on a time limit: the status says so
                 warnings.simplefilter("ignore", UserWarning)
-                problem.unpack_results(result, chain, inverse)
+                try:
+                    problem.unpack_results(result, chain, inverse)
+                except ValueError as exc:            # CVXPY refuses a solution without a status
+                    raise SolverError(f"CVXPY solver {solver} returned no usable solution: {exc}") from None
             status = problem.status
             if status in (cp.INFEASIBLE, cp.INFEASIBLE_INACCURATE):
                 return Raw(x=None, state=INFEASIBLE)

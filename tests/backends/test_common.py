@@ -85,7 +85,10 @@ class _Scripted(ProgramBackend):
 
     def run(self, prog, options, clock, *, relax=False, time_limit=None, hint=None):
         self.calls.append({"relax": relax, "rows": prog.A.shape[0], "hint": hint})
-        return self.answers.pop(0)
+        answer = self.answers.pop(0)
+        if isinstance(answer, Exception):
+            raise answer
+        return answer
 
 
 def test_fractional_lp_vertex_is_resolved_as_mip():
@@ -93,6 +96,15 @@ def test_fractional_lp_vertex_is_resolved_as_mip():
     b = _Scripted([Raw(x=np.array([0.5, 0.5, 0.0]), state=OPTIMAL), Raw(x=np.array([1.0, 0, 0]), state=OPTIMAL)])
     sol = b.solve(model, SolveOptions())
     assert [c["relax"] for c in b.calls] == [True, False] and "re-solved as a MIP" in sol.message
+
+
+def test_failed_lp_is_resolved_as_mip():
+    # HiGHS's simplex ended "kUnknown" on a real full-day FL-nd round (wait values of -1e9 beside ~1e6)
+    model = AssignmentModel(1, 2, [0, 0, 0], [0, 1, -1], [3, 1, -10**9])
+    b = _Scripted([SolverError("HiGHS failed with model status kUnknown"), Raw(x=np.array([1.0, 0, 0]), state=OPTIMAL)])
+    sol = b.solve(model, SolveOptions())
+    assert [c["relax"] for c in b.calls] == [True, False] and sol.objective == 3
+    assert "kUnknown" in sol.message and "re-solved as a MIP" in sol.message
 
 
 def test_oracle2_stage1_unproven_is_reported_as_time_limit():
