@@ -17,7 +17,8 @@ from . import __version__
 from .exceptions import RpbenchError
 
 #: Subcommand modules, in the order ``rpbench --help`` lists them.
-COMMANDS = ("run", "check", "oracle", "predict", "snapshot", "bench", "sweep", "report", "scenario", "list")
+COMMANDS = ("run", "check", "oracle", "predict", "snapshot", "bench", "sweep", "report", "publish", "scenario",
+            "list")
 
 
 def build_parser() -> argparse.ArgumentParser:

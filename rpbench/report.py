@@ -153,8 +153,12 @@ def report_markdown(folder: Path, name: str | None = None) -> str:
     if walls:
         lines += ["Wall time per run: " + ", ".join(f"{RUN_LABELS.get(r, r)} {w:.2f} s" for r, w in walls.items()),
                   ""]
-    lines += ["KPI definitions: see `rpbench/metrics.py` (and the README). Verify this folder with "
-              f"`rpbench check {name or folder.name}`.", ""]
+    if results.run_names(folder):
+        verify = f"Verify this folder with `rpbench check {name or folder.name}`."
+    else:
+        verify = ("This is a published light copy without the event logs: `check.txt` holds the checker's verdict "
+                  "on the full folder; rerun the command above to regenerate and re-check it.")
+    lines += [f"KPI definitions: see `rpbench/metrics.py` (and the README). {verify}", ""]
     return "\n".join(lines)
 
 
@@ -333,8 +337,9 @@ def render(folders: list[Path], metrics: list[str] | None = None) -> tuple[str, 
         elif kind == "sweep":
             written.append(write_sweep_report(folder))
         else:
-            if not results.run_names(folder):
-                raise ResultsError(f"results folder {str(folder)!r} holds no runs")
+            # a published light copy keeps kpis.csv but not the event logs under runs/
+            if not results.run_names(folder) and not (folder / "kpis.csv").is_file():
+                raise ResultsError(f"results folder {str(folder)!r} holds no runs (no runs/ and no kpis.csv)")
             written.append(write_report(folder))
     if len(folders) == 1 and metrics is None:
         return written[0].read_text(), written

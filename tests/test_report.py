@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import shutil
 
 import pandas as pd
 import pytest
@@ -74,8 +75,16 @@ def test_empty_results_folder(tmp_path):
     with pytest.raises(ResultsError, match="not an rpbench results folder"):
         render([tmp_path])
     folder = fixture_folder(tmp_path, runs=())
+    (folder / "kpis.csv").unlink()
     with pytest.raises(ResultsError, match="holds no runs"):
         render([folder])
+
+
+def test_a_light_copy_without_event_logs_still_renders(tmp_path):
+    folder = fixture_folder(tmp_path)
+    shutil.rmtree(folder / "runs")
+    md, _ = render([folder])
+    assert "Competitive ratio" in md
 
 
 def test_report_cli(tmp_path, capsys):
