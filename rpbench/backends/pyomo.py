@@ -82,7 +82,8 @@ class PyomoBackend(ProgramBackend):
             opt.config.load_solution = False
             opt.config.time_limit = None if time_limit is None else max(float(time_limit), 1e-3)
             opt.config.mip_gap = float(options.mip_rel_gap)
-            settings = {"random_seed": 0, **({"solver": "simplex"} if relax else {})}
+            # the assignment LP without presolve: 10-20x faster, see backends/highs.py
+            settings = {"random_seed": 0, **({"solver": "simplex", "presolve": "off"} if relax else {})}
             if options.threads is not None:
                 settings["threads"] = int(options.threads)
             opt.highs_options = {**settings, **options.extra}
