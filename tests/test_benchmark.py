@@ -87,6 +87,7 @@ def test_bench_command_json(capsys, tmp_path):
 @pytest.mark.parametrize("argv, match", [
     (["bench"], "pass --synthetic"),
     (["bench", "no/such/folder"], "does not exist"),
+    (["bench", "--synthetic", "--structures", "assignment,knapsack"], "--structures"),
     (["bench", "--synthetic", "--objectives", "max"], "--objectives"),
     (["bench", "--synthetic", "--preset-time-limit", "highs"], "NAME=SECONDS"),
     (["bench", "--synthetic", "--time-limit", "0"], "must be > 0"),
@@ -120,3 +121,9 @@ def test_a_recorded_optimum_the_solvers_do_not_reach_is_flagged(tmp_path, capsys
     assert main(["bench", str(tmp_path), "--solver", "matching", "--repeat", "1", "--no-isolate", "--json"]) == 1
     records = {r["model"]: r for r in json.loads(capsys.readouterr().out)}
     assert records[f"{tmp_path.name}/a"]["agrees"] is False and records["sub/a"]["agrees"] is True
+
+
+def test_bench_structures_filter(capsys):
+    assert main(["bench", "--synthetic", "--sizes", "tiny", "--structures", "pairing", "--solver", "matching",
+                 "--repeat", "1", "--no-isolate", "--json"]) == 0
+    assert {r["structure"] for r in json.loads(capsys.readouterr().out)} == {"pairing"}

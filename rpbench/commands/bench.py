@@ -18,7 +18,7 @@ import sys
 from ..benchmark import format_table, run_benchmark
 from ..exceptions import ParameterError
 from ..instances import load_instances
-from ..model import OBJECTIVES
+from ..model import OBJECTIVES, Structure
 from ..solver_presets import load_preset
 from ..synthetic import SUITES, suite
 from ._common import note, print_json
@@ -38,6 +38,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--objectives", default="weight",
                    help="pairing objectives, comma-separated: weight (Oracle-1), cardinality_then_weight "
                         "(Oracle-2) (default: weight)")
+    p.add_argument("--structures", default=None, metavar="LIST",
+                   help="only models of these structures, comma-separated: assignment, trip_packing, pairing")
     p.add_argument("--seed", type=int, default=0, help="seed of the synthetic models (default 0)")
     p.add_argument("--solver", action="append", default=None, metavar="NAME",
                    help="preset to run (repeatable; default: every installed preset)")
@@ -87,6 +89,15 @@ def run(args: argparse.Namespace) -> int:
     if args.synthetic:
         note(f"building the {args.sizes!r} synthetic models (seed {args.seed}) ...")
         models += suite(args.sizes, seed=args.seed, objectives=objectives)
+    if args.structures is not None:
+        wanted = {x.strip() for x in args.structures.split(",") if x.strip()}
+        known = {st.value for st in Structure}
+        if not wanted or wanted - known:
+            raise ParameterError(f"--structures {args.structures!r}: expected a comma-separated subset of "
+                                 f"{', '.join(sorted(known))}")
+        models = [m for m in models if m.structure.value in wanted]
+        if not models:
+            raise ParameterError(f"no model of structure {args.structures!r} to benchmark")
     table = run_benchmark(models, presets, time_limit_s=args.time_limit, time_limits=limits, repeat=args.repeat,
                           isolate=args.isolate, hard_timeout_s=args.hard_timeout,
                           progress=None if args.json else note, recorded=recorded)
