@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import textwrap
 from pathlib import Path
 
 import pandas as pd
@@ -39,7 +40,7 @@ def hourly_figure(hourly: pd.DataFrame, path: Path, title: str) -> Path:
     for ax in axes[1]:
         ax.set_xlabel("hour of day (request time)")
     axes[0, 0].legend(fontsize=8)
-    fig.suptitle(title, fontsize=10)
+    fig.suptitle("\n".join(textwrap.wrap(title, 110)), fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -84,7 +85,7 @@ def sweep_figure(table: pd.DataFrame, parameter: str, kpis: list[str], path: Pat
         ax.set_title(KPI_LABELS.get(kpi, kpi), fontsize=9)
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=8)
-    fig.suptitle(title, fontsize=10)
+    fig.suptitle("\n".join(textwrap.wrap(title, 110)), fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -92,20 +93,27 @@ def sweep_figure(table: pd.DataFrame, parameter: str, kpis: list[str], path: Pat
 
 
 def bench_figure(table: pd.DataFrame, path: Path, title: str) -> Path:
-    """Solve time against model size per preset (log-log), from a benchmark table
-    with columns preset, cols, solve_s."""
+    """Solver time (build + solve + extract) against model size, one panel per structure, one line per preset.
+
+    ``table`` is a :func:`rpbench.benchmark.run_benchmark` table; rows without a
+    proven optimum are left out (their time is a time limit, not a solve).
+    """
     plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(6.5, 4.2))
-    for preset, g in table.groupby("preset", sort=False):
-        g = g.sort_values("cols")
-        ax.plot(g["cols"], g["solve_s"] * 1e3, marker="o", ms=3, label=preset)
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel("model columns")
-    ax.set_ylabel("solve time (ms)")
-    ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=8)
-    ax.set_title(title, fontsize=10)
+    done = table[table["status"] == "optimal"]
+    structures = list(dict.fromkeys(table["structure"]))
+    fig, axes = plt.subplots(1, len(structures), figsize=(4.2 * len(structures), 3.8), squeeze=False)
+    for ax, structure in zip(axes[0], structures):
+        for preset, g in done[done["structure"] == structure].groupby("preset", sort=True):
+            g = g.sort_values("cols")
+            ax.plot(g["cols"], g["total_s"] * 1e3, marker="o", ms=3, label=preset)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("model columns")
+        ax.set_title(structure, fontsize=10)
+        ax.grid(alpha=0.3, which="both")
+    axes[0, 0].set_ylabel("solver time, proven optimal (ms)")
+    axes[0, 0].legend(fontsize=8)
+    fig.suptitle("\n".join(textwrap.wrap(title, 110)), fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)

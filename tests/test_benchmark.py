@@ -127,3 +127,10 @@ def test_bench_structures_filter(capsys):
     assert main(["bench", "--synthetic", "--sizes", "tiny", "--structures", "pairing", "--solver", "matching",
                  "--repeat", "1", "--no-isolate", "--json"]) == 0
     assert {r["structure"] for r in json.loads(capsys.readouterr().out)} == {"pairing"}
+
+
+def test_bench_plot(tmp_path):
+    png = tmp_path / "bench.png"
+    assert main(["bench", "--synthetic", "--sizes", "tiny", "--solver", "matching", "--solver", "scipy",
+                 "--repeat", "1", "--no-isolate", "--plot", str(png)]) == 0
+    assert png.read_bytes()[:4] == b"\x89PNG"

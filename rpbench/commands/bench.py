@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 from ..benchmark import format_table, run_benchmark
 from ..exceptions import ParameterError
@@ -53,6 +54,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--no-isolate", dest="isolate", action="store_false",
                    help="solve in this process (no hard timeout)")
     p.add_argument("--csv", metavar="FILE", default=None, help="also write the table as CSV")
+    p.add_argument("--plot", metavar="PNG", default=None, help="also plot solver time against model size")
     p.add_argument("--json", action="store_true", help="print the table as JSON records")
     p.set_defaults(handler=run)
 
@@ -103,6 +105,10 @@ def run(args: argparse.Namespace) -> int:
                           progress=None if args.json else note, recorded=recorded)
     if args.csv:
         table.to_csv(args.csv, index=False)
+    if args.plot:
+        from ..plots import bench_figure
+        bench_figure(table, Path(args.plot), f"rpbench bench: {len(models)} models x "
+                                             f"{table['preset'].nunique()} presets (time of proven optima)")
     if args.json:
         print_json(table.astype(object).where(table.notna(), None).to_dict(orient="records"))
     else:
