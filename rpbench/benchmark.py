@@ -240,16 +240,17 @@ class _Worker:
 def format_table(table: pd.DataFrame) -> str:
     """A plain-text table: one line per (model, preset) with the model's size, times in milliseconds."""
     w = max([len("model"), *map(len, table["model"])])
-    head = f"{'model':<{w}} {'rows x cols':>15} {'preset':<12} {'status':<10} {'objective':>16} {'gap':>8} " \
+    sizes = [f"{r:,} x {c:,}" for r, c in zip(table["rows"], table["cols"])]
+    sw = max([len("rows x cols"), *map(len, sizes)])
+    head = f"{'model':<{w}} {'rows x cols':>{sw}} {'preset':<12} {'status':<10} {'objective':>16} {'gap':>8} " \
            f"{'build ms':>10} {'solve ms':>10} {'total ms':>10}  agrees"
     lines = [head, "-" * len(head)]
-    for _, r in table.iterrows():
+    for size, (_, r) in zip(sizes, table.iterrows()):
         def ms(x):
             return "-" if x is None or (isinstance(x, float) and np.isnan(x)) else f"{1000 * x:,.1f}"
         gap = "-" if r["gap"] is None or pd.isna(r["gap"]) else f"{r['gap']:.1e}"
         obj = "-" if pd.isna(r["objective"]) else f"{r['objective']:,.0f}"
         agree = {True: "yes", False: "NO"}.get(None if pd.isna(r["agrees"]) else bool(r["agrees"]), "-")
-        size = f"{r['rows']:,} x {r['cols']:,}"
-        lines.append(f"{r['model']:<{w}} {size:>15} {r['preset']:<12} {r['status']:<10} {obj:>16} {gap:>8} "
+        lines.append(f"{r['model']:<{w}} {size:>{sw}} {r['preset']:<12} {r['status']:<10} {obj:>16} {gap:>8} "
                      f"{ms(r['build_s']):>10} {ms(r['solve_s']):>10} {ms(r['total_s']):>10}  {agree}")
     return "\n".join(lines)
