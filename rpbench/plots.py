@@ -99,6 +99,7 @@ def bench_figure(table: pd.DataFrame, path: Path, title: str) -> Path:
     proven optimum are left out (their time is a time limit, not a solve).
     """
     plt = _pyplot()
+    from matplotlib.ticker import NullFormatter
     done = table[table["status"] == "optimal"]
     structures = list(dict.fromkeys(table["structure"]))
     fig, axes = plt.subplots(1, len(structures), figsize=(4.2 * len(structures), 3.8), squeeze=False)
@@ -108,6 +109,7 @@ def bench_figure(table: pd.DataFrame, path: Path, title: str) -> Path:
             ax.plot(g["cols"], g["total_s"] * 1e3, marker="o", ms=3, label=preset)
         ax.set_xscale("log")
         ax.set_yscale("log")
+        ax.xaxis.set_minor_formatter(NullFormatter())    # decade labels only: minor ones overlap
         ax.set_xlabel("model columns")
         ax.set_title(structure, fontsize=10)
         ax.grid(alpha=0.3, which="both")
