@@ -23,6 +23,15 @@ def _pyplot():
     return plt
 
 
+def _save(plt, fig, path: Path, title: str) -> Path:
+    """Title (wrapped: scenario labels are long), lay out, write the PNG, free the figure."""
+    fig.suptitle("\n".join(textwrap.wrap(title, 110)), fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
 def _label(run: str) -> tuple[str, str | None]:
     return RUN_STYLE.get(run, (run, None))
 
@@ -40,11 +49,7 @@ def hourly_figure(hourly: pd.DataFrame, path: Path, title: str) -> Path:
     for ax in axes[1]:
         ax.set_xlabel("hour of day (request time)")
     axes[0, 0].legend(fontsize=8)
-    fig.suptitle("\n".join(textwrap.wrap(title, 110)), fontsize=10)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return _save(plt, fig, path, title)
 
 
 def per_day_figures(by_day: pd.DataFrame, folder: Path, kpis: list[str]) -> list[Path]:
@@ -85,11 +90,7 @@ def sweep_figure(table: pd.DataFrame, parameter: str, kpis: list[str], path: Pat
         ax.set_title(KPI_LABELS.get(kpi, kpi), fontsize=9)
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=8)
-    fig.suptitle("\n".join(textwrap.wrap(title, 110)), fontsize=10)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return _save(plt, fig, path, title)
 
 
 def bench_figure(table: pd.DataFrame, path: Path, title: str) -> Path:
@@ -115,8 +116,4 @@ def bench_figure(table: pd.DataFrame, path: Path, title: str) -> Path:
         ax.grid(alpha=0.3, which="both")
     axes[0, 0].set_ylabel("solver time, proven optimal (ms)")
     axes[0, 0].legend(fontsize=8)
-    fig.suptitle("\n".join(textwrap.wrap(title, 110)), fontsize=10)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return _save(plt, fig, path, title)
