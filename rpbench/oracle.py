@@ -100,26 +100,23 @@ class OracleResult:
             "gap": sol.gap if sol.gap is not None else float("nan"),
             "candidates": self.n_candidates,
             "edges": self.model.n_cols,
-            # Oracle-2's certificate: a proven upper bound on the number of pairs (not computed for
-            # Oracle-1, where Hopcroft-Karp on millions of en-route edges costs minutes for nothing)
-            "pairs_bound": float(cardinality_upper_bound(self.model)) if self.variant == 2 else float("nan"),
+            # Oracle-2's certificate: the proven maximum number of pairs (Oracle-1 does not need it)
+            "pairs_bound": float(maximum_pairs(self.model)) if self.variant == 2 else float("nan"),
             **self.timings,
         }
 
 
-def cardinality_upper_bound(model: PairingModel) -> int:
-    """An upper bound on the number of pairs of any matching: Σ over components of ⌊ν_f⌋.
+def maximum_pairs(model: PairingModel) -> int:
+    """The largest number of pairs of any matching (Oracle-2's stage 1), proven.
 
-    ν_f, the maximum fractional matching, is half the maximum matching of the
-    bipartite double cover (every order on both sides, every pair as two
-    arcs), found by Hopcroft-Karp (:func:`rpbench.backends.matching.cardinality_upper_bound`).
-    It certifies Oracle-2's cardinality stage when a solver stops early: a
-    matching with this many pairs is maximum.
+    Edmonds' algorithm with a Tutte-Berge set as certificate
+    (:mod:`rpbench.backends.cardinality`); it lets a report state Oracle-2's
+    cardinality as proven even when a solver stopped early on the weight.
     """
     if model.n_cols == 0:
         return 0
-    from .backends.matching import cardinality_upper_bound as bound
-    return bound(model.n_orders, model.col_a.astype(np.int64), model.col_b.astype(np.int64))
+    from .backends.cardinality import maximum_cardinality_matching
+    return maximum_cardinality_matching(model.n_orders, model.col_a, model.col_b).size
 
 
 def competitive_ratio(strategy_total_saving_km: float, oracle1_total_saving_km: float) -> float:

@@ -472,15 +472,15 @@ def test_haikou_peak_is_solved_to_optimality():
     assert k1["total_saving_km"] >= k2["total_saving_km"]
 
 
-def test_cardinality_upper_bound_certifies_oracle2():
-    """⌊ν_f⌋ bounds every matching and is met by Oracle-2 on these instances (the triangle: 1, not 1.5)."""
+def test_maximum_pairs_is_the_matching_number():
+    """Oracle-2's pairs_bound is the proven maximum: the triangle gives 1 (its fractional matching: 1.5)."""
     from rpbench.model import PairingModel
-    from rpbench.oracle import cardinality_upper_bound
+    from rpbench.oracle import maximum_pairs
     triangle = PairingModel(3, [0, 0, 1], [1, 2, 2], [1, 1, 1])
-    assert cardinality_upper_bound(triangle) == 1
+    assert maximum_pairs(triangle) == 1
     two_triangles = PairingModel(6, [0, 0, 1, 3, 3, 4, 2], [1, 2, 2, 4, 5, 5, 3], [1] * 7)
-    assert cardinality_upper_bound(two_triangles) == 3
-    assert cardinality_upper_bound(PairingModel(4, [], [], [])) == 0
+    assert maximum_pairs(two_triangles) == 3
+    assert maximum_pairs(PairingModel(4, [], [], [])) == 0
     import networkx as nx
     rng = np.random.default_rng(0)
     for _ in range(20):
@@ -489,5 +489,5 @@ def test_cardinality_upper_bound_certifies_oracle2():
         a, b = map(np.array, zip(*sorted(pairs)))
         model = PairingModel(n, a, b, np.ones(len(a)))
         g = nx.Graph(list(zip(a.tolist(), b.tolist())))
-        best = len(nx.max_weight_matching(g, maxcardinality=True))
-        assert cardinality_upper_bound(model) >= best
+        assert maximum_pairs(model) == len(nx.max_weight_matching(g, maxcardinality=True))
+

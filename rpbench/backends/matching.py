@@ -4,8 +4,9 @@
   on a square ``(P + V) x (V + P)`` cost matrix — :func:`lapmod_assignment`.
 * **Pairing** (ALGORITHMS.md §4): maximum-weight general matching by
   PyMatching's sparse blossom through the reduction to a minimum-weight
-  T-join — :func:`max_weight_matching`; Oracle-2 by a Lagrangian bonus per
-  pair — :func:`max_weight_max_cardinality`.
+  T-join — :func:`max_weight_matching`; Oracle-2 by Edmonds' exact maximum
+  cardinality (:mod:`.cardinality`) and then a Lagrangian bonus per pair —
+  :func:`max_weight_max_cardinality`.
 * **Trip packing** (ALGORITHMS.md §3.3): no special-purpose algorithm; it is
   delegated to the HiGHS MIP (exact), and the solution's message says so.
 
@@ -43,6 +44,7 @@ from ..exceptions import SolverError
 from ..model import AssignmentModel, Model, PairingModel, Solution, Status, Structure, empty_solution, make_solution
 from .base import Backend, SolveOptions
 from ._common import Clock, check_feasible
+from .cardinality import columns_of_mate, edge_indices, mate_of, maximum_cardinality_matching
 
 #: Largest edge weight PyMatching accepts and keeps unscaled when all weights are integral.
 PM_MAX_WEIGHT = 2 ** 24 - 1
@@ -225,13 +227,7 @@ def max_weight_matching(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, clo
     clock.times["solve_s"] += time.perf_counter() - t0 - build_s       # includes the fork, if any
     with clock("extract_s"):
         pairs = pairs[pairs[:, 1] >= 0]
-        keys = a.astype(np.int64) * n + b
-        order = np.argsort(keys)
-        want = pairs.min(axis=1) * n + pairs.max(axis=1)
-        pos = np.minimum(np.searchsorted(keys[order], want), E - 1)
-        if np.any(keys[order][pos] != want):
-            raise SolverError("PyMatching matched two orders that are not a candidate pair (reduction violated)")
-        return order[pos]
+        return edge_indices(n, a, b, pairs[:, 0], pairs[:, 1])
 
 
 def _pymatching_pairs(n, a, b, pair_cost, beta) -> tuple[np.ndarray, float, float]:
@@ -302,41 +298,29 @@ def _child_main(conn, fn, args) -> None:
         conn.close()
 
 
-def cardinality_upper_bound(n: int, a: np.ndarray, b: np.ndarray) -> int:
-    """``Σ_C ⌊ν_f(C)⌋`` over connected components: an upper bound on the matching number.
-
-    ``ν_f`` (the largest fractional matching) is half the maximum matching of
-    the bipartite double cover (Hopcroft-Karp); per component its floor is
-    usually the matching number itself, which :func:`max_weight_max_cardinality`
-    then reaches and thereby proves.
-    """
-    from scipy.sparse.csgraph import connected_components, maximum_bipartite_matching
-
-    g = sp.csr_matrix((np.ones(2 * len(a)), (np.concatenate([a, b]), np.concatenate([b, a]))), shape=(n, n))
-    matched = maximum_bipartite_matching(g, perm_type="column") >= 0
-    _, label = connected_components(g, directed=False)
-    return int((np.bincount(label[matched], minlength=label.max(initial=0) + 1) // 2).sum())
-
-
 def max_weight_max_cardinality(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, clock: Clock,
-                               deadline: float | None = None) -> tuple[np.ndarray, bool]:
-    """A maximum-weight matching among the maximum-cardinality ones (Oracle-2), and whether it is proven.
+                               deadline: float | None = None) -> tuple[np.ndarray, bool, int | None]:
+    """A maximum-weight matching among the maximum-cardinality ones (Oracle-2), whether it is proven, and a bound.
 
-    With a bonus ``λ`` per pair, a maximum-weight matching for ``w + λ`` with
-    ``k*`` pairs beats every other ``k*``-matching by weight (all get the same
-    ``k*·λ``), so it is exact for any ``λ`` that reaches ``k*``; ``k*`` is
-    certified by reaching :func:`cardinality_upper_bound`.  λ starts at a
-    quarter of the value spread and doubles up to 4 x the spread: larger
-    bonuses make the costs nearly uniform, and sparse blossom then slows down
-    by orders of magnitude (it is built for sparse defects; here every
-    vertex is one).  Unproven, the matching with the most pairs is returned.
-    On :class:`Timeout` the best matching so far rides on the exception.
+    ``k*`` comes first, exactly, from Edmonds' algorithm with its Tutte-Berge
+    certificate (:mod:`.cardinality`).  With a bonus ``λ`` per pair, a
+    maximum-weight matching for ``w + λ`` that has ``k*`` pairs beats every
+    other ``k*``-matching by weight (all get the same ``k*·λ``), so it is
+    exact.  λ starts at a quarter of the value spread and doubles up to 4 x
+    the spread: larger bonuses make the costs nearly uniform, and sparse
+    blossom then slows down by orders of magnitude (it is built for sparse
+    defects; here every vertex is one).  Unproven, the heaviest matching found
+    is augmented to ``k*`` pairs (Edmonds again) and returned as a warm start,
+    with the best Lagrangian bound: ``M_λ`` is a maximum-weight matching for
+    ``w + λ``, so every ``k*``-matching weighs at most
+    ``w(M_λ) + λ (|M_λ| - k*)``.  On :class:`Timeout` the matching and the
+    bound ride on the exception (``best``, ``bound``).
     """
     with clock("build_s"):
-        upper = cardinality_upper_bound(n, a, b)
-    best = np.zeros(0, np.int64)
-    if upper == 0:
-        return best, True
+        top = maximum_cardinality_matching(n, a, b)
+    if top.size == 0:
+        return np.zeros(0, np.int64), True, 0
+    best, bound = columns_of_mate(n, a, b, top.mate), None
     spread = int(w.max()) - int(w.min()) + 1
     lam = max(1, spread // 4)
     while lam <= 4 * spread:
@@ -345,13 +329,16 @@ def max_weight_max_cardinality(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarr
         try:
             sel = keep[max_weight_matching(n, a[keep], b[keep], wl[keep], clock, deadline)]
         except Timeout as exc:
-            exc.best = best
+            exc.best, exc.bound = best, bound
             raise
-        best = sel
-        if len(sel) == upper:
-            return sel, True
+        if len(sel) == top.size:
+            return sel, True, int(w[sel].sum())
+        lagrangian = int(w[sel].sum()) + lam * (len(sel) - top.size)
+        bound = lagrangian if bound is None else min(bound, lagrangian)
+        with clock("build_s"):             # the heaviest start so far, completed to k* pairs
+            best = columns_of_mate(n, a, b, maximum_cardinality_matching(n, a, b, start=mate_of(n, a[sel], b[sel])).mate)
         lam *= 2
-    return best, False
+    return best, False, bound
 
 
 def solve_pairing(model: PairingModel, options: SolveOptions, clock: Clock, backend: str) -> Solution:
@@ -372,12 +359,12 @@ def solve_pairing(model: PairingModel, options: SolveOptions, clock: Clock, back
         a, b = model.col_a.astype(np.int64), model.col_b.astype(np.int64)
         g = int(np.gcd.reduce(np.abs(v))) if np.any(v) else 1
         w = v // g                          # exact: every value is a multiple of g
-    step, why, sel, proven = 1, "", np.zeros(0, np.int64), False
+    step, why, sel, proven, bound = 1, "", np.zeros(0, np.int64), False, None
     while True:                             # step > 1: coarsened, only to warm-start the fallback
         wc = w if step == 1 else np.round(w / step).astype(np.int64)
         try:
             if lexi:
-                sel, proven = max_weight_max_cardinality(model.n_orders, a, b, wc, clock, deadline)
+                sel, proven, bound = max_weight_max_cardinality(model.n_orders, a, b, wc, clock, deadline)
             else:
                 use = np.flatnonzero(wc > 0)     # Oracle-1: a pair worth <= 0 never helps
                 sel, proven = use[max_weight_matching(model.n_orders, a[use], b[use], wc[use], clock, deadline)], True
@@ -389,18 +376,26 @@ def solve_pairing(model: PairingModel, options: SolveOptions, clock: Clock, back
             step *= 2
         except Timeout as exc:
             sel, why = getattr(exc, "best", sel), why or "PyMatching ran out of its share of the time limit"
+            bound = getattr(exc, "bound", None)
             break
     chosen = check_feasible(model, np.sort(sel), backend)
     if step == 1 and proven and not why:
         obj = model.objective_of(chosen)
         return make_solution(model, chosen, Status.OPTIMAL, backend, bound=obj, gap=0.0, **clock.times)
-    why = why or "maximum cardinality not certified (fractional bound not reached)"
-    return _highs_fallback(model, options, clock, backend, chosen, why)
+    why = why or "no pair bonus up to 4x the value spread reached the proven maximum number of pairs"
+    # a bound on coarsened values says nothing exact about the model's
+    lagrangian = bound * g if bound is not None and step == 1 else None
+    return _highs_fallback(model, options, clock, backend, chosen, why, lagrangian)
 
 
 def _highs_fallback(model: PairingModel, options: SolveOptions, clock: Clock, backend: str,
-                    start: np.ndarray, why: str) -> Solution:
-    """The exact HiGHS MIP (two stages for Oracle-2), warm-started with ``start``; honest status on a time limit."""
+                    start: np.ndarray, why: str, lagrangian: int | None = None) -> Solution:
+    """The exact HiGHS MIP (two stages for Oracle-2), warm-started with ``start``; honest status on a time limit.
+
+    ``lagrangian`` (Oracle-2) is a proven bound from the pair-bonus runs; the
+    tighter of it and HiGHS's bound is reported, and proves the optimum if
+    the incumbent reaches it.
+    """
     from .highs import HighsBackend
 
     hint = np.zeros(model.n_cols)
@@ -409,7 +404,14 @@ def _highs_fallback(model: PairingModel, options: SolveOptions, clock: Clock, ba
     sol = HighsBackend().solve(model, replace(options, time_limit_s=limit), hint=hint)
     times = {k: clock.times[k] + getattr(sol, k) for k in clock.times}
     note = "; ".join(m for m in (f"{why}: solved by the HiGHS MIP warm-started from PyMatching", sol.message) if m)
-    return replace(sol, backend=backend, message=note, **times)
+    sol = replace(sol, backend=backend, message=note, **times)
+    if sol.status is Status.OPTIMAL or lagrangian is None or (sol.bound is not None and sol.bound <= lagrangian):
+        return sol
+    obj = sol.objective
+    if lagrangian < obj + 1:                  # integral values: nothing better exists
+        return replace(sol, status=Status.OPTIMAL, bound=obj, gap=0.0, message=f"{note}; proven by the Lagrangian bound")
+    return replace(sol, bound=float(lagrangian), gap=(lagrangian - obj) / max(1.0, abs(obj)),
+                   message=f"{note}; bound from the pair-bonus (Lagrangian) relaxation")
 
 
 def _overflow_message(model: PairingModel, backend: str, g: int, needed: int, lexi: bool) -> str:

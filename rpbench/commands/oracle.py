@@ -86,7 +86,7 @@ _ROWS = (("orders", "orders", "{:,.0f}"), ("pairs", "pairs", "{:,.0f}"),
          ("avg_detour_m", "avg detour (m)", "{:,.0f}"), ("avg_shared_m", "avg shared (m)", "{:,.0f}"),
          ("total_saving_km", "total saving (km)", "{:,.1f}"), ("status", "status", "{}"),
          ("bound_m", "proven bound (m)", "{:,.0f}"), ("gap", "gap", "{:.2g}"),
-         ("pairs_bound", "pairs upper bound", "{:,.0f}"), ("edges", "model edges", "{:,.0f}"),
+         ("pairs_bound", "maximum pairs (proven)", "{:,.0f}"), ("edges", "model edges", "{:,.0f}"),
          ("model_s", "model build (s)", "{:.3f}"), ("build_s", "solver build (s)", "{:.3f}"),
          ("solve_s", "solve (s)", "{:.3f}"), ("total_s", "total incl. candidates (s)", "{:.3f}"))
 

@@ -107,20 +107,21 @@ def test_failed_lp_is_resolved_as_mip():
     assert "kUnknown" in sol.message and "re-solved as a MIP" in sol.message
 
 
-def test_oracle2_stage1_unproven_is_reported_as_time_limit():
+def test_oracle2_stage1_is_combinatorial_and_warm_starts_stage2():
+    # the path 0-1-2-3 has one 2-matching, {(0,1), (2,3)}: Edmonds finds it, the MIP only solves stage 2
     model = PairingModel(4, [0, 1, 2], [1, 2, 3], [1, 10, 1], objective="cardinality_then_weight")
-    b = _Scripted([Raw(x=np.array([0.0, 1.0, 0.0]), state=LIMIT, bound=5.0)])
-    sol = b.solve(model, SolveOptions(time_limit_s=1))
-    assert sol.status is Status.TIME_LIMIT and "not proven" in sol.message and len(b.calls) == 1
-
-
-def test_oracle2_stage2_keeps_the_cardinality_row_and_warm_start():
-    model = PairingModel(4, [0, 1, 2], [1, 2, 3], [1, 10, 1], objective="cardinality_then_weight")
-    b = _Scripted([Raw(x=np.array([1.0, 0.0, 1.0]), state=OPTIMAL, bound=2.0),
-                   Raw(x=None, state=LIMIT, bound=2.0)])
+    b = _Scripted([Raw(x=None, state=LIMIT, bound=2.0)])
     sol = b.solve(model, SolveOptions(time_limit_s=10))
-    assert b.calls[1]["rows"] == 5 and b.calls[1]["hint"].tolist() == [1, 0, 1]
-    assert sol.status is Status.OPTIMAL and sol.chosen.tolist() == [0, 2]   # hint adopted, bound proves it
+    assert len(b.calls) == 1
+    assert b.calls[0]["rows"] == 5 and b.calls[0]["hint"].tolist() == [1, 0, 1]    # degree rows + Σx >= 2
+    assert sol.status is Status.OPTIMAL and sol.chosen.tolist() == [0, 2]   # start adopted, bound proves it
+
+
+def test_oracle2_stage2_stopped_early_reports_time_limit():
+    model = PairingModel(4, [0, 1, 2], [1, 2, 3], [1, 10, 1], objective="cardinality_then_weight")
+    b = _Scripted([Raw(x=None, state=LIMIT, bound=5.0)])
+    sol = b.solve(model, SolveOptions(time_limit_s=10))
+    assert sol.status is Status.TIME_LIMIT and sol.chosen.tolist() == [0, 2] and sol.bound == 5.0
 
 
 MIP_PRESETS = ["highs", "scipy", "ortools", "cvxpy-highs", "pyomo-highs"]

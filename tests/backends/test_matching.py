@@ -94,10 +94,41 @@ def test_unknown_overflow_mode_is_an_error():
         BACKEND.solve(PairingModel(2, [0], [1], [1]), SolveOptions(extra={"overflow": "ignore"}))
 
 
-def test_cardinality_bound_is_per_component():
-    # two disjoint triangles: fractional matching 3, but 1 + 1 pairs at most; floors per component give 2
-    a, b = np.array([0, 0, 1, 3, 3, 4]), np.array([1, 2, 2, 4, 5, 5])
-    assert mb.cardinality_upper_bound(6, a, b) == 2
+def _alternating_path(m: int, heavy: int):
+    """Path of 2m + 2 orders, values 1, heavy, 1, ..., 1: the m + 1 light pairs are the only maximum matching.
+
+    A pair bonus must exceed ``m * heavy`` to prefer them, beyond the 4 x spread the PyMatching loop tries.
+    """
+    n = 2 * m + 2
+    a = np.arange(n - 1)
+    return n, a, a + 1, np.where(a % 2 == 1, heavy, 1).astype(np.int64)
+
+
+def test_oracle2_lagrangian_bound_is_valid_when_the_bonus_falls_short():
+    n, a, b, w = _alternating_path(8, 100)
+    sel, proven, bound = mb.max_weight_max_cardinality(n, a, b, w, Clock())
+    assert not proven and len(sel) == 9 and w[sel].sum() == 9      # the warm start has k* pairs
+    assert bound is not None and bound >= 9                          # 9 is the true optimum
+    sol = BACKEND.solve(PairingModel(n, a, b, w, objective="cardinality_then_weight"), SolveOptions())
+    assert sol.status is Status.OPTIMAL and len(sol.chosen) == 9 and "HiGHS MIP" in sol.message
+
+
+@pytest.mark.parametrize("seed", range(15))
+def test_oracle2_bound_never_cuts_off_the_optimum(seed):
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(6, 40))
+    edges = sorted({tuple(sorted(rng.choice(n, 2, replace=False))) for _ in range(int(rng.integers(n, 3 * n)))})
+    a, b = (np.array(x) for x in zip(*edges))
+    w = rng.integers(-50, 400, len(a))
+    g = nx.Graph()
+    g.add_weighted_edges_from(zip(a.tolist(), b.tolist(), w.tolist()))
+    best = nx.max_weight_matching(g, maxcardinality=True)
+    opt = sum(g.edges[e]["weight"] for e in best)
+    sel, proven, bound = mb.max_weight_max_cardinality(n, a, b, w, Clock())
+    assert len(sel) == len(best)
+    assert bound is None or bound >= opt
+    if proven:
+        assert w[sel].sum() == opt == bound
 
 
 def test_pymatching_timeout_falls_back_with_an_honest_status(monkeypatch):
