@@ -84,7 +84,7 @@ def maximum_cardinality_matching(n: int, a: np.ndarray, b: np.ndarray,
         mate_arr = greedy_matching(g)
     else:
         mate_arr = np.asarray(start, np.int64).copy()
-        _check_mate(g, mate_arr)
+        _check_mate(n, a, b, mate_arr)
     adj = [row.tolist() for row in np.split(g.indices, g.indptr[1:-1])]
     mate = mate_arr.tolist()
     search = _BlossomSearch(adj, mate)
@@ -141,17 +141,16 @@ def tutte_berge_bound(n: int, a: np.ndarray, b: np.ndarray, tutte_set: np.ndarra
     return (n - odd + len(tutte_set)) // 2
 
 
-def _check_mate(g: sp.csr_matrix, mate: np.ndarray) -> None:
-    n = g.shape[0]
+def _check_mate(n: int, a: np.ndarray, b: np.ndarray, mate: np.ndarray) -> None:
     if mate.shape != (n,) or np.any(mate >= n) or np.any(mate < -1):
         raise ValueError("start matching: expected a mate array of length n with values in -1..n-1")
     v = np.flatnonzero(mate >= 0)
-    rows = np.repeat(np.arange(n, dtype=np.int64), np.diff(g.indptr))
-    edges = rows * n + g.indices                     # sorted: canonical CSR, row-major
-    want = v * n + mate[v]
-    pos = np.minimum(np.searchsorted(edges, want), max(len(edges) - 1, 0))
-    if np.any(mate[mate[v]] != v) or (len(v) and (len(edges) == 0 or np.any(edges[pos] != want))):
+    if np.any(mate[mate[v]] != v):
         raise ValueError("start matching is not a matching of the graph")
+    try:
+        edge_indices(n, a, b, v, mate[v])
+    except SolverError:
+        raise ValueError("start matching is not a matching of the graph") from None
 
 
 class _BlossomSearch:
