@@ -77,7 +77,7 @@ PRESETS = ["highs", "matching"]
 SOLVERS = [pytest.param(NetworkxBackend(), id="networkx-ref")] + [
     pytest.param(p, id=p, marks=pytest.mark.skipif(not _preset_available(p), reason=f"preset {p} not available"))
     for p in PRESETS]
-ALL_PRESETS = ["highs", "matching", "ortools", "scipy", "pyomo-highs", "cvxpy-highs"]
+ALL_PRESETS = ["highs", "matching", "blossom-v", "ortools", "scipy", "pyomo-highs", "cvxpy-highs"]
 
 
 # ------------------------------------------------------------------ fixtures

@@ -20,6 +20,7 @@ REGISTRY: dict[str, str] = {
     "cvxpy": "cvxpy:CvxpyBackend",
     "scipy": "scipy:ScipyBackend",
     "matching": "matching:MatchingBackend",
+    "blossom": "blossom:BlossomBackend",
 }
 
 

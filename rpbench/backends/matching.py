@@ -6,7 +6,10 @@
   PyMatching's sparse blossom through the reduction to a minimum-weight
   T-join — :func:`max_weight_matching`; Oracle-2 by Edmonds' exact maximum
   cardinality (:mod:`.cardinality`) and then a Lagrangian bonus per pair —
-  :func:`max_weight_max_cardinality`.
+  :func:`max_weight_max_cardinality`.  What PyMatching cannot prove (and
+  Oracle-2 beyond ``BLOSSOM_V_FIRST`` pairs) goes to OGDF's Blossom V
+  (:mod:`.blossom`) when the ``blossom`` extra is installed, else to the
+  HiGHS MIP.
 * **Trip packing** (ALGORITHMS.md §3.3): no special-purpose algorithm; it is
   delegated to the HiGHS MIP (exact), and the solution's message says so.
 
@@ -44,6 +47,7 @@ from ..exceptions import SolverError
 from ..model import AssignmentModel, Model, PairingModel, Solution, Status, Structure, empty_solution, make_solution
 from .base import Backend, SolveOptions
 from ._common import Clock, check_feasible
+from ._forked import Timeout, run_in_child
 from .cardinality import columns_of_mate, edge_indices, mate_of, maximum_cardinality_matching
 
 #: Largest edge weight PyMatching accepts and keeps unscaled when all weights are integral.
@@ -53,6 +57,10 @@ LAP_LARGE = 1e6
 LAP_SAFE = 2.0 ** 18
 #: Pairings with fewer candidate pairs are solved in-process even under a time limit.
 SMALL_GRAPH = 5_000
+#: Oracle-2 pairings with this many candidate pairs go straight to Blossom V when it is installed:
+#: sparse blossom needs a pair bonus near the value spread to reach k*, and slows down by orders
+#: of magnitude there (full haikou-day, 465k pairs: > 15 min; the 2017-05-01 peak, 12k: 0.4 s).
+BLOSSOM_V_FIRST = 100_000
 
 
 class MatchingBackend(Backend):
@@ -248,54 +256,11 @@ def _pymatching_pairs(n, a, b, pair_cost, beta) -> tuple[np.ndarray, float, floa
     return np.asarray(pairs, dtype=np.int64).reshape(-1, 2), t1 - t0, time.perf_counter() - t1
 
 
-class Timeout(Exception):
-    """A PyMatching solve ran past its deadline (and was killed)."""
-
-
 def _in_child(fn, args, deadline: float | None):
-    """``fn(*args)``, in a forked child killed at ``deadline``.
-
-    In-process when there is no deadline, or inside a daemonic process (a
-    ``multiprocessing.Pool`` worker), which may not start children.
-    """
-    import multiprocessing
-
-    if deadline is None or multiprocessing.current_process().daemon:
-        return fn(*args)
-
-    import pymatching  # noqa: F401  (imported once here, inherited by every child)
-
-    remaining = deadline - time.perf_counter()
-    if remaining <= 0:
-        raise Timeout()
-    ctx = multiprocessing.get_context("fork")        # the child inherits the arrays; nothing is pickled in
-    receive, send = ctx.Pipe(duplex=False)
-    child = ctx.Process(target=_child_main, args=(send, fn, args))
-    child.start()
-    send.close()
-    try:
-        if not receive.poll(remaining):
-            raise Timeout()
-        ok, result = receive.recv()
-    except EOFError:
-        ok, result = False, "the PyMatching child process died"
-    finally:
-        if child.is_alive():
-            child.kill()
-        child.join()
-        receive.close()
-    if not ok:
-        raise SolverError(f"PyMatching failed: {result}")
-    return result
-
-
-def _child_main(conn, fn, args) -> None:
-    try:
-        conn.send((True, fn(*args)))
-    except BaseException as exc:                      # report, never hang the parent
-        conn.send((False, f"{type(exc).__name__}: {exc}"))
-    finally:
-        conn.close()
+    """``fn(*args)`` under ``deadline`` (:func:`._forked.run_in_child`), PyMatching imported before any fork."""
+    if deadline is not None:
+        import pymatching  # noqa: F401  (imported once here, inherited by every child)
+    return run_in_child(fn, args, deadline, solver="PyMatching")
 
 
 def max_weight_max_cardinality(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, clock: Clock,
@@ -342,7 +307,7 @@ def max_weight_max_cardinality(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarr
 
 
 def solve_pairing(model: PairingModel, options: SolveOptions, clock: Clock, backend: str) -> Solution:
-    """PyMatching when it can prove the optimum, else the HiGHS MIP warm-started from its best matching.
+    """PyMatching when it can prove the optimum, else Blossom V, else the HiGHS MIP warm-started from its best matching.
 
     With a time limit, PyMatching gets half of it for Oracle-2 (the rest is
     left to a fallback) and all of it for Oracle-1.
@@ -352,6 +317,8 @@ def solve_pairing(model: PairingModel, options: SolveOptions, clock: Clock, back
         raise SolverError(f"backend {backend!r}: [options.extra] overflow = {overflow!r}; "
                           "use \"fallback\" or \"error\"")
     lexi = model.objective == "cardinality_then_weight"
+    if lexi and model.n_cols >= BLOSSOM_V_FIRST and _blossom_installed():
+        return _blossom_v(model, options, clock, backend, f"{model.n_cols} candidate pairs")
     limit = options.time_limit_s
     deadline = None if limit is None else clock.start + (limit / 2 if lexi else limit)
     with clock("build_s"):
@@ -373,6 +340,8 @@ def solve_pairing(model: PairingModel, options: SolveOptions, clock: Clock, back
             if overflow == "error":
                 raise SolverError(_overflow_message(model, backend, g, exc.needed, lexi)) from None
             why = why or f"values exceed PyMatching's exact range (reduction costs up to {exc.needed})"
+            if _blossom_installed():          # exact in int64: no coarsened warm start needed
+                return _blossom_v(model, options, clock, backend, why)
             step *= 2
         except Timeout as exc:
             sel, why = getattr(exc, "best", sel), why or "PyMatching ran out of its share of the time limit"
@@ -383,9 +352,26 @@ def solve_pairing(model: PairingModel, options: SolveOptions, clock: Clock, back
         obj = model.objective_of(chosen)
         return make_solution(model, chosen, Status.OPTIMAL, backend, bound=obj, gap=0.0, **clock.times)
     why = why or "no pair bonus up to 4x the value spread reached the proven maximum number of pairs"
+    if _blossom_installed():
+        return _blossom_v(model, options, clock, backend, why)
     # a bound on coarsened values says nothing exact about the model's
     lagrangian = bound * g if bound is not None and step == 1 else None
     return _highs_fallback(model, options, clock, backend, chosen, why, lagrangian)
+
+
+def _blossom_installed() -> bool:
+    from .blossom import is_available
+
+    return is_available()
+
+
+def _blossom_v(model: PairingModel, options: SolveOptions, clock: Clock, backend: str, why: str) -> Solution:
+    """The exact Blossom V route (:mod:`.blossom`), within what is left of the time limit."""
+    from .blossom import solve_pairing as blossom_v_pairing
+
+    sol = blossom_v_pairing(model, options, clock, backend)
+    note = "; ".join(m for m in (f"{why}: solved by OGDF's Blossom V", sol.message) if m)
+    return replace(sol, message=note)
 
 
 def _highs_fallback(model: PairingModel, options: SolveOptions, clock: Clock, backend: str,

@@ -19,6 +19,13 @@ from rpbench.model import AssignmentModel, PairingModel, Status
 pytest.importorskip("pymatching")
 pytest.importorskip("lap")
 BACKEND = get_backend("matching")
+HAS_BLOSSOM_V = mb._blossom_installed()
+
+
+@pytest.fixture
+def no_blossom_v(monkeypatch):
+    """An install without the ``blossom`` extra: what PyMatching cannot prove goes to the HiGHS MIP."""
+    monkeypatch.setattr(mb, "_blossom_installed", lambda: False)
 
 
 def networkx_optimum(model: PairingModel) -> tuple[float, int]:
@@ -71,7 +78,7 @@ def test_reduction_costs_satisfy_the_star_condition():
             assert 2 * beta[v] > incident[0] + incident[1]
 
 
-def test_values_beyond_the_exact_range_fall_back_to_an_exact_mip():
+def test_values_beyond_the_exact_range_fall_back_to_an_exact_mip(no_blossom_v):
     # 2e7 units cannot be a PyMatching weight (max 2^24 - 1): the answer must still be exact
     v = np.array([20_000_001, 40_000_001, 20_000_001])
     model = PairingModel(4, [0, 1, 2], [1, 2, 3], v)
@@ -104,13 +111,34 @@ def _alternating_path(m: int, heavy: int):
     return n, a, a + 1, np.where(a % 2 == 1, heavy, 1).astype(np.int64)
 
 
-def test_oracle2_lagrangian_bound_is_valid_when_the_bonus_falls_short():
+def test_oracle2_lagrangian_bound_is_valid_when_the_bonus_falls_short(no_blossom_v):
     n, a, b, w = _alternating_path(8, 100)
     sel, proven, bound = mb.max_weight_max_cardinality(n, a, b, w, Clock())
     assert not proven and len(sel) == 9 and w[sel].sum() == 9      # the warm start has k* pairs
     assert bound is not None and bound >= 9                          # 9 is the true optimum
     sol = BACKEND.solve(PairingModel(n, a, b, w, objective="cardinality_then_weight"), SolveOptions())
     assert sol.status is Status.OPTIMAL and len(sol.chosen) == 9 and "HiGHS MIP" in sol.message
+
+
+@pytest.mark.skipif(not HAS_BLOSSOM_V, reason="the blossom extra (OGDF, cppyy) is not installed")
+def test_what_pymatching_cannot_prove_goes_to_blossom_v():
+    n, a, b, w = _alternating_path(8, 100)
+    sol = BACKEND.solve(PairingModel(n, a, b, w, objective="cardinality_then_weight"), SolveOptions())
+    assert sol.status is Status.OPTIMAL and len(sol.chosen) == 9 and sol.objective == 9
+    assert "Blossom V" in sol.message
+    big = PairingModel(4, [0, 1, 2], [1, 2, 3], [20_000_001, 40_000_001, 20_000_001])     # beyond PyMatching's range
+    sol = BACKEND.solve(big, SolveOptions())
+    assert sol.status is Status.OPTIMAL and sol.chosen.tolist() == [0, 2] and "Blossom V" in sol.message
+
+
+@pytest.mark.skipif(not HAS_BLOSSOM_V, reason="the blossom extra (OGDF, cppyy) is not installed")
+def test_large_oracle2_goes_straight_to_blossom_v(monkeypatch):
+    model = synthetic.pairing(300, partners=10, objective="cardinality_then_weight")
+    monkeypatch.setattr(mb, "BLOSSOM_V_FIRST", 0)
+    monkeypatch.setattr(mb, "max_weight_matching", lambda *args, **kw: pytest.fail("PyMatching was called"))
+    sol = BACKEND.solve(model, SolveOptions())
+    assert sol.status is Status.OPTIMAL and "Blossom V" in sol.message
+    assert (sol.objective, len(sol.chosen)) == networkx_optimum(model)
 
 
 @pytest.mark.parametrize("seed", range(15))
@@ -131,7 +159,7 @@ def test_oracle2_bound_never_cuts_off_the_optimum(seed):
         assert w[sel].sum() == opt == bound
 
 
-def test_pymatching_timeout_falls_back_with_an_honest_status(monkeypatch):
+def test_pymatching_timeout_falls_back_with_an_honest_status(monkeypatch, no_blossom_v):
     model = synthetic.pairing(400, partners=8, objective="cardinality_then_weight")
     monkeypatch.setattr(mb, "SMALL_GRAPH", 0)                   # force the forked, deadline-guarded path
 
