@@ -83,11 +83,6 @@ class BlossomBackend(Backend):
         return solve_pairing(model, options, Clock(), self.name)
 
 
-def is_available() -> bool:
-    """Are OGDF and cppyy installed (the ``blossom`` extra)?"""
-    return BlossomBackend.is_installed()
-
-
 @functools.cache
 def _shim():
     """The compiled C++ entry point (loads OGDF into this process once)."""

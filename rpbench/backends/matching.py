@@ -360,9 +360,10 @@ def solve_pairing(model: PairingModel, options: SolveOptions, clock: Clock, back
 
 
 def _blossom_installed() -> bool:
-    from .blossom import is_available
+    """Is the ``blossom`` extra (OGDF, cppyy) installed?"""
+    from .blossom import BlossomBackend
 
-    return is_available()
+    return BlossomBackend.is_installed()
 
 
 def _blossom_v(model: PairingModel, options: SolveOptions, clock: Clock, backend: str, why: str) -> Solution:

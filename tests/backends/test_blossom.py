@@ -14,7 +14,7 @@ from rpbench.backends.cardinality import maximum_cardinality_matching
 from rpbench.exceptions import SolverError
 from rpbench.model import PairingModel, Status
 
-if not bv.is_available():
+if not bv.BlossomBackend.is_installed():
     pytest.skip("the blossom extra (OGDF, cppyy) is not installed", allow_module_level=True)
 BACKEND = get_backend("blossom")
 OBJECTIVES = ("weight", "cardinality_then_weight")
