@@ -13,8 +13,8 @@ import argparse
 import importlib
 import sys
 
-from . import __version__
-from .exceptions import RpbenchError
+from rpbench import __version__
+from rpbench.exceptions import RpbenchError
 
 #: Subcommand modules, in the order ``rpbench --help`` lists them.
 COMMANDS = ("run", "check", "oracle", "predict", "snapshot", "bench", "sweep", "report", "publish", "scenario",
@@ -28,13 +28,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"rpbench {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in COMMANDS:
-        try:
-            module = importlib.import_module(f"rpbench.commands.{name}")
-        except ModuleNotFoundError as exc:
-            if exc.name == f"rpbench.commands.{name}":
-                continue  # command not built yet
-            raise
-        module.register(sub)
+        importlib.import_module(f"rpbench.commands.{name}").register(sub)
     return parser
 
 

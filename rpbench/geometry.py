@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .exceptions import ParameterError
+from rpbench.exceptions import ParameterError
 
 TOLERANCE_M = 1e-9
 ORDER_RULES = ("min_feasible", "min_then_check")

@@ -27,8 +27,8 @@ from typing import Any
 
 import numpy as np
 
-from .exceptions import ModelError, ResultsError
-from .model import AssignmentModel, PairingModel, Structure, TripPackingModel
+from rpbench.exceptions import ModelError, ResultsError
+from rpbench.model import AssignmentModel, PairingModel, Structure, TripPackingModel
 
 FORMAT = "rpbench-instance-1"
 _FIELDS = {

@@ -38,7 +38,7 @@ from typing import ClassVar
 import numpy as np
 import scipy.sparse as sp
 
-from .exceptions import ModelError
+from rpbench.exceptions import ModelError
 
 #: Sums of |values| must stay exactly representable in float64 (2**53).
 MAX_EXACT_TOTAL = float(2 ** 53)

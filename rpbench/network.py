@@ -25,9 +25,9 @@ from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import connected_components, shortest_path
 from scipy.spatial import cKDTree
 
-from .data.road import NetworkTables
-from .exceptions import DataError, ParameterError
-from .paths import cache_dir
+from rpbench.data.road import NetworkTables
+from rpbench.exceptions import DataError, ParameterError
+from rpbench.paths import cache_dir
 
 EARTH_RADIUS_M = 6_371_008.8
 _NO_PRED = -9999  # scipy's marker for "no predecessor"

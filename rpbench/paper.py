@@ -15,7 +15,7 @@ from __future__ import annotations
 
 NAN = float("nan")
 
-#: Table 2, per strategy column; keys as in rpbench.metrics.
+#: Table 2, per strategy column; keys as in rpbench.results.metrics.
 TABLE2 = {
     "np": {"response_rate": 0.74, "pairing_ratio": NAN, "platform_profit_cny": 7232, "avg_response_time_s": 16,
            "avg_pickup_time_s": 168, "avg_detour_m": NAN, "avg_shared_m": NAN, "total_occupied_km": 3333,

@@ -17,7 +17,7 @@ from pathlib import Path
 
 from platformdirs import user_cache_dir
 
-from .exceptions import DataNotFoundError
+from rpbench.exceptions import DataNotFoundError
 
 DATA_ENV = "RPBENCH_DATA"
 CACHE_ENV = "RPBENCH_CACHE"

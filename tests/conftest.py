@@ -64,3 +64,13 @@ def fake_data(tmp_path: Path) -> Path:
     (root / "samples_and_aggregates" / "data_dayly_hourly_count.csv").write_text(
         f'date,day_count,hour_count\n05/01,{sum(hours)},"{hours}"\n')
     return root
+
+
+@pytest.fixture
+def two_day_data(fake_data: Path) -> Path:
+    """The fake data folder with a second peak-hour day: the first day's orders moved to 2017-05-02."""
+    folder = fake_data / "demand_0800_0900" / "orders"
+    with gzip.open(folder / "2017-05-01.csv.gz", "rt") as fh:
+        text = fh.read().replace("2017-05-01 08:", "2017-05-02 08:")
+    write_gz(folder / "2017-05-02.csv.gz", text)
+    return fake_data

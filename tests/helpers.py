@@ -6,7 +6,7 @@ import numpy as np
 
 from rpbench.data.road import NetworkTables
 from rpbench.network import RoadNetwork
-from rpbench.scenario import Fleet, Orders, Params, Scenario
+from rpbench.scenarios.base import Fleet, Orders, Params, Scenario
 from rpbench.scenarios.common import make_orders
 from rpbench.strategies.base import RoundState
 

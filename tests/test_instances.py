@@ -7,12 +7,12 @@ import json
 import numpy as np
 import pytest
 
+from rpbench.backends.presets import load_preset, preset_names
+from rpbench.bench.snapshot import take_snapshots
 from rpbench.exceptions import ResultsError
 from rpbench.instances import find_instances, load_instance, save_instance
 from rpbench.model import AssignmentModel, PairingModel, TripPackingModel
 from rpbench.scenarios import build_scenario
-from rpbench.snapshot import take_snapshots
-from rpbench.solver_presets import load_preset, preset_names
 
 
 def installed():

@@ -6,8 +6,17 @@ import numpy as np
 import pytest
 
 from rpbench.exceptions import ModelError
-from rpbench.model import (MAX_EXACT_TOTAL, AssignmentModel, PairingModel, Status, Structure, TripPackingModel,
-                           empty_solution, make_solution, quantize)
+from rpbench.model import (
+    MAX_EXACT_TOTAL,
+    AssignmentModel,
+    PairingModel,
+    Status,
+    Structure,
+    TripPackingModel,
+    empty_solution,
+    make_solution,
+    quantize,
+)
 
 
 def assignment(**kw):

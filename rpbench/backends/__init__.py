@@ -1,43 +1,20 @@
-"""Backend registry: name -> adapter class, imported lazily.
+"""Solver backends: one adapter module per solver, one registry, presets, and the one entry point.
 
-Importing this package imports no solver library; :func:`get_backend`
-imports the adapter module (which itself imports its solver only when it
-solves).
+* :mod:`.base` — the :class:`Backend` interface and :class:`SolveOptions`;
+* :mod:`.registry` — backend name -> adapter class (imported lazily: importing
+  this package imports no solver library);
+* :mod:`.presets` — ``--solver NAME`` = ``solvers/NAME.toml``;
+* :mod:`.solve` — :func:`solve`, what the simulator, the oracle and the
+  benchmark call: support and installation checked, the solution verified once.
+
+Adding a backend is one adapter module, one :data:`REGISTRY` line and one
+preset file.
 """
 
-from __future__ import annotations
+from rpbench.backends.base import Backend, SolveOptions
+from rpbench.backends.presets import Preset, load_preset, preset_names
+from rpbench.backends.registry import REGISTRY, backend_class, get_backend
+from rpbench.backends.solve import solve
 
-import importlib
-
-from ..exceptions import PresetError
-from .base import Backend, SolveOptions
-
-#: Backend name -> "module:Class" (modules under rpbench.backends).
-REGISTRY: dict[str, str] = {
-    "highs": "highs:HighsBackend",
-    "ortools": "ortools:OrtoolsBackend",
-    "pyomo": "pyomo:PyomoBackend",
-    "cvxpy": "cvxpy:CvxpyBackend",
-    "scipy": "scipy:ScipyBackend",
-    "matching": "matching:MatchingBackend",
-    "blossom": "blossom:BlossomBackend",
-}
-
-
-def backend_class(name: str) -> type[Backend]:
-    target = REGISTRY.get(name)
-    if target is None:
-        raise PresetError(f"unknown backend {name!r}; known backends: {', '.join(REGISTRY)}")
-    module_name, class_name = target.split(":")
-    module = importlib.import_module(f"{__name__}.{module_name}")
-    return getattr(module, class_name)
-
-
-def get_backend(name: str) -> Backend:
-    """An instance of the named backend (raises if its library is missing)."""
-    cls = backend_class(name)
-    cls.ensure_installed()
-    return cls()
-
-
-__all__ = ["REGISTRY", "Backend", "SolveOptions", "backend_class", "get_backend"]
+__all__ = ["REGISTRY", "Backend", "Preset", "SolveOptions", "backend_class", "get_backend", "load_preset",
+           "preset_names", "solve"]

@@ -1,9 +1,10 @@
 """Machinery shared by the backends: timing, the generic 0/1 program, status rules, checks.
 
-Every backend returns solutions through :func:`finish`, which checks the
-chosen columns against the model (integral, feasible) and turns a solver's
-raw outcome into a :class:`~rpbench.model.Status` with the same rules
-everywhere:
+Every adapter declares a *status map* (its solver's status names -> the raw
+states below) read by :func:`raw_state`, and returns solutions through
+:func:`finish`, which checks that the solver's values are integral and turns
+its raw outcome into a :class:`~rpbench.model.Status` with the same rules
+everywhere (feasibility is verified once, by :func:`rpbench.backends.solve`):
 
 * values are integral, so a dual bound ``< objective + 1`` proves the
   incumbent optimal even when a time limit stopped the solver;
@@ -11,7 +12,7 @@ everywhere:
   without an incumbent, packing and pairing return ``x = 0`` (always
   feasible) and the assignment raises :class:`SolverError` (it has no
   trivially feasible answer);
-* a solver that answers with a non-integral or infeasible ``x`` raises
+* a solver that answers with a non-integral ``x`` raises
   :class:`SolverError` — never a silently wrong answer.
 """
 
@@ -25,8 +26,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
-from ..exceptions import SolverError
-from ..model import Model, Solution, Status, Structure, make_solution
+from rpbench.exceptions import SolverError
+from rpbench.model import Model, Solution, Status, Structure, make_solution
 
 #: Raw solver outcomes: proven optimal, stopped by a limit, or proven infeasible.
 OPTIMAL, LIMIT, INFEASIBLE = "optimal", "limit", "infeasible"
@@ -98,9 +99,17 @@ class Raw:
     extra: dict = field(default_factory=dict)
 
 
+def raw_state(status_map: dict, status, solver: str) -> str:
+    """A solver status as a raw state through the adapter's status map; an unmapped status is an error."""
+    state = status_map.get(status)
+    if state is None:
+        raise SolverError(f"{solver} ended with status {status!r}")
+    return state
+
+
 # ------------------------------------------------------------------ checks
 def chosen_columns(model: Model, x: np.ndarray, backend: str) -> np.ndarray:
-    """Indices of the columns set to 1, after checking integrality and feasibility."""
+    """Indices of the columns set to 1, after checking that the values are integral."""
     x = np.asarray(x, dtype=np.float64)
     if x.shape != (model.n_cols,):
         raise SolverError(f"backend {backend!r} returned {x.shape} values for {model.n_cols} columns of {model.name!r}")
@@ -108,14 +117,7 @@ def chosen_columns(model: Model, x: np.ndarray, backend: str) -> np.ndarray:
     if len(x) and off.max() > INT_TOL:
         c = int(off.argmax())
         raise SolverError(f"backend {backend!r} returned a fractional value x[{c}] = {x[c]!r} on {model.name!r}")
-    return check_feasible(model, np.flatnonzero(x > 0.5), backend)
-
-
-def check_feasible(model: Model, chosen: np.ndarray, backend: str) -> np.ndarray:
-    bad = model.violations(chosen)
-    if bad:
-        raise SolverError(f"backend {backend!r} returned an infeasible solution of {model.name!r}: {bad[0]}")
-    return np.asarray(chosen, dtype=np.int64)
+    return np.flatnonzero(x > 0.5)
 
 
 def integral_bound(bound: float | None) -> float | None:
@@ -161,7 +163,3 @@ def finish(model: Model, raw: Raw, backend: str, clock: Clock, rel_gap: float = 
     gap = None if bound is None else (bound - objective) / max(1.0, abs(objective))
     return make_solution(model, chosen, status, backend, bound=bound, gap=gap, message=note, **clock.times)
 
-
-def require(model: Model, structures: frozenset[Structure], backend: str) -> None:
-    if model.structure not in structures:
-        raise SolverError(f"backend {backend!r} does not solve {model.structure.value} models")

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import time
 
-from ..exceptions import SolverError
+from rpbench.exceptions import SolverError
 
 
 class Timeout(Exception):

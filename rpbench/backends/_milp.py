@@ -17,15 +17,14 @@ A subclass implements :meth:`ProgramBackend.run` — one solve of a
 from __future__ import annotations
 
 from abc import abstractmethod
-from dataclasses import replace
 
 import numpy as np
 
-from ..exceptions import SolverError
-from ..model import Model, Solution, Structure, empty_solution
-from .base import Backend, SolveOptions
-from ._common import LIMIT, OPTIMAL, Clock, Program, Raw, finish, program
-from .cardinality import columns_of_mate, maximum_cardinality_matching
+from rpbench.backends._common import LIMIT, OPTIMAL, Clock, Program, Raw, finish, program
+from rpbench.backends.base import Backend, SolveOptions
+from rpbench.backends.cardinality import columns_of_mate, maximum_cardinality_matching
+from rpbench.exceptions import SolverError
+from rpbench.model import Model, Solution, Structure, empty_solution
 
 ALL = frozenset(Structure)
 
@@ -104,12 +103,3 @@ class ProgramBackend(Backend):
             stage2.x = start                   # a maximum-cardinality matching is feasible for stage 2
         return finish(model, stage2, self.name, clock, options.mip_rel_gap)
 
-
-def time_options(options: SolveOptions, time_limit: float | None) -> dict:
-    """The common options as a plain dict (for solvers configured by name)."""
-    out = {"mip_rel_gap": float(options.mip_rel_gap)}
-    if time_limit is not None:
-        out["time_limit"] = max(float(time_limit), 1e-3)
-    if options.threads is not None:
-        out["threads"] = int(options.threads)
-    return out

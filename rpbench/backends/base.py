@@ -16,8 +16,8 @@ from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
-from ..exceptions import SolverNotInstalledError
-from ..model import Model, Solution, Structure
+from rpbench.exceptions import SolverNotInstalledError
+from rpbench.model import Model, Solution, Structure
 
 
 @dataclass(frozen=True)

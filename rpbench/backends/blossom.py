@@ -29,12 +29,14 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..exceptions import SolverError, SolverNotInstalledError
-from ..model import Model, PairingModel, Solution, Status, Structure, empty_solution, make_solution
-from .base import Backend, SolveOptions
-from ._common import Clock, check_feasible
-from ._forked import Timeout, run_in_child
-from .cardinality import columns_of_mate, edge_indices, maximum_cardinality_matching
+from rpbench.backends._common import Clock
+from rpbench.backends._forked import Timeout, run_in_child
+from rpbench.backends.base import Backend, SolveOptions
+from rpbench.backends.cardinality import columns_of_mate, edge_indices, maximum_cardinality_matching
+from rpbench.backends.highs import HighsBackend
+from rpbench.backends.jv import lapmod_solution
+from rpbench.exceptions import SolverError, SolverNotInstalledError
+from rpbench.model import Model, PairingModel, Solution, Status, Structure, empty_solution, make_solution
 
 #: OGDF multiplies integral costs by 4 internally; sums of costs must stay in int64.
 INT64_SAFE = 2 ** 60
@@ -74,10 +76,14 @@ class BlossomBackend(Backend):
 
     def solve(self, model: Model, options: SolveOptions) -> Solution:
         self.ensure_installed()
-        if model.structure is not Structure.PAIRING:
-            from .matching import MatchingBackend
-
-            return replace(MatchingBackend().solve(model, options), backend=self.name)
+        if model.n_cols == 0:
+            return empty_solution(model, self.name)
+        if model.structure is Structure.ASSIGNMENT:
+            return lapmod_solution(model, self.name)
+        if model.structure is Structure.TRIP_PACKING:
+            sol = HighsBackend().solve(model, options)
+            note = "; ".join(m for m in ("trip packing solved by the HiGHS MIP", sol.message) if m)
+            return replace(sol, backend=self.name, message=note)
         if model.n_cols == 0:
             return empty_solution(model, self.name)
         return solve_pairing(model, options, Clock(), self.name)
@@ -154,12 +160,12 @@ def solve_pairing(model: PairingModel, options: SolveOptions, clock: Clock, back
             sel = use[run_in_child(max_weight_matching, (model.n_orders, a[use], b[use], w[use], bonus),
                                    deadline, solver="Blossom V")]
     except Timeout:
-        chosen = check_feasible(model, start, backend)
+        chosen = start
         what = "Edmonds' maximum-cardinality matching" if lexi else "no pairs"
         return make_solution(model, chosen, Status.TIME_LIMIT, backend,
                              message=f"Blossom V ran past the time limit; returning {what}", **clock.times)
     if lexi and len(sel) != top.size:
         raise SolverError(f"Blossom V returned {len(sel)} pairs but the proven maximum is {top.size}")
-    chosen = check_feasible(model, np.sort(sel), backend)
+    chosen = np.sort(sel)
     obj = model.objective_of(chosen)
     return make_solution(model, chosen, Status.OPTIMAL, backend, bound=obj, gap=0.0, **clock.times)

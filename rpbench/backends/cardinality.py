@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from ..exceptions import SolverError
+from rpbench.exceptions import SolverError
 
 
 @dataclass(frozen=True)

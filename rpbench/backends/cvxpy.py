@@ -3,9 +3,9 @@
 ``build_s`` covers building the CVXPY problem and compiling it for the
 solver (``Problem.get_problem_data``); ``solve_s`` is the solver call alone
 (``solve_via_data``).  The assignment is an LP (``method = "lp"``, the
-default: integral, checked), the rest MIPs.  Options reach HiGHS by name
-(``time_limit``, ``mip_rel_gap``, ``threads``, ``random_seed``); for other
-solvers only ``[options.extra]`` is passed, verbatim.
+default: integral, checked), the rest MIPs.  Options reach HiGHS as
+:func:`rpbench.backends.highs.highs_settings` gives them; for other solvers
+only ``[options.extra]`` is passed, verbatim.
 """
 
 from __future__ import annotations
@@ -14,10 +14,15 @@ import warnings
 
 import numpy as np
 
-from ..exceptions import SolverError, SolverNotInstalledError
-from .base import SolveOptions
-from ._common import INFEASIBLE, LIMIT, OPTIMAL, Clock, Program, Raw
-from ._milp import ProgramBackend
+from rpbench.backends._common import INFEASIBLE, LIMIT, OPTIMAL, Clock, Program, Raw, raw_state
+from rpbench.backends._milp import ProgramBackend
+from rpbench.backends.base import SolveOptions
+from rpbench.backends.highs import highs_settings
+from rpbench.exceptions import SolverError, SolverNotInstalledError
+
+#: CVXPY problem status -> raw state (CVXPY's status names are plain strings).
+STATUS = {"optimal": OPTIMAL, "infeasible": INFEASIBLE, "infeasible_inaccurate": INFEASIBLE,
+          "user_limit": LIMIT, "optimal_inaccurate": LIMIT}
 
 
 class CvxpyBackend(ProgramBackend):
@@ -44,16 +49,7 @@ class CvxpyBackend(ProgramBackend):
             constraints += [A[rows] @ x >= prog.lo[rows] for rows in [np.flatnonzero(ge)] if len(rows)]
             problem = cp.Problem(cp.Maximize(prog.c @ x), constraints)
             data, chain, inverse = problem.get_problem_data(solver=solver)
-            opts = dict(options.extra)
-            if solver == "HIGHS":
-                opts.update({"mip_rel_gap": float(options.mip_rel_gap), "random_seed": 0})
-                if options.threads is not None:
-                    opts["threads"] = int(options.threads)
-                if time_limit is not None:
-                    opts["time_limit"] = max(float(time_limit), 1e-3)
-                if relax:
-                    opts["solver"] = "simplex"      # a vertex, hence integral for the assignment
-                    opts.setdefault("presolve", "off")   # 10-20x faster, see backends/highs.py
+            opts = highs_settings(options, time_limit, relax=relax) if solver == "HIGHS" else dict(options.extra)
         with clock("solve_s"):
             try:
                 result = chain.solve_via_data(problem, data, warm_start=False, verbose=False, solver_opts=opts)
@@ -67,14 +63,9 @@ class CvxpyBackend(ProgramBackend):
                 except ValueError as exc:            # CVXPY refuses a solution without a status
                     raise SolverError(f"CVXPY solver {solver} returned no usable solution: {exc}") from None
             status = problem.status
-            if status in (cp.INFEASIBLE, cp.INFEASIBLE_INACCURATE):
+            state = raw_state(STATUS, status, f"CVXPY solver {solver}")
+            if state == INFEASIBLE:
                 return Raw(x=None, state=INFEASIBLE)
-            if status == cp.OPTIMAL:
-                state = OPTIMAL
-            elif status in (cp.USER_LIMIT, cp.OPTIMAL_INACCURATE):
-                state = LIMIT
-            else:
-                raise SolverError(f"CVXPY solver {solver} ended with status {status!r}")
             xs = None if x.value is None else np.asarray(x.value, dtype=np.float64)
             bound = None
             info = problem.solver_stats.extra_stats if problem.solver_stats else None

@@ -13,28 +13,23 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..exceptions import SolverError
-from .base import SolveOptions
-from ._common import INFEASIBLE, LIMIT, OPTIMAL, Clock, Program, Raw
-from ._milp import ProgramBackend
+from rpbench.backends._common import INFEASIBLE, LIMIT, OPTIMAL, Clock, Program, Raw, raw_state
+from rpbench.backends._milp import ProgramBackend
+from rpbench.backends.base import SolveOptions
+from rpbench.exceptions import SolverError
 
-_LIMIT_STATES = ("kTimeLimit", "kIterationLimit", "kSolutionLimit", "kObjectiveBound", "kObjectiveTarget",
-                 "kInterrupt", "kHighsInterrupt", "kMemoryLimit")
-
-
-def highs_state(name: str) -> str | None:
-    """HiGHS model status name -> raw state (``None`` = an error)."""
-    if name == "kOptimal":
-        return OPTIMAL
-    if name in ("kInfeasible", "kUnboundedOrInfeasible"):   # x in [0,1]: never unbounded
-        return INFEASIBLE
-    if name in _LIMIT_STATES:
-        return LIMIT
-    return None
+#: HiGHS model status name -> raw state (x in [0, 1]: "unbounded or infeasible" is infeasible).
+STATUS = {"kOptimal": OPTIMAL, "kInfeasible": INFEASIBLE, "kUnboundedOrInfeasible": INFEASIBLE,
+          **{name: LIMIT for name in ("kTimeLimit", "kIterationLimit", "kSolutionLimit", "kObjectiveBound",
+                                      "kObjectiveTarget", "kInterrupt", "kHighsInterrupt", "kMemoryLimit")}}
 
 
-def configure(h, options: SolveOptions, time_limit: float | None, *, relax: bool) -> None:
-    """Silence HiGHS and apply the preset's options (unknown ``extra`` names are errors)."""
+def highs_settings(options: SolveOptions, time_limit: float | None, *, relax: bool) -> dict:
+    """HiGHS option values for a preset's options: the one place rpbench sets HiGHS options.
+
+    Used by the highs adapter and by the CVXPY and Pyomo adapters when they
+    run HiGHS; ``[options.extra]`` comes last and wins.
+    """
     settings: dict = {"output_flag": False, "random_seed": 0, "mip_rel_gap": float(options.mip_rel_gap)}
     if options.threads is not None:
         settings["threads"] = int(options.threads)
@@ -48,7 +43,12 @@ def configure(h, options: SolveOptions, time_limit: float | None, *, relax: bool
         # [options.extra] presolve = "on" restores it.
         settings["presolve"] = "off"
     settings.update(options.extra)
-    for key, value in settings.items():
+    return settings
+
+
+def configure(h, options: SolveOptions, time_limit: float | None, *, relax: bool) -> None:
+    """Apply :func:`highs_settings` to a ``highspy.Highs`` (an option HiGHS rejects is an error)."""
+    for key, value in highs_settings(options, time_limit, relax=relax).items():
         if h.setOptionValue(key, value).name == "kError":
             raise SolverError(f"HiGHS rejected option {key} = {value!r}; see the HiGHS option list")
 
@@ -83,9 +83,7 @@ class HighsBackend(ProgramBackend):
             h.run()
         with clock("extract_s"):
             status = h.getModelStatus().name
-            state = highs_state(status)
-            if state is None:
-                raise SolverError(f"HiGHS failed with model status {status}")
+            state = raw_state(STATUS, status, "HiGHS")
             info = h.getInfo()
             has_x = info.primal_solution_status == 2            # kSolutionStatusFeasible
             x = np.asarray(h.getSolution().col_value, dtype=np.float64) if has_x else None

@@ -1,7 +1,7 @@
 """The fastest exact special-purpose algorithms for rpbench's structures.
 
-* **Assignment** (paper Eqs. 1-4, 16): sparse Jonker-Volgenant, ``lap.lapmod``,
-  on a square ``(P + V) x (V + P)`` cost matrix — :func:`lapmod_assignment`.
+* **Assignment** (paper Eqs. 1-4, 16): sparse Jonker-Volgenant, ``lap.lapmod``
+  (:mod:`.jv`).
 * **Pairing** (ALGORITHMS.md §4): maximum-weight general matching by
   PyMatching's sparse blossom through the reduction to a minimum-weight
   T-join — :func:`max_weight_matching`; Oracle-2 by Edmonds' exact maximum
@@ -43,18 +43,19 @@ from dataclasses import replace
 import numpy as np
 import scipy.sparse as sp
 
-from ..exceptions import SolverError
-from ..model import AssignmentModel, Model, PairingModel, Solution, Status, Structure, empty_solution, make_solution
-from .base import Backend, SolveOptions
-from ._common import Clock, check_feasible
-from ._forked import Timeout, run_in_child
-from .cardinality import columns_of_mate, edge_indices, mate_of, maximum_cardinality_matching
+from rpbench.backends._common import Clock
+from rpbench.backends._forked import Timeout, run_in_child
+from rpbench.backends.base import Backend, SolveOptions
+from rpbench.backends.blossom import BlossomBackend
+from rpbench.backends.blossom import solve_pairing as blossom_v_pairing
+from rpbench.backends.cardinality import columns_of_mate, edge_indices, mate_of, maximum_cardinality_matching
+from rpbench.backends.highs import HighsBackend
+from rpbench.backends.jv import lapmod_solution
+from rpbench.exceptions import SolverError
+from rpbench.model import Model, PairingModel, Solution, Status, Structure, empty_solution, make_solution
 
 #: Largest edge weight PyMatching accepts and keeps unscaled when all weights are integral.
 PM_MAX_WEIGHT = 2 ** 24 - 1
-#: lap's "infinity"; costs are scaled so path lengths stay below LAP_SAFE.
-LAP_LARGE = 1e6
-LAP_SAFE = 2.0 ** 18
 #: Pairings with fewer candidate pairs are solved in-process even under a time limit.
 SMALL_GRAPH = 5_000
 #: Oracle-2 pairings with this many candidate pairs go straight to Blossom V when it is installed:
@@ -75,106 +76,14 @@ class MatchingBackend(Backend):
         if model.n_cols == 0:
             return empty_solution(model, self.name)
         if model.structure is Structure.TRIP_PACKING:
-            from .highs import HighsBackend
-
             sol = HighsBackend().solve(model, options)
             note = "; ".join(m for m in ("trip packing solved by the HiGHS MIP", sol.message) if m)
             return replace(sol, backend=self.name, message=note)
-        clock = Clock()
         if model.structure is Structure.ASSIGNMENT:
-            chosen = lapmod_assignment(model, clock)
-            if chosen is None:
-                return make_solution(model, np.zeros(0, np.int64), Status.INFEASIBLE, self.name,
-                                     message="no assignment serves every passenger without a wait option",
-                                     **clock.times)
-            chosen = check_feasible(model, chosen, self.name)
-            obj = model.objective_of(chosen)
-            return make_solution(model, chosen, Status.OPTIMAL, self.name, bound=obj, gap=0.0, **clock.times)
-        return solve_pairing(model, options, clock, self.name)
+            return lapmod_solution(model, self.name)
+        return solve_pairing(model, options, Clock(), self.name)
 
 
-# ------------------------------------------------------------------ assignment
-def lapmod_assignment(model: AssignmentModel, clock: Clock) -> np.ndarray | None:
-    """Optimal columns of an assignment model by ``lap.lapmod`` (``None`` if infeasible).
-
-    Square construction, rows = passengers then one "idle" row per vehicle,
-    columns = vehicles then one wait slot per passenger: passenger ``p`` may
-    take vehicle ``v`` (cost ``-value``) or its own slot (its wait option);
-    vehicle row ``v`` takes vehicle ``v`` (cost 0, unused) or the slot of
-    any passenger that may ride ``v`` (cost 0, ``v`` serves that passenger).
-    Perfect matchings correspond to assignments with equal cost, so the
-    sparse matrix has ``2E + W + V`` entries instead of ``(P + V)²``.
-    """
-    import lap
-
-    with clock("build_s"):
-        P, V = model.n_passengers, model.n_vehicles
-        cp, cv, val = model.col_passenger.astype(np.int64), model.col_vehicle.astype(np.int64), model.values
-        ride = cv >= 0
-        has_wait = np.zeros(P, bool)
-        has_wait[cp[~ride]] = True
-        if not has_wait.all() and not _serves_all(model, ~has_wait):
-            return None
-        N = P + V
-        # per-passenger shift keeps costs >= 0 and leaves the argmin unchanged (every passenger row is matched once)
-        top = np.full(P, -np.inf)
-        np.maximum.at(top, cp, val)
-        cost = top[cp] - val
-        scale = _lap_scale(float(cost.max(initial=0.0)), N)
-        rows = np.concatenate([cp, P + np.arange(V), P + cv[ride]])
-        cols = np.concatenate([np.where(ride, cv, V + cp), np.arange(V), V + cp[ride]])
-        cc = np.concatenate([cost * scale, np.zeros(V + int(ride.sum()))])
-        col_id = np.concatenate([np.arange(model.n_cols), np.full(V + int(ride.sum()), -1)])
-        key, order = _sorted_keys(rows * N + cols)
-        cc, col_id = np.ascontiguousarray(cc[order]), col_id[order]
-        ii = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=N))]).astype(np.int32)
-        kk = (key % N).astype(np.int32)
-    with clock("solve_s"):
-        x, _ = lap.lapmod(N, cc, ii, kk, return_cost=False)
-    with clock("extract_s"):
-        want = np.arange(P, dtype=np.int64) * N + np.asarray(x[:P], dtype=np.int64)
-        pos = np.searchsorted(key, want)
-        pos = np.minimum(pos, len(key) - 1)
-        if np.any(key[pos] != want) or np.any(col_id[pos] < 0):
-            raise SolverError("lap.lapmod returned an assignment outside the sparse cost matrix")
-        return np.sort(col_id[pos])
-
-
-def _sorted_keys(key: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``(sorted key, permutation)`` of unique non-negative int64 keys.
-
-    Packs the position into the low bits and sorts values, not indices:
-    several times faster than ``argsort`` on the 10^6 entries of a large round.
-    """
-    bits = max(1, int(len(key) - 1).bit_length())
-    if int(key.max(initial=0)).bit_length() + bits > 62:
-        order = np.argsort(key)
-        return key[order], order
-    packed = (key << bits) | np.arange(len(key), dtype=np.int64)
-    packed.sort()
-    return packed >> bits, packed & ((1 << bits) - 1)
-
-
-def _serves_all(model: AssignmentModel, must: np.ndarray) -> bool:
-    """Can every passenger in ``must`` (no wait option) get its own vehicle? (Hopcroft-Karp)"""
-    from scipy.sparse.csgraph import maximum_bipartite_matching
-
-    idx = np.flatnonzero(must)
-    sel = (model.col_vehicle >= 0) & must[model.col_passenger]
-    local = np.searchsorted(idx, model.col_passenger[sel])
-    g = sp.csr_matrix((np.ones(int(sel.sum())), (local, model.col_vehicle[sel])), shape=(len(idx), model.n_vehicles))
-    return bool(np.all(maximum_bipartite_matching(g, perm_type="column") >= 0))
-
-
-def _lap_scale(max_cost: float, n: int) -> float:
-    """A power of two bringing ``n * max_cost`` (a bound on any path length) below ``LAP_SAFE``."""
-    if max_cost <= 0:
-        return 1.0
-    k = math.ceil(math.log2(n * max_cost / LAP_SAFE))
-    return 2.0 ** -max(k, 0)
-
-
-# --------------------------------------------------------------------- pairing
 class RangeExceeded(Exception):
     """The reduction's integral costs would exceed PM_MAX_WEIGHT."""
 
@@ -347,7 +256,7 @@ def solve_pairing(model: PairingModel, options: SolveOptions, clock: Clock, back
             sel, why = getattr(exc, "best", sel), why or "PyMatching ran out of its share of the time limit"
             bound = getattr(exc, "bound", None)
             break
-    chosen = check_feasible(model, np.sort(sel), backend)
+    chosen = np.sort(sel)
     if step == 1 and proven and not why:
         obj = model.objective_of(chosen)
         return make_solution(model, chosen, Status.OPTIMAL, backend, bound=obj, gap=0.0, **clock.times)
@@ -361,15 +270,11 @@ def solve_pairing(model: PairingModel, options: SolveOptions, clock: Clock, back
 
 def _blossom_installed() -> bool:
     """Is the ``blossom`` extra (OGDF, cppyy) installed?"""
-    from .blossom import BlossomBackend
-
     return BlossomBackend.is_installed()
 
 
 def _blossom_v(model: PairingModel, options: SolveOptions, clock: Clock, backend: str, why: str) -> Solution:
     """The exact Blossom V route (:mod:`.blossom`), within what is left of the time limit."""
-    from .blossom import solve_pairing as blossom_v_pairing
-
     sol = blossom_v_pairing(model, options, clock, backend)
     note = "; ".join(m for m in (f"{why}: solved by OGDF's Blossom V", sol.message) if m)
     return replace(sol, message=note)
@@ -383,8 +288,6 @@ def _highs_fallback(model: PairingModel, options: SolveOptions, clock: Clock, ba
     tighter of it and HiGHS's bound is reported, and proves the optimum if
     the incumbent reaches it.
     """
-    from .highs import HighsBackend
-
     hint = np.zeros(model.n_cols)
     hint[start] = 1.0
     limit = clock.remaining(options.time_limit_s)

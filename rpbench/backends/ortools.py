@@ -15,11 +15,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..exceptions import SolverError
-from ..model import AssignmentModel, Solution, Status, make_solution
-from .base import SolveOptions
-from ._common import INFEASIBLE, LIMIT, OPTIMAL, Clock, Program, Raw, check_feasible
-from ._milp import ProgramBackend
+from rpbench.backends._common import INFEASIBLE, LIMIT, OPTIMAL, Clock, Program, Raw, raw_state
+from rpbench.backends._milp import ProgramBackend
+from rpbench.backends.base import SolveOptions
+from rpbench.exceptions import SolverError
+from rpbench.model import AssignmentModel, Solution, Status, make_solution
+
+#: CP-SAT status name -> raw state (UNKNOWN: stopped by a limit, perhaps without a solution).
+CP_SAT_STATUS = {"OPTIMAL": OPTIMAL, "FEASIBLE": LIMIT, "UNKNOWN": LIMIT, "INFEASIBLE": INFEASIBLE}
 
 
 class OrtoolsBackend(ProgramBackend):
@@ -60,7 +63,7 @@ class OrtoolsBackend(ProgramBackend):
                 raise SolverError(f"OR-Tools min-cost flow failed with status {status!r} "
                                   "(BAD_COST_RANGE: values too large for int64 path costs)")
             used = np.asarray(flow.flows(arcs[:model.n_cols])) > 0
-            chosen = check_feasible(model, np.sort(col_of_arc[used]), self.name)
+            chosen = np.sort(col_of_arc[used])
         obj = model.objective_of(chosen)
         return make_solution(model, chosen, Status.OPTIMAL, self.name, bound=obj, gap=0.0, **clock.times)
 
@@ -101,13 +104,11 @@ class OrtoolsBackend(ProgramBackend):
         with clock("solve_s"):
             status = solver.solve(model)
         with clock("extract_s"):
-            if status == cp_model.INFEASIBLE:
+            state = raw_state(CP_SAT_STATUS, solver.status_name(status), "CP-SAT")
+            if state == INFEASIBLE:
                 return Raw(x=None, state=INFEASIBLE)
-            if status not in (cp_model.OPTIMAL, cp_model.FEASIBLE, cp_model.UNKNOWN):
-                raise SolverError(f"CP-SAT failed with status {solver.status_name(status)}")
             has_x = status in (cp_model.OPTIMAL, cp_model.FEASIBLE)
             xs = np.asarray(solver.response_proto.solution, dtype=np.float64)[:prog.n] if has_x else None
-            state = OPTIMAL if status == cp_model.OPTIMAL else LIMIT
             bound = float(solver.best_objective_bound) if has_x else None   # without a solution it may be 0
         return Raw(x=xs, state=state, bound=bound,
                    message="" if state == OPTIMAL else f"CP-SAT status {solver.status_name(status)}")

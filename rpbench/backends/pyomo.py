@@ -16,26 +16,22 @@ import logging
 
 import numpy as np
 
-from ..exceptions import SolverError, SolverNotInstalledError
-from .base import SolveOptions
-from ._common import INFEASIBLE, LIMIT, OPTIMAL, Clock, Program, Raw
-from ._milp import ProgramBackend
+from rpbench.backends._common import INFEASIBLE, LIMIT, OPTIMAL, Clock, Program, Raw, raw_state
+from rpbench.backends._milp import ProgramBackend
+from rpbench.backends.base import SolveOptions
+from rpbench.backends.highs import highs_settings
+from rpbench.exceptions import SolverNotInstalledError
 
-_OPTIMAL = ("optimal",)
-_INFEASIBLE = ("infeasible", "infeasibleOrUnbounded", "invalidProblem")
-_LIMIT = ("maxTimeLimit", "maxIterations", "objectiveLimit", "interrupted", "maxEvaluations", "minStepLength",
-          "iterationLimit", "userInterrupt", "other")
+#: Pyomo termination condition name -> raw state (appsi and legacy interfaces).
+STATUS = {"optimal": OPTIMAL,
+          **{name: INFEASIBLE for name in ("infeasible", "infeasibleOrUnbounded", "invalidProblem")},
+          **{name: LIMIT for name in ("maxTimeLimit", "maxIterations", "objectiveLimit", "interrupted",
+                                      "maxEvaluations", "minStepLength", "iterationLimit", "userInterrupt",
+                                      "other")}}
 
 
-def _state(condition) -> str | None:
-    name = getattr(condition, "name", str(condition))
-    if name in _OPTIMAL:
-        return OPTIMAL
-    if name in _INFEASIBLE:
-        return INFEASIBLE
-    if name in _LIMIT:
-        return LIMIT
-    return None
+def _state(condition, solver: str) -> str:
+    return raw_state(STATUS, getattr(condition, "name", str(condition)), solver)
 
 
 def build_model(prog: Program, relax: bool):
@@ -80,13 +76,10 @@ class PyomoBackend(ProgramBackend):
             m, x = build_model(prog, relax)
             opt = Highs()
             opt.config.load_solution = False
-            opt.config.time_limit = None if time_limit is None else max(float(time_limit), 1e-3)
-            opt.config.mip_gap = float(options.mip_rel_gap)
-            # the assignment LP without presolve: 10-20x faster, see backends/highs.py
-            settings = {"random_seed": 0, **({"solver": "simplex", "presolve": "off"} if relax else {})}
-            if options.threads is not None:
-                settings["threads"] = int(options.threads)
-            opt.highs_options = {**settings, **options.extra}
+            settings = highs_settings(options, time_limit, relax=relax)
+            opt.config.time_limit = settings.pop("time_limit", None)   # appsi passes these two itself
+            opt.config.mip_gap = settings.pop("mip_rel_gap")
+            opt.highs_options = settings
             uc = opt.update_config            # the model is final: skip appsi's change detection in solve()
             for flag in ("check_for_new_or_removed_constraints", "check_for_new_or_removed_vars",
                          "check_for_new_or_removed_params", "check_for_new_objective", "update_constraints",
@@ -100,9 +93,7 @@ class PyomoBackend(ProgramBackend):
         with clock("solve_s"):
             results = opt.solve(m)
         with clock("extract_s"):
-            state = _state(results.termination_condition)
-            if state is None:
-                raise SolverError(f"Pyomo/HiGHS ended with {results.termination_condition}")
+            state = _state(results.termination_condition, "Pyomo/HiGHS")
             xs = None
             if state != INFEASIBLE and results.best_feasible_objective is not None:
                 values = results.solution_loader.get_primals(x)
@@ -127,9 +118,7 @@ class PyomoBackend(ProgramBackend):
                 kwargs["timelimit"] = max(float(time_limit), 1e-3)
             results = opt.solve(m, **kwargs)
         with clock("extract_s"):
-            state = _state(results.solver.termination_condition)
-            if state is None:
-                raise SolverError(f"Pyomo solver {solver} ended with {results.solver.termination_condition}")
+            state = _state(results.solver.termination_condition, f"Pyomo solver {solver}")
             xs = None
             if state != INFEASIBLE and len(results.solution) > 0:
                 with LoggingIntercept(level=logging.WARNING):    # "loading an 'aborted' result": the status says so

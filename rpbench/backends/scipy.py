@@ -14,13 +14,13 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ..model import AssignmentModel, Solution, Status, make_solution
-from .base import SolveOptions
-from ._common import INFEASIBLE, LIMIT, OPTIMAL, Clock, Program, Raw, check_feasible
-from ._milp import ProgramBackend
+from rpbench.backends._common import INFEASIBLE, LIMIT, OPTIMAL, Clock, Program, Raw, raw_state
+from rpbench.backends._milp import ProgramBackend
+from rpbench.backends.base import SolveOptions
+from rpbench.model import AssignmentModel, Solution, Status, make_solution
 
 #: scipy.optimize.milp status -> raw state (0 optimal, 1 iteration/time limit, 2 infeasible).
-_STATES = {0: OPTIMAL, 1: LIMIT, 2: INFEASIBLE}
+STATUS = {0: OPTIMAL, 1: LIMIT, 2: INFEASIBLE}
 
 
 class ScipyBackend(ProgramBackend):
@@ -52,7 +52,7 @@ class ScipyBackend(ProgramBackend):
                                      **clock.times)
         with clock("extract_s"):
             chosen = order[np.searchsorted(key[order], rows.astype(np.int64) * (V + P) + match)]
-            chosen = check_feasible(model, np.sort(chosen), self.name)
+            chosen = np.sort(chosen)
         obj = model.objective_of(chosen)
         return make_solution(model, chosen, Status.OPTIMAL, self.name, bound=obj, gap=0.0, **clock.times)
 
@@ -70,10 +70,7 @@ class ScipyBackend(ProgramBackend):
             res = milp(-prog.c, integrality=integrality, bounds=Bounds(0.0, 1.0), constraints=constraint,
                        options=opts)
         with clock("extract_s"):
-            state = _STATES.get(res.status)
-            if state is None:
-                from ..exceptions import SolverError
-                raise SolverError(f"scipy.optimize.milp failed: {res.message}")
+            state = raw_state(STATUS, res.status, f"scipy.optimize.milp ({res.message})")
             bound = getattr(res, "mip_dual_bound", None)
             bound = None if bound is None or relax else -float(bound)
             if relax and state == OPTIMAL:

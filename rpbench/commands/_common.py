@@ -4,11 +4,14 @@ from __future__ import annotations
 
 import argparse
 import json
+import shlex
 import sys
 from typing import Any
 
-from ..results import to_jsonable
-from ..scenario import Params
+from rpbench.exceptions import ParameterError
+from rpbench.results import to_jsonable
+from rpbench.scenarios import ScenarioRequest, default_scenario_name
+from rpbench.scenarios.base import Params
 
 
 def add_data_arg(parser: argparse.ArgumentParser) -> None:
@@ -35,7 +38,6 @@ def add_scenario_args(parser: argparse.ArgumentParser, *, positional: bool = Fal
 
 
 def parse_param_overrides(items: list[str]) -> dict[str, float]:
-    from ..exceptions import ParameterError
     out: dict[str, float] = {}
     known = set(Params().as_dict())
     for item in items:
@@ -50,9 +52,19 @@ def parse_param_overrides(items: list[str]) -> dict[str, float]:
     return out
 
 
-def scenario_kwargs(args: argparse.Namespace) -> dict[str, Any]:
-    return dict(data_dir=args.data, date=args.date, sample=args.sample, seed=args.seed,
-                param_overrides=parse_param_overrides(args.param), fleet_placement=args.fleet_placement)
+def scenario_request(args: argparse.Namespace) -> ScenarioRequest:
+    """The scenario the arguments name (without --scenario: haikou-peak, or the toy city without data)."""
+    name = args.scenario or default_scenario_name(args.data)
+    if args.scenario is None and name == "toy":
+        note("no Haikou data folder found: running the built-in SYNTHETIC toy city (pass --data DIR for Haikou)")
+    return ScenarioRequest(name=name, date=args.date, sample=args.sample, seed=args.seed,
+                           params=tuple(parse_param_overrides(args.param).items()),
+                           fleet_placement=args.fleet_placement, data_dir=args.data)
+
+
+def command_line() -> str | None:
+    """The command as typed (recorded in results folders)."""
+    return "rpbench " + " ".join(shlex.quote(a) for a in sys.argv[1:]) if sys.argv else None
 
 
 def print_json(obj: Any) -> None:

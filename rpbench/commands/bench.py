@@ -16,13 +16,14 @@ import argparse
 import sys
 from pathlib import Path
 
-from ..benchmark import format_table, run_benchmark
-from ..exceptions import ParameterError
-from ..instances import load_instances
-from ..model import OBJECTIVES, Structure
-from ..solver_presets import load_preset
-from ..synthetic import SUITES, suite
-from ._common import note, print_json
+from rpbench.backends.presets import load_preset
+from rpbench.bench.runner import format_table, run_benchmark
+from rpbench.bench.synthetic import SUITES, suite
+from rpbench.commands._common import note, print_json
+from rpbench.exceptions import ParameterError
+from rpbench.instances import load_instances
+from rpbench.model import OBJECTIVES, Structure
+from rpbench.results.plots import bench_figure
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -87,16 +88,18 @@ def run(args: argparse.Namespace) -> int:
         raise ParameterError(f"--repeat {args.repeat} must be >= 1")
     limits = _limits(args.preset_time_limit)
     presets = None if args.solver is None else [load_preset(name) for name in args.solver]   # fail before building
-    models, recorded = load_instances(args.paths) if args.paths else ([], {})
-    if args.synthetic:
-        note(f"building the {args.sizes!r} synthetic models (seed {args.seed}) ...")
-        models += suite(args.sizes, seed=args.seed, objectives=objectives)
-    if args.structures is not None:
+    wanted = None
+    if args.structures is not None:         # checked before the (slow) synthetic suite is built
         wanted = {x.strip() for x in args.structures.split(",") if x.strip()}
         known = {st.value for st in Structure}
         if not wanted or wanted - known:
             raise ParameterError(f"--structures {args.structures!r}: expected a comma-separated subset of "
                                  f"{', '.join(sorted(known))}")
+    models, recorded = load_instances(args.paths) if args.paths else ([], {})
+    if args.synthetic:
+        note(f"building the {args.sizes!r} synthetic models (seed {args.seed}) ...")
+        models += suite(args.sizes, seed=args.seed, objectives=objectives)
+    if wanted is not None:
         models = [m for m in models if m.structure.value in wanted]
         if not models:
             raise ParameterError(f"no model of structure {args.structures!r} to benchmark")
@@ -106,7 +109,6 @@ def run(args: argparse.Namespace) -> int:
     if args.csv:
         table.to_csv(args.csv, index=False)
     if args.plot:
-        from ..plots import bench_figure
         bench_figure(table, Path(args.plot), f"rpbench bench: {len(models)} models x "
                                              f"{table['preset'].nunique()} presets (time of proven optima)")
     if args.json:

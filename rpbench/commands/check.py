@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import argparse
 
-from ..check import check_folder, format_report
-from ..results import run_folders
-from ._common import print_json
+from rpbench.commands._common import print_json
+from rpbench.results.check import check_folder, format_report
+from rpbench.results.store import run_folders
 
 
 def register(sub: argparse._SubParsersAction) -> None:

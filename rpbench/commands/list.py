@@ -4,13 +4,17 @@ from __future__ import annotations
 
 import argparse
 
-from ..data import available_peak_dates
-from ..exceptions import RpbenchError
-from ..paths import default_data_candidates, find_data_dir
-from ..scenario import Params
-from ..scenarios import SCENARIOS
-from ..solver_presets import load_preset, preset_names
-from ._common import add_data_arg, print_json
+from rpbench.backends.presets import load_preset, preset_names
+from rpbench.commands._common import add_data_arg, print_json
+from rpbench.data import available_peak_dates
+from rpbench.exceptions import RpbenchError
+from rpbench.harness.comparison import options_class
+from rpbench.oracle.runs import ORACLE_RUNS
+from rpbench.paths import default_data_candidates, find_data_dir
+from rpbench.scenarios import SCENARIOS
+from rpbench.scenarios.base import Params
+from rpbench.strategies import REGISTRY as STRATEGY_REGISTRY
+from rpbench.strategies import strategy_class
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -41,8 +45,20 @@ def gather(data: str | None) -> dict:
         "scenarios": [{"name": s.name, "description": s.description, "needs_data": s.needs_data,
                        "available": (not s.needs_data) or folder is not None} for s in SCENARIOS.values()],
         "presets": presets,
+        "strategies": [run_entry(name) for name in [*STRATEGY_REGISTRY, *ORACLE_RUNS]],
         "parameters": Params().as_dict(),
     }
+
+
+def run_entry(name: str) -> dict:
+    """A strategy's or oracle run's label, description and declared options (``--opt NAME.OPTION=VALUE``)."""
+    if name in ORACLE_RUNS:
+        run = ORACLE_RUNS[name]
+        label, description = run.label, run.description
+    else:
+        cls = strategy_class(name)
+        label, description = cls.label, cls.description
+    return {"name": name, "label": label, "description": description, "options": options_class(name).help()}
 
 
 def run(args: argparse.Namespace) -> int:
@@ -68,5 +84,10 @@ def run(args: argparse.Namespace) -> int:
             continue
         state = "installed" if p["installed"] else f"NOT INSTALLED (missing {', '.join(p['missing'])})"
         print(f"  {p['name']:<14} {p['backend']:<9} {state:<10} exact: {', '.join(p['exact'])}")
+    print("\nstrategies and oracles (--strategies; options: --opt NAME.OPTION=VALUE):")
+    for s in info["strategies"]:
+        print(f"  {s['name']:<16} {s['label']:<20} {s['description']}")
+        for option, text in s["options"].items():
+            print(f"      {option:<22} {text}")
     print("\nparameters (--param NAME=VALUE): " + ", ".join(f"{k}={v:g}" for k, v in info["parameters"].items()))
     return 0

@@ -6,11 +6,10 @@ import argparse
 import dataclasses
 import math
 
-from ..exceptions import ParameterError
-from ..oracle import UNIT_M, PairRules, check_variant, find_candidates, solve_oracle
-from ..scenarios import build_scenario, default_scenario_name
-from ..solver_presets import load_preset
-from ._common import add_scenario_args, note, print_json, scenario_kwargs
+from rpbench.backends import load_preset
+from rpbench.commands._common import add_scenario_args, note, print_json, scenario_request
+from rpbench.exceptions import ParameterError
+from rpbench.oracle.solve import UNIT_M, PairRules, check_variant, find_candidates, solve_oracle
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -41,10 +40,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     variants = (1, 2) if args.variant == "both" else (check_variant(args.variant),)
-    name = args.scenario or default_scenario_name(args.data)
-    if args.scenario is None and name == "toy":
-        note("rpbench: no Haikou data folder found; using the built-in SYNTHETIC toy city (pass --data DIR)")
-    scenario = build_scenario(name, **scenario_kwargs(args))
+    scenario = scenario_request(args).build()
     rules = PairRules.from_params(scenario.params, both_pickup_orders=args.both_pickup_orders,
                                   pickup_check=args.pickup_check, allow_enroute=args.allow_enroute)
     candidates = find_candidates(scenario.network.distances(), scenario.orders, rules)
@@ -65,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
         _write_pairs(args.pairs, results)
 
     if args.json:
-        print_json({"scenario": name, "label": scenario.label, "rules": rules.as_dict(),
+        print_json({"scenario": scenario.name, "label": scenario.label, "rules": rules.as_dict(),
                     "candidates": {"evaluated": candidates.evaluated, "feasible": len(candidates),
                                    **candidates.stats, "seconds": candidates.seconds},
                     **{f"oracle{v}": r.kpis() for v, r in results.items()}})

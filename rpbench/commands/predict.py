@@ -15,17 +15,19 @@ import argparse
 import time
 from pathlib import Path
 
-from ..exceptions import ParameterError
-from ..paths import require_data_dir
-from ..scenario import Params
-from ..scenarios.common import haikou_network
-from ._common import add_data_arg, note, parse_param_overrides, print_json
-
-from ..predict.rates import DEFAULT_DATE, RATE_KINDS, load_rates
+from rpbench.commands._common import add_data_arg, note, parse_param_overrides, print_json
+from rpbench.exceptions import ParameterError
+from rpbench.paths import require_data_dir
+from rpbench.predict import PredictConfig, build_model, predict, solve_model
+from rpbench.predict.compare import compare
+from rpbench.predict.config import ACCELERATIONS, PRIORITIES
+from rpbench.predict.fcfs import simulate, validate
+from rpbench.predict.rates import DEFAULT_DATE, RATE_KINDS, load_rates
+from rpbench.scenarios.base import Params
+from rpbench.scenarios.common import haikou_network
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from ..predict.config import ACCELERATIONS, PRIORITIES
     p = sub.add_parser("predict", help="predict pairing probabilities and expected savings per OD",
                        description="Solve the seeker/taker fixed point (TR-B 2021 model as used by the FL "
                                    "strategy) for an OD rate table and write one CSV row per OD.")
@@ -64,7 +66,6 @@ def default_csv(kind: str, date: str | None) -> Path:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..predict import PredictConfig, build_model, predict, solve_model
     t0 = time.perf_counter()
     if args.hours <= 0 or args.min_samples < 1 or args.seed < 0:
         raise ParameterError("--hours must be > 0, --min-samples >= 1 and --seed >= 0")
@@ -79,7 +80,6 @@ def run(args: argparse.Namespace) -> int:
         note(f"rpbench predict: {len(rates)} ODs from {rates.source}; building the model ...")
     out: dict = {}
     if args.validate_fcfs:
-        from ..predict.fcfs import simulate, validate
         model = build_model(network, rates, params, config)
         prediction = solve_model(model)
         result = simulate(model, hours=args.hours, seed=args.seed)
@@ -90,7 +90,6 @@ def run(args: argparse.Namespace) -> int:
     csv_path = Path(args.out) if args.out else default_csv(args.rates, args.date)
     prediction.per_od_table().to_csv(csv_path, index=False)
     if args.compare_authors:
-        from ..predict.compare import compare
         out["authors"], _ = compare(prediction, data_dir)
     summary = {k: v for k, v in prediction.summary().items() if k not in ("config", "params")}
     result = {**summary, "csv": str(csv_path), "wall_s": round(time.perf_counter() - t0, 3), **out,

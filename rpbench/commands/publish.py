@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from ..publish import HEAVY, publish
+from rpbench.harness.publish import HEAVY, publish
 
 
 def register(sub: argparse._SubParsersAction) -> None:

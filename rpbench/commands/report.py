@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..report import render
+from rpbench.harness.render import render
 
 
 def register(sub: argparse._SubParsersAction) -> None:

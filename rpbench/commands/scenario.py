@@ -5,8 +5,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from ..scenarios import build_scenario
-from ._common import add_scenario_args, print_json, scenario_kwargs
+from rpbench.commands._common import add_scenario_args, print_json, scenario_request
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -19,7 +18,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
-    scenario = build_scenario(args.scenario, **scenario_kwargs(args))
+    scenario = scenario_request(args).build()
     summary = scenario.summary()
     summary["build_s"] = round(time.perf_counter() - t0, 4)
     if args.json:

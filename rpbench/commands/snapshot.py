@@ -4,12 +4,11 @@ from __future__ import annotations
 
 import argparse
 
-from ..exceptions import ParameterError
-from ..harness import ORACLES, parse_strategies
-from ..scenarios import build_scenario, default_scenario_name
-from ..snapshot import take_snapshots
-from ._common import add_scenario_args, note, print_json, scenario_kwargs
-from .run import parse_options
+from rpbench.bench.snapshot import take_snapshots
+from rpbench.commands._common import add_scenario_args, note, print_json, scenario_request
+from rpbench.exceptions import ParameterError
+from rpbench.harness.comparison import parse_run_options, parse_strategies
+from rpbench.oracle.runs import ORACLE_RUNS
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -28,7 +27,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    strategies = [s for s in parse_strategies(args.strategies) if s not in ORACLES]
+    strategies = [s for s in parse_strategies(args.strategies) if s not in ORACLE_RUNS]
+    run_options = parse_run_options(args.opt, strategies)
     rounds = None
     if args.rounds:
         try:
@@ -37,11 +37,10 @@ def run(args: argparse.Namespace) -> int:
             raise ParameterError(f"--rounds {args.rounds!r}: expected round indices like 10,100,200") from None
     if args.largest < 1:
         raise ParameterError(f"--largest {args.largest} must be >= 1")
-    name = args.scenario or default_scenario_name(args.data)
-    scenario = build_scenario(name, **scenario_kwargs(args))
+    scenario = scenario_request(args).build()
     note(scenario.label)
     folder, entries = take_snapshots(scenario, strategies, args.solver, args.out, rounds=rounds,
-                                     largest=args.largest, strategy_options=parse_options(args.opt, strategies))
+                                     largest=args.largest, run_options=run_options)
     if args.json:
         print_json({"folder": str(folder), "instances": entries})
         return 0

@@ -3,14 +3,15 @@
 from __future__ import annotations
 
 import argparse
-import shlex
-import sys
 
-from ..exceptions import ParameterError
-from ..harness import parse_strategies
-from ..sweep import SWEEPS, SweepSpec, expand, parse_over, run_sweep
-from ._common import add_scenario_args, note, print_json, scenario_kwargs
-from .run import parse_options
+import pandas as pd
+
+from rpbench.commands._common import add_scenario_args, command_line, note, print_json, scenario_request
+from rpbench.exceptions import ParameterError
+from rpbench.harness.comparison import parse_run_options, parse_strategies
+from rpbench.harness.sweep import SWEEPS, SweepSpec, expand, parse_over, run_sweep
+from rpbench.paths import require_data_dir
+from rpbench.scenarios import scenario_spec
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -50,19 +51,14 @@ def build_spec(args: argparse.Namespace) -> SweepSpec:
 def run(args: argparse.Namespace) -> int:
     spec = build_spec(args)
     points = expand(spec.parameter, spec.values)
-    options = parse_options(args.opt, list(spec.strategies))
-    kwargs = scenario_kwargs(args)
-    from ..scenarios import default_scenario_name
-    scenario = args.scenario or default_scenario_name(args.data)
-    if kwargs.get("data_dir") is None and scenario != "toy":
-        from ..paths import require_data_dir
-        kwargs["data_dir"] = str(require_data_dir(None, what=f"scenario {scenario!r}"))
-    note(f"sweep {spec.name}: {len(points)} points x {', '.join(spec.strategies)} on {scenario}")
-    command = "rpbench " + " ".join(shlex.quote(a) for a in sys.argv[1:]) if sys.argv else None
-    folder = run_sweep(spec, points, scenario=scenario, scenario_kwargs=kwargs, preset=args.solver,
-                       strategy_options=options, out=args.out, workers=args.workers, scheduler=args.scheduler,
-                       command=command)
-    import pandas as pd
+    run_options = parse_run_options(args.opt, list(spec.strategies))
+    request = scenario_request(args)
+    if request.data_dir is None and scenario_spec(request.name).needs_data:
+        # workers resolve no default folder of their own: pass the one found here
+        request = request.replace(data_dir=str(require_data_dir(None, what=f"scenario {request.name!r}")))
+    note(f"sweep {spec.name}: {len(points)} points x {', '.join(spec.strategies)} on {request.name}")
+    folder = run_sweep(spec, points, request=request, preset=args.solver, run_options=run_options, out=args.out,
+                       workers=args.workers, scheduler=args.scheduler, command=command_line())
     table = pd.read_csv(folder / "sweep.csv")
     if args.json:
         print_json({"results_dir": str(folder), "sweep": spec.name, "parameter": spec.parameter,

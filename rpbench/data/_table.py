@@ -14,7 +14,7 @@ from typing import Iterable, Mapping
 import numpy as np
 import pandas as pd
 
-from ..exceptions import DataError, DataNotFoundError
+from rpbench.exceptions import DataError, DataNotFoundError
 
 #: Column kinds understood by :func:`read_table`.
 INT, FLOAT, TEXT, DATETIME = "int", "float", "text", "datetime"

@@ -13,9 +13,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..exceptions import DataError, DataNotFoundError
-from ._table import INT, TEXT, read_table
-from .orders import parse_date
+from rpbench.data._table import INT, TEXT, read_table
+from rpbench.data.orders import parse_date
+from rpbench.exceptions import DataError, DataNotFoundError
 
 HOURLY_FILE = Path("samples_and_aggregates") / "data_dayly_hourly_count.csv"
 _YEAR = 2017

@@ -17,8 +17,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from ..exceptions import DataError
-from ._table import FLOAT, INT, read_table
+from rpbench.data._table import FLOAT, INT, read_table
+from rpbench.exceptions import DataError
 
 MONTH_OD_FILE = Path("demand_0800_0900") / "month_5_OD.csv.gz"
 DAY_OD_FILE = Path("demand_0800_0900") / "OD_2017-05-01_0800-0900.csv"

@@ -19,8 +19,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from ..exceptions import DataError, DataNotFoundError, ParameterError
-from ._table import DATETIME, FLOAT, INT, read_table
+from rpbench.data._table import DATETIME, FLOAT, INT, read_table
+from rpbench.exceptions import DataError, DataNotFoundError, ParameterError
 
 PEAK_DIR = Path("demand_0800_0900") / "orders"
 RAW_PEAK_FILE = Path("demand_0800_0900") / "raw_orders_2017-05-01_0800-0900_by_departure_time.csv.gz"

@@ -19,8 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..exceptions import DataError
-from ._table import FLOAT, INT, TEXT, read_table
+from rpbench.data._table import FLOAT, INT, TEXT, read_table
+from rpbench.exceptions import DataError
 
 NODE_FILE = Path("network") / "node.csv"
 LINK_FILE = Path("network") / "link.csv.gz"

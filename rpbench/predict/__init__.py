@@ -27,24 +27,35 @@ Public API (what the FL / FL-no_delay strategies call)::
     prediction.summary()        # dict: ODs, states, candidate pairs, iterations, residual, converged, ...
 
 Node arguments are the network's *internal* node indices (as in
-:class:`rpbench.scenario.Orders`).  Savings are the pair's total distance
+:class:`rpbench.scenarios.base.Orders`).  Savings are the pair's total distance
 saving in metres (A12: not doubled).
 
 Modules, one concept each: :mod:`.rates` (λ_w), :mod:`.config`,
-:mod:`.states` (seeker/taker states, taker classes), :mod:`.matching`
+:mod:`.states` (seeker/taker states, taker classes), :mod:`.match_sets`
 (T_s, E, priority), :mod:`.fixed_point` ((A1)-(A6) and the damped solver),
 :mod:`.savings` (ē and expected distances), :mod:`.prediction` (the entry
-point), :mod:`.cache`, :mod:`.fcfs` (validation simulator), :mod:`.compare`
-(vs the authors' published predictions).
+point), :mod:`.hourly` (one prediction per scenario hour: what FL calls),
+:mod:`.cache`, :mod:`.fcfs` (validation simulator), :mod:`.compare` (vs the
+authors' published predictions).
 """
 
-from .config import ACCELERATIONS, PRIORITIES, RHO_MODES, PredictConfig
-from .prediction import Lookup, Model, Prediction, build_model, predict, solve_model
-from .rates import (RATE_KINDS, OdRates, day_table_rates, load_rates, month_rates, order_rates, peak_order_rates,
-                    scenario_rates, table_rates)
+from rpbench.predict.config import ACCELERATIONS, PRIORITIES, RHO_MODES, PredictConfig
+from rpbench.predict.hourly import RATE_SOURCES, scenario_predictions
+from rpbench.predict.prediction import Lookup, Prediction, PredictionModel, build_model, predict, solve_model
+from rpbench.predict.rates import (
+                    RATE_KINDS,
+                    OdRates,
+                    day_table_rates,
+                    load_rates,
+                    month_rates,
+                    order_rates,
+                    peak_order_rates,
+                    scenario_rates,
+                    table_rates,
+)
 
 __all__ = [
-    "ACCELERATIONS", "Lookup", "Model", "OdRates", "PRIORITIES", "PredictConfig", "Prediction", "RHO_MODES", "build_model",
+    "ACCELERATIONS", "Lookup", "OdRates", "PredictionModel", "RATE_SOURCES", "scenario_predictions", "PRIORITIES", "PredictConfig", "Prediction", "RHO_MODES", "build_model",
     "RATE_KINDS", "day_table_rates", "load_rates", "month_rates", "order_rates", "peak_order_rates", "predict", "scenario_rates",
     "solve_model", "table_rates",
 ]

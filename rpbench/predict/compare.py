@@ -18,8 +18,8 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from ..data import read_authors_predictions, read_day_od_shares
-from .prediction import Prediction
+from rpbench.data import read_authors_predictions, read_day_od_shares
+from rpbench.predict.prediction import Prediction
 
 COLUMNS = ("matching_prob", "ride_distance", "detour_distance", "shared_distance", "saved_distance",
            "ride_distance_for_taker", "detour_distance_for_taker", "shared_distance_for_taker",

@@ -1,7 +1,7 @@
 """Configuration of the prediction model (ALGORITHMS.md §2, resolutions A1-A11).
 
 The network-side parameters (R̄ ``max_pickup_m``, D̄ ``max_detour_m``, speed
-``speed_mps``) come from :class:`rpbench.scenario.Params`; everything that
+``speed_mps``) come from :class:`rpbench.scenarios.base.Params`; everything that
 only the prediction model uses lives here.  Defaults are the spec's.
 """
 
@@ -13,8 +13,8 @@ from typing import Any
 
 import numpy as np
 
-from ..exceptions import ParameterError
-from ..geometry import ORDER_RULES
+from rpbench.exceptions import ParameterError
+from rpbench.geometry import ORDER_RULES
 
 #: Priority orders of a seeker's taker list (§2.4); all are "higher value first".
 PRIORITIES = ("net_saving", "fl_utility", "pickup", "vehicle_distance", "authors_feng_grid")

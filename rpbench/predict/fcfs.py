@@ -29,8 +29,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from ..exceptions import ParameterError
-from .prediction import Model, Prediction
+from rpbench.exceptions import ParameterError
+from rpbench.predict.prediction import Prediction, PredictionModel
 
 
 @dataclass(frozen=True, eq=False)
@@ -50,7 +50,7 @@ class FcfsResult:
     time_s: float
 
 
-def simulate(model: Model, *, hours: float, seed: int = 0, warmup_s: float | None = None) -> FcfsResult:
+def simulate(model: PredictionModel, *, hours: float, seed: int = 0, warmup_s: float | None = None) -> FcfsResult:
     """Simulate ``hours`` of stationary Poisson demand after a warm-up (default: the longest trip time)."""
     if not np.isfinite(hours) or hours <= 0:
         raise ParameterError(f"--hours {hours!r} must be > 0")

@@ -34,10 +34,10 @@ from typing import Callable
 
 import numpy as np
 
-from ._arrays import segment_exclusive_cumsum, segment_sums
-from .config import PredictConfig
-from .matching import Block, Matching
-from .states import StateSpace
+from rpbench.predict._arrays import segment_exclusive_cumsum, segment_sums
+from rpbench.predict.config import PredictConfig
+from rpbench.predict.match_sets import Block, Matching
+from rpbench.predict.states import StateSpace
 
 _LOG_ZERO = -1e4               # log λ for λ = 0: exp() underflows to exactly 0
 

@@ -9,6 +9,7 @@ not kept: a :class:`Prediction` holds per-OD and per-state arrays only.
 
 from __future__ import annotations
 
+import dataclasses
 import resource
 import time
 from dataclasses import dataclass
@@ -18,16 +19,16 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ..exceptions import ParameterError
-from ..network import RoadNetwork
-from ..scenario import Params
-from . import cache
-from .config import PredictConfig
-from .fixed_point import SolveInfo, System, solve
-from .matching import Matching, build_matching
-from .rates import OdRates
-from .savings import Outcome, outcome, waiting_saving
-from .states import StateSpace, build_states
+import rpbench.predict.cache as cache
+from rpbench.exceptions import ParameterError
+from rpbench.network import RoadNetwork
+from rpbench.predict.config import PredictConfig
+from rpbench.predict.fixed_point import SolveInfo, System, solve
+from rpbench.predict.match_sets import Matching, build_matching
+from rpbench.predict.rates import OdRates
+from rpbench.predict.savings import Outcome, outcome, waiting_saving
+from rpbench.predict.states import StateSpace, build_states
+from rpbench.scenarios.base import Params
 
 
 @dataclass(frozen=True)
@@ -42,7 +43,7 @@ class Lookup:
 
 
 @dataclass(frozen=True, eq=False)
-class Model:
+class PredictionModel:
     """The full model before solving: states, matching sets and rates (large; not cached)."""
 
     network: RoadNetwork
@@ -77,6 +78,24 @@ class Prediction:
     lam_taker: np.ndarray
     info: dict                             # summary facts (see summary())
     from_cache: bool = False
+
+    #: Per-state arrays stored beside the per-OD outcome (``od_<field>``) in the disk cache.
+    STATE_FIELDS = ("state_od", "state_k", "state_head", "state_tau_s", "rho", "p_taker", "eta", "lam_taker")
+
+    def arrays(self) -> tuple[dict[str, np.ndarray], dict]:
+        """(arrays, facts) as the disk cache stores them."""
+        arrays = {f"od_{f.name}": getattr(self.od, f.name) for f in dataclasses.fields(Outcome)}
+        arrays.update({name: getattr(self, name) for name in self.STATE_FIELDS})
+        return arrays, self.info
+
+    @classmethod
+    def from_arrays(cls, stored: tuple[dict[str, np.ndarray], dict], *, node_id: np.ndarray, rates: OdRates,
+                    config: PredictConfig) -> "Prediction":
+        """A prediction from the disk cache's (arrays, facts)."""
+        arrays, info = stored
+        od = Outcome(**{f.name: arrays[f"od_{f.name}"] for f in dataclasses.fields(Outcome)})
+        return cls(node_id=node_id, rates=rates, params=info.get("params", {}), config=config, od=od, info=info,
+                   from_cache=True, **{name: arrays[name] for name in cls.STATE_FIELDS})
 
     # ------------------------------------------------------------------ queries
     @cached_property
@@ -156,7 +175,7 @@ class Prediction:
 
 # ---------------------------------------------------------------------- build
 def build_model(network: RoadNetwork, rates: OdRates, params: Params | None = None,
-                config: PredictConfig | None = None) -> Model:
+                config: PredictConfig | None = None) -> PredictionModel:
     """States and matching sets (the expensive, uncached part)."""
     params = params or Params()
     config = config or PredictConfig()
@@ -171,11 +190,11 @@ def build_model(network: RoadNetwork, rates: OdRates, params: Params | None = No
     t2 = time.perf_counter()
     matching = build_matching(space, rates, dist, params, config)
     t3 = time.perf_counter()
-    return Model(network, rates, params, config, space, matching,
+    return PredictionModel(network, rates, params, config, space, matching,
                  {"distances_s": t1 - t0, "states_s": t2 - t1, "matching_s": t3 - t2})
 
 
-def solve_model(model: Model, *, progress=None, rho0: np.ndarray | None = None) -> Prediction:
+def solve_model(model: PredictionModel, *, progress=None, rho0: np.ndarray | None = None) -> Prediction:
     """Solve the fixed point of a built model (optionally warm-started) and derive the per-OD outcome."""
     system = model.system
     ev, info = solve(system, progress=progress, rho0=rho0)
@@ -192,9 +211,9 @@ def predict(network: RoadNetwork, rates: OdRates, params: Params | None = None,
     config = config or PredictConfig()
     key = cache.cache_key(network, rates, params, config)
     if use_cache:
-        hit = cache.load(key, network, rates, config)
+        hit = cache.load(key, len(rates))
         if hit is not None:
-            return hit
+            return Prediction.from_arrays(hit, node_id=network.node_id, rates=rates, config=config)
     t0, c0 = time.perf_counter(), time.process_time()
     model = build_model(network, rates, params, config)
     prediction = solve_model(model, progress=progress)
@@ -203,11 +222,11 @@ def predict(network: RoadNetwork, rates: OdRates, params: Params | None = None,
     prediction.info["cpu_s"] = round(time.process_time() - c0, 4)     # wall > cpu when the machine is shared
     prediction.info["peak_rss_mb"] = round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0, 1)
     if use_cache:
-        cache.save(key, prediction)
+        cache.save(key, *prediction.arrays())
     return prediction
 
 
-def _prediction(model: Model, ev, out: Outcome, info: SolveInfo, savings_s: float) -> Prediction:
+def _prediction(model: PredictionModel, ev, out: Outcome, info: SolveInfo, savings_s: float) -> Prediction:
     sp, m = model.space, model.matching
     relevant = {k: getattr(model.params, k) for k in cache.PARAM_FIELDS}
     facts = {

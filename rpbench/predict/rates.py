@@ -27,9 +27,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..data import read_day_od_shares, read_month_od_rates, read_od_rates, read_peak_orders
-from ..exceptions import DataError, ParameterError
-from ..network import RoadNetwork
+from rpbench.data import read_day_od_shares, read_month_od_rates, read_od_rates, read_peak_orders
+from rpbench.exceptions import DataError, ParameterError
+from rpbench.network import RoadNetwork
 
 HOUR_S = 3600.0
 #: Named rate sources of :func:`load_rates` (a path to an OD table CSV is accepted too).

@@ -24,8 +24,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._arrays import segment_sums
-from .fixed_point import Evaluation, System, evaluate
+from rpbench.predict._arrays import segment_sums
+from rpbench.predict.fixed_point import Evaluation, System, evaluate
 
 
 @dataclass(frozen=True, eq=False)

@@ -26,9 +26,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..exceptions import ParameterError
-from ..network import DistanceOracle, RoadNetwork
-from .rates import OdRates
+from rpbench.exceptions import ParameterError
+from rpbench.network import DistanceOracle, RoadNetwork
+from rpbench.predict.rates import OdRates
 
 
 @dataclass(frozen=True, eq=False)

@@ -7,10 +7,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..data import read_haikou_network, read_predecessor_network
-from ..exceptions import ParameterError
-from ..network import RoadNetwork
-from ..scenario import Fleet, Orders, Params
+from rpbench.data import read_haikou_network, read_predecessor_network
+from rpbench.exceptions import ParameterError
+from rpbench.network import RoadNetwork
+from rpbench.scenarios.base import Fleet, Orders, Params
 
 FLEET_PLACEMENTS = ("order_origins", "random_nodes")
 

@@ -20,11 +20,19 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..data import hourly_counts_for, read_month_od_rates
-from ..data.orders import parse_date
-from ..exceptions import DataError
-from ..scenario import Params, Scenario
-from .common import Streams, check_sample, check_seed, draw_patience, haikou_network, hourly_fleet, make_orders
+from rpbench.data import hourly_counts_for, read_month_od_rates
+from rpbench.data.orders import parse_date
+from rpbench.exceptions import DataError
+from rpbench.scenarios.base import Demand, Params, Scenario
+from rpbench.scenarios.common import (
+    Streams,
+    check_sample,
+    check_seed,
+    draw_patience,
+    haikou_network,
+    hourly_fleet,
+    make_orders,
+)
 
 DEFAULT_DATE = "2017-05-01"
 
@@ -62,4 +70,5 @@ def build_day(data_dir: Path, *, date: str = DEFAULT_DATE, sample: float = 1.0, 
                               f"{data_dir}/demand_0800_0900/month_5_OD.csv.gz",
                     "date": day, "sample": sample, "orders_per_hour": per_hour.tolist(), "data_dir": str(data_dir),
                     "fleet_placement": fleet_placement},
+        demand=Demand(table="month", data_dir=str(data_dir), orders_per_hour=tuple(float(n) for n in per_hour)),
     )

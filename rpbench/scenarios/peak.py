@@ -14,11 +14,19 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..data import read_peak_orders
-from ..data.orders import parse_date
-from ..scenario import Fleet, Params, Scenario
-from .common import (Streams, check_sample, check_seed, draw_patience, fleet_size, haikou_network, make_orders,
-                     place_fleet)
+from rpbench.data import read_peak_orders
+from rpbench.data.orders import parse_date
+from rpbench.scenarios.base import Demand, Fleet, Params, Scenario
+from rpbench.scenarios.common import (
+    Streams,
+    check_sample,
+    check_seed,
+    draw_patience,
+    fleet_size,
+    haikou_network,
+    make_orders,
+    place_fleet,
+)
 
 DEFAULT_DATE = "2017-05-01"
 DEFAULT_SAMPLE = 0.3
@@ -50,4 +58,5 @@ def build_peak(data_dir: Path, *, date: str = DEFAULT_DATE, sample: float = DEFA
         start_time=start.isoformat(), synthetic=False,
         provenance={"source": str(data_dir / "demand_0800_0900" / "orders" / f"{day}.csv.gz"), "date": day, "data_dir": str(data_dir),
                     "sample": sample, "rows_in_hour": int(len(frame)), "fleet_placement": fleet_placement},
+        demand=Demand(table="month", data_dir=str(data_dir)),
     )

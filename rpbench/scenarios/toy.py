@@ -13,11 +13,19 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..data.road import NetworkTables
-from ..exceptions import ParameterError
-from ..network import RoadNetwork
-from ..scenario import Fleet, Params, Scenario
-from .common import (Streams, check_sample, check_seed, draw_patience, fleet_size, make_orders, place_fleet)
+from rpbench.data.road import NetworkTables
+from rpbench.exceptions import ParameterError
+from rpbench.network import RoadNetwork
+from rpbench.scenarios.base import Fleet, Params, Scenario
+from rpbench.scenarios.common import (
+    Streams,
+    check_sample,
+    check_seed,
+    draw_patience,
+    fleet_size,
+    make_orders,
+    place_fleet,
+)
 
 BLOCK_M = 500.0
 BASE_ORDERS = 400

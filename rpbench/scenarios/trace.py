@@ -14,9 +14,17 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..data import read_trace_orders
-from ..scenario import Params, Scenario
-from .common import Streams, check_sample, check_seed, draw_patience, hourly_fleet, make_orders, predecessor_network
+from rpbench.data import read_trace_orders
+from rpbench.scenarios.base import Demand, Params, Scenario
+from rpbench.scenarios.common import (
+    Streams,
+    check_sample,
+    check_seed,
+    draw_patience,
+    hourly_fleet,
+    make_orders,
+    predecessor_network,
+)
 
 TRACE_DATE = "2017-07-01"
 
@@ -48,4 +56,5 @@ def build_trace(data_dir: Path, *, sample: float = 1.0, seed: int = 0, params: P
         start_time=start.isoformat(), synthetic=False,
         provenance={"source": str(data_dir / "predecessor_trb2021_network"), "date": TRACE_DATE, "data_dir": str(data_dir),
                     "sample": sample, "fleet_placement": fleet_placement},
+        demand=Demand(data_dir=str(data_dir)),  # its own orders: the month table is on another network
     )

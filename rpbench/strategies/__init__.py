@@ -4,7 +4,9 @@ A strategy turns a read-only :class:`~rpbench.strategies.base.RoundState`
 into a solver-agnostic :class:`~rpbench.strategies.base.RoundModel`; the
 simulator solves and commits it.  To add a formulation, write one module
 with a :class:`~rpbench.strategies.base.Strategy` subclass and register its
-name here.
+name here: its label, plot colour, options and calibration are class
+attributes (:class:`~rpbench.strategies.base.Strategy`), which the harness,
+the reports and the plots read.
 """
 
 from __future__ import annotations
@@ -12,8 +14,8 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-from ..exceptions import ParameterError
-from .base import Kind, RoundModel, RoundState, Strategy
+from rpbench.exceptions import ParameterError
+from rpbench.strategies.base import Kind, RoundModel, RoundState, Strategy
 
 #: Strategy name -> "module:Class" (modules under rpbench.strategies).
 REGISTRY: dict[str, str] = {
@@ -23,9 +25,6 @@ REGISTRY: dict[str, str] = {
     "fl-nd": "forward:ForwardLookingNoDelay",
     "fl": "forward:ForwardLooking",
 }
-
-#: The paper's column order in Table 2.
-PAPER_ORDER = ("np", "mb", "rtv", "fl", "fl-nd")
 
 
 def strategy_class(name: str) -> type[Strategy]:
@@ -40,5 +39,5 @@ def make_strategy(name: str, **options: Any) -> Strategy:
     return strategy_class(name)(**options)
 
 
-__all__ = ["Kind", "PAPER_ORDER", "REGISTRY", "RoundModel", "RoundState", "Strategy", "make_strategy",
+__all__ = ["Kind", "REGISTRY", "RoundModel", "RoundState", "Strategy", "make_strategy",
            "strategy_class"]

@@ -17,8 +17,9 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ..model import AssignmentModel, Structure, TripPackingModel
-from ..scenario import Params, Scenario
+from rpbench.model import AssignmentModel, Structure, TripPackingModel
+from rpbench.scenarios.base import Params, Scenario
+from rpbench.strategies.options import RunOptions
 
 
 class Kind(enum.IntEnum):
@@ -109,14 +110,42 @@ class RoundModel:
 
 
 class Strategy(ABC):
-    """A dispatching formulation.  Subclasses set ``name`` and implement :meth:`build`."""
+    """A dispatching formulation: a subclass sets the class attributes and implements :meth:`build`.
+
+    Everything the harness, the reports and the plots need to know about a
+    strategy is a class attribute here, so adding one is one module plus one
+    registry line.
+    """
 
     name: ClassVar[str]
     structure: ClassVar[Structure]
     description: ClassVar[str] = ""
+    #: Column header in tables and legend entry in plots.
+    label: ClassVar[str]
+    #: Matplotlib colour of its line in plots (None: the next colour of the cycle).
+    color: ClassVar[str | None] = None
+    #: Its options, declared once (names, types, defaults, help).
+    Options: ClassVar[type[RunOptions]] = RunOptions
+    #: The strategy whose run on the same scenario calibrates this one (None: none needed).
+    calibrated_by: ClassVar[str | None] = None
 
-    def __init__(self, **options: Any):
-        self.options = options
+    def __init__(self, options: RunOptions | None = None, **raw: Any):
+        """Options as a parsed :attr:`Options` object, or as keyword values (parsed and checked here)."""
+        if options is not None and raw:
+            raise TypeError("give options either parsed or as keywords, not both")
+        self.options = options if options is not None else self.Options.parse(self.name, raw)
+        if not isinstance(self.options, self.Options):
+            raise TypeError(f"{self.name}: options must be {self.Options.__name__}, not {type(self.options).__name__}")
+
+    @classmethod
+    def needs_calibration(cls, options: RunOptions) -> bool:
+        """Whether ``options`` still lack what the :attr:`calibrated_by` run provides."""
+        return cls.calibrated_by is not None
+
+    @classmethod
+    def calibrate(cls, options: RunOptions, kpis: dict[str, float], hourly, hours: int) -> RunOptions:
+        """``options`` completed from the calibration run's KPIs (whole run) and ``hourly`` table."""
+        return options
 
     def prepare(self, scenario: Scenario) -> None:
         """Called once before the first round (e.g. to load predictions)."""
@@ -135,4 +164,4 @@ class Strategy(ABC):
 
     def describe(self) -> dict[str, Any]:
         """Options as recorded in a results folder's meta.json."""
-        return {"name": self.name, "structure": self.structure.value, "options": dict(self.options)}
+        return {"name": self.name, "structure": self.structure.value, "options": self.options.as_dict()}

@@ -15,9 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..geometry import TOLERANCE_M, pair_geometry, choose_order
-from ..model import AssignmentModel, quantize
-from .base import Kind, RoundModel, RoundState
+from rpbench.geometry import TOLERANCE_M, choose_order, pair_geometry
+from rpbench.model import AssignmentModel, quantize
+from rpbench.strategies.base import Kind, RoundModel, RoundState
 
 #: Utility of keeping a passenger waiting when the strategy has no waiting
 #: option (MB, FL-no_delay, NP): -M with M = 10^6 m, so a passenger is

@@ -16,17 +16,19 @@ and in ē(0,p).  An OD missing from the rate table predicts 0 (§2.1).
 
 Options (``--opt fl.NAME=VALUE``):
 
-* ``rates``: where λ_w comes from — ``auto`` (default: the 21-day May 1-21
-  table for Haikou peak hours, as the paper; for the synthetic full day the
-  same table scaled to each hour's volume, which is exactly how that day's
-  demand is generated; for other scenarios the scenario's own orders per
-  hour), ``month``, ``scenario``.
+* ``rates``: where λ_w comes from — ``auto`` (default: the demand the
+  scenario implies, :class:`~rpbench.scenarios.base.Demand`: the 21-day
+  May 1-21 table for Haikou peak hours, as the paper; for the synthetic full
+  day the same table scaled to each hour's volume, which is exactly how that
+  day's demand is generated; for other scenarios their own orders per hour),
+  ``month``, ``scenario``.
 * ``tau0_s``: sojourn τ_0 of the origin taker state (A4) and
   ``mean_pickup_m``: l̄ of the waiting utility.  Both default to the mean
   pick-up time / distance of an MB calibration run on the same scenario
   (per hour where the scenario spans hours), which the harness computes;
-  without it the fallbacks are 120 s and 900 m.  τ_0 is rounded to 10 s so
-  that runs with nearly equal calibrations share one cached prediction.
+  without it the fallbacks are 120 s and 900 m.  τ_0 is rounded to 10 s by
+  :func:`rpbench.predict.scenario_predictions` so that runs with nearly equal
+  calibrations share one cached prediction.
 * ``priority``, ``include_origin_state``, ``rho_mode``, ``accel``:
   prediction options (:class:`rpbench.predict.PredictConfig`); FL solves the
   fixed point with Anderson mixing by default (the same fixed point as the
@@ -36,25 +38,45 @@ Options (``--opt fl.NAME=VALUE``):
 
 from __future__ import annotations
 
-import dataclasses
-import sys
-from pathlib import Path
-from typing import Any
+from dataclasses import dataclass
 
 import numpy as np
 
-from ..exceptions import ParameterError
-from ..model import Structure
-from ..predict import PredictConfig, Prediction, build_model, month_rates, order_rates, solve_model
-from ..predict import cache as prediction_cache
-from ..scenario import Scenario
-from .base import RoundModel, RoundState, Strategy
-from .candidates import NO_WAIT_UTILITY_M, JoinOptions, assignment_round, join_options, vacant_options
+from rpbench.exceptions import ParameterError
+from rpbench.model import Structure
+from rpbench.predict import RATE_SOURCES, PredictConfig, Prediction, scenario_predictions
+from rpbench.predict.config import ACCELERATIONS, PRIORITIES, RHO_MODES
+from rpbench.scenarios.base import Scenario
+from rpbench.strategies.base import RoundModel, RoundState, Strategy
+from rpbench.strategies.candidates import NO_WAIT_UTILITY_M, JoinOptions, assignment_round, join_options, vacant_options
+from rpbench.strategies.myopic import PoolingOptions
+from rpbench.strategies.options import RunOptions, option
 
 FALLBACK_TAU0_S = 120.0
 FALLBACK_MEAN_PICKUP_M = 900.0
-RATE_SOURCES = ("auto", "month", "scenario")
-_PREDICT_OPTIONS = ("priority", "include_origin_state", "rho_mode", "accel")
+
+
+@dataclass(frozen=True)
+class ForwardOptions(PoolingOptions):
+    """FL's and FL-no_delay's options (the prediction's among them, :class:`rpbench.predict.PredictConfig`)."""
+
+    rates: str = option("auto", "where λ_w comes from: the scenario's implied demand, the 21-day table, or the "
+                        "scenario's own orders", choices=RATE_SOURCES)
+    tau0_s: float | tuple[float, ...] | None = option(
+        None, "τ_0 in seconds, one value or one per hour (default: MB calibration run's mean pick-up time, A4)")
+    mean_pickup_m: float | tuple[float, ...] | None = option(
+        None, "l̄ of the waiting utility in metres, one value or one per hour (default: MB calibration run's)")
+    priority: str | None = option(None, "taker priority of the prediction (§2.4, A7)", choices=PRIORITIES)
+    include_origin_state: bool | None = option(None, "taker state k = 0 at the origin (A4)")
+    rho_mode: str | None = option(None, "how ρ is formed (A8)", choices=RHO_MODES)
+    accel: str = option("anderson", "fixed-point acceleration (the same fixed point as the damped map, in about "
+                        "half the sweeps)", choices=ACCELERATIONS)
+
+    def predict_config(self) -> PredictConfig:
+        """The prediction options that were set (the rest at :class:`PredictConfig`'s defaults)."""
+        chosen = {k: getattr(self, k) for k in ("priority", "include_origin_state", "rho_mode")
+                  if getattr(self, k) is not None}
+        return PredictConfig(accel=self.accel, **chosen)
 
 
 def fraction(num: np.ndarray, den: np.ndarray) -> np.ndarray:
@@ -66,31 +88,38 @@ def fraction(num: np.ndarray, den: np.ndarray) -> np.ndarray:
 
 class _ForwardBase(Strategy):
     structure = Structure.ASSIGNMENT
+    Options = ForwardOptions
+    calibrated_by = "mb"
 
-    def __init__(self, **options: Any):
-        super().__init__(**options)
-        unknown = set(options) - {"rates", "tau0_s", "mean_pickup_m", "order_rule", *_PREDICT_OPTIONS}
-        if unknown:
-            raise ParameterError(f"{self.name}: unknown option(s) {', '.join(sorted(unknown))}; known: rates, "
-                                 f"tau0_s, mean_pickup_m, order_rule, {', '.join(_PREDICT_OPTIONS)}")
-        self.rates_source = options.get("rates", "auto")
-        if self.rates_source not in RATE_SOURCES:
-            raise ParameterError(f"{self.name}: rates {self.rates_source!r} unknown; expected one of "
-                                 f"{', '.join(RATE_SOURCES)}")
-        self.order_rule = options.get("order_rule", "min_feasible")
+    def __init__(self, options: RunOptions | None = None, **raw):
+        super().__init__(options, **raw)
         self.predictions: list[Prediction] = []
         self.mean_pickup_m: np.ndarray = np.array([FALLBACK_MEAN_PICKUP_M])
+
+    # ----------------------------------------------------------- calibration
+    @classmethod
+    def needs_calibration(cls, options: ForwardOptions) -> bool:
+        return options.tau0_s is None or options.mean_pickup_m is None
+
+    @classmethod
+    def calibrate(cls, options: ForwardOptions, kpis: dict[str, float], hourly, hours: int) -> ForwardOptions:
+        """τ_0 (A4) and l̄ from the MB run "for the same hour" (ALGORITHMS.md §1-§2), per hour where the
+        scenario spans several; options the user set are kept."""
+        if hours == 1:
+            tau0, pickup = kpis["avg_pickup_time_s"], kpis["avg_pickup_distance_m"]
+        else:
+            h = hourly.set_index("hour").reindex(range(hours))
+            tau0 = tuple(round(float(x), 3) for x in h["avg_pickup_time_s"])
+            pickup = tuple(round(float(x), 3) for x in h["avg_pickup_m"])
+        return options.replace(tau0_s=tau0 if options.tau0_s is None else options.tau0_s,
+                               mean_pickup_m=pickup if options.mean_pickup_m is None else options.mean_pickup_m)
 
     # ----------------------------------------------------------- predictions
     def prepare(self, scenario: Scenario) -> None:
         hours = max(1, int(np.ceil(scenario.horizon_s / 3600.0)))
-        tau0 = _per_hour(self.options.get("tau0_s"), hours, FALLBACK_TAU0_S, "tau0_s")
-        self.mean_pickup_m = _per_hour(self.options.get("mean_pickup_m"), hours, FALLBACK_MEAN_PICKUP_M,
-                                       "mean_pickup_m")
-        # Anderson mixing reaches the same fixed point as the plain damped map in about half the sweeps.
-        config = PredictConfig(**{"accel": "anderson",
-                                  **{k: self.options[k] for k in _PREDICT_OPTIONS if k in self.options}})
-        self.predictions = hourly_predictions(scenario, self.rates_source, tau0, config)
+        tau0 = _per_hour(self.options.tau0_s, hours, FALLBACK_TAU0_S, "tau0_s")
+        self.mean_pickup_m = _per_hour(self.options.mean_pickup_m, hours, FALLBACK_MEAN_PICKUP_M, "mean_pickup_m")
+        self.predictions = scenario_predictions(scenario, self.options.rates, tau0, self.options.predict_config())
 
     def prediction_at(self, t_s: float) -> tuple[Prediction, int]:
         hour = min(int(t_s // 3600.0), len(self.predictions) - 1)
@@ -98,7 +127,7 @@ class _ForwardBase(Strategy):
 
     def _options(self, state: RoundState):
         vac = vacant_options(state)
-        join = join_options(state, self.order_rule)
+        join = join_options(state, self.options.order_rule)
         good = join.saving_m > 0                                   # A11
         join = JoinOptions(join.p[good], join.v[good], join.pickup_m[good], join.saving_m[good], join.fofo[good])
         prediction, hour = self.prediction_at(state.t_s)
@@ -108,6 +137,8 @@ class _ForwardBase(Strategy):
 
 class ForwardLooking(_ForwardBase):
     name = "fl"
+    label = "FL"
+    color = "tab:green"
     description = "forward-looking dispatch with intended delay, paper Eqs. (15)-(16)"
 
     def build(self, state: RoundState) -> RoundModel:
@@ -124,6 +155,8 @@ class ForwardLooking(_ForwardBase):
 
 class ForwardLookingNoDelay(_ForwardBase):
     name = "fl-nd"
+    label = "FL-no_delay"
+    color = "tab:olive"
     description = "forward-looking dispatch without intended delay, paper Eq. (17)"
 
     def build(self, state: RoundState) -> RoundModel:
@@ -145,78 +178,3 @@ def _per_hour(value, hours: int, fallback: float, name: str) -> np.ndarray:
     if (arr < 0).any():
         raise ParameterError(f"option {name} must be >= 0")
     return arr
-
-
-# ---------------------------------------------------------------------- rates
-#: τ_0 is rounded to this resolution, so runs whose calibrations differ by a few
-#: seconds (peak hours of different days, sweep points) share one prediction.
-TAU0_RESOLUTION_S = 10.0
-#: The last built prediction model of this process: its matching sets depend only on the OD set,
-#: the geometry and the priority rule, and take minutes and gigabytes for the 39,510-OD table.
-_BUILT: dict[tuple, Any] = {}
-
-
-def hourly_predictions(scenario: Scenario, source: str, tau0_s: np.ndarray,
-                       config: PredictConfig) -> list[Prediction]:
-    """One prediction per scenario hour (shared objects where hours have the same inputs)."""
-    hours = len(tau0_s)
-    tau0_s = np.maximum(TAU0_RESOLUTION_S, np.round(tau0_s / TAU0_RESOLUTION_S) * TAU0_RESOLUTION_S)
-    net, params = scenario.network, scenario.params
-    data_dir = scenario.provenance.get("data_dir")
-    if source == "auto":
-        source = "month" if scenario.name in ("haikou-peak", "haikou-day") else "scenario"
-    if source == "month":
-        if data_dir is None or net.name != "haikou":
-            raise ParameterError(f"FL rates 'month' need the Haikou network and data folder; scenario "
-                                 f"{scenario.name!r} has neither (use --opt fl.rates=scenario)")
-        base = month_rates(net, Path(data_dir))
-        if scenario.name == "haikou-day":
-            # The stand-in draws hour h's orders from this table: λ_w(h) = n_h · λ_w / Σλ / 3600.
-            per_hour = np.asarray(scenario.provenance["orders_per_hour"], dtype=float)
-            rates = [base.scaled(float(n / (base.total_per_s * 3600.0))) for n in per_hour[:hours]]
-        else:
-            rates = [base] * hours
-    else:   # the scenario's own orders, hour by hour
-        o = scenario.orders
-        hour_of = np.minimum((o.request_s // 3600.0).astype(int), hours - 1)
-        rates = [order_rates(net, o.origin[hour_of == h], o.destination[hour_of == h], 3600.0,
-                             source=f"{scenario.name} orders of hour {h} (count/3600 s)") for h in range(hours)]
-    out: list[Prediction] = []
-    memo: dict[tuple, Prediction] = {}
-    previous: Prediction | None = None
-    for h in range(hours):
-        cfg = config.replace(tau0_s=float(tau0_s[h]))
-        key = (id(rates[h]), cfg.tau0_s)
-        if key not in memo:
-            # Warm-start from the previous hour when the OD set is the same (only the demand level moved).
-            same_ods = previous is not None and len(previous.rates) == len(rates[h]) and \
-                np.array_equal(previous.rates.origin, rates[h].origin) and \
-                np.array_equal(previous.rates.destination, rates[h].destination)
-            warm = previous.rho if same_ods else None
-            memo[key] = solve_cached(net, rates[h], params, cfg, rho0=warm)
-            previous = memo[key]
-        out.append(memo[key])
-    return out
-
-
-def solve_cached(net, rates, params, config: PredictConfig, *, rho0: np.ndarray | None = None) -> Prediction:
-    """:func:`rpbench.predict.predict` with the built model kept in memory across demand levels and τ_0."""
-    key = prediction_cache.cache_key(net, rates, params, config)
-    hit = prediction_cache.load(key, net, rates, config)
-    if hit is not None:
-        return hit
-    structure = (net.content_hash, len(rates), hash(rates.key(net.n_nodes).tobytes()),
-                 tuple(getattr(params, f) for f in prediction_cache.PARAM_FIELDS),
-                 config.include_origin_state, config.priority, config.keep_nonpositive, config.order_rule)
-    model = _BUILT.get(structure)
-    if model is None:
-        _BUILT.clear()                      # keep one model: the month table's takes gigabytes
-        print(f"rpbench: building the seeker/taker prediction model for {len(rates):,} OD pairs "
-              f"({rates.source}); cached afterwards", file=sys.stderr)
-        model = build_model(net, rates, params, config)
-        _BUILT[structure] = model
-    # The demand level and τ_0 enter the fixed point only (the origin states' sojourn).
-    space = dataclasses.replace(model.space, tau_s=np.where(model.space.k == 0, config.tau0_s, model.space.tau_s))
-    prediction = solve_model(dataclasses.replace(model, rates=rates, config=config, space=space), rho0=rho0)
-    prediction_cache.save(key, prediction)
-    return prediction

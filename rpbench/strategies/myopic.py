@@ -11,15 +11,29 @@ Neither keeps a passenger waiting on purpose: the keep-waiting option gets
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-from ..model import Structure
-from .base import RoundModel, RoundState, Strategy
-from .candidates import NO_WAIT_UTILITY_M, JoinOptions, assignment_round, join_options, vacant_options
+from rpbench.geometry import ORDER_RULES
+from rpbench.model import Structure
+from rpbench.strategies.base import RoundModel, RoundState, Strategy
+from rpbench.strategies.candidates import NO_WAIT_UTILITY_M, JoinOptions, assignment_round, join_options, vacant_options
+from rpbench.strategies.options import RunOptions, option
+
+
+@dataclass(frozen=True)
+class PoolingOptions(RunOptions):
+    """Options of a strategy that pairs passengers (§1.1)."""
+
+    order_rule: str = option("min_feasible", "drop-off order rule of a pair (ALGORITHMS.md §1.1, A6)",
+                             choices=ORDER_RULES)
 
 
 class NonPooling(Strategy):
     name = "np"
+    label = "NP"
+    color = "tab:gray"
     structure = Structure.ASSIGNMENT
     description = "non-pooling: vacant vehicles only, minimise pick-up distance"
 
@@ -31,11 +45,14 @@ class NonPooling(Strategy):
 
 class MyopicBatch(Strategy):
     name = "mb"
+    label = "MB"
+    color = "tab:blue"
     structure = Structure.ASSIGNMENT
+    Options = PoolingOptions
     description = "myopic batch matching, paper Eq. (7)"
 
     def build(self, state: RoundState) -> RoundModel:
         vac = vacant_options(state)
-        join = join_options(state, self.options.get("order_rule", "min_feasible"))
+        join = join_options(state, self.options.order_rule)
         return assignment_round(state, vac, -vac.pickup_m, join, join.saving_m - join.pickup_m,
                                 np.full(state.n_passengers, NO_WAIT_UTILITY_M), name="mb")

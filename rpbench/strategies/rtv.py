@@ -32,58 +32,66 @@ Options: ``c_ko`` (metres or "large"), ``objective`` ("net" | "gross"),
 
 from __future__ import annotations
 
-import numpy as np
+from dataclasses import dataclass
 
+import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from ..exceptions import ParameterError
-from ..geometry import TOLERANCE_M, pool
-from ..model import Structure, TripPackingModel, quantize
-from .base import Kind, RoundModel, RoundState, Strategy
-from .candidates import VALUE_UNIT_M, join_options, vacant_options
+from rpbench.exceptions import ParameterError
+from rpbench.geometry import pool
+from rpbench.model import Structure, TripPackingModel, quantize
+from rpbench.strategies.base import Kind, RoundModel, RoundState, Strategy
+from rpbench.strategies.candidates import VALUE_UNIT_M, join_options, vacant_options
+from rpbench.strategies.myopic import PoolingOptions
+from rpbench.strategies.options import option
 
 LARGE_C_KO_M = 1e6
 PICKUP_TIE_BREAK = 1e-3
 
 
+@dataclass(frozen=True)
+class RTVOptions(PoolingOptions):
+    """RTV's options (ALGORITHMS.md §3.3, A15-A17)."""
+
+    c_ko: float | str | None = option(None, "value of serving a request, metres or 'large' (default R̄, A15)",
+                                      choices=("large",))
+    objective: str = option("net", "net: e - pick-up; gross: e - 1e-3 pick-up", choices=("net", "gross"))
+    rr_pickup_check: bool = option(True, "size-2 trips need l(o_first, o_second) <= R̄")
+    rv_top_k: int | None = option(None, "keep each request's k best vehicle edges (None: all)")
+    rebalance: bool = option(False, "send idle vacant vehicles towards unassigned requests (PNAS step d, A17)")
+    reassign: bool = option(False, "reassign assigned requests (not supported: assignments are final)")
+
+    def __post_init__(self) -> None:
+        if self.reassign:
+            raise ParameterError("rtv reassign is not supported: assignments are final in rpbench's simulator")
+        if self.rv_top_k is not None and self.rv_top_k <= 0:
+            raise ParameterError(f"rtv rv_top_k {self.rv_top_k!r} must be a positive integer")
+
+
 class RTV(Strategy):
     name = "rtv"
+    label = "RTV"
+    color = "tab:orange"
     structure = Structure.TRIP_PACKING
     description = "request-trip-vehicle ILP (PNAS 2017), capacity 2, distance-saving objective"
-
-    def __init__(self, **options):
-        super().__init__(**options)
-        c_ko = options.get("c_ko", None)
-        self.objective = options.get("objective", "net")
-        if self.objective not in ("net", "gross"):
-            raise ParameterError(f"rtv objective {self.objective!r} unknown; expected 'net' or 'gross'")
-        self._c_ko_option = c_ko
-        self.rr_pickup_check = bool(options.get("rr_pickup_check", True))
-        self.rv_top_k = options.get("rv_top_k", None)
-        self.order_rule = options.get("order_rule", "min_feasible")
-        self.rebalance = bool(options.get("rebalance", False))
-        if options.get("reassign"):
-            raise ParameterError("rtv reassign is not supported: assignments are final in rpbench's simulator")
+    Options = RTVOptions
 
     def c_ko(self, state: RoundState) -> float:
-        c = self._c_ko_option
+        c = self.options.c_ko
         if c is None:
             return state.params.max_pickup_m
         if c == "large":
             return LARGE_C_KO_M
-        try:
-            return float(c)
-        except (TypeError, ValueError):
-            raise ParameterError(f"rtv c_ko {c!r} must be a number of metres or 'large'") from None
+        return float(c)
 
     def _net(self, saving_m: np.ndarray, pickup_m: np.ndarray) -> np.ndarray:
-        weight = PICKUP_TIE_BREAK if self.objective == "gross" else 1.0
+        weight = PICKUP_TIE_BREAK if self.options.objective == "gross" else 1.0
         return saving_m - weight * pickup_m
 
     def build(self, state: RoundState) -> RoundModel:
         c_ko = self.c_ko(state)
         vac = vacant_options(state)
-        join = join_options(state, self.order_rule)
+        join = join_options(state, self.options.order_rule)
         # Size-1 trips: vacant (e = 0) and joins (e = POOL saving).
         cols = {
             "kind": [np.full(len(vac.p), Kind.VACANT), np.full(len(join.p), Kind.JOIN)],
@@ -96,8 +104,8 @@ class RTV(Strategy):
         }
         self._add_pair_trips(state, vac, c_ko, cols)
         merged = {k: np.concatenate(v) if v else np.zeros(0) for k, v in cols.items()}
-        if self.rv_top_k is not None:
-            merged = _top_k_per_request(merged, int(self.rv_top_k))
+        if self.options.rv_top_k is not None:
+            merged = _top_k_per_request(merged, int(self.options.rv_top_k))
         vehicle_sim = np.concatenate([state.v0_vehicle, state.v1_vehicle])[merged["vehicle_row"].astype(int)] \
             if len(merged["vehicle_row"]) else np.zeros(0, np.int64)
         r1, r2 = merged["r1"].astype(np.int64), merged["r2"].astype(np.int64)
@@ -116,7 +124,7 @@ class RTV(Strategy):
     def reposition(self, state: RoundState, rm: RoundModel, chosen: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """PNAS step (d): idle vacant vehicles towards unassigned requests, minimum total distance."""
         none = np.zeros(0, np.int64)
-        if not self.rebalance or state.n_v0 == 0 or state.n_passengers == 0:
+        if not self.options.rebalance or state.n_v0 == 0 or state.n_passengers == 0:
             return none, none
         served = np.isin(state.p_order, np.concatenate([rm.first[chosen], rm.second[chosen]]))
         busy = np.isin(state.v0_vehicle, rm.vehicle[chosen])
@@ -134,12 +142,12 @@ class RTV(Strategy):
         if n < 2 or len(vac.p) == 0:
             return
         i, j = np.triu_indices(n, k=1)
-        rr_pickup = state.params.max_pickup_m if self.rr_pickup_check else np.inf
+        rr_pickup = state.params.max_pickup_m if self.options.rr_pickup_check else np.inf
         # Direction i -> j (i picked up first) and j -> i; drop order chosen by POOL.
         fwd = pool(state.dist, state.p_origin[i], state.p_destination[i], state.p_origin[j], state.p_destination[j],
-                   max_pickup_m=rr_pickup, max_detour_m=state.params.max_detour_m, order_rule=self.order_rule)
+                   max_pickup_m=rr_pickup, max_detour_m=state.params.max_detour_m, order_rule=self.options.order_rule)
         bwd = pool(state.dist, state.p_origin[j], state.p_destination[j], state.p_origin[i], state.p_destination[i],
-                   max_pickup_m=rr_pickup, max_detour_m=state.params.max_detour_m, order_rule=self.order_rule)
+                   max_pickup_m=rr_pickup, max_detour_m=state.params.max_detour_m, order_rule=self.options.order_rule)
         edge = fwd.feasible | bwd.feasible                # the request-request edge
         if not edge.any():
             return

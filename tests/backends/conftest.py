@@ -5,9 +5,11 @@ from __future__ import annotations
 import pytest
 
 from rpbench.backends import get_backend
-from rpbench.solver_presets import load_preset, preset_names
+from rpbench.backends.presets import load_preset, preset_names
 
 PRESETS = preset_names()
+#: Presets whose first use costs seconds (OGDF is loaded and a C++ shim compiled once per process).
+SLOW_PRESETS = ("blossom-v",)
 
 
 def make(name: str):
@@ -19,7 +21,7 @@ def make(name: str):
     return get_backend(preset.backend), preset.options
 
 
-@pytest.fixture(params=PRESETS)
+@pytest.fixture(params=[pytest.param(n, marks=pytest.mark.slow) if n in SLOW_PRESETS else n for n in PRESETS])
 def preset(request):
     """(name, backend, options) for each preset."""
     backend, options = make(request.param)

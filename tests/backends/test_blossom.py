@@ -6,17 +6,18 @@ import networkx as nx
 import numpy as np
 import pytest
 
-from rpbench import synthetic
 from rpbench.backends import SolveOptions, get_backend
 from rpbench.backends import blossom as bv
 from rpbench.backends._forked import Timeout
 from rpbench.backends.cardinality import maximum_cardinality_matching
+from rpbench.bench import synthetic
 from rpbench.exceptions import SolverError
 from rpbench.model import PairingModel, Status
 
 if not bv.BlossomBackend.is_installed():
     pytest.skip("the blossom extra (OGDF, cppyy) is not installed", allow_module_level=True)
 BACKEND = get_backend("blossom")
+pytestmark = pytest.mark.slow        # loading OGDF and compiling the shim takes 5-14 s once per process
 OBJECTIVES = ("weight", "cardinality_then_weight")
 
 
@@ -37,6 +38,7 @@ def networkx_optimum(model: PairingModel) -> tuple[float, int]:
     return float(sum(g.edges[e]["weight"] for e in m)), len(m)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("objective", OBJECTIVES)
 @pytest.mark.parametrize("seed", range(40))
 def test_blossom_v_equals_networkx(seed, objective):

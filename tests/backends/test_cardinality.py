@@ -35,6 +35,7 @@ def _assert_matching(n, a, b, mate):
     assert all((x, int(mate[x])) in edges for x in v)
 
 
+@pytest.mark.slow
 @settings(max_examples=300, deadline=None)
 @given(graphs())
 def test_matches_networkx_and_certifies_itself(graph):

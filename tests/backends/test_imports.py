@@ -31,7 +31,7 @@ def run_python(code: str) -> str:
 def test_importing_rpbench_loads_no_solver():
     out = run_python(f"""
         import sys
-        import rpbench, rpbench.backends, rpbench.model, rpbench.synthetic, rpbench.benchmark
+        import rpbench, rpbench.backends, rpbench.model, rpbench.bench.synthetic, rpbench.bench.runner
         from rpbench.backends import REGISTRY, backend_class
         for name in REGISTRY:
             backend_class(name).is_installed()       # the adapter modules import, their solvers do not
@@ -42,6 +42,7 @@ def test_importing_rpbench_loads_no_solver():
 
 @pytest.mark.parametrize("order", [LOADED, tuple(reversed(LOADED))],
                          ids=["highspy-first", "highspy-last"])
+@pytest.mark.slow
 def test_every_solver_library_loads_and_solves_in_one_process(order):
     imports = {"highspy": "import highspy",
                "ortools": "import ortools.sat.python.cp_model, ortools.graph.python.min_cost_flow, "
@@ -51,7 +52,7 @@ def test_every_solver_library_loads_and_solves_in_one_process(order):
     out = run_python("\n".join(imports[m] for m in order) + """
 from rpbench.backends import get_backend
 from rpbench.model import PairingModel, AssignmentModel
-from rpbench.solver_presets import load_preset, preset_names
+from rpbench.backends.presets import load_preset, preset_names
 pair = PairingModel(4, [0, 1, 2], [1, 2, 3], [1, 10, 1], objective="cardinality_then_weight")
 assign = AssignmentModel(2, 1, [0, 0, 1, 1], [0, -1, 0, -1], [-3, -10, -4, -5])
 for name in preset_names():

@@ -12,10 +12,10 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from rpbench import synthetic
 from rpbench.backends import get_backend
+from rpbench.backends.presets import load_preset, preset_names
+from rpbench.bench import synthetic
 from rpbench.model import AssignmentModel, PairingModel, Status, TripPackingModel
-from rpbench.solver_presets import load_preset, preset_names
 
 from .brute import MAX_COLS, brute_force
 
@@ -82,18 +82,21 @@ def assert_all_presets_equal_brute_force(model):
             assert sol.cardinality == best[1], name
 
 
+@pytest.mark.slow
 @settings(max_examples=25, **SETTINGS)
 @given(assignments())
 def test_assignment_every_preset_equals_brute_force(model):
     assert_all_presets_equal_brute_force(model)
 
 
+@pytest.mark.slow
 @settings(max_examples=25, **SETTINGS)
 @given(pairings())
 def test_pairing_every_preset_equals_brute_force(model):
     assert_all_presets_equal_brute_force(model)
 
 
+@pytest.mark.slow
 @settings(max_examples=20, **SETTINGS)
 @given(packings())
 def test_trip_packing_every_preset_equals_brute_force(model):

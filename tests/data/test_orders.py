@@ -7,8 +7,13 @@ import shutil
 import pandas as pd
 import pytest
 
-from rpbench.data import (available_peak_dates, read_gaia_sample, read_peak_orders, read_raw_peak_orders,
-                          read_trace_orders)
+from rpbench.data import (
+    available_peak_dates,
+    read_gaia_sample,
+    read_peak_orders,
+    read_raw_peak_orders,
+    read_trace_orders,
+)
 from rpbench.exceptions import DataError, DataNotFoundError, ParameterError
 
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from rpbench.predict import OdRates, PredictConfig, build_model, solve_model
-from rpbench.scenario import Params
+from rpbench.scenarios.base import Params
 from rpbench.scenarios.toy import grid_network
 
 

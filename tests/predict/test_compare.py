@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from rpbench.predict import day_table_rates, predict
 from rpbench.predict.compare import COLUMNS, compare
 from rpbench.scenarios.common import haikou_network
 
 
+@pytest.mark.slow
 def test_compare_with_the_authors(data_dir):
     net = haikou_network(data_dir)
     pred = predict(net, day_table_rates(net, data_dir), use_cache=False)

@@ -11,10 +11,10 @@ from rpbench.data.road import NetworkTables
 from rpbench.network import RoadNetwork
 from rpbench.predict import OdRates, PredictConfig, build_model, solve_model
 from rpbench.predict.fixed_point import evaluate
-from rpbench.scenario import Params
+from rpbench.scenarios.base import Params
 
 from .conftest import make_instance
-from .test_matching import line_network, model_list
+from .test_match_sets import line_network, model_list
 
 
 # ---------------------------------------------------------------- reference: one state at a time

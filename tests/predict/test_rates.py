@@ -6,8 +6,15 @@ import numpy as np
 import pytest
 
 from rpbench.exceptions import DataError, DataNotFoundError, ParameterError
-from rpbench.predict import (OdRates, day_table_rates, month_rates, order_rates, peak_order_rates,
-                             scenario_rates, table_rates)
+from rpbench.predict import (
+    OdRates,
+    day_table_rates,
+    month_rates,
+    order_rates,
+    peak_order_rates,
+    scenario_rates,
+    table_rates,
+)
 from rpbench.scenarios import build_scenario
 from rpbench.scenarios.common import haikou_network
 from rpbench.scenarios.toy import grid_network

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from rpbench.predict.fixed_point import evaluate
-from rpbench.scenario import Params
+from rpbench.scenarios.base import Params
 
 from .conftest import make_instance
-from .test_matching import model_list
+from .test_match_sets import model_list
 
 
 @pytest.fixture(scope="module")

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from rpbench.exceptions import DataNotFoundError, ParameterError
-from rpbench.scenario import Params
 from rpbench.scenarios import build_scenario
+from rpbench.scenarios.base import Params
 
 
 def _same(a, b) -> bool:

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from helpers import line_network, round_state
 
-from rpbench.scenario import Params
+from rpbench.scenarios.base import Params
 from rpbench.strategies import Kind, make_strategy
 from rpbench.strategies.forward import fraction
 
@@ -100,12 +100,13 @@ def test_unknown_options_rejected():
     from rpbench.exceptions import ParameterError
     with pytest.raises(ParameterError, match="unknown option"):
         make_strategy("fl", colour="red")
-    with pytest.raises(ParameterError, match="rates 'weekly' unknown"):
+    with pytest.raises(ParameterError, match="option rates = 'weekly' must be one of auto, month, scenario"):
         make_strategy("fl", rates="weekly")
 
 
+@pytest.mark.slow
 def test_fl_runs_on_the_toy_city(tmp_path):
-    from rpbench.harness import run_comparison
+    from rpbench.harness.comparison import run_comparison
     from rpbench.scenarios import build_scenario
     folder, table = run_comparison(build_scenario("toy", sample=0.25, seed=8), ["mb", "fl-nd", "fl"], "highs",
                                    out=tmp_path / "fl", progress=False)
@@ -114,5 +115,5 @@ def test_fl_runs_on_the_toy_city(tmp_path):
     # τ_0 and l̄ come from the MB run of the same scenario (A4)
     assert meta["runs"]["fl"]["options"]["mean_pickup_m"] == pytest.approx(table.loc["avg_pickup_distance_m", "mb"])
     assert meta["runs"]["fl"]["options"]["tau0_s"] == pytest.approx(table.loc["avg_pickup_time_s", "mb"])
-    from rpbench.check import check_folder
+    from rpbench.results.check import check_folder
     assert all(rc.ok for rc in check_folder(folder))

@@ -9,9 +9,9 @@ import pytest
 from helpers import network_from_edges, round_state
 from scipy.optimize import linear_sum_assignment
 
+from rpbench.backends.presets import load_preset
 from rpbench.model import TripPackingModel
-from rpbench.scenario import Params
-from rpbench.solver_presets import load_preset
+from rpbench.scenarios.base import Params
 from rpbench.strategies import Kind, make_strategy
 
 

@@ -1,0 +1,51 @@
+"""Freeze chosen rounds of simulation runs into instance files (:mod:`rpbench.instances`).
+
+Each strategy is simulated on the scenario with the preset; the models of
+the chosen rounds (round indices, or the largest rounds by columns) are
+written with their provenance, plus a ``manifest.json`` listing them.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from rpbench import results
+from rpbench.backends import load_preset
+from rpbench.harness.comparison import calibrated, simulate_strategy
+from rpbench.instances import save_instance
+from rpbench.scenarios.base import Scenario
+from rpbench.strategies import strategy_class
+from rpbench.strategies.options import RunOptions
+
+
+def take_snapshots(scenario: Scenario, strategies: list[str], preset_name: str, out: str | Path, *,
+                   rounds: list[int] | None = None, largest: int = 3,
+                   run_options: dict[str, RunOptions] | None = None) -> tuple[Path, list[dict]]:
+    """Simulate each strategy and save the chosen rounds' models under ``out`` (a new folder)."""
+    preset = load_preset(preset_name)
+    run_options = run_options or {}
+    entries: list[dict] = []
+    done: dict = {}
+    out = Path(out)
+    with results.new_results_folder(out, out.name) as (tmp, final):
+        for name in strategies:
+            seen: list[tuple[int, float, object, float, str]] = []
+
+            def capture(k, t, rm, solution, seen=seen):
+                if rounds is None or k in rounds:
+                    seen.append((k, t, rm.model, solution.objective, solution.status.value))
+
+            options = run_options.get(name) or strategy_class(name).Options()
+            options = calibrated(scenario, name, options, preset, done, progress=False)   # as in a comparison
+            simulate_strategy(scenario, name, preset, options=options, progress=False, capture=capture)
+            picked = seen if rounds is not None else sorted(seen, key=lambda s: (-s[2].n_cols, s[0]))[:largest]
+            for k, t, model, objective, status in sorted(picked, key=lambda s: s[0]):
+                stem = f"{scenario.name}_{name}_round{k:05d}"
+                meta = {"scenario": scenario.label, "scenario_name": scenario.name, "seed": scenario.seed,
+                        "strategy": name, "round": k, "t_s": t, "preset": preset.name,
+                        "objective": objective, "status": status, "size": model.size}
+                save_instance(tmp / f"{stem}.npz", model, meta)
+                entries.append({"file": f"{stem}.npz", **meta})
+        results.write_json(tmp / "manifest.json", {"format": "rpbench-instance-1", "instances": entries,
+                                                   **results.environment()})
+    return final, entries

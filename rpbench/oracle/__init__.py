@@ -1,0 +1,7 @@
+"""The offline oracles (paper Eqs. 18-22, ALGORITHMS.md §4): candidate pairs
+(:mod:`.pairs`) and the maximum-weight matching over them (:mod:`.solve`)."""
+
+from rpbench.oracle.pairs import CandidatePairs, PairRules, find_candidates
+from rpbench.oracle.solve import OracleResult, solve_oracle
+
+__all__ = ["CandidatePairs", "OracleResult", "PairRules", "find_candidates", "solve_oracle"]

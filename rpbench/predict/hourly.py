@@ -1,0 +1,106 @@
+"""One prediction per scenario hour: the demand rates a scenario implies, τ_0, caching and warm starts.
+
+:func:`scenario_predictions` is what the FL strategies call.  It takes the
+rates λ_w from the scenario's :class:`~rpbench.scenarios.base.Demand` (or the
+scenario's own orders), rounds τ_0 to :data:`TAU0_RESOLUTION_S` so runs with
+nearly equal calibrations share one cached prediction, reuses a solved
+prediction from the disk cache, and otherwise solves the fixed point on one
+built model kept in memory: the matching sets depend only on the OD set, the
+geometry and the priority rule (minutes and gigabytes for the 39,510-OD
+month table), while the demand level and τ_0 enter the fixed point only.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import sys
+from pathlib import Path
+
+import numpy as np
+
+import rpbench.predict.cache as cache
+from rpbench.exceptions import ParameterError
+from rpbench.network import RoadNetwork
+from rpbench.predict.config import PredictConfig
+from rpbench.predict.prediction import Prediction, PredictionModel, build_model, solve_model
+from rpbench.predict.rates import OdRates, month_rates, order_rates
+from rpbench.scenarios.base import Params, Scenario
+
+#: Where λ_w comes from: the scenario's implied demand, the 21-day table, or the scenario's own orders.
+RATE_SOURCES = ("auto", "month", "scenario")
+#: τ_0 is rounded to this resolution, so runs whose calibrations differ by a few
+#: seconds (peak hours of different days, sweep points) share one prediction.
+TAU0_RESOLUTION_S = 10.0
+
+#: The last built model of this process (one only: the month table's takes gigabytes).
+_BUILT: dict[tuple, PredictionModel] = {}
+
+
+def scenario_predictions(scenario: Scenario, source: str, tau0_s: np.ndarray,
+                         config: PredictConfig) -> list[Prediction]:
+    """One prediction per hour of ``scenario`` (``len(tau0_s)`` hours; hours with equal inputs share one)."""
+    hours = len(tau0_s)
+    tau0_s = np.maximum(TAU0_RESOLUTION_S, np.round(np.asarray(tau0_s) / TAU0_RESOLUTION_S) * TAU0_RESOLUTION_S)
+    rates = hourly_rates(scenario, source, hours)
+    out: list[Prediction] = []
+    memo: dict[tuple, Prediction] = {}
+    previous: Prediction | None = None
+    for h in range(hours):
+        cfg = config.replace(tau0_s=float(tau0_s[h]))
+        key = (id(rates[h]), cfg.tau0_s)
+        if key not in memo:
+            # Warm-start from the previous hour when the OD set is the same (only the demand level moved).
+            same_ods = previous is not None and len(previous.rates) == len(rates[h]) and \
+                np.array_equal(previous.rates.origin, rates[h].origin) and \
+                np.array_equal(previous.rates.destination, rates[h].destination)
+            memo[key] = cached_prediction(scenario.network, rates[h], scenario.params, cfg,
+                                          rho0=previous.rho if same_ods else None)
+            previous = memo[key]
+        out.append(memo[key])
+    return out
+
+
+def hourly_rates(scenario: Scenario, source: str, hours: int) -> list[OdRates]:
+    """λ_w for each of the first ``hours`` hours of ``scenario`` (objects shared where equal)."""
+    if source not in RATE_SOURCES:
+        raise ParameterError(f"rates {source!r} unknown; expected one of {', '.join(RATE_SOURCES)}")
+    net, demand = scenario.network, scenario.demand
+    if source == "auto":
+        source = "month" if demand.table == "month" else "scenario"
+    if source == "month":
+        if demand.data_dir is None or net.name != "haikou":
+            raise ParameterError(f"FL rates 'month' need the Haikou network and data folder; scenario "
+                                 f"{scenario.name!r} has neither (use --opt fl.rates=scenario)")
+        base = month_rates(net, Path(demand.data_dir))
+        if demand.orders_per_hour is None:
+            return [base] * hours
+        # hour h carries n_h orders of the table's OD mix: λ_w(h) = n_h · λ_w / Σλ / 3600
+        return [base.scaled(float(n / (base.total_per_s * 3600.0))) for n in demand.orders_per_hour[:hours]]
+    o = scenario.orders
+    hour_of = np.minimum((o.request_s // 3600.0).astype(int), hours - 1)
+    return [order_rates(net, o.origin[hour_of == h], o.destination[hour_of == h], 3600.0,
+                        source=f"{scenario.name} orders of hour {h} (count/3600 s)") for h in range(hours)]
+
+
+def cached_prediction(net: RoadNetwork, rates: OdRates, params: Params, config: PredictConfig, *,
+                      rho0: np.ndarray | None = None) -> Prediction:
+    """A solved prediction: from the disk cache, else on the in-memory built model (built if needed)."""
+    key = cache.cache_key(net, rates, params, config)
+    hit = cache.load(key, len(rates))
+    if hit is not None:
+        return Prediction.from_arrays(hit, node_id=net.node_id, rates=rates, config=config)
+    structure = (net.content_hash, len(rates), hash(rates.key(net.n_nodes).tobytes()),
+                 tuple(getattr(params, f) for f in cache.PARAM_FIELDS),
+                 config.include_origin_state, config.priority, config.keep_nonpositive, config.order_rule)
+    model = _BUILT.get(structure)
+    if model is None:
+        _BUILT.clear()
+        print(f"rpbench: building the seeker/taker prediction model for {len(rates):,} OD pairs "
+              f"({rates.source}); cached afterwards", file=sys.stderr)
+        model = build_model(net, rates, params, config)
+        _BUILT[structure] = model
+    # The demand level and τ_0 enter the fixed point only (the origin states' sojourn).
+    space = dataclasses.replace(model.space, tau_s=np.where(model.space.k == 0, config.tau0_s, model.space.tau_s))
+    prediction = solve_model(dataclasses.replace(model, rates=rates, config=config, space=space), rho0=rho0)
+    cache.save(key, *prediction.arrays())
+    return prediction

@@ -1,0 +1,213 @@
+"""The paper's Table 2 KPIs, computed from a run's event log and trajectories only.
+
+Distances are read off the vehicles' odometers (trajectories) at event
+times, so every figure is what the vehicles actually drove.  Definitions
+(each KPI key below; "served" = assigned and delivered, "pooled" = served
+and paired with another passenger in the same vehicle):
+
+* ``response_rate`` — served / orders.
+* ``pairing_ratio`` — pooled / served (share of responded passengers who
+  were pooled).  The paper does not say which denominator it uses;
+  ``pairing_ratio_of_orders`` = pooled / orders is the alternative (the
+  oracle's 2|M|/|P| is the same number when every order is served).
+* ``platform_profit_cny`` — fares minus driver pay: a served passenger pays
+  5 CNY/km of solo distance, a pooled one 3.5 CNY/km of solo distance;
+  drivers are paid 2 CNY/km of occupied driving.  The paper's text ("5 Yuan/km
+  for solo-ride distance and 3.5 Yuan/km for shared distance") can also be
+  read as 5 CNY/km of a passenger's un-shared ride and 3.5 CNY/km of its
+  shared ride: ``platform_profit_alt_cny``.
+* ``avg_response_time_s`` — mean assignment time minus request time (served).
+* ``avg_pickup_time_s`` — mean pick-up time minus assignment time (served).
+* ``avg_detour_m`` — mean ride distance minus solo distance (pooled).
+* ``avg_shared_m`` — mean distance ridden with the partner on board (pooled).
+* ``total_occupied_km`` — distance driven with at least one passenger on
+  board (the paper's dist_total).
+* ``total_saving_km`` — Σ solo distance of served passengers minus
+  total_occupied_km (the paper's dist_save; = Σ over pairs of l_A + l_B - L).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from rpbench.scenarios.base import Params
+
+KPI_ORDER = ["response_rate", "pairing_ratio", "platform_profit_cny", "avg_response_time_s", "avg_pickup_time_s",
+             "avg_detour_m", "avg_shared_m", "total_occupied_km", "total_saving_km"]
+KPI_LABELS = {
+    "response_rate": "Response rate",
+    "pairing_ratio": "Pairing ratio",
+    "platform_profit_cny": "Platform profit (CNY)",
+    "avg_response_time_s": "Average response time (s)",
+    "avg_pickup_time_s": "Average pick-up time (s)",
+    "avg_detour_m": "Average detour distance (m)",
+    "avg_shared_m": "Average shared distance (m)",
+    "total_occupied_km": "Total driving distance with passenger(s) on board (km)",
+    "total_saving_km": "Total distance saving due to ride-pooling (km)",
+    "competitive_ratio": "Competitive ratio (saving / Oracle-1)",
+    "competitive_ratio_enroute": "Competitive ratio (saving / Oracle-1 with en-route pairs)",
+}
+EXTRA_KPIS = ["orders", "served", "cancelled", "pooled_passengers", "pairs", "pairing_ratio_of_orders",
+              "avg_pickup_distance_m", "platform_profit_alt_cny", "total_solo_served_km"]
+
+
+def odometer_at(traj: dict[str, np.ndarray], vehicle: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Odometer (m) of each ``vehicle`` at time ``t`` (linear between trajectory nodes)."""
+    vehicle = np.asarray(vehicle, dtype=np.int64)
+    t = np.asarray(t, dtype=np.float64)
+    out = np.full(len(vehicle), np.nan)
+    off = traj["vehicle_offsets"]
+    for v in np.unique(vehicle[vehicle >= 0]):
+        sel = vehicle == v
+        lo, hi = off[v], off[v + 1]
+        out[sel] = np.interp(t[sel], traj["t_s"][lo:hi], traj["odo_m"][lo:hi])
+    return out
+
+
+def passenger_table(events: pd.DataFrame, solo_m: np.ndarray, request_s: np.ndarray,
+                    traj: dict[str, np.ndarray]) -> pd.DataFrame:
+    """One row per order: times, vehicle, partner, and driven distances from the odometers."""
+    n = len(solo_m)
+    tab = pd.DataFrame({"request_s": request_s, "solo_m": solo_m})
+    for name in ("assign", "pickup", "dropoff", "cancel"):
+        sel = events[events["event"] == name]
+        col = np.full(n, np.nan)
+        col[sel["order"].to_numpy(dtype=np.int64)] = sel["t_s"].to_numpy(dtype=np.float64)
+        tab[f"{name}_s"] = col
+    assign = events[events["event"] == "assign"]
+    vehicle = np.full(n, -1, dtype=np.int64)
+    vehicle[assign["order"].to_numpy()] = assign["vehicle"].to_numpy()
+    partner = np.full(n, -1, dtype=np.int64)
+    has = assign["partner"].to_numpy() >= 0
+    a_order, a_partner = assign["order"].to_numpy()[has], assign["partner"].to_numpy()[has]
+    partner[a_order] = a_partner
+    partner[a_partner] = a_order                       # the first passenger of a join learns its partner too
+    kind = np.full(n, "", dtype=object)
+    kind[assign["order"].to_numpy()] = assign["kind"].to_numpy()
+    tab["vehicle"], tab["partner"], tab["kind"] = vehicle, partner, kind
+    served = ~np.isnan(tab["dropoff_s"].to_numpy())
+    tab["served"] = served
+    tab["pooled"] = served & (partner >= 0)
+    odo_pick = odometer_at(traj, vehicle, tab["pickup_s"].to_numpy())
+    odo_drop = odometer_at(traj, vehicle, tab["dropoff_s"].to_numpy())
+    odo_assign = odometer_at(traj, vehicle, tab["assign_s"].to_numpy())
+    tab["ride_m"] = odo_drop - odo_pick
+    tab["detour_m"] = tab["ride_m"] - tab["solo_m"]
+    # Pick-up distance: from the assignment, or from the partner's pick-up when the
+    # partner was collected first (a join diverts at o_p', A14; the second request of a trip).
+    p_idx = np.where(partner >= 0, partner, 0)
+    partner_pick = np.where(partner >= 0, tab["pickup_s"].to_numpy()[p_idx], np.nan)
+    partner_first = (partner >= 0) & (partner_pick <= tab["pickup_s"].to_numpy())
+    start = np.where(partner_first, np.maximum(tab["assign_s"].to_numpy(), partner_pick), tab["assign_s"].to_numpy())
+    odo_start = np.where(partner_first, odometer_at(traj, vehicle, start), odo_assign)
+    tab["pickup_m"] = odo_pick - odo_start
+    shared = np.full(n, np.nan)
+    pooled = tab["pooled"].to_numpy()
+    if pooled.any():
+        pp = partner[pooled]
+        begin = np.maximum(tab["pickup_s"].to_numpy()[pooled], tab["pickup_s"].to_numpy()[pp])
+        end = np.minimum(tab["dropoff_s"].to_numpy()[pooled], tab["dropoff_s"].to_numpy()[pp])
+        v = vehicle[pooled]
+        shared[pooled] = np.maximum(0.0, odometer_at(traj, v, end) - odometer_at(traj, v, np.minimum(begin, end)))
+    tab["shared_m"] = shared
+    return tab
+
+
+def occupied_distance_m(events: pd.DataFrame, traj: dict[str, np.ndarray]) -> np.ndarray:
+    """Per vehicle, the distance driven with at least one passenger on board."""
+    n_vehicles = len(traj["vehicle_offsets"]) - 1
+    out = np.zeros(n_vehicles)
+    ev = events[events["event"].isin(["pickup", "dropoff"])]
+    if ev.empty:
+        return out
+    ev = ev.assign(delta=np.where(ev["event"] == "pickup", 1, -1))
+    # Pick-ups before drop-offs at the same instant keep the load non-negative.
+    ev = ev.sort_values(["vehicle", "t_s", "delta"], ascending=[True, True, False], kind="stable")
+    veh = ev["vehicle"].to_numpy()
+    t = ev["t_s"].to_numpy()
+    load = np.zeros(len(ev), dtype=np.int64)
+    starts = np.r_[0, np.flatnonzero(np.diff(veh)) + 1, len(ev)]
+    for a, b in zip(starts[:-1], starts[1:]):
+        load[a:b] = np.cumsum(ev["delta"].to_numpy()[a:b])
+    odo = odometer_at(traj, veh, t)
+    # Distance between consecutive events of a vehicle counts when the load after the first is > 0.
+    same = np.r_[veh[1:] == veh[:-1], False]
+    seg = np.where(same & (load > 0), np.r_[odo[1:] - odo[:-1], 0.0], 0.0)
+    np.add.at(out, veh, seg)
+    return out
+
+
+def kpis(tab: pd.DataFrame, occupied_m: np.ndarray, params: Params) -> dict[str, float]:
+    """The KPI dictionary (keys in :data:`KPI_ORDER` and :data:`EXTRA_KPIS`)."""
+    served = tab["served"].to_numpy()
+    pooled = tab["pooled"].to_numpy()
+    n = len(tab)
+    n_served, n_pooled = int(served.sum()), int(pooled.sum())
+    solo = tab["solo_m"].to_numpy()
+    occupied_km = float(occupied_m.sum()) / 1000
+    solo_served_km = float(solo[served].sum()) / 1000
+    fare = np.where(pooled, params.fare_pooled_cny_per_km, params.fare_solo_cny_per_km)
+    revenue = float((fare[served] * solo[served]).sum()) / 1000
+    shared = np.nan_to_num(tab["shared_m"].to_numpy())
+    ride = tab["ride_m"].to_numpy()
+    revenue_alt = float((params.fare_solo_cny_per_km * (ride - shared) + params.fare_pooled_cny_per_km * shared)
+                        [served].sum()) / 1000
+    pay = params.driver_pay_cny_per_km * occupied_km
+
+    def mean(x, mask):
+        return float(np.mean(x[mask])) if mask.any() else float("nan")
+
+    return {
+        "orders": n,
+        "served": n_served,
+        "cancelled": int((~np.isnan(tab["cancel_s"].to_numpy())).sum()),
+        "pooled_passengers": n_pooled,
+        "pairs": n_pooled // 2,
+        "response_rate": n_served / n if n else float("nan"),
+        "pairing_ratio": n_pooled / n_served if n_served else float("nan"),
+        "pairing_ratio_of_orders": n_pooled / n if n else float("nan"),
+        "platform_profit_cny": revenue - pay,
+        "platform_profit_alt_cny": revenue_alt - pay,
+        "avg_response_time_s": mean((tab["assign_s"] - tab["request_s"]).to_numpy(), served),
+        "avg_pickup_time_s": mean((tab["pickup_s"] - tab["assign_s"]).to_numpy(), served),
+        "avg_pickup_distance_m": mean(tab["pickup_m"].to_numpy(), served),
+        "avg_detour_m": mean(tab["detour_m"].to_numpy(), pooled),
+        "avg_shared_m": mean(tab["shared_m"].to_numpy(), pooled),
+        "total_occupied_km": occupied_km,
+        "total_solo_served_km": solo_served_km,
+        "total_saving_km": solo_served_km - occupied_km,
+    }
+
+
+def hourly(tab: pd.DataFrame, start_hour: int = 0) -> pd.DataFrame:
+    """Per request hour: orders, response rate, pairing ratio, mean detour and shared distance,
+    distance saving (each pair's l_A + l_B - L counted in the hour of its earlier request), and
+    mean pick-up distance and time (the FL calibration inputs)."""
+    hour = (tab["request_s"] // 3600).astype(int) + start_hour
+    served = tab["served"]
+    pooled = tab["pooled"]
+    partner = tab["partner"].to_numpy()
+    idx = np.arange(len(tab))
+    lead = pooled.to_numpy() & ((partner > idx) | (partner < 0))
+    p = np.where(partner >= 0, partner, 0)
+    pair_saving = np.where(lead, tab["solo_m"].to_numpy() + tab["solo_m"].to_numpy()[p]
+                           - _pair_length(tab, p), 0.0)
+    frame = pd.DataFrame({"hour": hour, "served": served, "pooled": pooled, "detour_m": tab["detour_m"].where(pooled),
+                          "shared_m": tab["shared_m"].where(pooled), "saving_km": pair_saving / 1000,
+                          "pickup_m": tab["pickup_m"].where(served),
+                          "pickup_time_s": (tab["pickup_s"] - tab["assign_s"]).where(served)})
+    g = frame.groupby("hour")
+    out = pd.DataFrame({"orders": g.size(), "response_rate": g["served"].mean(),
+                        "pairing_ratio": g["pooled"].sum() / g["served"].sum().where(g["served"].sum() > 0),
+                        "avg_detour_m": g["detour_m"].mean(), "avg_shared_m": g["shared_m"].mean(),
+                        "total_saving_km": g["saving_km"].sum(), "avg_pickup_m": g["pickup_m"].mean(),
+                        "avg_pickup_time_s": g["pickup_time_s"].mean()})
+    return out.reset_index()
+
+
+def _pair_length(tab: pd.DataFrame, partner: np.ndarray) -> np.ndarray:
+    """Vehicle distance from the pair's first pick-up to its last drop-off (= ride_a + ride_b - shared)."""
+    ride = tab["ride_m"].to_numpy()
+    shared = np.nan_to_num(tab["shared_m"].to_numpy())
+    return ride + ride[partner] - shared

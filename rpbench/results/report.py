@@ -1,0 +1,229 @@
+"""Reports rendered from result files alone (tables now; plots in rpbench.results.plots).
+
+:func:`load_kpis` reads a results folder's tidy ``kpis.csv`` into the wide
+KPI x run table; :func:`text_table` / :func:`markdown_table` format it in
+the paper's Table 2 layout (strategies as columns); :func:`write_report`
+writes ``report.md`` into the folder.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from rpbench import paper, results
+from rpbench.exceptions import ResultsError
+from rpbench.results.metrics import EXTRA_KPIS, KPI_LABELS, KPI_ORDER
+from rpbench.results.plots import hourly_figure
+from rpbench.results.runs import run_label
+
+#: Competitive-ratio rows: KPI name -> the oracle run whose total saving is the denominator.
+RATIO_ROWS = {"competitive_ratio": "oracle1", "competitive_ratio_enroute": "oracle1-enroute"}
+_DECIMALS = {"response_rate": 2, "pairing_ratio": 2, "competitive_ratio": 3, "competitive_ratio_enroute": 3,
+             "pairing_ratio_of_orders": 2}
+
+
+def fmt(kpi: str, value) -> str:
+    """Format a KPI value the way the paper prints it ("/" for undefined)."""
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return "/"
+    value = float(value) + 0.0
+    if kpi in _DECIMALS:
+        text = f"{value:.{_DECIMALS[kpi]}f}"
+        return text[1:] if text.startswith("-") and float(text) == 0 else text   # no "-0.000"
+    if abs(value) >= 100 or kpi.endswith("_s") or kpi.endswith("_m"):
+        text = f"{value:,.0f}"
+    else:
+        text = f"{value:.1f}"
+    return text[1:] if text.startswith("-") and float(text.replace(",", "")) == 0 else text
+
+
+def load_kpis(folder: Path) -> pd.DataFrame:
+    """Wide KPI table (rows = KPI keys, columns = runs in meta.json's order)."""
+    meta = results.read_meta(folder)
+    tidy = results.read_csv(folder / "kpis.csv")
+    missing = {"run", "kpi", "value"} - set(tidy.columns)
+    if missing:
+        raise ResultsError(f"{str(folder / 'kpis.csv')!r} lacks column(s) {', '.join(sorted(missing))}")
+    wide = tidy.pivot(index="kpi", columns="run", values="value")
+    order = [r for r in meta.get("strategies", []) if r in wide.columns] + \
+            [r for r in wide.columns if r not in meta.get("strategies", [])]
+    return with_competitive_ratios(wide[order].drop(index=list(RATIO_ROWS), errors="ignore"))
+
+
+def with_competitive_ratios(wide: pd.DataFrame) -> pd.DataFrame:
+    """Add a strategy-saving / oracle-saving row for each oracle present (paper §4: FL = 63.2 % of Oracle-1)."""
+    for row, oracle in RATIO_ROWS.items():
+        if oracle in wide.columns and "total_saving_km" in wide.index:
+            best = wide.loc["total_saving_km", oracle]
+            wide.loc[row] = wide.loc["total_saving_km"] / best if best else np.nan
+    return wide
+
+
+def table_rows(table: pd.DataFrame) -> list[str]:
+    return [k for k in KPI_ORDER if k in table.index] + [k for k in RATIO_ROWS if k in table.index]
+
+
+def text_table(table: pd.DataFrame, *, title: str | None = None) -> str:
+    """A plain-text table for the terminal (KPIs as rows, runs as columns)."""
+    rows = table_rows(table)
+    cols = list(table.columns)
+    head = ["Metric"] + [run_label(c) for c in cols]
+    body = [[KPI_LABELS.get(k, k)] + [fmt(k, table.loc[k, c]) for c in cols] for k in rows]
+    widths = [max(len(r[i]) for r in [head] + body) for i in range(len(head))]
+    lines = []
+    if title:
+        lines.append(title)
+    lines.append("  ".join(h.ljust(widths[0]) if i == 0 else h.rjust(widths[i]) for i, h in enumerate(head)))
+    lines.append("  ".join("-" * w for w in widths))
+    for r in body:
+        lines.append("  ".join(x.ljust(widths[0]) if i == 0 else x.rjust(widths[i]) for i, x in enumerate(r)))
+    return "\n".join(lines)
+
+
+def markdown_table(table: pd.DataFrame, paper_values: dict | None = None) -> str:
+    """The Table 2 layout in markdown; with ``paper_values`` each cell reads "rpbench (paper)"."""
+    rows = table_rows(table)
+    cols = list(table.columns)
+    out = ["| Metric | " + " | ".join(run_label(c) for c in cols) + " |",
+           "|---|" + "---:|" * len(cols)]
+    for k in rows:
+        cells = []
+        for c in cols:
+            cell = fmt(k, table.loc[k, c])
+            if paper_values is not None:
+                ref = paper_values.get(c, {}).get(k, float("nan")) if k not in RATIO_ROWS else (
+                    paper.FL_COMPETITIVE_RATIO if c == "fl" and k == "competitive_ratio" else float("nan"))
+                cell += f" ({fmt(k, ref)})"
+            cells.append(cell)
+        out.append(f"| {KPI_LABELS.get(k, k)} | " + " | ".join(cells) + " |")
+    return "\n".join(out)
+
+
+def solver_summary(folder: Path) -> pd.DataFrame | None:
+    """Per run: rounds solved, model size and solve time percentiles, statuses."""
+    path = folder / "rounds.csv.gz"
+    if not path.is_file():
+        return None
+    rounds = pd.read_csv(path)
+    if rounds.empty:
+        return None
+    g = rounds.groupby("run", sort=False)
+    return pd.DataFrame({
+        "rounds": g.size(),
+        "mean cols": g["cols"].mean().round(1),
+        "max cols": g["cols"].max(),
+        "strategy build p50 (ms)": (g["strategy_build_s"].median() * 1e3).round(3),
+        "solve p50 (ms)": (g["solve_s"].median() * 1e3).round(3),
+        "solve p95 (ms)": (g["solve_s"].quantile(0.95) * 1e3).round(3),
+        "solver total (s)": (g["solver_build_s"].sum() + g["solve_s"].sum() + g["extract_s"].sum()).round(3),
+        "not optimal": g["status"].apply(lambda s: int((s != "optimal").sum())),
+        "tie moves": g["tie_moves"].sum(),
+    })
+
+
+def report_markdown(folder: Path, name: str | None = None) -> str:
+    meta = results.read_meta(folder)
+    table = load_kpis(folder)
+    sc = meta["scenario"]
+    args = sc.get("args", {})
+    lines = [f"# rpbench results: {sc['label']}", ""]
+    if sc.get("synthetic"):
+        lines += ["> **Synthetic scenario** — not real order data (see the scenario label).", ""]
+    lines += [f"- scenario `{sc['name']}`, seed {sc['seed']}, {sc['summary']['orders']} orders, "
+              f"{sc['summary']['vehicles']} vehicles, {sc['summary']['nodes']} nodes",
+              f"- solver preset `{meta['preset']['name']}` (backend `{meta['preset']['backend']}`)",
+              f"- rpbench {meta['versions']['rpbench']}, commit `{meta.get('git_commit')}`, "
+              f"written {meta.get('created')}", ""]
+    if meta.get("command"):
+        lines += ["Command:", "", f"    {meta['command']}", ""]
+    lines += ["## Comparison (paper Table 2 layout)", "", markdown_table(table), ""]
+    if paper.table2_applies(sc["name"], args.get("date"), args.get("sample")):
+        lines += ["## Beside the paper", "",
+                  "Each cell: rpbench (paper Table 2). The paper's numbers are shown for comparison only; "
+                  "nothing is tuned to them.", "", markdown_table(table, paper.TABLE2), ""]
+    summary = solver_summary(folder)
+    if summary is not None:
+        lines += ["## Solver statistics per run", "", summary.to_markdown() if _has_tabulate() else
+                  "```\n" + summary.to_string() + "\n```", ""]
+    walls = {r: v.get("wall_s") for r, v in meta.get("runs", {}).items() if v.get("wall_s") is not None}
+    if walls:
+        lines += ["Wall time per run: " + ", ".join(f"{run_label(r)} {w:.2f} s" for r, w in walls.items()),
+                  ""]
+    if results.run_names(folder):
+        verify = f"Verify this folder with `rpbench check {name or folder.name}`."
+    else:
+        verify = ("This is a published light copy without the event logs: `check.txt` holds the checker's verdict "
+                  "on the full folder; rerun the command above to regenerate and re-check it.")
+    lines += [f"KPI definitions: see `rpbench/metrics.py` (and the README). {verify}", ""]
+    return "\n".join(lines)
+
+
+def _has_tabulate() -> bool:
+    try:
+        import tabulate  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def write_report(folder: Path, name: str | None = None) -> Path:
+    """Write ``report.md`` (and its PNG plots) into ``folder`` (``name``: its final name, for the text)."""
+    text = report_markdown(folder, name)
+    hourly_png = hourly_plot(folder)
+    if hourly_png is not None:
+        text += ("\n## Per hour\n\nKPIs by request hour (saving of a pair counted in the hour of its earlier "
+                 f"request).\n\n![per-hour comparison]({hourly_png.name})\n")
+    path = folder / "report.md"
+    path.write_text(text)
+    return path
+
+
+def hourly_plot(folder: Path) -> Path | None:
+    """``hourly.png`` when the folder covers more than two hours (full-day and trace scenarios)."""
+    path = folder / "hourly.csv"
+    if not path.is_file():
+        return None
+    hourly = pd.read_csv(path)
+    if hourly.empty or hourly["hour"].nunique() <= 2:
+        return None
+    meta = results.read_meta(folder)
+    return hourly_figure(hourly, folder / "hourly.png", meta["scenario"]["label"])
+
+
+def findings(table: pd.DataFrame) -> dict[str, bool] | None:
+    """The paper's headline claims on one KPI table (KPI rows x run columns), or None without FL/MB/RTV."""
+    if not {"fl", "mb", "rtv"} <= set(table.columns):
+        return None
+    col = table.loc
+    return {
+        "FL saves the most distance (vs MB, RTV)": bool(col["total_saving_km", "fl"] > max(
+            col["total_saving_km", "mb"], col["total_saving_km", "rtv"])),
+        "FL has the lowest average detour (vs MB, RTV)": bool(col["avg_detour_m", "fl"] < min(
+            col["avg_detour_m", "mb"], col["avg_detour_m", "rtv"])),
+        "FL has a lower response rate (vs MB, RTV)": bool(col["response_rate", "fl"] < min(
+            col["response_rate", "mb"], col["response_rate", "rtv"])),
+    }
+
+
+def check_metrics(metrics: list[str] | None) -> list[str] | None:
+    """Validate a user's KPI selection against the known KPI names."""
+    if metrics is None:
+        return None
+    known = KPI_ORDER + EXTRA_KPIS + list(RATIO_ROWS) + ["wall_s"]
+    unknown = [m for m in metrics if m not in known]
+    if unknown or not metrics:
+        raise ResultsError(f"unknown metric {unknown[0] if unknown else '(none)'!r}; known metrics: "
+                           f"{', '.join(known)}")
+    return metrics
+
+
+def selected_markdown(table: pd.DataFrame) -> str:
+    cols = list(table.columns)
+    out = ["| Metric | " + " | ".join(run_label(c) for c in cols) + " |", "|---|" + "---:|" * len(cols)]
+    for k in table.index:
+        out.append(f"| {KPI_LABELS.get(k, k)} | " + " | ".join(fmt(k, table.loc[k, c]) for c in cols) + " |")
+    return "\n".join(out)

@@ -1,0 +1,203 @@
+"""Scenario = orders + fleet + parameters on a road network (frozen, validated).
+
+Generators that build scenarios from the Haikou data or in code live in
+:mod:`rpbench.scenarios`; this module only defines the objects.  Units are in
+the names (``_s`` seconds from the scenario start, ``_m`` metres).  All
+defaults are the paper's (§4.1): Δt = 10 s, R̄ = D̄ = 3000 m, 30 km/h,
+α = 1.01, r_w = 0.75, patience ~ N(90 s, 10 s) floored at 30 s, fares 5 and
+3.5 CNY/km, drivers paid 2 CNY/km, 25 vehicles per 100 orders.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from rpbench.exceptions import ParameterError
+from rpbench.network import RoadNetwork
+
+
+@dataclass(frozen=True)
+class Params:
+    """Simulation and dispatch parameters (the paper's defaults)."""
+
+    dt_s: float = 10.0                      # Δt, batch interval
+    max_pickup_m: float = 3000.0            # R̄
+    max_detour_m: float = 3000.0            # D̄
+    speed_mps: float = 30.0 / 3.6           # constant vehicle speed (30 km/h)
+    alpha: float = 1.01                     # FL waiting-priority base α (Eq. 15)
+    response_rate: float = 0.75             # r_w, presumed per-round response rate (Eq. 10)
+    planner_patience_s: float = 90.0        # K̄, the patience the planner assumes (A10)
+    patience_mean_s: float = 90.0           # K_p ~ N(mean, sd), floored
+    patience_sd_s: float = 10.0
+    patience_floor_s: float = 30.0
+    vehicles_per_100_orders: float = 25.0   # order-driver ratio 100:25
+    fare_solo_cny_per_km: float = 5.0
+    fare_pooled_cny_per_km: float = 3.5
+    driver_pay_cny_per_km: float = 2.0
+
+    _POSITIVE = ("dt_s", "max_pickup_m", "max_detour_m", "speed_mps", "planner_patience_s",
+                 "patience_mean_s", "vehicles_per_100_orders")
+    _NON_NEGATIVE = ("patience_sd_s", "patience_floor_s", "fare_solo_cny_per_km",
+                     "fare_pooled_cny_per_km", "driver_pay_cny_per_km")
+
+    def __post_init__(self) -> None:
+        for name in self._POSITIVE + self._NON_NEGATIVE + ("alpha", "response_rate"):
+            value = getattr(self, name)
+            if not isinstance(value, (int, float, np.floating, np.integer)) or not np.isfinite(value):
+                raise ParameterError(f"parameter {name} = {value!r} is not a finite number")
+        for name in self._POSITIVE:
+            if getattr(self, name) <= 0:
+                raise ParameterError(f"parameter {name} = {getattr(self, name)!r} must be > 0")
+        for name in self._NON_NEGATIVE:
+            if getattr(self, name) < 0:
+                raise ParameterError(f"parameter {name} = {getattr(self, name)!r} must be >= 0")
+        if self.alpha <= 0:
+            raise ParameterError(f"parameter alpha = {self.alpha!r} must be > 0 (the paper uses 1.01)")
+        if not 0 <= self.response_rate <= 1:
+            raise ParameterError(f"parameter response_rate = {self.response_rate!r} must lie in [0, 1]")
+
+    def replace(self, **changes: Any) -> "Params":
+        """A copy with some fields changed (validated); unknown names are an error."""
+        unknown = set(changes) - {f.name for f in dataclasses.fields(self)}
+        if unknown:
+            raise ParameterError(f"unknown parameter(s) {', '.join(sorted(unknown))}; "
+                                 f"known: {', '.join(f.name for f in dataclasses.fields(self))}")
+        return dataclasses.replace(self, **changes)
+
+    def as_dict(self) -> dict[str, float]:
+        return dataclasses.asdict(self)
+
+
+@dataclass(frozen=True, eq=False)
+class Orders:
+    """Ride requests sorted by request time (node indices are the network's internal ones)."""
+
+    order_id: np.ndarray      # int64, unique
+    request_s: np.ndarray     # float64, seconds from scenario start, non-decreasing
+    origin: np.ndarray        # int32 node index
+    destination: np.ndarray   # int32 node index
+    patience_s: np.ndarray    # float64, K_p > 0
+
+    def __post_init__(self) -> None:
+        n = len(self.order_id)
+        for name in ("request_s", "origin", "destination", "patience_s"):
+            if len(getattr(self, name)) != n:
+                raise ParameterError(f"orders: column {name} has {len(getattr(self, name))} rows, expected {n}")
+        if n and np.any(np.diff(self.request_s) < 0):
+            raise ParameterError("orders must be sorted by request time")
+        if n and (not np.all(np.isfinite(self.request_s)) or np.any(self.patience_s <= 0)):
+            raise ParameterError("orders: request times must be finite and patience positive")
+        if len(np.unique(self.order_id)) != n:
+            raise ParameterError("orders: order ids are not unique")
+
+    def __len__(self) -> int:
+        return len(self.order_id)
+
+
+@dataclass(frozen=True, eq=False)
+class Fleet:
+    """Vehicles and how many are on duty over time.
+
+    ``online_times_s``/``online_count`` define a step function: from
+    ``online_times_s[k]`` on, vehicles ``0..online_count[k]-1`` are on duty.
+    A vehicle that goes off duty finishes its passengers first.  ``None``
+    means every vehicle is on duty all the time.
+    """
+
+    initial_node: np.ndarray                  # int32 node index per vehicle
+    online_times_s: np.ndarray | None = None  # float64, increasing, first = 0
+    online_count: np.ndarray | None = None    # int64, <= number of vehicles
+
+    def __post_init__(self) -> None:
+        if (self.online_times_s is None) != (self.online_count is None):
+            raise ParameterError("fleet: online_times_s and online_count go together")
+        if self.online_times_s is not None:
+            if len(self.online_times_s) != len(self.online_count) or len(self.online_count) == 0:
+                raise ParameterError("fleet: online schedule arrays differ in length or are empty")
+            if np.any(np.diff(self.online_times_s) <= 0) or self.online_times_s[0] != 0:
+                raise ParameterError("fleet: online_times_s must start at 0 and increase")
+            if np.any(self.online_count < 0) or np.any(self.online_count > len(self.initial_node)):
+                raise ParameterError("fleet: online_count must lie in [0, number of vehicles]")
+
+    def __len__(self) -> int:
+        return len(self.initial_node)
+
+    def on_duty(self, t_s: float) -> int:
+        """Number of vehicles on duty at time ``t_s`` (vehicles 0..n-1)."""
+        if self.online_times_s is None:
+            return len(self.initial_node)
+        k = int(np.searchsorted(self.online_times_s, t_s, side="right")) - 1
+        return int(self.online_count[max(k, 0)])
+
+
+@dataclass(frozen=True)
+class Demand:
+    """The demand rates λ_w a scenario implies (what FL's prediction, paper §3.1, is fed by default).
+
+    ``table = "month"``: the 21-day 08:00-09:00 OD rate table of ``data_dir``
+    (the paper's λ_w); with ``orders_per_hour`` it is scaled so that hour h
+    carries that many orders (how the synthetic full day draws its demand).
+    ``table = None``: the scenario's own orders, counted per hour.
+    """
+
+    table: str | None = None
+    data_dir: str | None = None
+    orders_per_hour: tuple[float, ...] | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class Scenario:
+    """A complete, reproducible simulation input."""
+
+    name: str                  # generator name, e.g. "haikou-peak"
+    label: str                 # one line shown wherever results are shown
+    network: RoadNetwork
+    orders: Orders
+    fleet: Fleet
+    params: Params
+    seed: int
+    horizon_s: float           # simulated period [0, horizon_s)
+    start_time: str            # ISO date-time of t = 0 (for display)
+    synthetic: bool            # True for stand-ins and generated cities
+    provenance: dict = field(default_factory=dict)
+    demand: Demand = Demand()
+
+    def __post_init__(self) -> None:
+        n = self.network.n_nodes
+        for name in ("origin", "destination"):
+            arr = getattr(self.orders, name)
+            if len(arr) and (arr.min() < 0 or arr.max() >= n):
+                raise ParameterError(f"orders: {name} node index outside the network (0..{n - 1})")
+        if len(self.fleet) and (self.fleet.initial_node.min() < 0 or self.fleet.initial_node.max() >= n):
+            raise ParameterError(f"fleet: initial node outside the network (0..{n - 1})")
+        if self.horizon_s <= 0:
+            raise ParameterError(f"horizon_s = {self.horizon_s} must be > 0")
+
+    def summary(self) -> dict[str, Any]:
+        """The facts ``rpbench scenario`` prints (keys ``orders``, ``vehicles``, ``nodes`` are stable)."""
+        o = self.orders
+        solo = self.network.distances()(o.origin, o.destination) if len(o) else np.zeros(0)
+        od = np.unique(o.origin.astype(np.int64) * self.network.n_nodes + o.destination) if len(o) else []
+        return {
+            "scenario": self.name,
+            "label": self.label,
+            "synthetic": self.synthetic,
+            "orders": int(len(o)),
+            "vehicles": int(len(self.fleet)),
+            "nodes": int(self.network.n_nodes),
+            "arcs": int(self.network.n_arcs),
+            "distinct_od_pairs": int(len(od)),
+            "mean_solo_trip_m": float(solo.mean()) if len(o) else 0.0,
+            "first_request_s": float(o.request_s[0]) if len(o) else 0.0,
+            "last_request_s": float(o.request_s[-1]) if len(o) else 0.0,
+            "horizon_s": float(self.horizon_s),
+            "start_time": self.start_time,
+            "seed": int(self.seed),
+            "network": self.network.name,
+            "data_source": self.provenance.get("source", ""),
+            "params": self.params.as_dict(),
+        }

@@ -1,0 +1,82 @@
+"""The scenario generators by name.
+
+``build_scenario(name, ...)`` resolves the data folder (``--data``,
+``$RPBENCH_DATA``, ``../shared/data/haikou``), applies parameter overrides
+and returns a frozen :class:`~rpbench.scenarios.base.Scenario`.  A generator
+of real days also says which dates its data folder holds (``dates``), which
+is what ``--dates`` runs over.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable
+
+from rpbench.data import available_peak_dates, read_hourly_counts
+from rpbench.exceptions import ParameterError
+from rpbench.paths import find_data_dir, require_data_dir
+from rpbench.scenarios.base import Params, Scenario
+from rpbench.scenarios.day import build_day
+from rpbench.scenarios.peak import build_peak
+from rpbench.scenarios.toy import build_toy
+from rpbench.scenarios.trace import build_trace
+
+
+@dataclass(frozen=True)
+class ScenarioSpec:
+    name: str
+    description: str
+    needs_data: bool
+    default_sample: float
+    build: Callable[..., Scenario]
+    #: The dates a data folder holds for this scenario (None: the scenario has no date choice).
+    dates: Callable[[Path], list[str]] | None = None
+
+
+def _hourly_count_dates(data_dir: Path) -> list[str]:
+    return sorted(read_hourly_counts(data_dir))
+
+
+SCENARIOS: dict[str, ScenarioSpec] = {
+    spec.name: spec for spec in [
+        ScenarioSpec("haikou-peak", "a date's real 08:00-09:00 DiDi orders on the authors' network "
+                     "(default 2017-05-01, 30 % sample)", True, 0.3, build_peak, available_peak_dates),
+        ScenarioSpec("haikou-day", "SYNTHETIC 24-hour stand-in: a date's real hourly volumes, OD pairs "
+                     "from the 21-day OD rate table", True, 1.0, build_day, _hourly_count_dates),
+        ScenarioSpec("haikou-trace", "the real 2017-07-01 00:00-13:06 trace on the TR-B 2021 network",
+                     True, 1.0, build_trace),
+        ScenarioSpec("toy", "SYNTHETIC small grid city generated in code (no data needed)", False, 1.0,
+                     lambda data_dir, **kw: build_toy(**kw)),
+    ]
+}
+
+DEFAULT_SCENARIO = "haikou-peak"
+
+
+def build_scenario(name: str, *, data_dir: str | Path | None = None, date: str | None = None,
+                   sample: float | None = None, seed: int = 0, params: Params | None = None,
+                   param_overrides: dict[str, Any] | None = None, **options: Any) -> Scenario:
+    """Build the named scenario (see :data:`SCENARIOS`)."""
+    spec = scenario_spec(name)
+    params = params or Params()
+    if param_overrides:
+        params = params.replace(**param_overrides)
+    kwargs: dict[str, Any] = dict(seed=seed, params=params,
+                                  sample=spec.default_sample if sample is None else sample, **options)
+    if date is not None:
+        kwargs["date"] = date
+    folder = require_data_dir(data_dir, what=f"scenario {name!r}") if spec.needs_data else None
+    return spec.build(folder, **kwargs)
+
+
+def scenario_spec(name: str) -> ScenarioSpec:
+    spec = SCENARIOS.get(name)
+    if spec is None:
+        raise ParameterError(f"unknown scenario {name!r}; expected one of {', '.join(SCENARIOS)}")
+    return spec
+
+
+def default_scenario_name(data_dir: str | Path | None = None) -> str:
+    """``haikou-peak`` when a data folder exists, else the built-in ``toy`` city."""
+    return DEFAULT_SCENARIO if find_data_dir(data_dir) is not None else "toy"

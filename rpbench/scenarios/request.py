@@ -1,0 +1,95 @@
+"""A scenario request: everything that names one scenario, frozen, picklable, recorded as given.
+
+One :class:`ScenarioRequest` replaces the argument shapes that the run, the
+multi-day runner, the sweep points and the commands used to rebuild:
+:meth:`~ScenarioRequest.build` makes the scenario, :meth:`~ScenarioRequest.meta`
+is what a results folder records (``meta.json`` ``scenario.args``), and
+:meth:`~ScenarioRequest.dates` expands ``--dates`` for any dated scenario.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime as dt
+from dataclasses import dataclass
+from typing import Any
+
+from rpbench.data.orders import parse_date
+from rpbench.exceptions import ParameterError
+from rpbench.paths import require_data_dir
+from rpbench.scenarios.base import Scenario
+from rpbench.scenarios.registry import build_scenario, scenario_spec
+
+
+@dataclass(frozen=True)
+class ScenarioRequest:
+    """Name, date, sample, seed, parameter overrides and fleet placement of one scenario."""
+
+    name: str
+    date: str | None = None
+    sample: float | None = None
+    seed: int = 0
+    params: tuple[tuple[str, float], ...] = ()     # overrides, sorted (frozen and hashable)
+    fleet_placement: str = "order_origins"
+    data_dir: str | None = None
+
+    def __post_init__(self) -> None:
+        scenario_spec(self.name)                   # an unknown name fails here, before any work
+        object.__setattr__(self, "params", tuple(sorted(dict(self.params).items())))
+
+    @property
+    def overrides(self) -> dict[str, float]:
+        return dict(self.params)
+
+    def replace(self, **changes: Any) -> "ScenarioRequest":
+        """A copy with some fields changed; ``params`` may be given as a dict."""
+        if isinstance(changes.get("params"), dict):
+            changes["params"] = tuple(changes["params"].items())
+        return dataclasses.replace(self, **changes)
+
+    def with_overrides(self, overrides: dict[str, float]) -> "ScenarioRequest":
+        """This request with more parameter overrides (they win over the present ones)."""
+        return self.replace(params={**self.overrides, **overrides})
+
+    def build(self) -> Scenario:
+        return build_scenario(self.name, data_dir=self.data_dir, date=self.date, sample=self.sample,
+                              seed=self.seed, param_overrides=self.overrides, fleet_placement=self.fleet_placement)
+
+    def meta(self) -> dict[str, Any]:
+        """The request as recorded in a results folder (no machine path)."""
+        return {"date": self.date, "sample": self.sample, "seed": self.seed, "params": self.overrides,
+                "fleet_placement": self.fleet_placement}
+
+    def dates(self, text: str) -> list[str]:
+        """``A..B`` (the days in range the data folder has) or ``A,B,C`` (each must exist) for this scenario."""
+        spec = scenario_spec(self.name)
+        if spec.dates is None:
+            raise ParameterError(f"--dates: scenario {self.name!r} has no dates to choose from")
+        folder = require_data_dir(self.data_dir, what="--dates")
+        return parse_dates(text, spec.dates(folder))
+
+
+def parse_dates(text: str, have: list[str]) -> list[str]:
+    """``A..B`` (inclusive; the days in range that are in ``have``) or ``A,B,C`` (each must be in ``have``)."""
+    if ".." in text:
+        first, _, last = text.partition("..")
+        a, b = parse_date(first.strip()), parse_date(last.strip())
+        if b < a:
+            raise ParameterError(f"--dates {text!r}: the range ends before it starts")
+        dates = [d for d in have if a <= dt.date.fromisoformat(d) <= b]
+        if not dates:
+            raise ParameterError(f"--dates {text!r}: no data for a day in that range "
+                                 f"(available: {_span(have)})")
+        return dates
+    dates = [parse_date(d.strip()).isoformat() for d in text.split(",") if d.strip()]
+    missing = [d for d in dates if d not in have]
+    if missing or not dates:
+        raise ParameterError(f"--dates {text!r}: no data for {', '.join(missing) or '(none)'} "
+                             f"(available: {_span(have)})")
+    return dates
+
+
+def _span(have: list[str]) -> str:
+    if not have:
+        return "none"
+    return ", ".join(have) if len(have) <= 20 else f"{have[0]}..{have[-1]} ({len(have)} days)"

@@ -1,0 +1,242 @@
+"""Vehicle routes, positions and stops for the batch-round simulator.
+
+Each vehicle has a *plan*: a node sequence with the time it reaches each
+node and its odometer there, driven at the constant speed along shortest
+paths of the one distance table.  A plan may carry *stops* (pick-ups and
+drop-offs at plan nodes).  Vehicles only turn at nodes: a new plan starts at
+an *anchor* node of the current plan (the next node, or the pick-up node of
+the passenger already assigned, A14), and everything before the anchor is
+moved to the vehicle's history unchanged.  Vacant on-duty vehicles cruise at
+random (uniformly among outgoing arcs, avoiding U-turns where possible),
+extended lazily; off-duty vacant vehicles stand still at their next node.
+
+Positions are derived from plans, never stepped: at time t a vehicle is
+``pre = (tt[k] - t)·v`` metres before the plan node ``k`` it reaches next.
+History + plan form the trajectory the event log stores and the checker
+verifies (consecutive nodes joined by arcs, driven at the set speed).
+"""
+
+from __future__ import annotations
+
+import heapq
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from rpbench.network import DistanceOracle, RoadNetwork
+
+PICKUP, DROPOFF = 0, 1
+CRUISE_ARCS = 24          # random-walk arcs added per extension (~11 km on Haikou)
+_EPS_S = 1e-9
+
+
+@dataclass
+class Stop:
+    index: int        # position in the plan
+    kind: int         # PICKUP or DROPOFF
+    order: int        # scenario order index
+
+
+@dataclass
+class Plan:
+    nodes: np.ndarray
+    tt: np.ndarray    # time at each node (s)
+    odo: np.ndarray   # odometer at each node (m)
+    stops: list[Stop] = field(default_factory=list)
+    cruising: bool = False
+
+
+class FleetState:
+    """Mutable vehicle state of one simulation run."""
+
+    def __init__(self, network: RoadNetwork, distances: DistanceOracle, initial_nodes: np.ndarray, speed_mps: float,
+                 rng: np.random.Generator):
+        self.network = network
+        self.distances = distances
+        self.speed = float(speed_mps)
+        self.rng = rng
+        n = len(initial_nodes)
+        self.n = n
+        self.history: list[list[Plan]] = [[] for _ in range(n)]
+        self.plans: list[Plan] = [self._still(int(node), 0.0, 0.0) for node in initial_nodes]
+        self.onboard: list[list[int]] = [[] for _ in range(n)]
+        self.assigned: list[list[int]] = [[] for _ in range(n)]     # assigned, not yet picked up
+        self.load = np.zeros(n, dtype=np.int64)                     # passengers assigned or on board
+        self.paired = np.zeros(n, dtype=bool)                       # carries (or will carry) a pooled pair
+        self.on_duty = np.zeros(n, dtype=bool)
+        self._version = np.zeros(n, dtype=np.int64)
+        self._heap: list[tuple[float, int, int]] = []               # (time of next stop, vehicle, version)
+        # Cached next plan node per vehicle, valid until the vehicle reaches it.
+        self._next_k = np.zeros(n, dtype=np.int64)
+        self._next_node = np.asarray(initial_nodes, dtype=np.int64).copy()
+        self._next_tt = np.full(n, -np.inf)
+        self._idle = np.zeros(n, dtype=bool)
+        # Out-neighbours per node as plain lists: the random walk steps one node at a time.
+        heads = network.arc_head[network.out_arcs]
+        off = network.out_offsets
+        self._successors = [heads[off[u]:off[u + 1]].tolist() for u in range(network.n_nodes)]
+
+    # --------------------------------------------------------------- plans
+    def _still(self, node: int, t: float, odo: float) -> Plan:
+        return Plan(np.array([node], np.int32), np.array([t]), np.array([odo]))
+
+    def _plan_from(self, start_node: int, t: float, odo: float, nodes_tail: np.ndarray) -> Plan:
+        """A plan driving ``start_node`` then ``nodes_tail`` (consecutive nodes joined by arcs)."""
+        nodes = np.concatenate([[start_node], nodes_tail]).astype(np.int32)
+        if len(nodes) > 1:
+            arcs = self.network.arc_index(nodes[:-1], nodes[1:])
+            step = self.network.arc_length_m[arcs]
+        else:
+            step = np.zeros(0)
+        cum = np.concatenate([[0.0], np.cumsum(step)])
+        return Plan(nodes, t + cum / self.speed, odo + cum)
+
+    def route_through(self, waypoints: list[int]) -> tuple[np.ndarray, list[int]]:
+        """Shortest-path node sequence visiting ``waypoints`` (the first is the start node).
+
+        Returns the tail (without the start node) and the tail index (1-based
+        plan index) at which each later waypoint is reached.
+        """
+        tail: list[np.ndarray] = []
+        reach: list[int] = []
+        length = 0
+        for a, b in zip(waypoints[:-1], waypoints[1:]):
+            path = self.distances.path_nodes(a, b)[1:]
+            tail.append(path)
+            length += len(path)
+            reach.append(length)
+        return (np.concatenate(tail) if tail else np.zeros(0, np.int32)), reach
+
+    def position(self, v: int, t: float) -> tuple[int, int, float]:
+        """(plan index of the next node, that node, metres before reaching it) at time ``t``."""
+        plan = self.plans[v]
+        k = int(np.searchsorted(plan.tt, t - _EPS_S, side="left"))
+        if k >= len(plan.nodes):
+            if plan.cruising:
+                self._extend_cruise(v, t)
+                return self.position(v, t)
+            k = len(plan.nodes) - 1
+            return k, int(plan.nodes[k]), 0.0
+        # Before plan node k the vehicle drives the arc into it (for k = 0, the
+        # last arc of its history), so the remaining distance follows from time.
+        return k, int(plan.nodes[k]), max(0.0, (plan.tt[k] - t) * self.speed)
+
+    def positions(self, vehicles: np.ndarray, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Vectorised :meth:`position` for many vehicles (plan index, next node, metres before it).
+
+        Only vehicles that passed their cached next node are looked up again,
+        so a round costs O(vehicles that crossed a node) Python work.
+        """
+        vehicles = np.asarray(vehicles, dtype=np.int64)
+        stale = vehicles[(self._next_tt[vehicles] < t - _EPS_S) & ~self._idle[vehicles]]
+        for v in stale:
+            k, node, _ = self.position(int(v), t)
+            plan = self.plans[v]
+            self._next_k[v], self._next_node[v] = k, node
+            self._idle[v] = k == len(plan.nodes) - 1 and plan.tt[k] <= t and not plan.cruising
+            self._next_tt[v] = plan.tt[k]
+        pre = np.where(self._idle[vehicles], 0.0, np.maximum(0.0, (self._next_tt[vehicles] - t) * self.speed))
+        return self._next_k[vehicles].copy(), self._next_node[vehicles].copy(), pre
+
+    def _invalidate(self, v: int) -> None:
+        self._next_tt[v] = -np.inf
+        self._idle[v] = False
+
+    def replan(self, v: int, anchor: int, nodes_tail: np.ndarray, stops: list[Stop], *, cruising: bool = False,
+               start_t: float | None = None) -> None:
+        """Keep the current plan up to plan index ``anchor`` and continue with ``nodes_tail``.
+
+        ``stops`` are indexed in the new plan (0 = the anchor node).  With
+        ``start_t`` later than the anchor time the vehicle stands still at the
+        anchor until then (used when an off-duty vehicle resumes).
+        """
+        plan = self.plans[v]
+        if plan.stops and plan.stops[0].index < anchor:
+            raise RuntimeError(f"vehicle {v}: replanning past an unserved stop")  # pragma: no cover
+        self.history[v].append(Plan(plan.nodes[:anchor + 1], plan.tt[:anchor + 1], plan.odo[:anchor + 1]))
+        t0 = float(plan.tt[anchor]) if start_t is None else max(float(plan.tt[anchor]), start_t)
+        new = self._plan_from(int(plan.nodes[anchor]), t0, float(plan.odo[anchor]), nodes_tail)
+        new.stops = sorted(stops, key=lambda s: (s.index, s.kind))
+        new.cruising = cruising
+        self.plans[v] = new
+        self._invalidate(v)
+        self._version[v] += 1
+        if new.stops:
+            heapq.heappush(self._heap, (float(new.tt[new.stops[0].index]), v, int(self._version[v])))
+
+    # -------------------------------------------------------------- cruising
+    def start_cruise(self, v: int, anchor: int, t: float | None = None) -> None:
+        """Random cruising from plan index ``anchor`` (at time ``t`` if later)."""
+        node = int(self.plans[v].nodes[anchor])
+        prev = int(self.plans[v].nodes[anchor - 1]) if anchor > 0 else -1
+        self.replan(v, anchor, self._random_walk(node, prev), [], cruising=True, start_t=t)
+
+    def park(self, v: int, anchor: int) -> None:
+        """Stop at plan index ``anchor`` and stand still (off duty)."""
+        self.replan(v, anchor, np.zeros(0, np.int32), [])
+
+    def _extend_cruise(self, v: int, t: float) -> None:
+        plan = self.plans[v]
+        while plan.tt[-1] < t + 1.0:
+            prev = int(plan.nodes[-2]) if len(plan.nodes) > 1 else -1
+            extra = self._plan_from(int(plan.nodes[-1]), float(plan.tt[-1]), float(plan.odo[-1]),
+                                    self._random_walk(int(plan.nodes[-1]), prev))
+            plan.nodes = np.concatenate([plan.nodes, extra.nodes[1:]])
+            plan.tt = np.concatenate([plan.tt, extra.tt[1:]])
+            plan.odo = np.concatenate([plan.odo, extra.odo[1:]])
+        self._invalidate(v)
+
+    def random_walk_from(self, node: int, prev: int) -> np.ndarray:
+        """A random cruise continuing from ``node`` having come from ``prev``."""
+        return self._random_walk(node, prev)
+
+    def _random_walk(self, node: int, prev: int) -> np.ndarray:
+        succ = self._successors
+        out = []
+        for u in self.rng.random(CRUISE_ARCS).tolist():
+            heads = succ[node]
+            if len(heads) > 1 and prev >= 0:
+                heads = [h for h in heads if h != prev] or heads    # no U-turn unless at a dead end
+            nxt = heads[int(u * len(heads))]
+            out.append(nxt)
+            prev, node = node, nxt
+        return np.asarray(out, dtype=np.int32)
+
+    # ---------------------------------------------------------------- stops
+    def due_stops(self, t: float):
+        """Yield ``(time, vehicle, stop, node, odometer)`` for every stop due by ``t``, in time order.
+
+        The caller handles each stop (and may replan the vehicle) before the
+        next one is produced.
+        """
+        while self._heap and self._heap[0][0] <= t + _EPS_S:
+            time, v, version = heapq.heappop(self._heap)
+            if version != self._version[v]:
+                continue
+            plan = self.plans[v]
+            stop = plan.stops.pop(0)
+            node = int(plan.nodes[stop.index])
+            odo = float(plan.odo[stop.index])
+            if plan.stops:
+                heapq.heappush(self._heap, (float(plan.tt[plan.stops[0].index]), v, int(self._version[v])))
+            yield float(plan.tt[stop.index]), v, stop, node, odo
+
+    # ------------------------------------------------------------ trajectory
+    def trajectory(self, v: int, t_end: float | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The driven node sequence with times and odometer (up to ``t_end``)."""
+        chunks = self.history[v] + [self.plans[v]]
+        nodes, tt, odo = [], [], []
+        for c in chunks:
+            n, t, o = c.nodes, c.tt, c.odo
+            if nodes and nodes[-1][-1] == n[0] and tt[-1][-1] >= t[0] - _EPS_S:
+                n, t, o = n[1:], t[1:], o[1:]        # drop the repeated anchor node
+            if len(n):
+                nodes.append(n)
+                tt.append(t)
+                odo.append(o)
+        nodes_a, tt_a, odo_a = np.concatenate(nodes), np.concatenate(tt), np.concatenate(odo)
+        if t_end is not None:
+            keep = tt_a <= t_end + _EPS_S
+            keep[0] = True
+            nodes_a, tt_a, odo_a = nodes_a[keep], tt_a[keep], odo_a[keep]
+        return nodes_a, tt_a, odo_a

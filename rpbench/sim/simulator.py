@@ -1,0 +1,345 @@
+"""The batch-round simulator (paper §2.1 and §4.1; issue "Simulator").
+
+Every Δt seconds, at rounds t = 0, Δt, 2Δt, ...:
+
+1. process the pick-ups and drop-offs vehicles reached by t (a vehicle whose
+   last passenger leaves becomes vacant and cruises at random);
+2. reveal the orders requested by t; cancel waiting passengers whose
+   patience K_p ran out (``t - t_request > K_p``; never assigned);
+3. build the round state (waiting passengers with rounds waited k_p; vacant
+   vehicles V0; partially occupied vehicles V1 — exactly one unpaired
+   passenger on board *or assigned*, including vehicles still driving to that
+   first passenger; full vehicles excluded);
+4. ask the strategy for a model, solve it with the preset's backend, resolve
+   ties among optima solver-independently (:mod:`rpbench.sim.ties`) and commit
+   the decisions (assignments are final);
+5. record events and per-round solver statistics.
+
+Vehicles move along shortest paths at the set speed between rounds
+(:mod:`rpbench.sim.fleet`).  Capacity is one pooled pair.  The run ends when
+every order has been revealed and resolved; vehicles then finish their
+passengers.
+"""
+
+from __future__ import annotations
+
+import math
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from rpbench.backends import Preset, solve
+from rpbench.exceptions import SolverError
+from rpbench.instances import save_instance
+from rpbench.model import Status
+from rpbench.scenarios.base import Scenario
+from rpbench.sim.fleet import DROPOFF, PICKUP, FleetState, Stop
+from rpbench.sim.ties import canonicalize
+from rpbench.strategies.base import Kind, RoundModel, RoundState, Strategy
+
+# passenger states
+PENDING, WAITING, ASSIGNED, ONBOARD, DONE, CANCELLED = range(6)
+EVENT_COLUMNS = ["t_s", "event", "order", "vehicle", "node", "kind", "utility_m", "pickup_plan_m", "partner",
+                 "fofo"]
+EVENT_DTYPES = {"t_s": "float64", "event": "object", "order": "int64", "vehicle": "int64", "node": "int64",
+                "kind": "object", "utility_m": "float64", "pickup_plan_m": "float64", "partner": "int64",
+                "fofo": "bool"}
+ROUND_COLUMNS = ["round", "t_s", "waiting", "v0", "v1", "rows", "cols", "nonzeros", "strategy_build_s",
+                 "solver_build_s", "solve_s", "extract_s", "status", "objective_m", "gap", "assigned",
+                 "tie_moves"]
+
+
+@dataclass
+class SimResult:
+    """What one simulation run produced (everything the results folder stores)."""
+
+    strategy: str
+    events: pd.DataFrame
+    rounds: pd.DataFrame
+    trajectories: dict[str, np.ndarray]   # vehicle_offsets, node, t_s, odo_m
+    wall_s: float
+    end_s: float
+
+
+class Simulator:
+    """One run of one strategy on one scenario with one solver backend."""
+
+    def __init__(self, scenario: Scenario, strategy: Strategy, preset: Preset, *,
+                 canonical_ties: bool = True, progress=None, capture=None):
+        """``capture(round, t, round_model, solution)``, if given, sees every solved round (snapshots)."""
+        self.scenario = scenario
+        self.strategy = strategy
+        self.preset = preset
+        self.canonical_ties = canonical_ties
+        self.progress = progress
+        self.capture = capture
+        self.params = scenario.params
+        self.distances = scenario.network.distances()
+        self.dist = self.distances.dist
+        o = scenario.orders
+        self.n_orders = len(o)
+        self.origin = o.origin.astype(np.int64)
+        self.destination = o.destination.astype(np.int64)
+        self.request = o.request_s
+        self.patience = o.patience_s
+        self.solo = self.dist[self.origin, self.destination] if self.n_orders else np.zeros(0)
+        self.state = np.full(self.n_orders, PENDING, dtype=np.int8)
+        self.vehicle_of = np.full(self.n_orders, -1, dtype=np.int64)
+        self.pickup_odo = np.full(self.n_orders, np.nan)
+        rng = np.random.default_rng(np.random.SeedSequence([scenario.seed, 20170501]))
+        self.fleet = FleetState(scenario.network, self.distances, scenario.fleet.initial_node, self.params.speed_mps, rng)
+        self.events: list[tuple] = []
+        self.rounds: list[tuple] = []
+        self.waiting: list[int] = []
+
+    # ------------------------------------------------------------------ run
+    def run(self) -> SimResult:
+        t0 = time.perf_counter()
+        self.strategy.prepare(self.scenario)
+        dt = self.params.dt_s
+        next_order = 0
+        k = 0
+        t = 0.0
+        last_request = float(self.request[-1]) if self.n_orders else 0.0
+        while True:
+            t = k * dt
+            self._process_stops(t)
+            self._update_duty(t)
+            while next_order < self.n_orders and self.request[next_order] <= t:
+                self.state[next_order] = WAITING
+                self.waiting.append(next_order)
+                self._event(self.request[next_order], "request", next_order, -1, self.origin[next_order])
+                next_order += 1
+            self._expire(t)
+            if self.waiting:
+                self._round(k, t)
+            if self.progress is not None:
+                self.progress.update(min(t, self.scenario.horizon_s) - self.progress.n)
+            if next_order >= self.n_orders and not self.waiting and t >= last_request:
+                break
+            k += 1
+        self._process_stops(math.inf)
+        end = max([t] + [e[0] for e in self.events])
+        return SimResult(strategy=self.strategy.name,
+                         events=pd.DataFrame(self.events, columns=EVENT_COLUMNS).astype(EVENT_DTYPES).sort_values(
+                             ["t_s", "order", "event"], kind="stable").reset_index(drop=True),
+                         rounds=pd.DataFrame(self.rounds, columns=ROUND_COLUMNS),
+                         trajectories=self._trajectories(end), wall_s=time.perf_counter() - t0, end_s=end)
+
+    # ------------------------------------------------------------ per round
+    def _round(self, k: int, t: float) -> None:
+        t_build = time.perf_counter()
+        state = self._round_state(t)
+        rm = self.strategy.build(state)
+        build_s = time.perf_counter() - t_build
+        model = rm.model
+        if model.n_cols == 0:
+            return
+        try:
+            solution = solve(model, self.preset)        # verified feasible there
+        except SolverError as exc:
+            raise self._round_failure(k, t, model, str(exc)) from None
+        if solution.status is Status.INFEASIBLE:
+            raise self._round_failure(k, t, model, f"returned {solution.status.value}: {solution.message}")
+        if self.capture is not None:
+            self.capture(k, t, rm, solution)
+        moves = 0
+        if self.canonical_ties:
+            solution, moves = canonicalize(model, solution)
+        assigned = self._commit(rm, solution.chosen, t)
+        vehicles, targets = self.strategy.reposition(state, rm, solution.chosen)
+        for v, node in zip(vehicles, targets):
+            self._reposition(int(v), int(node), t)
+        size = model.size
+        self.rounds.append((k, t, state.n_passengers, state.n_v0, state.n_v1, size["rows"], size["cols"],
+                            size["nonzeros"], build_s, solution.build_s, solution.solve_s, solution.extract_s,
+                            solution.status.value, solution.objective * model.unit_m, solution.gap, assigned, moves))
+
+    def _round_failure(self, k: int, t: float, model, what: str) -> SolverError:
+        """A solver failure naming the strategy and round, with the round's model saved for `rpbench bench`."""
+
+        where = f"{self.strategy.name} round {k} (t={t:g} s): solver preset {self.preset.name!r}: {what}"
+        path = Path(tempfile.gettempdir()) / f"rpbench-failed-{self.strategy.name}-round{k:05d}.npz"
+        try:
+            save_instance(path, model, {"scenario": self.scenario.name, "seed": self.scenario.seed,
+                                        "strategy": self.strategy.name, "round": k, "t_s": t, "error": what})
+        except OSError:
+            return SolverError(where)
+        return SolverError(f"{where}; the round's model is saved as {path} (reproduce: rpbench bench {path})")
+
+    def _round_state(self, t: float) -> RoundState:
+        fl = self.fleet
+        p = np.asarray(self.waiting, dtype=np.int64)
+        v0 = np.flatnonzero((fl.load == 0) & fl.on_duty)
+        v1 = np.flatnonzero((fl.load == 1) & ~fl.paired & fl.on_duty)
+        _, v0_node, v0_pre = fl.positions(v0, t)
+        v1_node = np.empty(len(v1), np.int64)
+        v1_delta = np.zeros(len(v1))
+        v1_pre = np.zeros(len(v1))
+        v1_order = np.empty(len(v1), np.int64)
+        v1_onboard = np.zeros(len(v1), bool)
+        if len(v1):
+            k_next, node_next, pre_next = fl.positions(v1, t)
+            for i, v in enumerate(v1):
+                if fl.onboard[v]:
+                    a = fl.onboard[v][0]
+                    v1_onboard[i] = True
+                    v1_node[i] = node_next[i]
+                    v1_pre[i] = pre_next[i]
+                    v1_delta[i] = fl.plans[v].odo[k_next[i]] - self.pickup_odo[a]
+                else:   # still driving to its first passenger: h = o_A, δ = 0, pre = 0 (A14)
+                    a = fl.assigned[v][0]
+                    v1_node[i] = self.origin[a]
+                v1_order[i] = a
+        waited = np.maximum(1, np.ceil((t - self.request[p]) / self.params.dt_s - 1e-9)).astype(np.int64)
+        return RoundState(
+            t_s=t, params=self.params, dist=self.dist, p_order=p, p_origin=self.origin[p],
+            p_destination=self.destination[p], p_solo_m=self.solo[p], p_request_s=self.request[p],
+            p_rounds_waited=waited, v0_vehicle=v0, v0_node=v0_node, v0_pre_m=v0_pre, v1_vehicle=v1,
+            v1_node=v1_node, v1_delta_m=v1_delta, v1_pre_m=v1_pre, v1_order=v1_order,
+            v1_origin=self.origin[v1_order], v1_destination=self.destination[v1_order],
+            v1_solo_m=self.solo[v1_order], v1_onboard=v1_onboard)
+
+    # --------------------------------------------------------------- commit
+    def _commit(self, rm: RoundModel, chosen: np.ndarray, t: float) -> int:
+        fl = self.fleet
+        served = 0
+        for c in chosen:
+            kind = int(rm.kind[c])
+            if kind == Kind.WAIT:
+                continue
+            v = int(rm.vehicle[c])
+            a, b = int(rm.first[c]), int(rm.second[c])
+            fofo = bool(rm.fofo[c])
+            k, h, _ = fl.positions(np.array([v]), t)
+            k, h = int(k[0]), int(h[0])
+            if kind == Kind.VACANT:
+                tail, reach = fl.route_through([h, self.origin[a], self.destination[a]])
+                stops = [Stop(reach[0], PICKUP, a), Stop(reach[1], DROPOFF, a)]
+                fl.replan(v, k, tail, stops)
+                self._assign(a, v, t, rm, c, partner=-1)
+                served += 1
+            elif kind == Kind.JOIN:
+                first = fl.onboard[v][0] if fl.onboard[v] else fl.assigned[v][0]
+                drops = self._drop_order(first, a, fofo)
+                drop_nodes = [int(self.destination[o]) for o in drops]
+                if fl.onboard[v]:
+                    tail, reach = fl.route_through([h, self.origin[a], *drop_nodes])
+                    stops = [Stop(reach[0], PICKUP, a)]
+                    anchor = k
+                else:   # divert after picking up the first passenger at o_A (A14)
+                    plan = fl.plans[v]
+                    anchor = next(s.index for s in plan.stops if s.kind == PICKUP and s.order == first)
+                    tail, reach = fl.route_through([int(plan.nodes[anchor]), self.origin[a], *drop_nodes])
+                    stops = [Stop(0, PICKUP, first), Stop(reach[0], PICKUP, a)]
+                stops += [Stop(reach[1], DROPOFF, drops[0]), Stop(reach[2], DROPOFF, drops[1])]
+                fl.replan(v, anchor, tail, stops)
+                fl.paired[v] = True
+                self._assign(a, v, t, rm, c, partner=first)
+                served += 1
+            elif kind == Kind.TRIP2:
+                drops = self._drop_order(a, b, fofo)
+                tail, reach = fl.route_through([h, self.origin[a], self.origin[b],
+                                                *(int(self.destination[o]) for o in drops)])
+                stops = [Stop(reach[0], PICKUP, a), Stop(reach[1], PICKUP, b),
+                         Stop(reach[2], DROPOFF, drops[0]), Stop(reach[3], DROPOFF, drops[1])]
+                fl.replan(v, k, tail, stops)
+                fl.paired[v] = True
+                self._assign(a, v, t, rm, c, partner=b)
+                self._assign(b, v, t, rm, c, partner=a)
+                served += 2
+        return served
+
+    def _reposition(self, v: int, node: int, t: float) -> None:
+        """Send a vacant vehicle to ``node``; it stays vacant and cruises on from there."""
+        fl = self.fleet
+        k, h, _ = fl.positions(np.array([v]), t)
+        tail, _ = fl.route_through([int(h[0]), node])
+        fl.replan(v, int(k[0]), np.concatenate([tail, fl.random_walk_from(node, int(tail[-2]) if len(tail) > 1
+                                                                          else int(h[0]))]), [], cruising=True)
+        self._event(t, "reposition", -1, v, node)
+
+    @staticmethod
+    def _drop_order(a: int, b: int, a_first: bool) -> list[int]:
+        """The two orders in drop-off sequence (FOFO: the first passenger is dropped first)."""
+        return [a, b] if a_first else [b, a]
+
+    def _assign(self, order: int, v: int, t: float, rm: RoundModel, c: int, partner: int) -> None:
+        self.state[order] = ASSIGNED
+        self.vehicle_of[order] = v
+        self.fleet.assigned[v].append(order)
+        self.fleet.load[v] += 1
+        self.waiting.remove(order)
+        kind = {Kind.VACANT: "vacant", Kind.JOIN: "join", Kind.TRIP2: "trip2"}[Kind(int(rm.kind[c]))]
+        self._event(t, "assign", order, v, -1, kind, float(rm.utility_m[c]), float(rm.pickup_m[c]), partner,
+                    bool(rm.fofo[c]))
+
+    # ---------------------------------------------------------------- stops
+    def _process_stops(self, t: float) -> None:
+        fl = self.fleet
+        for when, v, stop, node, odo in fl.due_stops(t):
+            o = stop.order
+            if stop.kind == PICKUP:
+                fl.assigned[v].remove(o)
+                fl.onboard[v].append(o)
+                self.state[o] = ONBOARD
+                self.pickup_odo[o] = odo
+                self._event(when, "pickup", o, v, node)
+            else:
+                fl.onboard[v].remove(o)
+                fl.load[v] -= 1
+                self.state[o] = DONE
+                self._event(when, "dropoff", o, v, node)
+                if not fl.onboard[v] and not fl.assigned[v]:
+                    fl.paired[v] = False
+                    if fl.on_duty[v]:
+                        fl.start_cruise(v, stop.index)
+                    else:
+                        fl.park(v, stop.index)
+
+    def _update_duty(self, t: float) -> None:
+        fl = self.fleet
+        n_on = self.scenario.fleet.on_duty(t)
+        want = np.arange(fl.n) < n_on
+        for v in np.flatnonzero(want != fl.on_duty):
+            v = int(v)
+            fl.on_duty[v] = want[v]
+            if fl.onboard[v] or fl.assigned[v]:
+                continue                      # busy vehicles finish their passengers first
+            plan = fl.plans[v]
+            if want[v]:
+                fl.start_cruise(v, len(plan.nodes) - 1 if not plan.cruising else fl.position(v, t)[0], t)
+            else:
+                fl.park(v, fl.position(v, t)[0])
+
+    def _expire(self, t: float) -> None:
+        keep = []
+        for o in self.waiting:
+            if t - self.request[o] > self.patience[o] + 1e-9:
+                self.state[o] = CANCELLED
+                self._event(self.request[o] + self.patience[o], "cancel", o, -1, self.origin[o])
+            else:
+                keep.append(o)
+        self.waiting = keep
+
+    # -------------------------------------------------------------- records
+    def _event(self, t, event, order, vehicle, node, kind="", utility=np.nan, pickup=np.nan, partner=-1,
+               fofo=False) -> None:
+        self.events.append((float(t), event, int(order), int(vehicle), int(node), kind, utility, pickup,
+                            int(partner), bool(fofo)))
+
+    def _trajectories(self, end: float) -> dict[str, np.ndarray]:
+        nodes, tt, odo, offsets = [], [], [], [0]
+        for v in range(self.fleet.n):
+            n, t_, o = self.fleet.trajectory(v, end)
+            nodes.append(n)
+            tt.append(t_)
+            odo.append(o)
+            offsets.append(offsets[-1] + len(n))
+        return {"vehicle_offsets": np.asarray(offsets, np.int64), "node": np.concatenate(nodes).astype(np.int32),
+                "t_s": np.concatenate(tt), "odo_m": np.concatenate(odo)}
+

@@ -1,0 +1,41 @@
+"""rpbench publish: a light copy only of a folder that passes the checker, never overwriting."""
+
+from __future__ import annotations
+
+import shutil
+
+import pandas as pd
+import pytest
+
+from rpbench.cli import main
+from rpbench.exceptions import ResultsError
+from rpbench.harness.comparison import run_comparison
+from rpbench.harness.publish import publish
+from rpbench.harness.render import render
+from rpbench.scenarios import build_scenario
+
+
+@pytest.fixture(scope="module")
+def run_folder(tmp_path_factory):
+    folder, _ = run_comparison(build_scenario("toy", sample=0.2, seed=5), ["mb", "oracle1"], "highs",
+                               out=tmp_path_factory.mktemp("runs") / "toy", progress=False)
+    return folder
+
+
+def test_light_copy_keeps_tables_and_the_verdict(run_folder, tmp_path):
+    dest = publish(run_folder, tmp_path / "pub")
+    assert not (dest / "runs").exists() and not (dest / "orders.csv.gz").exists()
+    assert (dest / "kpis.csv").is_file() and "mb: OK" in (dest / "check.txt").read_text()
+    md, _ = render([dest])
+    assert "light copy" in md
+    with pytest.raises(ResultsError, match="already exists"):
+        publish(run_folder, dest)
+
+
+def test_a_folder_failing_the_checker_is_not_published(run_folder, tmp_path, capsys):
+    bad = tmp_path / "bad"
+    shutil.copytree(run_folder, bad)
+    events = bad / "runs" / "mb" / "events.csv.gz"
+    pd.read_csv(events).query("event != 'dropoff'").to_csv(events, index=False)
+    assert main(["publish", str(bad), str(tmp_path / "pub")]) == 2
+    assert "fails rpbench check (mb)" in capsys.readouterr().err and not (tmp_path / "pub").exists()

@@ -1,0 +1,67 @@
+"""Sweep expansion (the paper's Tables 3-6) and bad sweep input."""
+
+from __future__ import annotations
+
+import pytest
+
+from rpbench.exceptions import ParameterError
+from rpbench.harness.sweep import SWEEPS, expand, parameter_fields, parse_over
+
+
+def test_patience_sweep_moves_passengers_and_planner_together():
+    points = expand("K", SWEEPS["patience"].values)
+    assert [p.value for p in points] == [60, 90, 120, 180, 240, 300, 400, 500, 600]
+    assert points[0].overrides == {"patience_mean_s": 60.0, "planner_patience_s": 60.0}
+    assert points[1].label == "K=90"
+
+
+def test_paper_sweeps_have_the_paper_layout():
+    assert SWEEPS["response-rate"].strategies == ("fl",)
+    assert SWEEPS["interval"].values == (2, 10, 30, 60)
+    assert SWEEPS["ratio"].values == (10, 25)
+    assert expand("ratio", (10,))[0].overrides == {"vehicles_per_100_orders": 10.0}
+    assert expand("r_w", (0.3,))[0].overrides == {"response_rate": 0.3}
+    assert parameter_fields("dt_s") == ("dt_s",)
+
+
+def test_over_parsing():
+    assert parse_over("dt=2,10,30") == ("dt", [2.0, 10.0, 30.0])
+    with pytest.raises(ParameterError, match="expected NAME=V1,V2"):
+        parse_over("dt")
+    with pytest.raises(ParameterError, match="must be numbers"):
+        parse_over("dt=fast")
+
+
+def test_unknown_sweep_parameter():
+    with pytest.raises(ParameterError, match="unknown sweep parameter 'speed'"):
+        expand("speed", [1.0])
+
+
+def test_out_of_range_and_repeated_values():
+    with pytest.raises(ParameterError, match="dt_s = 0.0 must be > 0"):
+        expand("dt", [0, 10])
+    with pytest.raises(ParameterError, match="must lie in \\[0, 1\\]"):
+        expand("r_w", [1.5])
+    with pytest.raises(ParameterError, match="repeats a value"):
+        expand("dt", [10, 10])
+
+
+def test_sweep_cli_rejects_unknown_parameter(capsys):
+    from rpbench.cli import main
+    assert main(["sweep", "--over", "colour=1,2", "--scenario", "toy"]) == 2
+    assert "unknown sweep parameter 'colour'" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_sweep_runs_end_to_end_on_the_toy_city(tmp_path):
+    from rpbench.harness.render import render
+    from rpbench.harness.sweep import SweepSpec, run_sweep
+    from rpbench.scenarios import ScenarioRequest
+    spec = SweepSpec("dt", "dt", (10, 30), ("mb",), ("total_saving_km", "response_rate"))
+    request = ScenarioRequest("toy", sample=0.1, seed=1)
+    folder = run_sweep(spec, expand("dt", spec.values), request=request, preset="highs", run_options={},
+                       out=str(tmp_path / "sw"), workers=1, scheduler=None, command="test")
+    assert (folder / "dt=10").is_dir() and (folder / "dt=30").is_dir()
+    assert (folder / "sweep.png").is_file()
+    text, _ = render([folder])
+    assert "| dt |" in text and text.count("\n| 10 |") + text.count("\n| 30 |") == 2

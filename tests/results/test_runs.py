@@ -1,0 +1,19 @@
+"""Run labels and colours are read off the strategy classes and oracle runs."""
+
+from __future__ import annotations
+
+from rpbench.oracle.runs import ORACLE_RUNS
+from rpbench.results.runs import run_color, run_label
+from rpbench.strategies import REGISTRY, strategy_class
+
+
+def test_labels_come_from_the_classes():
+    assert run_label("fl-nd") == "FL-no_delay" and run_label("oracle1-enroute") == "Oracle-1 (en-route)"
+    for name in REGISTRY:
+        assert run_label(name) == strategy_class(name).label and run_color(name) == strategy_class(name).color
+    for name, run in ORACLE_RUNS.items():
+        assert run_label(name) == run.label and run_color(name) == run.color
+
+
+def test_an_unknown_run_is_shown_under_its_own_name():
+    assert run_label("mypkg.rules:Greedy") == "mypkg.rules:Greedy" and run_color("whatever") is None

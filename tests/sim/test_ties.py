@@ -1,0 +1,83 @@
+"""Solver-independent choice among tied optima (rpbench.sim.ties)."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+
+from rpbench.model import AssignmentModel, Status, TripPackingModel, make_solution
+from rpbench.sim.ties import canonicalize
+
+
+def optimal(model, chosen):
+    return make_solution(model, chosen, Status.OPTIMAL, "test")
+
+
+def test_interchangeable_vehicles_go_to_passengers_in_order():
+    # Two passengers, three identical vehicles (same value for everybody), plus waiting options.
+    cp = [0, 0, 0, 0, 1, 1, 1, 1]
+    cv = [0, 1, 2, -1, 0, 1, 2, -1]
+    vals = [-5, -5, -5, -1000, -7, -7, -7, -1000]
+    m = AssignmentModel(2, 3, cp, cv, vals)
+    for start in ([2, 5], [1, 6], [2, 4], [0, 5]):
+        fixed, _ = canonicalize(m, optimal(m, start))
+        assert fixed.chosen.tolist() == [0, 5]           # p0 -> v0, p1 -> v1
+        assert fixed.objective == optimal(m, start).objective
+
+
+def test_swap_between_two_passengers():
+    # p0 and p1 share an origin: vehicles 0 and 1 are worth the same to both, so swapping is value-neutral.
+    cp = [0, 0, 1, 1]
+    cv = [0, 1, 0, 1]
+    m = AssignmentModel(2, 2, cp, cv, [-3, -4, -3, -4] )
+    fixed, moves = canonicalize(m, optimal(m, [1, 2]))   # p0 -> v1, p1 -> v0
+    assert fixed.chosen.tolist() == [0, 3] and moves == 1
+
+
+def test_no_move_without_a_tie():
+    m = AssignmentModel(2, 2, [0, 0, 1, 1], [0, 1, 0, 1], [-3, -4, -4, -3])
+    sol = optimal(m, [0, 3])
+    fixed, moves = canonicalize(m, sol)
+    assert moves == 0 and fixed is sol
+
+
+def test_non_optimal_solutions_are_left_alone():
+    m = AssignmentModel(1, 2, [0, 0], [0, 1], [-5, -5])
+    sol = make_solution(m, [1], Status.TIME_LIMIT, "test")
+    assert canonicalize(m, sol)[0] is sol
+
+
+def test_trip_packing_vehicle_swap_and_replace():
+    # Identical vehicles 0 and 1; a pair trip {0,1} and a single trip {2}.
+    cv = [0, 0, 1, 1]
+    r1 = [0, 2, 0, 2]
+    r2 = [1, -1, 1, -1]
+    m = TripPackingModel(3, 2, cv, r1, r2, [10, 4, 10, 4])
+    fixed, _ = canonicalize(m, optimal(m, [1, 2]))       # {2} on v0, {0,1} on v1
+    assert fixed.chosen.tolist() == [0, 3]
+
+
+def test_canonical_choice_is_independent_of_the_start_on_symmetric_models():
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        n_p, n_groups = 3, 2
+        # vehicles come in groups of identical copies
+        group_vals = rng.integers(-20, 0, size=(n_p, n_groups))
+        copies = 2
+        cp, cv, vals = [], [], []
+        for p in range(n_p):
+            for g in range(n_groups):
+                for c in range(copies):
+                    cp.append(p), cv.append(g * copies + c), vals.append(group_vals[p, g])
+            cp.append(p), cv.append(-1), vals.append(-1000)
+        m = AssignmentModel(n_p, n_groups * copies, cp, cv, vals)
+        # enumerate every optimal solution, canonicalise each: all must land on the same one
+        cols_of = [np.flatnonzero(m.col_passenger == p) for p in range(n_p)]
+        sols = []
+        for combo in itertools.product(*cols_of):
+            if not m.violations(list(combo)):
+                sols.append((m.objective_of(list(combo)), combo))
+        best = max(s[0] for s in sols)
+        outcomes = {tuple(canonicalize(m, optimal(m, list(c)))[0].chosen) for v, c in sols if v == best}
+        assert len(outcomes) == 1
