@@ -9,6 +9,7 @@ import math
 from rpbench.backends import load_preset
 from rpbench.commands._common import add_scenario_args, note, print_json, scenario_request
 from rpbench.exceptions import ParameterError
+from rpbench.oracle.pairs import bound_rules
 from rpbench.oracle.solve import UNIT_M, PairRules, check_variant, find_candidates, solve_oracle
 
 
@@ -19,7 +20,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "Pair feasibility follows ALGORITHMS.md §4.2; the saving is counted once "
                                    "per pair.")
     add_scenario_args(p)
-    p.add_argument("--variant", default="both", choices=("1", "2", "both"), help="which oracle (default both)")
+    p.add_argument("--variant", default="both", choices=("1", "2", "both", "bound"),
+                   help="which oracle (default both); bound: the proven upper bound on any strategy's saving "
+                        "(docs/bound.md)")
     p.add_argument("--solver", default="matching", metavar="PRESET",
                    help="solver preset with an exact pairing backend (default matching)")
     p.add_argument("--both-pickup-orders", action="store_true",
@@ -39,10 +42,15 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    variants = (1, 2) if args.variant == "both" else (check_variant(args.variant),)
     scenario = scenario_request(args).build()
-    rules = PairRules.from_params(scenario.params, both_pickup_orders=args.both_pickup_orders,
-                                  pickup_check=args.pickup_check, allow_enroute=args.allow_enroute)
+    if args.variant == "bound":
+        if args.both_pickup_orders or args.pickup_check or args.allow_enroute:
+            raise ParameterError("--variant bound takes no pair-rule flags: the bound's rules are fixed by its proof")
+        variants, rules = (1,), bound_rules(scenario.params)
+    else:
+        variants = (1, 2) if args.variant == "both" else (check_variant(args.variant),)
+        rules = PairRules.from_params(scenario.params, both_pickup_orders=args.both_pickup_orders,
+                                      pickup_check=args.pickup_check, allow_enroute=args.allow_enroute)
     candidates = find_candidates(scenario.network.distances(), scenario.orders, rules)
     preset = load_preset(args.solver)
     options = preset.options
@@ -55,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
     for v, r in results.items():
         if r.status.value != "optimal":
             gap = r.kpis()["gap"]
-            note(f"rpbench: Oracle-{v} stopped with status {r.status.value} "
+            note(f"rpbench: {_name(r)} stopped with status {r.status.value} "
                  f"(gap {'unknown' if math.isnan(gap) else f'{gap:.3g}'}); its value is not proven optimal")
     if args.pairs:
         _write_pairs(args.pairs, results)
@@ -64,13 +72,17 @@ def run(args: argparse.Namespace) -> int:
         print_json({"scenario": scenario.name, "label": scenario.label, "rules": rules.as_dict(),
                     "candidates": {"evaluated": candidates.evaluated, "feasible": len(candidates),
                                    **candidates.stats, "seconds": candidates.seconds},
-                    **{f"oracle{v}": r.kpis() for v, r in results.items()}})
+                    **{"bound" if r.is_upper_bound else f"oracle{v}": r.kpis() for v, r in results.items()}})
         return 0
     print(scenario.label)
     flags = [k for k in ("both_pickup_orders", "pickup_check", "allow_enroute") if getattr(rules, k)]
-    print(f"  pair rules: K̄={rules.planner_patience_s:g} s, D̄={rules.max_detour_m:g} m"
-          + (f", R̄={rules.max_pickup_m:g} m" if rules.pickup_check else ", no R̄ test")
-          + (f"; flags: {', '.join(flags)}" if flags else "; default flags (ALGORITHMS.md A18)"))
+    if rules.window == "bound":
+        print(f"  pair rules of the upper bound (docs/bound.md): t_B - t_A in [-K_B, K_A + (R̄ + l_A)/v], "
+              f"D̄={rules.max_detour_m:g} m at A's origin, both pick-up orders, no R̄ test")
+    else:
+        print(f"  pair rules: K̄={rules.planner_patience_s:g} s, D̄={rules.max_detour_m:g} m"
+              + (f", R̄={rules.max_pickup_m:g} m" if rules.pickup_check else ", no R̄ test")
+              + (f"; flags: {', '.join(flags)}" if flags else "; default flags (ALGORITHMS.md A18)"))
     print(f"  candidates: {len(candidates):,} feasible of {candidates.evaluated:,} pairs in the time windows "
           f"({candidates.seconds:.3f} s)")
     print(_table(results))
@@ -89,13 +101,17 @@ _ROWS = (("orders", "orders", "{:,.0f}"), ("pairs", "pairs", "{:,.0f}"),
 
 def _table(results: dict) -> str:
     kpis = {v: r.kpis() for v, r in results.items()}
-    header = ["metric"] + [f"Oracle-{v} ({results[v].solver})" for v in results]
+    header = ["metric"] + [f"{_name(results[v])} ({results[v].solver})" for v in results]
     rows = [[label] + [_fmt(fmt, kpis[v][key]) for v in results] for key, label, fmt in _ROWS]
     widths = [max(len(r[c]) for r in [header] + rows) for c in range(len(header))]
     lines = ["  " + "  ".join(h.ljust(widths[0]) if c == 0 else h.rjust(widths[c]) for c, h in enumerate(header))]
     lines += ["  " + "  ".join(x.ljust(widths[0]) if c == 0 else x.rjust(widths[c]) for c, x in enumerate(r))
               for r in rows]
     return "\n".join(lines)
+
+
+def _name(result) -> str:
+    return "Upper bound" if result.is_upper_bound else f"Oracle-{result.variant}"
 
 
 def _fmt(fmt: str, value) -> str:

@@ -13,7 +13,7 @@ from rpbench.harness.multiday import run_days
 from rpbench.results.report import load_kpis, text_table
 from rpbench.scenarios import ScenarioRequest
 
-DEFAULT_STRATEGIES = "np,mb,rtv,fl-nd,fl,oracle1,oracle2,oracle1-enroute"
+DEFAULT_STRATEGIES = "np,mb,rtv,fl-nd,fl,bound,oracle1,oracle2"
 
 
 def register(sub: argparse._SubParsersAction) -> None:

@@ -214,6 +214,14 @@ def kpi_table(runs: list[StrategyRun], oracle_results: dict, order: list[str]) -
     return with_competitive_ratios(pd.DataFrame({name: cols[name] for name in order if name in cols}))
 
 
+def bound_by_hour(pairs: pd.DataFrame) -> pd.DataFrame:
+    """The upper bound's matching split by the hour of each pair's earlier request (``hourly.csv`` rows of run
+    ``bound``; only the saving column: per hour this is a description of the matching, not itself a bound)."""
+    hour = (np.minimum(pairs["first_request_s"], pairs["second_request_s"]) // 3600).astype(int)
+    saving = pairs["saving_m"].groupby(hour).sum() / 1000.0
+    return pd.DataFrame({"hour": saving.index, "total_saving_km": saving.to_numpy(), "run": "bound"})
+
+
 def write_folder(folder: Path, scenario: Scenario, runs: list[StrategyRun], oracle_results: dict, preset: Preset,
                  strategies: list[str], scenario_args: dict[str, Any], command: str | None) -> None:
     orders = scenario.orders
@@ -236,6 +244,11 @@ def write_folder(folder: Path, scenario: Scenario, runs: list[StrategyRun], orac
         hourly.append(r.hourly.assign(run=r.name))
         meta_runs[r.name] = {"kind": "simulation", "options": r.options.as_dict(), "wall_s": r.sim.wall_s,
                              "end_s": r.sim.end_s, "rounds_solved": int(len(r.sim.rounds))}
+    bound = oracle_results.get("bound")
+    if bound is not None:                     # the competitive ratio of every strategy run (docs/bound.md)
+        bound_km = oracle_kpis(bound)["total_saving_km"]
+        tidy += [{"run": r.name, "kpi": "competitive_ratio_bound",
+                  "value": r.kpis["total_saving_km"] / bound_km if bound_km else float("nan")} for r in runs]
     for name, res in oracle_results.items():
         d = folder / "runs" / name
         d.mkdir(parents=True)
@@ -245,11 +258,13 @@ def write_folder(folder: Path, scenario: Scenario, runs: list[StrategyRun], orac
         meta_runs[name] = {"kind": "oracle", "variant": res.variant, "solver": res.solver,
                            "status": facts["status"], "rules": dataclasses.asdict(res.rules),
                            "objective_m": facts["objective_m"], "bound_m": facts["bound_m"], "gap": facts["gap"],
-                           "candidates": res.n_candidates, "evaluated": res.n_evaluated,
+                           "candidates": res.n_candidates, "evaluated": res.n_evaluated, "unit_m": res.model.unit_m,
                            "timings_s": res.timings}
     pd.DataFrame(tidy).to_csv(folder / "kpis.csv", index=False)
     if rounds:
         pd.concat(rounds, ignore_index=True).to_csv(folder / "rounds.csv.gz", index=False)
+    if hourly and bound is not None:
+        hourly.append(bound_by_hour(bound.pairs))
     if hourly:
         pd.concat(hourly, ignore_index=True).to_csv(folder / "hourly.csv", index=False)
     meta = {

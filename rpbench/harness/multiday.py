@@ -20,7 +20,7 @@ from rpbench.harness.parallel import run_tasks
 from rpbench.paths import require_data_dir
 from rpbench.results.metrics import KPI_LABELS, KPI_ORDER
 from rpbench.results.plots import per_day_figures
-from rpbench.results.report import RATIO_ROWS, findings, fmt, load_kpis, markdown_table
+from rpbench.results.report import RATIO_ROWS, findings, fmt, load_kpis, markdown_table, offline_notes
 from rpbench.results.runs import run_label
 from rpbench.scenarios import SCENARIOS, ScenarioRequest
 from rpbench.strategies.options import RunOptions
@@ -73,7 +73,7 @@ def day_folders(parent: Path) -> list[Path]:
 
 
 def by_day_table(parent: Path) -> pd.DataFrame:
-    """Tidy (date, run, kpi, value) over the day folders, with the competitive ratio when Oracle-1 ran."""
+    """Tidy (date, run, kpi, value) over the day folders, with the ratio rows of the offline runs present."""
     frames = []
     for day in day_folders(parent):
         wide = load_kpis(day)
@@ -92,8 +92,8 @@ def summarize(parent: Path) -> pd.DataFrame:
     return stats
 
 
-MULTIDAY_PLOT_KPIS = [k for k in KPI_ORDER if k != "platform_profit_cny"] + ["competitive_ratio",
-                                                                             "competitive_ratio_enroute"]
+MULTIDAY_PLOT_KPIS = [k for k in KPI_ORDER if k != "platform_profit_cny"] + ["competitive_ratio_bound",
+                                                                             "competitive_ratio"]
 
 
 def write_multiday_report(parent: Path, name: str | None = None) -> Path:
@@ -114,7 +114,7 @@ def write_multiday_report(parent: Path, name: str | None = None) -> Path:
              f"- rpbench {meta['versions']['rpbench']}, commit `{meta.get('git_commit')}`", ""]
     if meta.get("command"):
         lines += ["Command:", "", f"    {meta['command']}", ""]
-    lines += ["## Mean over days", "", markdown_table(mean), ""]
+    lines += ["## Mean over days", "", markdown_table(mean), ""] + offline_notes(mean, {})
     key = ["total_saving_km", "avg_detour_m", "response_rate", "pairing_ratio"]
     for kpi in key + [r for r in RATIO_ROWS if r in set(table["kpi"])]:
         wide = table[table["kpi"] == kpi].pivot(index="date", columns="run", values="value")[runs]

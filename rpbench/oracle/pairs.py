@@ -16,6 +16,18 @@ Pair feasibility of ALGORITHMS.md §4.2 (A18).  Let ``i`` be the earlier order
   ``POOL(A=i, B=j, h, δ = l(o_i, h), pre = δ - s)``.  Waiting and en-route
   pairs are disjoint (``dt <= K̄`` versus ``dt > K̄``).
 
+With ``window = "bound"`` the pairs are those of the proven upper bound
+(docs/bound.md): every pair rpbench's simulator can form, with the largest
+saving it can realise.  With A picked up first, B can only join while A is
+assigned and not yet dropped off, so ``t_B - t_A`` lies in
+``[-K_B, K_A + (R̄ + l_A)/v]`` with each order's own patience ``K_p``; the
+vehicle then turns towards ``o_B`` at a node ``h`` of A's shortest path
+``P_A`` with ``l(h, o_B) <= R̄``, no further along than it can have driven
+by ``t_B + K_B``.  The earliest such node ``h*`` is the best place to turn
+(the pooled route only grows along ``P_A``), so the weight is
+``POOL(A, B, h*, δ = l(o_A, h*))`` with no further pick-up test; both pick-up
+orders, the larger saving wins.
+
 Detours must be ``<= D̄`` (``order_rule`` as in §1.1, default min over the
 feasible service orders).  The pick-up distance ``pk = pre + l(h, o_B)`` is
 tested against R̄ only with ``pickup_check`` (O3: the authors' oracle never
@@ -43,6 +55,8 @@ from rpbench.scenarios.base import Orders, Params
 
 #: Pairs evaluated per numpy block (bounds memory to a few hundred MB).
 BLOCK_PAIRS = 1 << 21
+#: Time windows of a pair: the paper's (requests within K̄) or the upper bound's.
+WINDOWS = ("patience", "bound")
 
 
 @dataclass(frozen=True)
@@ -57,6 +71,7 @@ class PairRules:
     pickup_check: bool = False              # oracle_pickup_check
     allow_enroute: bool = False             # oracle_allow_enroute
     order_rule: str = "min_feasible"
+    window: str = "patience"                # "patience": §4.2's K̄; "bound": the upper bound's (docs/bound.md)
 
     def __post_init__(self) -> None:
         for name in ("planner_patience_s", "max_detour_m", "max_pickup_m", "speed_mps"):
@@ -67,6 +82,12 @@ class PairRules:
             raise ParameterError(f"oracle rule speed_mps = {self.speed_mps!r} must be > 0")
         if self.order_rule not in ORDER_RULES:
             raise ParameterError(f"order_rule {self.order_rule!r} unknown; expected one of {', '.join(ORDER_RULES)}")
+        if self.window not in WINDOWS:
+            raise ParameterError(f"pair window {self.window!r} unknown; expected one of {', '.join(WINDOWS)}")
+        if self.window == "bound" and (self.pickup_check or self.allow_enroute or not self.both_pickup_orders
+                                       or self.order_rule != "min_feasible"):
+            raise ParameterError("the upper bound's pairs take both pick-up orders, no pick-up test, no en-route "
+                                 "geometry and the best feasible service order: its rules cannot be changed")
 
     @classmethod
     def from_params(cls, params: Params, **flags) -> "PairRules":
@@ -166,6 +187,11 @@ def find_candidates(distances: DistanceOracle | np.ndarray, orders: Orders, rule
     o = orders.origin[rank].astype(np.intp)
     d = orders.destination[rank].astype(np.intp)
     solo = dist[o, d]
+    if rules.window == "bound":
+        if not isinstance(distances, DistanceOracle):
+            raise ParameterError("the upper bound needs the orders' shortest paths: pass the network's "
+                                 "DistanceOracle (network.distances()), not a bare distance matrix")
+        return _bound_candidates(distances, dist, orders, rules, rank, t, o, d, solo, block_pairs, t0)
     k_bar = float(rules.planner_patience_s)
 
     # Window of each i: j in (i, hi_i).  The bound is widened by a hair and the
@@ -208,6 +234,77 @@ def find_candidates(distances: DistanceOracle | np.ndarray, orders: Orders, rule
         n_orders=n, first=first[srt], second=second[srt], rules=rules, evaluated=int(evaluated),
         seconds=time.perf_counter() - t0,
         stats={"waiting": int((~cols["enroute"]).sum()), "enroute": int(cols["enroute"].sum())}, **cols)
+
+
+def bound_rules(params: Params) -> PairRules:
+    """The pair rules of the proven upper bound on a scenario with ``params`` (docs/bound.md)."""
+    return PairRules.from_params(params, both_pickup_orders=True, window="bound")
+
+
+def _bound_candidates(distances: DistanceOracle, dist, orders: Orders, rules: PairRules, rank, t, o, d, solo,
+                      block_pairs: int, t0: float) -> "CandidatePairs":
+    """Every pair the simulator can form, weighted by the largest saving it can realise (docs/bound.md)."""
+    n = len(orders)
+    patience = orders.patience_s[rank]
+    offsets, nodes = distances.paths_batch(o, d) if n else (np.zeros(1, np.int64), np.zeros(0, np.int32))
+    path = (np.asarray(offsets, np.int64), np.asarray(nodes, np.intp),
+            dist[np.repeat(o, np.diff(offsets)), nodes])          # l(o_i, k-th node of P_i) = arc length to it
+    # i (earlier) first: j requests before i's drop-off, at most t_i + K_i + (R̄ + l_i)/v; j first: i still
+    # waits, t_j <= t_i + K_i.  Widened by the simulator's tolerances (1e-9 s on patience, TOLERANCE_M on R̄)
+    # and a hair for rounding: a wider window only adds candidate pairs, it never drops one.
+    reach = patience + (rules.max_pickup_m + 1e-6 + solo) / rules.speed_mps + 1e-6
+    hi = np.searchsorted(t, t + reach + 1e-9 * (1.0 + np.abs(t)), side="right")
+    count = np.maximum(hi - np.arange(n) - 1, 0)
+    parts: list[dict] = []
+    evaluated = 0
+    for i0, i1 in _blocks(count, block_pairs):
+        ii = np.repeat(np.arange(i0, i1), count[i0:i1])
+        if not len(ii):
+            continue
+        starts = np.cumsum(count[i0:i1]) - count[i0:i1]
+        jj = ii + 1 + np.arange(len(ii)) - np.repeat(starts, count[i0:i1])
+        evaluated += len(ii)
+        reverse_ok = t[jj] - t[ii] <= patience[ii] + 1e-6
+        # how far along its path the first passenger's vehicle can be while the second still waits
+        reach_f = rules.speed_mps * (t[jj] + patience[jj] - t[ii]) + 1e-6
+        reach_r = rules.speed_mps * (t[ii] + patience[ii] - t[jj]) + 1e-6
+        parts.append(_best_orientation(dist, o, d, solo, ii, jj, reverse_ok, rules,
+                                       turn=(path, reach_f, reach_r)))
+    cols = {k: np.concatenate([p[k] for p in parts]) if parts else np.zeros(0, dtype)
+            for k, dtype in _COLUMNS.items()}
+    first, second = rank[cols.pop("first")].astype(np.int64), rank[cols.pop("second")].astype(np.int64)
+    srt = np.lexsort((np.maximum(first, second), np.minimum(first, second)))
+    cols = {k: v[srt] for k, v in cols.items()}
+    return CandidatePairs(n_orders=n, first=first[srt], second=second[srt], rules=rules, evaluated=int(evaluated),
+                          seconds=time.perf_counter() - t0, stats={"window": "bound"}, **cols)
+
+
+def _best_orientation(dist, o, d, solo, ii, jj, reverse_ok, rules: PairRules, turn=None) -> dict:
+    """POOL(A=i, B=j, h=o_i) and, where ``reverse_ok``, POOL(A=j, B=i, h=o_j): the larger saving (tie: i first).
+
+    ``turn = (path, reach_f, reach_r)``: the upper bound's geometry instead of
+    h = o_A: the vehicle turns at the first node of A's path within R̄ of o_B
+    (:func:`_turn_at_first_reachable_node`).
+    """
+    rev_idx = np.flatnonzero(reverse_ok)
+    if turn is None:
+        rows_f, fwd = _pool_where_possible(dist, o, d, solo, ii, jj, rules)
+        rows_r, rev = _pool_where_possible(dist, o, d, solo, jj[rev_idx], ii[rev_idx], rules)
+    else:
+        path, reach_f, reach_r = turn
+        rows_f, fwd = _turn_at_first_reachable_node(dist, o, d, solo, ii, jj, reach_f, path, rules)
+        rows_r, rev = _turn_at_first_reachable_node(dist, o, d, solo, jj[rev_idx], ii[rev_idx], reach_r[rev_idx],
+                                                    path, rules)
+    rows_r = rev_idx[rows_r]
+    best_f = np.full(len(ii), -np.inf)
+    best_f[rows_f] = fwd.saving
+    flip = np.zeros(len(ii), dtype=bool)
+    flip[rows_r] = rev.saving > best_f[rows_r]
+    keep_f, keep_r = ~flip[rows_f], flip[rows_r]
+    fwd = PoolResult(*(getattr(fwd, f.name)[keep_f] for f in fields(PoolResult)))
+    rev = PoolResult(*(getattr(rev, f.name)[keep_r] for f in fields(PoolResult)))
+    return _concat(_rows(ii[rows_f[keep_f]], jj[rows_f[keep_f]], False, fwd),
+                   _rows(jj[rows_r[keep_r]], ii[rows_r[keep_r]], False, rev))
 
 
 _COLUMNS = {"first": np.int64, "second": np.int64, "enroute": bool, "fofo": bool, "saving_m": np.float64,
@@ -259,6 +356,45 @@ def _pool_where_possible(dist, o, d, solo, a, b, rules: PairRules, h=None, delta
     return rows[ok], PoolResult(*(getattr(r, f.name)[ok] for f in fields(PoolResult)))
 
 
+def _turn_at_first_reachable_node(dist, o, d, solo, a, b, reach_m, path, rules: PairRules):
+    """POOL(A=a, B=b) with the vehicle turning at h*, the first node of P_A with ``l(h, o_B) <= R̄`` whose
+    predecessor on P_A lies within ``reach_m`` of o_A (docs/bound.md); ``(rows, PoolResult)`` of feasible pairs.
+
+    Feasibility at h = o_A is necessary (the pooled route and A's detour only
+    grow along P_A), so only the pairs that pass it are walked along their
+    paths, one vectorised step per node.
+    """
+    offsets, nodes, cum = path
+    rows, at_origin = _pool_where_possible(dist, o, d, solo, a, b, rules)
+    near = dist[o[a[rows]], o[b[rows]]] <= rules.max_pickup_m + 1e-6
+    keep = [(rows[near], PoolResult(*(getattr(at_origin, f.name)[near] for f in fields(PoolResult))))]
+    walk = rows[~near]
+    if len(walk):
+        pos = offsets[a[walk]] + 1                      # o_A itself failed the pick-up test
+        end = offsets[a[walk] + 1]
+        h = np.full(len(walk), -1, dtype=np.intp)
+        active = np.flatnonzero(pos < end)
+        while len(active):
+            p = pos[active]
+            in_reach = cum[p - 1] <= reach_m[walk[active]]
+            hit = in_reach & (dist[nodes[p], o[b[walk[active]]]] <= rules.max_pickup_m + 1e-6)
+            h[active[hit]] = p[hit]
+            go = in_reach & ~hit & (p + 1 < end[active])
+            pos[active[go]] += 1
+            active = active[go]
+        found = h >= 0
+        w, hp = walk[found], h[found]
+        if len(w):
+            g = pair_geometry(dist, o[a[w]], d[a[w]], solo[a[w]], o[b[w]], d[b[w]], solo[b[w]], nodes[hp], cum[hp],
+                              np.zeros(len(w)), rules.max_detour_m)
+            r = choose_order(g, np.inf, rules.order_rule)
+            ok = r.feasible
+            keep.append((w[ok], PoolResult(*(getattr(r, f.name)[ok] for f in fields(PoolResult)))))
+    out_rows = np.concatenate([k[0] for k in keep])
+    out = PoolResult(*(np.concatenate([getattr(k[1], f.name) for k in keep]) for f in fields(PoolResult)))
+    return out_rows, out
+
+
 def _rows(a, b, enroute: bool, r: PoolResult) -> dict:
     return {"first": a, "second": b, "enroute": np.full(len(a), enroute), "fofo": r.fofo,
             "saving_m": r.saving, "length_m": r.length, "detour_first_m": r.detour_a,
@@ -271,20 +407,7 @@ def _concat(*parts: dict) -> dict:
 
 def _waiting_pairs(dist, o, d, solo, ii, jj, rules: PairRules) -> dict:
     """POOL(A=i, B=j, h=o_i) and, with both_pickup_orders, POOL(A=j, B=i, h=o_j)."""
-    rows_f, fwd = _pool_where_possible(dist, o, d, solo, ii, jj, rules)
-    if not rules.both_pickup_orders:
-        return _rows(ii[rows_f], jj[rows_f], False, fwd)
-    rows_r, rev = _pool_where_possible(dist, o, d, solo, jj, ii, rules)
-    # j first only when strictly better (tie -> the earlier order first).
-    best_f = np.full(len(ii), -np.inf)
-    best_f[rows_f] = fwd.saving
-    flip = np.zeros(len(ii), dtype=bool)
-    flip[rows_r] = rev.saving > best_f[rows_r]
-    keep_f, keep_r = ~flip[rows_f], flip[rows_r]
-    fwd = PoolResult(*(getattr(fwd, f.name)[keep_f] for f in fields(PoolResult)))
-    rev = PoolResult(*(getattr(rev, f.name)[keep_r] for f in fields(PoolResult)))
-    return _concat(_rows(ii[rows_f[keep_f]], jj[rows_f[keep_f]], False, fwd),
-                   _rows(jj[rows_r[keep_r]], ii[rows_r[keep_r]], False, rev))
+    return _best_orientation(dist, o, d, solo, ii, jj, np.full(len(ii), rules.both_pickup_orders), rules)
 
 
 def _enroute_pairs(dist, o, d, solo, ii, jj, s, path, rules: PairRules) -> dict:

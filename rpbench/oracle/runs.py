@@ -1,9 +1,11 @@
-"""The oracle runs a comparison can include: which variant, which pair rules, and how they are shown.
+"""The offline runs a comparison can include: which matching, which pair rules, and how they are shown.
 
-``oracle1``/``oracle2`` follow the seed's pair rules (ALGORITHMS.md A18);
-``oracle1-enroute`` is Oracle-1 that may also pair an order with one already
-riding, in either pick-up order (§4.2).  Their options (``--opt
-oracle1.allow_enroute=true``) are typed like a strategy's.
+``bound`` is the proven upper bound on the saving of any strategy rpbench's
+simulator can run (docs/bound.md): the denominator of the competitive ratio.
+``oracle1``/``oracle2`` are the paper's offline oracles with the seed's pair
+rules (ALGORITHMS.md A18): references, not bounds (a strategy that pairs en
+route can save more than Oracle-1).  Their options (``--opt
+oracle1.allow_enroute=true``) are typed like a strategy's; the bound has none.
 """
 
 from __future__ import annotations
@@ -27,15 +29,15 @@ class OracleOptions(RunOptions):
 
 @dataclass(frozen=True)
 class OracleRun:
-    """One oracle column of a comparison."""
+    """One offline column of a comparison."""
 
     name: str
     variant: int                     # 1: maximum saving; 2: maximum pairs, ties by saving
     label: str                       # column header and legend entry
     color: str
     description: str
-    defaults: dict[str, bool] = field(default_factory=dict)
-    Options = OracleOptions
+    defaults: dict[str, Any] = field(default_factory=dict)
+    Options: type[RunOptions] = OracleOptions
 
     def rules(self, params: Params, options: OracleOptions) -> PairRules:
         """The pair rules of this run on a scenario with ``params``."""
@@ -45,9 +47,10 @@ class OracleRun:
 
 
 ORACLE_RUNS: dict[str, OracleRun] = {run.name: run for run in [
-    OracleRun("oracle1", 1, "Oracle-1", "tab:red", "offline: maximum total saving over pairs requested within "
-              "K̄ of each other (paper Eqs. 18-22)"),
-    OracleRun("oracle2", 2, "Oracle-2", "tab:purple", "offline: maximum number of pairs, ties by saving"),
-    OracleRun("oracle1-enroute", 1, "Oracle-1 (en-route)", "tab:brown", "offline: Oracle-1 that may also pair an "
-              "order with one already riding, either pick-up order", {"allow_enroute": True, "both_pickup_orders": True}),
+    OracleRun("bound", 1, "Upper bound", "black", "offline: proven upper bound on any strategy's saving "
+              "(docs/bound.md)", {"window": "bound", "both_pickup_orders": True}, RunOptions),
+    OracleRun("oracle1", 1, "Oracle-1", "tab:red", "offline: the paper's Oracle-1, maximum saving over pairs "
+              "requested within K̄ of each other (Eqs. 18-22); a reference, not a bound"),
+    OracleRun("oracle2", 2, "Oracle-2", "tab:purple", "offline: the paper's Oracle-2, maximum number of pairs, "
+              "ties by saving"),
 ]}

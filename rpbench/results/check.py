@@ -18,7 +18,18 @@ folder, never the simulator's state) and verifies:
 * ``movement`` — trajectories start at the vehicle's initial node, follow
   arcs of the network, with odometer steps equal to arc lengths and time
   steps equal to length / speed (never faster), times non-decreasing;
-* ``kpi`` — every KPI recomputed from the log equals the reported one.
+* ``kpi`` — every KPI recomputed from the log equals the reported one;
+* ``bound-certificate`` — every pair the run formed is an edge of the upper
+  bound's candidate graph (docs/bound.md: its requests within the window, the
+  service order's detours <= D̄ with the vehicle at the first passenger's
+  origin) and its realised saving, read off the odometers, is at most the edge
+  weight (+ :data:`CERT_TOL_M`); with a ``bound`` run in the folder, the run's
+  saving is at most the bound and its ``competitive_ratio_bound`` is that
+  quotient.
+
+Offline runs (``pairs.csv.gz``) are checked as matchings of feasible pairs
+whose stored savings and KPIs are recomputed; the bound's pairs under the
+bound's window and weight.
 
 Distances are read off the trajectories at the matched event entries, not
 recomputed by the simulator's code paths.
@@ -41,6 +52,8 @@ from rpbench.scenarios.base import Params
 TOL_M = 1e-6
 TOL_S = 1e-6
 KPI_RTOL = 1e-9
+#: Tolerance of the bound certificate: a realised saving may exceed its edge weight by float rounding only.
+CERT_TOL_M = 1e-3
 
 
 @dataclass
@@ -71,24 +84,38 @@ def check_folder(folder: str | Path) -> list[RunCheck]:
     network = results.load_network(folder / "network.npz")
     fleet = results.read_csv(folder / "fleet.csv.gz")
     reported = results.read_csv(folder / "kpis.csv")
-    dist = network.distances().dist
+    distances = network.distances()
+    dist = distances.dist
     solo = dist[orders["origin"].to_numpy(), orders["destination"].to_numpy()]
+    bound_km = _bound_km(meta, reported)
     out = []
     for name in names:
         run_dir = folder / "runs" / name
         if (run_dir / "pairs.csv.gz").is_file():
-            out.append(_check_oracle(name, run_dir, meta, orders, solo, dist, reported[reported["run"] == name]))
+            out.append(_check_oracle(name, run_dir, meta, orders, solo, distances, params,
+                                     reported[reported["run"] == name]))
             continue
         rc = RunCheck(name)
         events = results.read_csv(run_dir / "events.csv.gz")
         traj = results.load_trajectories(run_dir / "trajectories.npz")
         _check_movement(rc, traj, network, fleet["initial_node"].to_numpy(), params)
         tab = _check_events(rc, events, orders, solo, traj, params)
-        _check_kpis(rc, events, orders, solo, traj, params, reported[reported["run"] == name])
+        mine = reported[reported["run"] == name]
+        _check_kpis(rc, events, orders, solo, traj, params, mine)
+        _check_certificate(rc, tab, orders, solo, distances, params, mine, bound_km)
         rc.checked["orders"] = len(orders)
         rc.checked["served"] = int(tab["served"].sum())
         out.append(rc)
     return out
+
+
+def _bound_km(meta: dict, reported: pd.DataFrame) -> float | None:
+    """The reported upper bound (km) when the folder has a bound run (its own check verifies it)."""
+    for name, run in meta.get("runs", {}).items():
+        if run.get("kind") == "oracle" and run.get("rules", {}).get("window") == "bound":
+            value = reported[(reported["run"] == name) & (reported["kpi"] == "total_saving_km")]["value"]
+            return float(value.iloc[0]) if len(value) else float("nan")
+    return None
 
 
 # ------------------------------------------------------------------- movement
@@ -228,7 +255,8 @@ def _check_events(rc: RunCheck, events: pd.DataFrame, orders: pd.DataFrame, solo
         rc.fail("max-pickup", f"order {o}: pick-up distance {pickup[o]:.1f} m > R̄ = {params.max_pickup_m:g} m")
     _check_capacity(rc, v_assign, t_assign, t_pick, t_drop, served)
     rc.checked["events"] = int(len(events))
-    return pd.DataFrame({"served": served})
+    return pd.DataFrame({"served": served, "ok": ok, "partner": partner, "t_pick": t_pick, "odo_pick": odo_pick,
+                         "odo_drop": odo_drop})
 
 
 def _check_capacity(rc: RunCheck, vehicle, t_assign, t_pick, t_drop, served) -> None:
@@ -271,23 +299,94 @@ def _check_kpis(rc: RunCheck, events, orders, solo, traj, params: Params, report
     rc.checked["kpis"] = len(recomputed)
 
 
+# ------------------------------------------------------------ bound certificate
+def bound_weights(distances, orders: pd.DataFrame, solo: np.ndarray, params: Params, a: np.ndarray,
+                  b: np.ndarray, a_first_only: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """(weight, edge) of pairs (a, b) in the upper bound's graph (docs/bound.md), computed here pair by pair.
+
+    With X picked up first and Y joining: ``t_Y - t_X`` in
+    ``[-K_Y, K_X + (R̄ + l_X)/v]``; the vehicle turns at h*, the first node of
+    X's shortest path within R̄ of o_Y, and h*'s predecessor on that path lies
+    within ``v (t_Y + K_Y - t_X)`` of o_X; the service order's detours with the
+    vehicle at h* (δ = its distance from o_X) are ``<= D̄``.  The weight is the
+    largest such saving over the orientations (only a first: ``a_first_only``).
+    ``distances`` is the folder network's DistanceOracle.
+    """
+    dist = distances.dist
+    t = orders["request_s"].to_numpy()
+    k = orders["patience_s"].to_numpy()
+    o, d = orders["origin"].to_numpy(), orders["destination"].to_numpy()
+    v, r_max = params.speed_mps, params.max_pickup_m
+    weight = np.full(len(a), -np.inf)
+    for x_all, y_all in ((a, b),) if a_first_only else ((a, b), (b, a)):
+        for n, (x, y) in enumerate(zip(x_all, y_all)):
+            gap = t[y] - t[x]
+            if not -k[y] - TOL_S <= gap <= k[x] + (r_max + TOL_M + solo[x]) / v + TOL_S:
+                continue
+            path = distances.path_nodes(int(o[x]), int(d[x]))
+            cum = dist[o[x], path]
+            near = np.flatnonzero(dist[path, o[y]] <= r_max + TOL_M)
+            if not len(near) or (near[0] > 0 and cum[near[0] - 1] > v * (t[y] + k[y] - t[x]) + TOL_M):
+                continue
+            h = int(near[0])
+            r = pool(dist, o[x], d[x], o[y], d[y], h=path[h], delta=cum[h], pre=0.0, max_pickup_m=np.inf,
+                     max_detour_m=params.max_detour_m, order_rule="min_feasible")
+            if bool(r.feasible):
+                weight[n] = max(weight[n], float(r.saving))
+    return weight, np.isfinite(weight)
+
+
+def _check_certificate(rc: RunCheck, tab: pd.DataFrame, orders: pd.DataFrame, solo: np.ndarray, distances,
+                       params: Params, reported: pd.DataFrame, bound_km: float | None) -> None:
+    """Every pair of the run is a bound edge whose weight covers its realised saving; saving <= bound."""
+    partner, ok = tab["partner"].to_numpy(), tab["ok"].to_numpy()
+    t_pick = tab["t_pick"].to_numpy()
+    both = (partner >= 0) & ok & ok[np.maximum(partner, 0)]
+    me = np.flatnonzero(both)
+    first_me = (t_pick[me] < t_pick[partner[me]]) | ((t_pick[me] == t_pick[partner[me]]) & (me < partner[me]))
+    a = me[first_me]                         # picked up first
+    b = partner[a]
+    odo_pick, odo_drop = tab["odo_pick"].to_numpy(), tab["odo_drop"].to_numpy()
+    occupied = np.maximum(odo_drop[a], odo_drop[b]) - odo_pick[a]
+    realised = solo[a] + solo[b] - occupied
+    weight, edge = bound_weights(distances, orders, solo, params, a, b)
+    _, own_edge = bound_weights(distances, orders, solo, params, a, b, a_first_only=True)
+    for k in np.flatnonzero(~own_edge)[:5]:
+        rc.fail("bound-certificate", f"pair ({a[k]}, {b[k]}) is not an edge of the upper bound's graph with "
+                                     f"order {a[k]} first (time window or detours at its origin)")
+    over = edge & (realised > weight + CERT_TOL_M)
+    for k in np.flatnonzero(over)[:5]:
+        rc.fail("bound-certificate", f"pair ({a[k]}, {b[k]}): realised saving {realised[k]:.3f} m exceeds the "
+                                     f"bound's edge weight {weight[k]:.3f} m")
+    rc.checked["certified_pairs"] = int((own_edge & ~over).sum())
+    if bound_km is None:
+        return
+    have = dict(zip(reported["kpi"], reported["value"]))
+    saving = float(have.get("total_saving_km", np.nan))      # recomputed and compared by _check_kpis
+    if not np.isfinite(bound_km):
+        rc.fail("bound-certificate", "the folder's upper bound is not finite (its solver proved no bound)")
+    elif saving > bound_km + CERT_TOL_M / 1000.0 * max(1, len(a)):
+        rc.fail("bound-certificate", f"saving {saving:.3f} km exceeds the upper bound {bound_km:.3f} km")
+    ratio = saving / bound_km if bound_km else float("nan")
+    rep = float(have.get("competitive_ratio_bound", np.nan))
+    if not (np.isnan(ratio) and np.isnan(rep)) and not np.isclose(rep, ratio, rtol=1e-6, atol=1e-9):
+        rc.fail("kpi", f"KPI competitive_ratio_bound: reported {rep!r}, recomputed {ratio!r}")
+
+
 # --------------------------------------------------------------------- oracle
-def _check_oracle(name: str, run_dir: Path, meta: dict, orders: pd.DataFrame, solo: np.ndarray, dist: np.ndarray,
-                  reported: pd.DataFrame) -> RunCheck:
-    """An oracle run: a matching of feasible pairs (§4.2) whose KPIs equal the reported ones."""
+def _check_oracle(name: str, run_dir: Path, meta: dict, orders: pd.DataFrame, solo: np.ndarray, distances,
+                  params: Params, reported: pd.DataFrame) -> RunCheck:
+    """An offline run: a matching of feasible pairs (§4.2, or the bound's) whose KPIs equal the reported ones."""
     rc = RunCheck(name)
-    rules = meta["runs"][name]["rules"]
-    pairs = results.read_csv(run_dir / "pairs.csv.gz")
-    index = pd.Series(np.arange(len(orders)), index=orders["order_id"].to_numpy())
-    unknown = ~pairs["first_id"].isin(index.index) | ~pairs["second_id"].isin(index.index)
-    if unknown.any():
-        rc.fail("oracle-pairs", f"{int(unknown.sum())} pairs name unknown order ids")
+    run = meta["runs"][name]
+    rules = run["rules"]
+    if rules.get("window") == "bound":
+        return _check_bound(rc, run, run_dir, orders, solo, distances, params, reported)
+    dist = distances.dist
+    stored = _pairs_as_rows(rc, run_dir, orders)
+    if stored is None:
         return rc
-    a = index[pairs["first_id"]].to_numpy()
-    b = index[pairs["second_id"]].to_numpy()
-    counts = np.bincount(np.concatenate([a, b]), minlength=len(orders))
-    if (counts > 1).any():
-        rc.fail("oracle-pairs", f"order {int(np.argmax(counts))} appears in {int(counts.max())} pairs")
+    pairs, a, b = stored
     req = orders["request_s"].to_numpy()
     direct = ~pairs["enroute"].to_numpy().astype(bool)
     gap = np.abs(req[b] - req[a])
@@ -323,6 +422,53 @@ def _check_oracle(name: str, run_dir: Path, meta: dict, orders: pd.DataFrame, so
         rep = float(have.get(key, np.nan))
         if not (np.isnan(value) and np.isnan(rep)) and not np.isclose(rep, value, rtol=KPI_RTOL, atol=1e-6):
             rc.fail("kpi", f"KPI {key}: reported {rep!r}, recomputed {value!r}")
+    rc.checked.update({"pairs": len(pairs), "orders": n})
+    return rc
+
+
+def _pairs_as_rows(rc: RunCheck, run_dir: Path, orders: pd.DataFrame):
+    """(pairs, a, b): the stored pairs and their row positions, or None when they name unknown orders."""
+    pairs = results.read_csv(run_dir / "pairs.csv.gz")
+    index = pd.Series(np.arange(len(orders)), index=orders["order_id"].to_numpy())
+    unknown = ~pairs["first_id"].isin(index.index) | ~pairs["second_id"].isin(index.index)
+    if unknown.any():
+        rc.fail("oracle-pairs", f"{int(unknown.sum())} pairs name unknown order ids")
+        return None
+    a = index[pairs["first_id"]].to_numpy()
+    b = index[pairs["second_id"]].to_numpy()
+    counts = np.bincount(np.concatenate([a, b]), minlength=len(orders))
+    if (counts > 1).any():
+        rc.fail("oracle-pairs", f"order {int(np.argmax(counts))} appears in {int(counts.max())} pairs")
+    return pairs, a, b
+
+
+def _check_bound(rc: RunCheck, run: dict, run_dir: Path, orders: pd.DataFrame, solo: np.ndarray, distances,
+                 params: Params, reported: pd.DataFrame) -> RunCheck:
+    """The upper bound: a matching of bound edges, each stored weight the largest realisable saving, and the
+    reported bound the rounded-up optimum (or, when the solver stopped early, at least the matching's value)."""
+    stored = _pairs_as_rows(rc, run_dir, orders)
+    if stored is None:
+        return rc
+    pairs, a, b = stored
+    weight, edge = bound_weights(distances, orders, solo, params, a, b)
+    if not edge.all():
+        rc.fail("oracle-pairs", f"{int((~edge).sum())} pairs are not edges of the upper bound's graph")
+    if not np.allclose(weight[edge], pairs["saving_m"].to_numpy()[edge], rtol=0, atol=1e-6):
+        rc.fail("oracle-pairs", "stored weights differ from the largest realisable savings recomputed here")
+    unit = float(run.get("unit_m", 0.01))
+    value_km = float(np.ceil(pairs["saving_m"].to_numpy() / unit).sum() * unit) / 1000.0
+    have = dict(zip(reported["kpi"], reported["value"]))
+    rep = float(have.get("total_saving_km", np.nan))
+    if run.get("status") == "optimal":
+        if not np.isclose(rep, value_km, rtol=KPI_RTOL, atol=1e-6):
+            rc.fail("kpi", f"KPI total_saving_km (the bound): reported {rep!r}, recomputed {value_km!r}")
+    elif not rep >= value_km - 1e-6:
+        rc.fail("kpi", f"the reported bound {rep!r} km lies below its own matching's {value_km!r} km")
+    n = len(orders)
+    recomputed = {"orders": n, "pairs": len(pairs), "pooled_passengers": 2 * len(pairs)}
+    for key, value in recomputed.items():
+        if not np.isclose(float(have.get(key, np.nan)), value, rtol=KPI_RTOL, atol=1e-6):
+            rc.fail("kpi", f"KPI {key}: reported {have.get(key)!r}, recomputed {value!r}")
     rc.checked.update({"pairs": len(pairs), "orders": n})
     return rc
 

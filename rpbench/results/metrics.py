@@ -45,8 +45,8 @@ KPI_LABELS = {
     "avg_shared_m": "Average shared distance (m)",
     "total_occupied_km": "Total driving distance with passenger(s) on board (km)",
     "total_saving_km": "Total distance saving due to ride-pooling (km)",
-    "competitive_ratio": "Competitive ratio (saving / Oracle-1)",
-    "competitive_ratio_enroute": "Competitive ratio (saving / Oracle-1 with en-route pairs)",
+    "competitive_ratio_bound": "Competitive ratio (saving / proven upper bound)",
+    "competitive_ratio": "Saving / Oracle-1 (paper: same-window pairs; not a bound)",
 }
 EXTRA_KPIS = ["orders", "served", "cancelled", "pooled_passengers", "pairs", "pairing_ratio_of_orders",
               "avg_pickup_distance_m", "platform_profit_alt_cny", "total_solo_served_km"]

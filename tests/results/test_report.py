@@ -26,8 +26,9 @@ def fixture_folder(tmp_path, *, scenario="haikou-peak", args=None, runs=("mb", "
             "runs": {r: {"wall_s": 1.5} for r in runs}}
     (folder / "meta.json").write_text(json.dumps(meta))
     rows = []
-    for r, saving, detour, rr in [("mb", 111.0, 912.0, 0.9), ("fl", 158.0, 731.0, 0.81), ("oracle1", 250.0, 942.0,
-                                                                                           float("nan"))]:
+    values = {"mb": (111.0, 912.0, 0.9), "fl": (158.0, 731.0, 0.81), "oracle1": (250.0, 942.0, float("nan")),
+              "bound": (400.0, 500.0, float("nan"))}
+    for r, (saving, detour, rr) in ((r, values[r]) for r in runs):
         rows += [{"run": r, "kpi": "total_saving_km", "value": saving}, {"run": r, "kpi": "avg_detour_m",
                                                                          "value": detour},
                  {"run": r, "kpi": "response_rate", "value": rr}]
@@ -44,12 +45,27 @@ def test_table_and_competitive_ratio(tmp_path):
     table = load_kpis(folder)
     assert table.loc["competitive_ratio", "fl"] == pytest.approx(158 / 250)
     text = text_table(table)
-    assert "Competitive ratio" in text and "0.632" in text
+    assert "Saving / Oracle-1 (paper: same-window pairs; not a bound)" in text and "0.632" in text
+    assert "Competitive ratio" not in text                      # no bound in this folder: no competitive ratio
     md, written = render([folder])
+    assert "a reference, not a competitive ratio" in md        # why the Oracle-1 row can exceed 1
     assert written == [folder / "report.md"]
     assert "| Total distance saving due to ride-pooling (km) | 111 | 158 | 250 |" in md
     # the paper's Table 2 is shown beside rpbench's numbers for 2017-05-01 at 30 %
     assert "158 (158)" in md and "0.632 (0.632)" in md
+
+
+def test_the_competitive_ratio_divides_by_the_bound(tmp_path):
+    folder = fixture_folder(tmp_path, runs=("mb", "fl", "bound", "oracle1"))
+    table = load_kpis(folder)
+    assert table.loc["competitive_ratio_bound", "fl"] == pytest.approx(158 / 400)
+    assert table.loc["competitive_ratio", "fl"] == pytest.approx(158 / 250)
+    text = text_table(table)
+    rows = [line.split("  ")[0] for line in text.splitlines()]
+    assert rows.index("Competitive ratio (saving / proven upper bound)") < \
+        rows.index("Saving / Oracle-1 (paper: same-window pairs; not a bound)")
+    md, _ = render([folder])
+    assert "| Upper bound |" in md.replace("Upper bound | Oracle-1", "Upper bound |") and "docs/bound.md" in md
 
 
 def test_paper_values_only_where_they_apply(tmp_path):
@@ -82,10 +98,10 @@ def test_empty_results_folder(tmp_path):
 
 
 def test_a_light_copy_without_event_logs_still_renders(tmp_path):
-    folder = fixture_folder(tmp_path)
+    folder = fixture_folder(tmp_path, runs=("mb", "fl", "bound", "oracle1"))
     shutil.rmtree(folder / "runs")
     md, _ = render([folder])
-    assert "Competitive ratio" in md
+    assert "Competitive ratio (saving / proven upper bound)" in md
 
 
 def test_report_cli(tmp_path, capsys):

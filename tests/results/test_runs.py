@@ -8,7 +8,7 @@ from rpbench.strategies import REGISTRY, strategy_class
 
 
 def test_labels_come_from_the_classes():
-    assert run_label("fl-nd") == "FL-no_delay" and run_label("oracle1-enroute") == "Oracle-1 (en-route)"
+    assert run_label("fl-nd") == "FL-no_delay" and run_label("bound") == "Upper bound"
     for name in REGISTRY:
         assert run_label(name) == strategy_class(name).label and run_color(name) == strategy_class(name).color
     for name, run in ORACLE_RUNS.items():
