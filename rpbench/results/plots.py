@@ -58,13 +58,13 @@ def per_day_figures(by_day: pd.DataFrame, folder: Path, kpis: list[str]) -> list
         sel = by_day[by_day["kpi"] == kpi]
         if sel.empty:
             continue
-        fig, ax = plt.subplots(figsize=(8, 3.6))
+        fig, ax = plt.subplots(figsize=(9.5, 3.6))
         for run, g in sel.groupby("run", sort=False):
             label, color = _label(run)
             ax.plot(pd.to_datetime(g["date"]), g["value"], marker="o", ms=3, label=label, color=color)
         ax.set_title(KPI_LABELS.get(kpi, kpi), fontsize=10)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8, ncol=4)
+        ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.01, 0.5))   # beside: lines fill the plot
         fig.autofmt_xdate()
         fig.tight_layout()
         path = folder / f"by_day_{kpi}.png"

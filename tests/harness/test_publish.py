@@ -39,3 +39,15 @@ def test_a_folder_failing_the_checker_is_not_published(run_folder, tmp_path, cap
     pd.read_csv(events).query("event != 'dropoff'").to_csv(events, index=False)
     assert main(["publish", str(bad), str(tmp_path / "pub")]) == 2
     assert "fails rpbench check (mb)" in capsys.readouterr().err and not (tmp_path / "pub").exists()
+
+
+@pytest.mark.slow
+def test_a_published_multi_day_report_names_the_published_folder(two_day_data, tmp_path):
+    from rpbench.harness.multiday import run_days
+    from rpbench.scenarios import ScenarioRequest
+    folder = run_days(ScenarioRequest("haikou-peak", sample=1.0, data_dir=str(two_day_data)),
+                      ["2017-05-01", "2017-05-02"], strategies=["mb"], preset="highs", run_options={},
+                      out=str(tmp_path / "days"), workers=1, scheduler=None, command="test")
+    dest = publish(folder, tmp_path / "published-days")
+    report = (dest / "report.md").read_text()
+    assert "rpbench check published-days/<date>" in report and "partial" not in report

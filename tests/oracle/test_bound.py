@@ -100,7 +100,7 @@ def test_certificate_holds_for_every_strategy_on_random_toy_scenarios(tmp_path, 
     assert all(rc.ok for rc in checks.values()), {k: v.violations for k, v in checks.items() if not v.ok}
     assert sum(checks[s].checked["certified_pairs"] for s in STRATEGIES) > 0
     ratios = table.loc["competitive_ratio_bound", STRATEGIES]
-    assert (ratios <= 1.0).all() and (ratios >= 0).all()
+    assert (ratios <= 1.0).all() and (ratios >= -1e-9).all()        # NP saves 0 up to float rounding
 
 
 @pytest.fixture(scope="module")
