@@ -18,7 +18,7 @@ from rpbench.exceptions import RpbenchError
 
 #: Subcommand modules, in the order ``rpbench --help`` lists them.
 COMMANDS = ("run", "check", "oracle", "predict", "snapshot", "bench", "sweep", "report", "publish", "scenario",
-            "list")
+            "list", "data")
 
 
 def build_parser() -> argparse.ArgumentParser:

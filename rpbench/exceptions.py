@@ -44,3 +44,11 @@ class PresetError(RpbenchError, ValueError):
 
 class ResultsError(RpbenchError, ValueError):
     """A results folder is missing, empty or inconsistent."""
+
+
+class DownloadError(RpbenchError, OSError):
+    """A data file could not be downloaded (network down, HTTP error, connection cut)."""
+
+
+class ChecksumError(DataError):
+    """A data file's content does not match the SHA-256 the registry pins for it."""

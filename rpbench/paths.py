@@ -3,8 +3,11 @@
 Data folder precedence (DESIGN.md "Data"): ``--data DIR``, else the
 ``RPBENCH_DATA`` environment variable, else ``../shared/data/haikou`` next to
 the checkout (tried beside the current directory first, then beside the
-source tree when rpbench runs from a checkout).  Nothing here assumes which
-days exist in the folder.
+source tree when rpbench runs from a checkout), else the folder
+``rpbench data fetch`` downloads into (``haikou`` in the user data directory,
+or in ``RPBENCH_DATA_HOME``), so a fresh machine without ``../shared`` runs
+the real data after one fetch.  Nothing here assumes which days exist in the
+folder.
 
 The cache (all-pairs distances, predictions) lives in the user cache
 directory, never in the repository; ``RPBENCH_CACHE`` overrides it.
@@ -15,13 +18,17 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from platformdirs import user_cache_dir
+from platformdirs import user_cache_dir, user_data_dir
 
 from rpbench.exceptions import DataNotFoundError
 
 DATA_ENV = "RPBENCH_DATA"
 CACHE_ENV = "RPBENCH_CACHE"
+DATA_HOME_ENV = "RPBENCH_DATA_HOME"
 _RELATIVE_DEFAULT = Path("..") / "shared" / "data" / "haikou"
+# The fetched folder gets the same name as the shared one, so the data home can
+# later hold other cities beside it.
+_FETCHED_NAME = "haikou"
 
 
 def source_root() -> Path:
@@ -29,9 +36,20 @@ def source_root() -> Path:
     return Path(__file__).resolve().parent.parent
 
 
+def data_home() -> Path:
+    """Where downloaded data lives: ``$RPBENCH_DATA_HOME``, else the user data directory."""
+    root = os.environ.get(DATA_HOME_ENV) or user_data_dir("rpbench", appauthor=False)
+    return Path(root).expanduser()
+
+
+def fetched_data_dir() -> Path:
+    """The folder ``rpbench data fetch`` fills by default (it may not exist yet)."""
+    return data_home() / _FETCHED_NAME
+
+
 def default_data_candidates() -> list[Path]:
     """Folders tried, in order, when neither ``--data`` nor the env var is set."""
-    candidates = [Path.cwd() / _RELATIVE_DEFAULT, source_root() / _RELATIVE_DEFAULT]
+    candidates = [Path.cwd() / _RELATIVE_DEFAULT, source_root() / _RELATIVE_DEFAULT, fetched_data_dir()]
     unique: list[Path] = []
     for c in candidates:
         c = c.resolve()
@@ -40,8 +58,20 @@ def default_data_candidates() -> list[Path]:
     return unique
 
 
-def find_data_dir(explicit: str | os.PathLike | None = None) -> Path | None:
-    """Return the data folder to use, or ``None`` when no folder exists.
+def describe_candidate(path: Path) -> str:
+    """Say which default a candidate folder is (for ``rpbench list``)."""
+    path = path.resolve()
+    if path == fetched_data_dir().resolve():
+        return f"downloaded by `rpbench data fetch` (${DATA_HOME_ENV} or the user data directory)"
+    if path == (Path.cwd() / _RELATIVE_DEFAULT).resolve():
+        return "../shared/data/haikou beside the current directory"
+    if path == (source_root() / _RELATIVE_DEFAULT).resolve():
+        return "../shared/data/haikou beside the checkout"
+    return "a default candidate folder"
+
+
+def locate_data_dir(explicit: str | os.PathLike | None = None) -> tuple[Path | None, str]:
+    """The data folder to use and where it came from (``--data``, the env var, which default).
 
     An explicit folder (argument or env var) that does not exist is an
     error, not a silent fall-back: the user asked for it by name.
@@ -51,18 +81,24 @@ def find_data_dir(explicit: str | os.PathLike | None = None) -> Path | None:
         if not path.is_dir():
             raise DataNotFoundError(f"data folder {str(path)!r} (from --data) does not exist; "
                                     "point --data at the Haikou data folder")
-        return path.resolve()
+        return path.resolve(), "--data"
     env = os.environ.get(DATA_ENV)
     if env:
         path = Path(env).expanduser()
         if not path.is_dir():
             raise DataNotFoundError(f"data folder {env!r} (from ${DATA_ENV}) does not exist; "
                                     f"unset {DATA_ENV} or point it at the Haikou data folder")
-        return path.resolve()
+        return path.resolve(), f"${DATA_ENV}"
+    # Looked up through the module so tests can replace the candidate list.
     for candidate in default_data_candidates():
         if candidate.is_dir():
-            return candidate
-    return None
+            return candidate, describe_candidate(candidate)
+    return None, "none found"
+
+
+def find_data_dir(explicit: str | os.PathLike | None = None) -> Path | None:
+    """Return the data folder to use, or ``None`` when no folder exists (see :func:`locate_data_dir`)."""
+    return locate_data_dir(explicit)[0]
 
 
 def require_data_dir(explicit: str | os.PathLike | None = None, *, what: str = "this scenario") -> Path:
@@ -71,7 +107,7 @@ def require_data_dir(explicit: str | os.PathLike | None = None, *, what: str = "
     if found is None:
         tried = ", ".join(str(c) for c in default_data_candidates())
         raise DataNotFoundError(f"no Haikou data folder found for {what} (tried {tried}); "
-                                f"pass --data DIR or set ${DATA_ENV}")
+                                f"pass --data DIR, set ${DATA_ENV}, or download it with `rpbench data fetch`")
     return found
 
 

@@ -8,7 +8,9 @@
   benchmark call: support and installation checked, the solution verified once.
 
 Adding a backend is one adapter module, one :data:`REGISTRY` line and one
-preset file.
+preset file.  A backend defined outside the package needs no registry line:
+its preset names it as an installed entry point of the group
+``rpbench.backends`` or as ``module:Class`` (:func:`backend_class`).
 """
 
 from rpbench.backends.base import Backend, SolveOptions

@@ -13,7 +13,12 @@ A preset names a backend and its options::
 
 Presets are found in the checkout's ``solvers/`` folder, else in the
 installed package (the same files, shipped as ``rpbench.presets``).  A path
-ending in ``.toml`` is accepted as well.
+ending in ``.toml`` is accepted as well: that is how a preset of a backend
+defined outside the package is used (``--solver path/to/mine.toml``), its
+``backend`` an installed entry-point name or ``"mypkg.solvers:MyBackend"``
+(:func:`~rpbench.backends.registry.backend_class`).  Such a backend is
+resolved when the preset is parsed, so a module that does not import is
+reported at once, naming the preset.
 """
 
 from __future__ import annotations
@@ -24,9 +29,10 @@ from importlib import resources
 from pathlib import Path
 
 from rpbench.backends.base import Backend, SolveOptions
-from rpbench.backends.registry import REGISTRY, backend_class, get_backend
+from rpbench.backends.registry import REGISTRY, backend_class, get_backend, plugin_names
 from rpbench.exceptions import PresetError
 from rpbench.paths import source_root
+from rpbench.plugins import is_spec
 
 _TOP_KEYS = {"backend", "description", "options"}
 _OPTION_KEYS = {"threads", "time_limit_s", "mip_rel_gap", "method", "solver", "extra"}
@@ -112,8 +118,16 @@ def parse_preset(name: str, text: str, where: str) -> Preset:
         raise PresetError(f"solver preset {where!r}: unknown key(s) {', '.join(sorted(unknown))}; "
                           f"allowed: {', '.join(sorted(_TOP_KEYS))}")
     backend = data.get("backend")
-    if not isinstance(backend, str) or backend not in REGISTRY:
-        raise PresetError(f"solver preset {where!r}: backend = {backend!r} is not one of {', '.join(REGISTRY)}")
+    if not isinstance(backend, str) or not (backend in REGISTRY or is_spec(backend)
+                                            or backend.lower() in plugin_names()):
+        raise PresetError(f"solver preset {where!r}: backend = {backend!r} is not one of "
+                          f"{', '.join([*REGISTRY, *plugin_names()])} (installed plug-ins included) nor a "
+                          "\"module:Class\" spec")
+    if backend not in REGISTRY:
+        try:
+            backend_class(backend)
+        except PresetError as exc:
+            raise PresetError(f"solver preset {where!r}: {exc}") from None
     opts = data.get("options", {})
     if not isinstance(opts, dict):
         raise PresetError(f"solver preset {where!r}: [options] must be a table")

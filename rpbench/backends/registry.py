@@ -2,13 +2,14 @@
 
 Importing it imports no solver library; :func:`get_backend`
 imports the adapter module (which itself imports its solver only when it
-solves).
+solves).  Backends defined outside the package are named by an installed
+entry point of the group ``rpbench.backends`` or as ``module:Class``
+(:func:`backend_class`, :mod:`rpbench.plugins`).
 """
 
 from __future__ import annotations
 
-import importlib
-
+from rpbench import plugins
 from rpbench.backends.base import Backend
 from rpbench.exceptions import PresetError
 
@@ -23,14 +24,29 @@ REGISTRY: dict[str, str] = {
     "blossom": "blossom:BlossomBackend",
 }
 
+#: Entry-point group of backends installed by other distributions.
+ENTRY_POINT_GROUP = "rpbench.backends"
+
 
 def backend_class(name: str) -> type[Backend]:
-    target = REGISTRY.get(name)
-    if target is None:
-        raise PresetError(f"unknown backend {name!r}; known backends: {', '.join(REGISTRY)}")
-    module_name, class_name = target.split(":")
-    module = importlib.import_module(f"rpbench.backends.{module_name}")
-    return getattr(module, class_name)
+    """The adapter class of a backend name, or one :class:`PresetError` line.
+
+    ``name`` is, in this order of precedence, a built-in name of
+    :data:`REGISTRY`; a ``module:Class`` spec (the module imported by its
+    absolute name: installed or on ``PYTHONPATH``); or the name of an
+    installed entry point of :data:`ENTRY_POINT_GROUP` (compared
+    case-insensitively).  An entry point named like a built-in backend is
+    ignored: the built-in always wins.  The class must subclass
+    :class:`Backend`, implement ``solve`` and declare ``name``, ``requires``
+    and ``exact``.
+    """
+    return plugins.resolve(name, builtin=REGISTRY, package="rpbench.backends", group=ENTRY_POINT_GROUP,
+                           base=Backend, what="backend", required=("name", "requires", "exact"), error=PresetError)
+
+
+def plugin_names() -> list[str]:
+    """Names of the installed plug-in backends (entry points not shadowed by a built-in name)."""
+    return plugins.plugin_names(ENTRY_POINT_GROUP, REGISTRY)
 
 
 def get_backend(name: str) -> Backend:
@@ -38,4 +54,3 @@ def get_backend(name: str) -> Backend:
     cls = backend_class(name)
     cls.ensure_installed()
     return cls()
-

@@ -16,7 +16,8 @@ from rpbench.scenarios.base import Params
 
 def add_data_arg(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--data", metavar="DIR", default=None,
-                        help="Haikou data folder (default: $RPBENCH_DATA, else ../shared/data/haikou)")
+                        help="Haikou data folder (default: $RPBENCH_DATA, else ../shared/data/haikou, else the folder "
+                             "`rpbench data fetch` fills; `rpbench list` says which)")
 
 
 def add_scenario_args(parser: argparse.ArgumentParser, *, positional: bool = False) -> None:

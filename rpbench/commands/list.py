@@ -10,11 +10,11 @@ from rpbench.data import available_peak_dates
 from rpbench.exceptions import RpbenchError
 from rpbench.harness.comparison import options_class
 from rpbench.oracle.runs import ORACLE_RUNS
-from rpbench.paths import default_data_candidates, find_data_dir
+from rpbench.paths import default_data_candidates, locate_data_dir
 from rpbench.scenarios import SCENARIOS
 from rpbench.scenarios.base import Params
 from rpbench.strategies import REGISTRY as STRATEGY_REGISTRY
-from rpbench.strategies import strategy_class
+from rpbench.strategies import plugin_names, strategy_class
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -27,7 +27,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def gather(data: str | None) -> dict:
-    folder = find_data_dir(data)
+    folder, origin = locate_data_dir(data)
     presets = []
     for name in preset_names():
         try:
@@ -40,12 +40,13 @@ def gather(data: str | None) -> dict:
             presets.append({"name": name, "backend": None, "installed": False, "error": str(exc)})
     return {
         "data_dir": str(folder) if folder else None,
+        "data_dir_source": origin,
         "data_dir_candidates": [str(c) for c in default_data_candidates()],
         "peak_dates": available_peak_dates(folder) if folder else [],
         "scenarios": [{"name": s.name, "description": s.description, "needs_data": s.needs_data,
                        "available": (not s.needs_data) or folder is not None} for s in SCENARIOS.values()],
         "presets": presets,
-        "strategies": [run_entry(name) for name in [*STRATEGY_REGISTRY, *ORACLE_RUNS]],
+        "strategies": [run_entry(name) for name in [*STRATEGY_REGISTRY, *plugin_names(), *ORACLE_RUNS]],
         "parameters": Params().as_dict(),
     }
 
@@ -67,7 +68,11 @@ def run(args: argparse.Namespace) -> int:
         print_json(info)
         return 0
     folder = info["data_dir"]
-    print(f"data folder: {folder or 'none found (only the toy scenario runs); pass --data DIR'}")
+    if folder:
+        print(f"data folder: {folder} (from {info['data_dir_source']})")
+    else:
+        print("data folder: none found (only the toy scenario runs); pass --data DIR, or download it once "
+              "with `rpbench data fetch`")
     if info["peak_dates"]:
         dates = info["peak_dates"]
         print(f"  peak-hour dates: {len(dates)} ({dates[0]} .. {dates[-1]})")

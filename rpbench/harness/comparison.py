@@ -25,13 +25,14 @@ from rpbench.backends import Preset, load_preset
 from rpbench.exceptions import ParameterError
 from rpbench.oracle import find_candidates, solve_oracle
 from rpbench.oracle.runs import ORACLE_RUNS
+from rpbench.plugins import is_spec
 from rpbench.results import metrics
 from rpbench.results.report import with_competitive_ratios, write_report
 from rpbench.scenarios import ScenarioRequest
 from rpbench.scenarios.base import Scenario
 from rpbench.sim.simulator import SimResult, Simulator
 from rpbench.strategies import REGISTRY as STRATEGY_REGISTRY
-from rpbench.strategies import strategy_class
+from rpbench.strategies import plugin_names, strategy_class
 from rpbench.strategies.options import RunOptions
 
 
@@ -48,16 +49,33 @@ class StrategyRun:
 
 
 def parse_strategies(text: str | list[str]) -> list[str]:
-    """Run names from ``--strategies`` (strategies and oracles), checked and in order."""
-    names = [s.strip().lower() for s in (text.split(",") if isinstance(text, str) else text) if s.strip()]
-    known = list(STRATEGY_REGISTRY) + list(ORACLE_RUNS)
-    unknown = [n for n in names if n not in known]
-    if unknown or not names:
-        raise ParameterError(f"unknown strategy {unknown[0] if unknown else '(none)'!r}; "
-                             f"choose from {', '.join(known)}")
+    """Run names from ``--strategies`` (strategies and oracles), checked and in order.
+
+    Built-in and entry-point names are case-insensitive (lower-cased here);
+    a ``module:Class`` spec keeps its case (Python names are case-sensitive)
+    and is the run's name as typed, e.g. its folder ``runs/mypkg.rules:Greedy/``.
+    Oracle runs take precedence over plug-ins of the same name.  Plug-in
+    classes are resolved here, so an import error is reported before any run.
+    """
+    items = text.split(",") if isinstance(text, str) else text
+    names = [s.strip() if is_spec(s) else s.strip().lower() for s in items if s.strip()]
+    if not names:
+        raise ParameterError(f"unknown strategy '(none)'; choose from {', '.join(known_runs())}")
+    for name in names:
+        if name in ORACLE_RUNS or name in STRATEGY_REGISTRY:
+            continue
+        if not is_spec(name) and name not in plugin_names():
+            raise ParameterError(f"unknown strategy {name!r}; choose from {', '.join(known_runs())}, "
+                                 "or give a strategy class as MODULE:CLASS (e.g. mypkg.rules:Greedy)")
+        strategy_class(name)
     if len(set(names)) != len(names):
         raise ParameterError(f"strategy list {','.join(names)} names a strategy twice")
     return names
+
+
+def known_runs() -> list[str]:
+    """Every run name ``--strategies`` accepts without a ``module:`` prefix (an oracle hides a plug-in's name)."""
+    return [*STRATEGY_REGISTRY, *(n for n in plugin_names() if n not in ORACLE_RUNS), *ORACLE_RUNS]
 
 
 def options_class(name: str) -> type[RunOptions]:
@@ -66,17 +84,34 @@ def options_class(name: str) -> type[RunOptions]:
 
 
 def parse_run_options(items: list[str], names: list[str]) -> dict[str, RunOptions]:
-    """``--opt RUN.NAME=VALUE`` items as typed options per run (every run of ``names`` gets its own)."""
+    """``--opt RUN.NAME=VALUE`` items as typed options per run (every run of ``names`` gets its own).
+
+    RUN is the longest run name of ``names`` that the key starts with,
+    followed by a dot: run names may contain dots themselves
+    (``--opt mypkg.rules:Greedy.threshold=3``).
+    """
     raw: dict[str, dict[str, str]] = {name: {} for name in names}
     for item in items:
         key, sep, value = item.partition("=")
-        name, dot, option = key.partition(".")
-        if not sep or not dot or not option:
+        name, option = split_option_key(key, names)
+        if not sep or not name or not option.strip():
             raise ParameterError(f"--opt {item!r}: expected STRATEGY.KEY=VALUE, e.g. rtv.c_ko=large")
         if name not in raw:
             raise ParameterError(f"--opt {item!r}: strategy {name!r} is not in --strategies")
         raw[name][option.strip()] = value
     return {name: options_class(name).parse(name, values) for name, values in raw.items()}
+
+
+def split_option_key(key: str, names: list[str]) -> tuple[str, str]:
+    """``RUN.OPTION`` -> (RUN, OPTION): the longest of ``names`` followed by a dot, else a best guess for
+    the error message (up to the first dot; after the colon for a ``module:Class`` spec); OPTION is ``""``
+    when there is no dot."""
+    for name in sorted(names, key=len, reverse=True):
+        if key.startswith(f"{name}."):
+            return name, key[len(name) + 1:]
+    colon = key.find(":")
+    dot = key.find(".", colon + 1 if colon >= 0 else 0)
+    return (key, "") if dot < 0 else (key[:dot], key[dot + 1:])
 
 
 def progress_bar(scenario: Scenario, label: str, enabled: bool | None):

@@ -1,12 +1,13 @@
 """How a run is called in tables and drawn in plots: read off the strategy classes and oracle runs.
 
-A run name that is neither (say, a plug-in strategy that is not installed
-where a folder is re-rendered) is shown under its own name.
+A plug-in strategy (an entry-point name or a ``module:Class`` run name) is
+shown by its class's ``label`` and ``color`` like a built-in one.  A run name
+that resolves to no class (say, a plug-in that is not installed where a
+folder is re-rendered) is shown under its own name.
 """
 
 from __future__ import annotations
 
-from rpbench.exceptions import ParameterError
 from rpbench.oracle.runs import ORACLE_RUNS
 from rpbench.strategies import strategy_class
 
@@ -27,6 +28,6 @@ def _style(name: str) -> tuple[str, str | None]:
         return run.label, run.color
     try:
         cls = strategy_class(name)
-    except (ParameterError, ImportError):
+    except Exception:          # a label is cosmetic: a broken or missing plug-in must not stop a report
         return name, None
     return cls.label, cls.color

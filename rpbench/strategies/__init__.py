@@ -7,13 +7,18 @@ with a :class:`~rpbench.strategies.base.Strategy` subclass and register its
 name here: its label, plot colour, options and calibration are class
 attributes (:class:`~rpbench.strategies.base.Strategy`), which the harness,
 the reports and the plots read.
+
+A strategy defined outside the package runs the same way, named either by
+an installed entry point of the group ``rpbench.strategies`` (``greedy =
+"mypkg.rules:Greedy"`` in its ``pyproject.toml``) or directly as
+``mypkg.rules:Greedy`` (:func:`strategy_class`, :mod:`rpbench.plugins`).
 """
 
 from __future__ import annotations
 
-import importlib
 from typing import Any
 
+from rpbench import plugins
 from rpbench.exceptions import ParameterError
 from rpbench.strategies.base import Kind, RoundModel, RoundState, Strategy
 
@@ -26,18 +31,35 @@ REGISTRY: dict[str, str] = {
     "fl": "forward:ForwardLooking",
 }
 
+#: Entry-point group of strategies installed by other distributions.
+ENTRY_POINT_GROUP = "rpbench.strategies"
+
 
 def strategy_class(name: str) -> type[Strategy]:
-    target = REGISTRY.get(name)
-    if target is None:
-        raise ParameterError(f"unknown strategy {name!r}; known strategies: {', '.join(REGISTRY)}")
-    module_name, class_name = target.split(":")
-    return getattr(importlib.import_module(f"{__name__}.{module_name}"), class_name)
+    """The strategy class of a run name, or one :class:`ParameterError` line.
+
+    ``name`` is, in this order of precedence, a built-in name of
+    :data:`REGISTRY`; a ``module:Class`` spec (the module imported by its
+    absolute name: installed or on ``PYTHONPATH``); or the name of an
+    installed entry point of :data:`ENTRY_POINT_GROUP` (compared
+    case-insensitively).  An entry point named like a built-in strategy is
+    ignored: the built-in always wins (and the harness gives the oracle runs
+    ``bound``, ``oracle1``, ``oracle2`` precedence over both).  The class
+    must subclass :class:`Strategy`, implement ``build`` and declare
+    ``name``, ``label`` and ``structure``.
+    """
+    return plugins.resolve(name, builtin=REGISTRY, package=__name__, group=ENTRY_POINT_GROUP, base=Strategy,
+                           what="strategy", required=("name", "label", "structure"), error=ParameterError)
+
+
+def plugin_names() -> list[str]:
+    """Names of the installed plug-in strategies (entry points not shadowed by a built-in name)."""
+    return plugins.plugin_names(ENTRY_POINT_GROUP, REGISTRY)
 
 
 def make_strategy(name: str, **options: Any) -> Strategy:
     return strategy_class(name)(**options)
 
 
-__all__ = ["Kind", "REGISTRY", "RoundModel", "RoundState", "Strategy", "make_strategy",
-           "strategy_class"]
+__all__ = ["ENTRY_POINT_GROUP", "Kind", "REGISTRY", "RoundModel", "RoundState", "Strategy", "make_strategy",
+           "plugin_names", "strategy_class"]
