@@ -350,3 +350,24 @@ def test_default_data_location_picks_up_the_fetch_destination(capsys, monkeypatc
     assert len(info["peak_dates"]) == 14
     code, out, _ = run_cli(capsys, "list")
     assert f"data folder: {expected} (from downloaded by `rpbench data fetch`" in out
+
+
+def test_a_fresh_machine_fetches_from_a_local_mirror_and_runs_the_paper_scenario(capsys, monkeypatch, mirror,
+                                                                               tmp_path, private_data_home):
+    """The README's path for a machine without ../shared: fetch over HTTP, then `rpbench run` finds the data
+    by default and runs the paper's haikou-peak comparison (MB only, a small sample: the path, not the numbers)."""
+    monkeypatch.delenv("RPBENCH_DATA", raising=False)
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr("rpbench.paths.default_data_candidates",
+                        lambda: [tmp_path / "no-shared", (private_data_home / "haikou")])
+    url, _, _ = mirror
+    code, _, _ = run_cli(capsys, "data", "fetch", "--mirror", url, "--quiet")
+    assert code == 0
+    out = tmp_path / "run"
+    code, stdout, _ = run_cli(capsys, "run", "--strategies", "mb", "--sample", "0.05", "--out", str(out),
+                              "--no-progress")
+    assert code == 0 and "Haikou 2017-05-01 08:00-09:00" in stdout
+    meta = json.loads((out / "meta.json").read_text())
+    assert meta["scenario"]["name"] == "haikou-peak"
+    code, stdout, _ = run_cli(capsys, "check", str(out))
+    assert code == 0 and "mb: OK" in stdout
