@@ -3,15 +3,22 @@
 Each subcommand lives in its own module under :mod:`rpbench.commands` and
 exposes ``register(subparsers)``; the parser it adds carries a ``handler``
 default.  Every :class:`~rpbench.exceptions.RpbenchError` becomes one line
-on stderr and exit status 2; ``--json`` output is a single JSON object on
-stdout (progress bars and notes go to stderr).
+on stderr and exit status 2, and so does an OSError no command caught
+(naming the path); ``--json`` output is a single JSON object on stdout
+(progress bars and notes go to stderr).  SIGTERM (a batch scheduler, a
+container stop) raises :class:`Terminated` in the main thread, so every
+cleanup of half-written results runs; then one line and exit status 143.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
+import signal
 import sys
+import threading
+from typing import Iterator
 
 from rpbench import __version__
 from rpbench.exceptions import RpbenchError
@@ -32,6 +39,39 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: Exit status after SIGTERM (the shell's 128 + signal number).
+EXIT_TERMINATED = 128 + signal.SIGTERM
+
+
+class Terminated(BaseException):
+    """SIGTERM, raised in the main thread like KeyboardInterrupt for SIGINT.
+
+    A BaseException, so no ``except Exception`` swallows it on its way up
+    through the cleanups (``finally`` blocks, the results-folder context).
+    """
+
+
+def _raise_terminated(signum, frame) -> None:
+    # Once is enough: a second SIGTERM must not interrupt the cleanup the first one started
+    # (SIGKILL still stops a cleanup that hangs).
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    raise Terminated()
+
+
+@contextlib.contextmanager
+def sigterm_raises() -> Iterator[None]:
+    """Turn SIGTERM into :class:`Terminated` for the body (the previous handler is restored afterwards,
+    for callers that run :func:`main` in-process).  Only the main thread can install handlers."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGTERM, _raise_terminated)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -39,15 +79,30 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help(sys.stderr)
         return 2
     try:
-        return int(args.handler(args) or 0)
+        with sigterm_raises():
+            return int(args.handler(args) or 0)
     except RpbenchError as exc:
         print(f"rpbench: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("rpbench: interrupted", file=sys.stderr)
         return 130
+    except Terminated:
+        print("rpbench: terminated (SIGTERM); nothing half-written was left", file=sys.stderr)
+        return EXIT_TERMINATED
     except BrokenPipeError:
         return 0
+    except OSError as exc:     # a file-system error no command turned into an RpbenchError: still one line
+        print(f"rpbench: error: {os_error_line(exc)}", file=sys.stderr)
+        return 2
+
+
+def os_error_line(exc: OSError) -> str:
+    """``[Errno 13] Permission denied: '/x'`` as ``'/x': permission denied`` (one line, path first)."""
+    what = (exc.strerror or str(exc) or type(exc).__name__).strip()
+    paths = [p for p in (exc.filename, exc.filename2) if p is not None]
+    text = f"{' -> '.join(repr(str(p)) for p in paths)}: {what[:1].lower()}{what[1:]}" if paths else what
+    return " ".join(text.split())
 
 
 if __name__ == "__main__":  # pragma: no cover

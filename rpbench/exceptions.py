@@ -52,3 +52,23 @@ class DownloadError(RpbenchError, OSError):
 
 class ChecksumError(DataError):
     """A data file's content does not match the SHA-256 the registry pins for it."""
+
+
+class CacheError(RpbenchError, OSError):
+    """The cache folder cannot be used: it is a file, cannot be created or is not writable."""
+
+
+class NoOrdersError(RpbenchError, ValueError):
+    """A scenario would hold no order at all (empty data, or a sample keeping none), so a run would
+    only write an empty results folder."""
+
+
+def one_line(exc: BaseException) -> str:
+    """``exc`` as one line of text, for embedding a library's message in an rpbench error.
+
+    Library messages (pandas, zlib, tomllib) may span several lines, which
+    would break the CLI's one-line error contract; an empty message falls
+    back to the exception's class name.
+    """
+    text = " ".join(str(exc).split())
+    return text or type(exc).__name__

@@ -21,16 +21,28 @@ damaged file fails with one clear error instead of a wrong model.
 from __future__ import annotations
 
 import json
+import math
+import pickle
 import zipfile
+import zlib
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from rpbench.exceptions import ModelError, ResultsError
+from rpbench.exceptions import ModelError, ResultsError, one_line
 from rpbench.model import AssignmentModel, PairingModel, Structure, TripPackingModel
 
 FORMAT = "rpbench-instance-1"
+#: Largest declared row count (passengers, vehicles, requests, orders): ~1000 times the largest fleet or
+#: order count of a Haikou run, and small enough that per-row arrays stay within a few hundred MB.
+MAX_ROWS = 10_000_000
+#: Largest total of (uncompressed) array bytes in one instance file.
+MAX_ARRAY_BYTES = 4 << 30
+#: What reading a truncated, corrupt or foreign file raises (zip, zlib, .npy header, pickle, short data).
+_READ_ERRORS = (OSError, EOFError, ValueError, KeyError, TypeError, zipfile.BadZipFile, zlib.error,
+                pickle.UnpicklingError, NotImplementedError)
+_HEADER_READERS = {(1, 0): np.lib.format.read_array_header_1_0, (2, 0): np.lib.format.read_array_header_2_0}
 _FIELDS = {
     Structure.ASSIGNMENT: ("n_passengers", "n_vehicles", "col_passenger", "col_vehicle"),
     Structure.TRIP_PACKING: ("n_requests", "n_vehicles", "col_vehicle", "col_request1", "col_request2"),
@@ -56,15 +68,19 @@ def save_instance(path: str | Path, model, meta: dict[str, Any] | None = None) -
 
 
 def load_instance(path: str | Path):
-    """Read an instance file; return ``(model, meta)``.  Raises ResultsError on a corrupt file."""
+    """Read an instance file; return ``(model, meta)``.  Raises ResultsError on a corrupt file.
+
+    Nothing is allocated from what the file merely declares: every array's
+    header must match the bytes its zip member holds (within
+    :data:`MAX_ARRAY_BYTES` in all), and the declared row counts must be
+    scalars in ``[0, MAX_ROWS]`` that the column arrays can back, before the
+    model is built (a crafted file declaring 2e9 passengers once made
+    ``rpbench bench`` allocate 15 GiB).
+    """
     path = Path(path)
     if not path.is_file():
         raise ResultsError(f"snapshot file {str(path)!r} does not exist")
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            data = {k: z[k] for k in z.files}
-    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as exc:
-        raise ResultsError(f"snapshot file {str(path)!r} is corrupt or not an rpbench instance: {exc}") from None
+    data = _read_arrays(path)
     if str(data.get("format", "")) != FORMAT:
         raise ResultsError(f"snapshot file {str(path)!r} is not an rpbench instance (format "
                            f"{str(data.get('format', 'missing'))!r}, expected {FORMAT!r})")
@@ -73,6 +89,7 @@ def load_instance(path: str | Path):
         missing = [f for f in ("values", "unit_m", "name", *_FIELDS[structure]) if f not in data]
         if missing:
             raise KeyError(", ".join(missing))
+        _check_declared_sizes(data, structure)
         common = dict(unit_m=float(data["unit_m"]), name=str(data["name"]))
         if structure == Structure.ASSIGNMENT:
             model = AssignmentModel(int(data["n_passengers"]), int(data["n_vehicles"]), data["col_passenger"],
@@ -84,9 +101,83 @@ def load_instance(path: str | Path):
             model = PairingModel(int(data["n_orders"]), data["col_a"], data["col_b"], data["values"],
                                  objective=str(data.get("objective", "weight")), **common)
         meta = json.loads(str(data.get("meta_json", "{}")))
-    except (KeyError, ValueError, TypeError, ModelError, json.JSONDecodeError) as exc:
-        raise ResultsError(f"snapshot file {str(path)!r} is corrupt: {exc}") from None
+        if not isinstance(meta, dict):
+            raise ValueError("meta_json is not a JSON object")
+    except (KeyError, ValueError, TypeError, OverflowError, ModelError) as exc:
+        what = f"missing array(s) {exc.args[0]}" if isinstance(exc, KeyError) else one_line(exc)
+        raise ResultsError(f"snapshot file {str(path)!r} is corrupt: {what}") from None
     return model, meta
+
+
+def _read_arrays(path: Path) -> dict[str, np.ndarray]:
+    """Every array of the file, after checking their declared sizes against the file (see load_instance)."""
+    try:
+        _check_members(path)
+        with np.load(path, allow_pickle=False) as z:
+            return {k: z[k] for k in z.files}
+    except ResultsError:
+        raise
+    except _READ_ERRORS as exc:
+        raise ResultsError(f"snapshot file {str(path)!r} is corrupt or not an rpbench instance: "
+                           f"{one_line(exc)}") from None
+
+
+def _check_members(path: Path) -> None:
+    """Each ``.npy`` member's header (shape x item size) must match the bytes the member holds.
+
+    np.load allocates the array its header declares before reading the data,
+    so a lying header is refused here, from the zip directory and the headers
+    alone; the total is capped so a decompression bomb is never inflated.
+    """
+    total = 0
+    with zipfile.ZipFile(path) as zf:
+        for info in zf.infolist():
+            total += info.file_size
+            if total > MAX_ARRAY_BYTES:
+                raise ResultsError(f"snapshot file {str(path)!r} declares more than {MAX_ARRAY_BYTES:,} bytes "
+                                   "of arrays; not an instance rpbench wrote")
+            with zf.open(info) as fh:
+                version = np.lib.format.read_magic(fh)
+                if version not in _HEADER_READERS:
+                    raise ValueError(f"array {info.filename!r} has unsupported .npy version {version}")
+                shape, _, dtype = _HEADER_READERS[version](fh)
+                if dtype.hasobject:
+                    raise ValueError(f"array {info.filename!r} holds Python objects")
+                declared = fh.tell() + math.prod(shape) * dtype.itemsize
+            if declared != info.file_size:
+                raise ValueError(f"array {info.filename!r} declares shape {shape} of {dtype} "
+                                 f"({declared:,} bytes) but holds {info.file_size:,} bytes")
+
+
+def _check_declared_sizes(data: dict[str, np.ndarray], structure: Structure) -> None:
+    """Row counts and column arrays checked before the model (which allocates per declared row) is built."""
+    values = data["values"]
+    if values.ndim != 1 or values.dtype.kind not in "fiu":
+        raise ValueError(f"values must be a one-dimensional real array, not {values.dtype}{values.shape}")
+    n_cols = len(values)
+    for name in _FIELDS[structure]:
+        if name.startswith("n_"):
+            _check_count(name, data[name])
+        else:
+            _check_column(name, data[name], n_cols)
+    # Every passenger needs at least its keep-waiting column: more passengers than columns is a lie.
+    if structure == Structure.ASSIGNMENT and int(data["n_passengers"]) > n_cols:
+        raise ValueError(f"n_passengers = {int(data['n_passengers'])} exceeds the {n_cols} columns; "
+                         "every passenger has at least one column")
+
+
+def _check_count(name: str, arr: np.ndarray) -> None:
+    if arr.ndim != 0 or arr.dtype.kind not in "iu" or not 0 <= int(arr) <= MAX_ROWS:
+        shown = repr(arr.item()) if arr.ndim == 0 else f"an array of shape {arr.shape}"
+        raise ValueError(f"{name} = {shown} must be an integer in [0, {MAX_ROWS:,}]")
+
+
+def _check_column(name: str, arr: np.ndarray, n_cols: int) -> None:
+    # The model stores indices as int32: an int64 index of 2**32 would wrap around to 0 unnoticed.
+    if arr.ndim != 1 or arr.dtype.kind not in "iu" or len(arr) != n_cols:
+        raise ValueError(f"{name} must be an integer array of {n_cols} entries, not {arr.dtype}{arr.shape}")
+    if len(arr) and (int(arr.min()) < -1 or int(arr.max()) >= MAX_ROWS):
+        raise ValueError(f"{name} holds an index outside [-1, {MAX_ROWS:,})")
 
 
 def find_instances(paths: list[str | Path]) -> list[Path]:

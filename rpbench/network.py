@@ -6,7 +6,8 @@
 rpbench uses (ALGORITHMS.md §1: "the same distance oracle the simulator
 uses"): all-pairs shortest distances and a predecessor matrix from Dijkstra
 (``scipy.sparse.csgraph``), cached on disk in the user cache directory under
-a hash of the network content.  Shortest paths are read off the predecessor
+a hash of the network content, with a SHA-256 digest that every load checks
+(:meth:`DistanceOracle.load_or_build`).  Shortest paths are read off the predecessor
 matrix, so the path a prediction assumes is the path the simulator drives.
 """
 
@@ -14,6 +15,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import sys
 import time
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -26,8 +28,8 @@ from scipy.sparse.csgraph import connected_components, shortest_path
 from scipy.spatial import cKDTree
 
 from rpbench.data.road import NetworkTables
-from rpbench.exceptions import DataError, ParameterError
-from rpbench.paths import cache_dir
+from rpbench.exceptions import DataError, ParameterError, one_line
+from rpbench.paths import cache_dir, cache_write_error
 
 EARTH_RADIUS_M = 6_371_008.8
 _NO_PRED = -9999  # scipy's marker for "no predecessor"
@@ -178,24 +180,28 @@ class DistanceOracle:
 
     @classmethod
     def load_or_build(cls, network: RoadNetwork, *, use_cache: bool = True) -> "DistanceOracle":
+        """The oracle from the disk cache when its content checks out, else built and cached.
+
+        The cache holds ``apsp-<hash>-dist.npy``, ``-pred.npy`` and
+        ``.sha256`` (the SHA-256 of both arrays, written after them).  A
+        table whose values changed on disk keeps its shape, so only a content
+        check catches it: every load re-hashes the arrays (a fraction of a
+        second for Haikou's 180 MB, against seconds to rebuild).  A mismatch,
+        a missing digest or an unreadable file is rebuilt, with one note on
+        stderr; a cache folder that cannot be written is a :class:`CacheError`.
+        """
         if not use_cache:
             return cls.build(network)
-        stem = cache_dir() / f"apsp-{network.content_hash}"
-        dist_path, pred_path = Path(f"{stem}-dist.npy"), Path(f"{stem}-pred.npy")
-        if dist_path.is_file() and pred_path.is_file():
-            t0 = time.perf_counter()
-            try:
-                # Plain ndarray views of the memory maps: pages load lazily, and
-                # indexing avoids numpy.memmap's per-call overhead.
-                dist = np.asarray(np.load(dist_path, mmap_mode="r"))
-                pred = np.asarray(np.load(pred_path, mmap_mode="r"))
-                if dist.shape == pred.shape == (network.n_nodes,) * 2:
-                    return cls(network, dist, pred, build_s=time.perf_counter() - t0, from_cache=True)
-            except (OSError, ValueError):
-                pass  # a damaged cache file is rebuilt below
+        files = _ApspFiles.of(network)
+        t0 = time.perf_counter()
+        arrays, problem = files.load_verified(network.n_nodes)
+        if arrays is not None:
+            return cls(network, *arrays, build_s=time.perf_counter() - t0, from_cache=True)
+        if problem:
+            print(f"rpbench: note: the cached all-pairs distances {files.stem.name}-* {problem}; rebuilding them",
+                  file=sys.stderr)
         oracle = cls.build(network)
-        _atomic_save(dist_path, oracle.dist)
-        _atomic_save(pred_path, oracle.pred)
+        files.save(oracle.dist, oracle.pred)
         return oracle
 
     # -------------------------------------------------------------- queries
@@ -253,11 +259,87 @@ class DistanceOracle:
         return int(self.dist.nbytes + self.pred.nbytes)
 
 
-def _atomic_save(path: Path, array: np.ndarray) -> None:
+_DIGEST_FORMAT = "rpbench-apsp-sha256-1"
+
+
+def apsp_digest(dist: np.ndarray, pred: np.ndarray) -> str:
+    """SHA-256 of an all-pairs table: dtypes, shapes and the bytes of both arrays."""
+    h = hashlib.sha256(f"{_DIGEST_FORMAT}|{dist.dtype.str}{dist.shape}|{pred.dtype.str}{pred.shape}|".encode())
+    for arr in (dist, pred):
+        h.update(memoryview(np.ascontiguousarray(arr)).cast("B"))
+    return h.hexdigest()
+
+
+@dataclass(frozen=True)
+class _ApspFiles:
+    """The three cache files of one network's all-pairs table."""
+
+    stem: Path
+
+    @classmethod
+    def of(cls, network: RoadNetwork) -> "_ApspFiles":
+        return cls(cache_dir() / f"apsp-{network.content_hash}")
+
+    @property
+    def dist(self) -> Path:
+        return Path(f"{self.stem}-dist.npy")
+
+    @property
+    def pred(self) -> Path:
+        return Path(f"{self.stem}-pred.npy")
+
+    @property
+    def digest(self) -> Path:
+        return Path(f"{self.stem}.sha256")
+
+    def load_verified(self, n_nodes: int) -> tuple[tuple[np.ndarray, np.ndarray] | None, str]:
+        """``((dist, pred), "")`` when the cached table checks out, else ``(None, what is wrong)``.
+
+        What is wrong is ``""`` when nothing was ever cached (a first build is
+        not worth a note).
+        """
+        files = (self.dist, self.pred, self.digest)
+        if not any(p.exists() for p in files):
+            return None, ""
+        if not self.digest.is_file():
+            return None, "have no digest file (written by an older rpbench, or interrupted)"
+        if not (self.dist.is_file() and self.pred.is_file()):
+            return None, "are incomplete (an array file is missing)"
+        try:
+            # Plain ndarray views of the memory maps: indexing avoids numpy.memmap's per-call overhead.
+            dist = np.asarray(np.load(self.dist, mmap_mode="r"))
+            pred = np.asarray(np.load(self.pred, mmap_mode="r"))
+            expected = self.digest.read_text(encoding="ascii").strip()
+        except (OSError, ValueError, EOFError) as exc:
+            return None, f"are unreadable ({one_line(exc)})"
+        want = (n_nodes, n_nodes)
+        if dist.shape != want or pred.shape != want or dist.dtype != np.float64 or pred.dtype != np.int32:
+            return None, (f"hold {dist.dtype}{dist.shape} and {pred.dtype}{pred.shape} arrays, expected "
+                          f"float64{want} and int32{want}")
+        if apsp_digest(dist, pred) != expected:
+            return None, f"do not match their SHA-256 digest {self.digest.name} (changed on disk)"
+        return (dist, pred), ""
+
+    def save(self, dist: np.ndarray, pred: np.ndarray) -> None:
+        """Write both arrays, then their digest (so a digest always describes complete arrays)."""
+        for path, write in ((self.dist, lambda fh: np.save(fh, dist)), (self.pred, lambda fh: np.save(fh, pred)),
+                            (self.digest, lambda fh: fh.write(apsp_digest(dist, pred).encode() + b"\n"))):
+            try:
+                _atomic_write(path, write)
+            except OSError as exc:
+                raise cache_write_error(path, exc) from None
+
+
+def _atomic_write(path: Path, write) -> None:
+    """Write through ``write(file)`` into a temporary file renamed over ``path``; no leftover on failure."""
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    with open(tmp, "wb") as fh:
-        np.save(fh, array)
-    os.replace(tmp, path)
+    try:
+        with open(tmp, "wb") as fh:
+            write(fh)
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
 
 
 # -------------------------------------------------------------------- snapping

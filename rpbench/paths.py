@@ -10,7 +10,8 @@ the real data after one fetch.  Nothing here assumes which days exist in the
 folder.
 
 The cache (all-pairs distances, predictions) lives in the user cache
-directory, never in the repository; ``RPBENCH_CACHE`` overrides it.
+directory, never in the repository; ``RPBENCH_CACHE`` overrides it.  A
+cache folder that cannot be used is one clear error (:func:`cache_dir`).
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from pathlib import Path
 
 from platformdirs import user_cache_dir, user_data_dir
 
-from rpbench.exceptions import DataNotFoundError
+from rpbench.exceptions import CacheError, DataNotFoundError, one_line
 
 DATA_ENV = "RPBENCH_DATA"
 CACHE_ENV = "RPBENCH_CACHE"
@@ -112,8 +113,29 @@ def require_data_dir(explicit: str | os.PathLike | None = None, *, what: str = "
 
 
 def cache_dir() -> Path:
-    """The user cache directory for derived data (created on demand)."""
-    root = os.environ.get(CACHE_ENV) or user_cache_dir("rpbench", appauthor=False)
-    path = Path(root).expanduser()
-    path.mkdir(parents=True, exist_ok=True)
+    """The user cache directory for derived data (created on demand).
+
+    A cache folder that is a file, cannot be created or is not writable is a
+    :class:`CacheError` naming it (and ``$RPBENCH_CACHE``), never a traceback
+    and never a silent fall-back to computing without a cache: the all-pairs
+    table of the Haikou network takes a while to build, and rebuilding it on
+    every run without saying so would hide a misconfiguration.
+    """
+    env = os.environ.get(CACHE_ENV)
+    path = Path(env or user_cache_dir("rpbench", appauthor=False)).expanduser()
+    origin = f"from ${CACHE_ENV}" if env else f"the user cache directory; set ${CACHE_ENV} to move it"
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:      # FileExistsError (a file sits there), NotADirectoryError, PermissionError, ...
+        raise CacheError(f"cache folder {str(path)!r} ({origin}) cannot be created: {one_line(exc)}; "
+                         f"point ${CACHE_ENV} at a writable folder") from None
+    if not os.access(path, os.W_OK | os.X_OK):
+        raise CacheError(f"cache folder {str(path)!r} ({origin}) is not writable; "
+                         f"point ${CACHE_ENV} at a writable folder")
     return path
+
+
+def cache_write_error(path: Path, exc: OSError) -> CacheError:
+    """The one-line error for a cache file that cannot be written (disk full, permissions...)."""
+    return CacheError(f"cannot write the cache file {str(path)!r}: {one_line(exc)}; free some space or "
+                      f"point ${CACHE_ENV} at another writable folder")

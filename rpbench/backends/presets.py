@@ -11,6 +11,13 @@ A preset names a backend and its options::
     method = "lp"          # backend-specific choice of algorithm
     [options.extra]        # passed to the backend verbatim
 
+Every value is checked when the preset is parsed: ``threads`` in [1, 1024],
+``time_limit_s`` in (0, 1e6] s, ``mip_rel_gap`` in [0, 1] (finite: TOML's
+``nan`` and ``inf`` are refused), ``method``/``solver``/``description``
+strings, ``[options.extra]`` a table of scalars (string, integer, finite
+number, boolean).  The file must be UTF-8 TOML.  Any violation is one
+:class:`~rpbench.exceptions.PresetError` naming the file.
+
 Presets are found in the checkout's ``solvers/`` folder, else in the
 installed package (the same files, shipped as ``rpbench.presets``).  A path
 ending in ``.toml`` is accepted as well: that is how a preset of a backend
@@ -23,6 +30,7 @@ reported at once, naming the preset.
 
 from __future__ import annotations
 
+import math
 import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
@@ -30,12 +38,16 @@ from pathlib import Path
 
 from rpbench.backends.base import Backend, SolveOptions
 from rpbench.backends.registry import REGISTRY, backend_class, get_backend, plugin_names
-from rpbench.exceptions import PresetError
+from rpbench.exceptions import PresetError, one_line
 from rpbench.paths import source_root
 from rpbench.plugins import is_spec
 
 _TOP_KEYS = {"backend", "description", "options"}
 _OPTION_KEYS = {"threads", "time_limit_s", "mip_rel_gap", "method", "solver", "extra"}
+# Sanity bounds: beyond them a value is a typo, and a huge time limit overflows the timeouts derived from it.
+MAX_THREADS = 1024
+MAX_TIME_LIMIT_S = 1e6          # 11.6 days
+# mip_rel_gap lies in [0, 1]: a relative gap of 1 already accepts any feasible solution.
 
 
 @dataclass(frozen=True)
@@ -99,20 +111,31 @@ def load_preset(name: str) -> Preset:
         path = Path(name)
         if not path.is_file():
             raise PresetError(f"solver preset file {name!r} does not exist")
-        return parse_preset(path.stem, path.read_text(), str(path))
+        return parse_preset(path.stem, _read_text(path, str(path)), str(path))
     files = _preset_files()
     if name not in files:
         raise PresetError(f"unknown solver preset {name!r}; available: {', '.join(files) or 'none'} "
                           "(presets live in solvers/NAME.toml)")
     entry = files[name]
-    return parse_preset(name, entry.read_text(), str(entry))
+    return parse_preset(name, _read_text(entry, str(entry)), str(entry))
+
+
+def _read_text(entry: Path | resources.abc.Traversable, where: str) -> str:
+    """A preset file's text: TOML is UTF-8 by definition, so other bytes are an error naming the file."""
+    try:
+        return entry.read_bytes().decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise PresetError(f"solver preset {where!r} is not UTF-8 text (byte {exc.start}); "
+                          "save it as UTF-8") from None
+    except OSError as exc:
+        raise PresetError(f"solver preset {where!r} cannot be read: {one_line(exc)}") from None
 
 
 def parse_preset(name: str, text: str, where: str) -> Preset:
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise PresetError(f"solver preset {where!r} is not valid TOML: {exc}") from None
+        raise PresetError(f"solver preset {where!r} is not valid TOML: {one_line(exc)}") from None
     unknown = set(data) - _TOP_KEYS
     if unknown:
         raise PresetError(f"solver preset {where!r}: unknown key(s) {', '.join(sorted(unknown))}; "
@@ -128,31 +151,33 @@ def parse_preset(name: str, text: str, where: str) -> Preset:
             backend_class(backend)
         except PresetError as exc:
             raise PresetError(f"solver preset {where!r}: {exc}") from None
-    opts = data.get("options", {})
+    description = data.get("description", "")
+    if not isinstance(description, str):
+        raise PresetError(f"solver preset {where!r}: description = {description!r} must be a string")
+    return Preset(name=name, backend=backend, description=description,
+                  options=_parse_options(data.get("options", {}), where), path=where)
+
+
+def _parse_options(opts, where: str) -> SolveOptions:
+    """The ``[options]`` table, every value checked for its type and range."""
     if not isinstance(opts, dict):
         raise PresetError(f"solver preset {where!r}: [options] must be a table")
     unknown = set(opts) - _OPTION_KEYS
     if unknown:
         raise PresetError(f"solver preset {where!r}: unknown option(s) {', '.join(sorted(unknown))}; "
                           f"allowed: {', '.join(sorted(_OPTION_KEYS))}")
-    try:
-        options = SolveOptions(
-            threads=_opt(opts, "threads", int, 1, where, positive=True),
-            time_limit_s=_opt(opts, "time_limit_s", float, None, where, positive=True),
-            mip_rel_gap=_opt(opts, "mip_rel_gap", float, 0.0, where),
-            method=_opt(opts, "method", str, None, where),
-            solver=_opt(opts, "solver", str, None, where),
-            extra=dict(opts.get("extra", {})),
-        )
-    except TypeError as exc:
-        raise PresetError(f"solver preset {where!r}: {exc}") from None
-    if options.mip_rel_gap < 0:
-        raise PresetError(f"solver preset {where!r}: mip_rel_gap must be >= 0")
-    return Preset(name=name, backend=backend, description=str(data.get("description", "")),
-                  options=options, path=where)
+    return SolveOptions(
+        threads=_opt(opts, "threads", int, 1, where, low=1, high=MAX_THREADS),
+        time_limit_s=_opt(opts, "time_limit_s", float, None, where, low=0.0, low_open=True, high=MAX_TIME_LIMIT_S),
+        mip_rel_gap=_opt(opts, "mip_rel_gap", float, 0.0, where, low=0.0, high=1.0),
+        method=_opt(opts, "method", str, None, where),
+        solver=_opt(opts, "solver", str, None, where),
+        extra=_extra(opts.get("extra", {}), where),
+    )
 
 
-def _opt(opts: dict, key: str, kind: type, default, where: str, positive: bool = False):
+def _opt(opts: dict, key: str, kind: type, default, where: str, *, low=None, high=None, low_open: bool = False):
+    """``opts[key]`` checked to be a ``kind`` (an int is a float too; a bool is neither) within the bounds."""
     if key not in opts:
         return default
     value = opts[key]
@@ -160,6 +185,28 @@ def _opt(opts: dict, key: str, kind: type, default, where: str, positive: bool =
         value = float(value)
     if not isinstance(value, kind) or isinstance(value, bool):
         raise PresetError(f"solver preset {where!r}: option {key} = {value!r} must be of type {kind.__name__}")
-    if positive and value <= 0:
-        raise PresetError(f"solver preset {where!r}: option {key} = {value!r} must be > 0")
+    # TOML spells nan and inf; a NaN limit compares false with everything and would slip through.
+    if kind is float and not math.isfinite(value):
+        raise PresetError(f"solver preset {where!r}: option {key} = {value!r} must be a finite number")
+    if low is not None and (value <= low if low_open else value < low):
+        raise PresetError(f"solver preset {where!r}: {key} must be {'>' if low_open else '>='} {low:g} "
+                          f"(got {value!r})")
+    if high is not None and value > high:
+        raise PresetError(f"solver preset {where!r}: {key} must be <= {high:g} (got {value!r})")
     return value
+
+
+def _extra(extra, where: str) -> dict[str, str | int | float | bool]:
+    """``[options.extra]``: a table of scalar settings, passed to the backend verbatim."""
+    if not isinstance(extra, dict):
+        raise PresetError(f"solver preset {where!r}: [options.extra] must be a table of NAME = value settings, "
+                          f"not {type(extra).__name__} {extra!r}")
+    for key, value in extra.items():
+        # Lists, tables and TOML dates would reach the solver as odd options: only scalars are settings.
+        if isinstance(value, bool) or isinstance(value, (str, int)):
+            continue
+        if isinstance(value, float) and math.isfinite(value):
+            continue
+        raise PresetError(f"solver preset {where!r}: [options.extra] {key} = {value!r} must be a string, "
+                          "integer, finite number or boolean")
+    return dict(extra)

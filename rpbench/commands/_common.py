@@ -4,12 +4,18 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
+import secrets
 import shlex
 import sys
-from typing import Any
+import tempfile
+from pathlib import Path
+from typing import Any, Callable
 
-from rpbench.exceptions import ParameterError
-from rpbench.results import to_jsonable
+from rpbench.exceptions import ParameterError, RpbenchError
+from rpbench.results import run_folders, to_jsonable
+from rpbench.results.report import unproven_runs
+from rpbench.results.runs import run_label
 from rpbench.scenarios import ScenarioRequest, default_scenario_name
 from rpbench.scenarios.base import Params
 
@@ -76,3 +82,61 @@ def print_json(obj: Any) -> None:
 def note(message: str) -> None:
     """A one-line remark for humans, on stderr (never pollutes --json output)."""
     print(message, file=sys.stderr)
+
+
+# ------------------------------------------------------------ unproven solves
+def add_strict_arg(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--strict", action="store_true",
+                        help="fail (exit 2, nothing written) when the solver stops any round or oracle before "
+                             "proving optimality (time limit, gap) instead of noting and marking it")
+
+
+def note_unproven(folder: Path) -> dict[str, str]:
+    """One note line per run of ``folder`` (and of each day / sweep point below it) that rests on solver
+    answers not proven optimal; returns every such run with its first reason (to mark table columns)."""
+    marked: dict[str, str] = {}
+    for sub in run_folders(folder):
+        where = "" if sub == folder else f"{sub.name}: "
+        for run, why in unproven_runs(sub).items():
+            note(f"rpbench: note: {where}{run_label(run)} {why}; its numbers are not proven optimal "
+                 "(--strict makes this an error)")
+            marked.setdefault(run, why)
+    return marked
+
+
+# ------------------------------------------------------------- output files
+def check_out_file(path: str, option: str) -> Path:
+    """Fail in one line, before any work, unless file ``path`` can be written: its folder exists and takes
+    new files, and ``path`` is not a folder.  An existing file is replaced (atomically, see
+    :func:`write_out_file`)."""
+    out = Path(path)
+    folder = out.parent
+    if out.is_dir():
+        raise ParameterError(f"{option} {path!r} is a folder; give a file name")
+    if not folder.is_dir():
+        state = "is not a folder" if os.path.lexists(folder) else "does not exist"
+        raise ParameterError(f"{option} {path!r}: folder {str(folder)!r} {state}; create it or choose another path")
+    try:   # try it: permission bits say nothing about root, read-only mounts or /proc
+        fd, probe = tempfile.mkstemp(prefix=".rpbench-probe-", dir=folder)
+    except OSError as exc:
+        raise ParameterError(f"{option} {path!r}: cannot create files in {str(folder)!r} "
+                             f"({exc.strerror or exc})") from None
+    os.close(fd)
+    os.unlink(probe)
+    return out
+
+
+def write_out_file(path: Path, option: str, write: Callable[[Path], object]) -> None:
+    """``write(tmp)`` a sibling temporary file, then rename it to ``path``: an interrupted or failed write
+    leaves no half-written ``path`` (nor the temporary file); an OSError is one line naming ``path``."""
+    # the random part makes the name unguessable (nothing to plant a link at); the original name last keeps
+    # the suffix pandas picks compression by
+    tmp = path.with_name(f".partial-{secrets.token_hex(6)}-{path.name}")
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    except BaseException as exc:
+        tmp.unlink(missing_ok=True)
+        if isinstance(exc, OSError) and not isinstance(exc, RpbenchError):
+            raise ParameterError(f"{option} {str(path)!r}: cannot write the file ({exc.strerror or exc})") from None
+        raise

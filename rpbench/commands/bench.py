@@ -14,12 +14,11 @@ from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 
 from rpbench.backends.presets import load_preset
 from rpbench.bench.runner import format_table, run_benchmark
 from rpbench.bench.synthetic import SUITES, suite
-from rpbench.commands._common import note, print_json
+from rpbench.commands._common import check_out_file, note, print_json, write_out_file
 from rpbench.exceptions import ParameterError
 from rpbench.instances import load_instances
 from rpbench.model import OBJECTIVES, Structure
@@ -87,6 +86,9 @@ def run(args: argparse.Namespace) -> int:
     if args.repeat < 1:
         raise ParameterError(f"--repeat {args.repeat} must be >= 1")
     limits = _limits(args.preset_time_limit)
+    # output files checked before benchmarking: a bad path must not cost the run
+    csv_out = check_out_file(args.csv, "--csv") if args.csv else None
+    plot_out = check_out_file(args.plot, "--plot") if args.plot else None
     presets = None if args.solver is None else [load_preset(name) for name in args.solver]   # fail before building
     wanted = None
     if args.structures is not None:         # checked before the (slow) synthetic suite is built
@@ -106,11 +108,11 @@ def run(args: argparse.Namespace) -> int:
     table = run_benchmark(models, presets, time_limit_s=args.time_limit, time_limits=limits, repeat=args.repeat,
                           isolate=args.isolate, hard_timeout_s=args.hard_timeout,
                           progress=None if args.json else note, recorded=recorded)
-    if args.csv:
-        table.to_csv(args.csv, index=False)
-    if args.plot:
-        bench_figure(table, Path(args.plot), f"rpbench bench: {len(models)} models x "
-                                             f"{table['preset'].nunique()} presets (time of proven optima)")
+    if csv_out is not None:
+        write_out_file(csv_out, "--csv", lambda tmp: table.to_csv(tmp, index=False))
+    if plot_out is not None:
+        title = f"rpbench bench: {len(models)} models x {table['preset'].nunique()} presets (time of proven optima)"
+        write_out_file(plot_out, "--plot", lambda tmp: bench_figure(table, tmp, title))
     if args.json:
         print_json(table.astype(object).where(table.notna(), None).to_dict(orient="records"))
     else:

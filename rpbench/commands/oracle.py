@@ -5,12 +5,23 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import math
+from pathlib import Path
 
 from rpbench.backends import load_preset
-from rpbench.commands._common import add_scenario_args, note, print_json, scenario_request
+from rpbench.commands._common import (
+    add_scenario_args,
+    add_strict_arg,
+    check_out_file,
+    note,
+    print_json,
+    scenario_request,
+    write_out_file,
+)
 from rpbench.exceptions import ParameterError
+from rpbench.harness.strict import require_proven
 from rpbench.oracle.pairs import bound_rules
 from rpbench.oracle.solve import UNIT_M, PairRules, check_variant, find_candidates, solve_oracle
+from rpbench.results.report import UNPROVEN_MARK
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -38,10 +49,16 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "integer algorithm reports an overflow)")
     p.add_argument("--pairs", metavar="CSV", default=None, help="write the chosen pairs to this CSV file")
     p.add_argument("--json", action="store_true", help="print one JSON object")
+    add_strict_arg(p)
     p.set_defaults(handler=run)
 
 
 def run(args: argparse.Namespace) -> int:
+    pairs_csv = check_out_file(args.pairs, "--pairs") if args.pairs else None     # before solving anything
+    if args.time_limit is not None and not args.time_limit > 0:
+        raise ParameterError(f"--time-limit {args.time_limit!r} must be > 0 seconds")
+    if not (args.unit_m > 0 and math.isfinite(args.unit_m)):
+        raise ParameterError(f"--unit-m {args.unit_m!r} must be a finite number of metres > 0")
     scenario = scenario_request(args).build()
     if args.variant == "bound":
         if args.both_pickup_orders or args.pickup_check or args.allow_enroute:
@@ -55,18 +72,18 @@ def run(args: argparse.Namespace) -> int:
     preset = load_preset(args.solver)
     options = preset.options
     if args.time_limit is not None:
-        if not args.time_limit > 0:
-            raise ParameterError(f"--time-limit {args.time_limit!r} must be > 0 seconds")
         options = dataclasses.replace(options, time_limit_s=args.time_limit)
     results = {v: solve_oracle(scenario, v, preset, candidates=candidates, options=options, unit_m=args.unit_m)
                for v in variants}
     for v, r in results.items():
+        require_proven(f"{_name(r)} (solver preset {r.solver!r})", r.status.value, strict=args.strict)
         if r.status.value != "optimal":
             gap = r.kpis()["gap"]
-            note(f"rpbench: {_name(r)} stopped with status {r.status.value} "
-                 f"(gap {'unknown' if math.isnan(gap) else f'{gap:.3g}'}); its value is not proven optimal")
-    if args.pairs:
-        _write_pairs(args.pairs, results)
+            note(f"rpbench: note: {_name(r)} stopped with status {r.status.value} "
+                 f"(gap {'unknown' if math.isnan(gap) else f'{gap:.3g}'}); its value is not proven optimal "
+                 "(--strict makes this an error)")
+    if pairs_csv is not None:
+        _write_pairs(pairs_csv, results)
 
     if args.json:
         print_json({"scenario": scenario.name, "label": scenario.label, "rules": rules.as_dict(),
@@ -101,12 +118,16 @@ _ROWS = (("orders", "orders", "{:,.0f}"), ("pairs", "pairs", "{:,.0f}"),
 
 def _table(results: dict) -> str:
     kpis = {v: r.kpis() for v, r in results.items()}
-    header = ["metric"] + [f"{_name(results[v])} ({results[v].solver})" for v in results]
+    unproven = [v for v, r in results.items() if r.status.value != "optimal"]
+    header = ["metric"] + [f"{_name(results[v])} ({results[v].solver})" + (UNPROVEN_MARK if v in unproven else "")
+                           for v in results]
     rows = [[label] + [_fmt(fmt, kpis[v][key]) for v in results] for key, label, fmt in _ROWS]
     widths = [max(len(r[c]) for r in [header] + rows) for c in range(len(header))]
     lines = ["  " + "  ".join(h.ljust(widths[0]) if c == 0 else h.rjust(widths[c]) for c, h in enumerate(header))]
     lines += ["  " + "  ".join(x.ljust(widths[0]) if c == 0 else x.rjust(widths[c]) for c, x in enumerate(r))
               for r in rows]
+    if unproven:
+        lines.append(f"  {UNPROVEN_MARK} not proven optimal: the solver stopped early (see its status and gap)")
     return "\n".join(lines)
 
 
@@ -120,10 +141,7 @@ def _fmt(fmt: str, value) -> str:
     return fmt.format(value)
 
 
-def _write_pairs(path: str, results: dict) -> None:
+def _write_pairs(path: Path, results: dict) -> None:
     import pandas as pd
-    frames = [r.pairs.assign(variant=v) for v, r in results.items()]
-    try:
-        pd.concat(frames, ignore_index=True).to_csv(path, index=False)
-    except OSError as exc:
-        raise ParameterError(f"--pairs {path!r}: cannot write the file ({exc.strerror})") from None
+    table = pd.concat([r.pairs.assign(variant=v) for v, r in results.items()], ignore_index=True)
+    write_out_file(path, "--pairs", lambda tmp: table.to_csv(tmp, index=False))

@@ -15,7 +15,14 @@ import argparse
 import time
 from pathlib import Path
 
-from rpbench.commands._common import add_data_arg, note, parse_param_overrides, print_json
+from rpbench.commands._common import (
+    add_data_arg,
+    check_out_file,
+    note,
+    parse_param_overrides,
+    print_json,
+    write_out_file,
+)
 from rpbench.exceptions import ParameterError
 from rpbench.paths import require_data_dir
 from rpbench.predict import PredictConfig, build_model, predict, solve_model
@@ -69,6 +76,8 @@ def run(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     if args.hours <= 0 or args.min_samples < 1 or args.seed < 0:
         raise ParameterError("--hours must be > 0, --min-samples >= 1 and --seed >= 0")
+    # checked before the (minutes-long) solve: a bad --out must not cost it
+    csv_path = check_out_file(args.out or str(default_csv(args.rates, args.date)), "--out")
     data_dir = require_data_dir(args.data, what="rpbench predict")
     params = Params().replace(**parse_param_overrides(args.param))
     changes = {k: v for k, v in (("tau0_s", args.tau0), ("priority", args.priority), ("accel", args.accel))
@@ -87,8 +96,8 @@ def run(args: argparse.Namespace) -> int:
         out["fcfs"], _ = validate(prediction, result, min_samples=args.min_samples)
     else:
         prediction = predict(network, rates, params, config, use_cache=not args.no_cache)
-    csv_path = Path(args.out) if args.out else default_csv(args.rates, args.date)
-    prediction.per_od_table().to_csv(csv_path, index=False)
+    table = prediction.per_od_table()
+    write_out_file(csv_path, "--out", lambda tmp: table.to_csv(tmp, index=False))
     if args.compare_authors:
         out["authors"], _ = compare(prediction, data_dir)
     summary = {k: v for k, v in prediction.summary().items() if k not in ("config", "params")}

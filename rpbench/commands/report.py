@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from rpbench.commands._common import check_out_file, write_out_file
 from rpbench.harness.render import render
 
 
@@ -20,9 +21,10 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     metrics = [m.strip() for m in args.metrics.split(",")] if args.metrics else None
+    out = check_out_file(args.out, "--out") if args.out else None      # before rendering anything
     text, written = render([Path(f) for f in args.folders], metrics)
-    if args.out:
-        Path(args.out).write_text(text)
+    if out is not None:
+        write_out_file(out, "--out", lambda tmp: tmp.write_text(text))
         print(f"report written to {args.out}")
     else:
         print(text)

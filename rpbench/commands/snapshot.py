@@ -9,6 +9,7 @@ from rpbench.commands._common import add_scenario_args, note, print_json, scenar
 from rpbench.exceptions import ParameterError
 from rpbench.harness.comparison import parse_run_options, parse_strategies
 from rpbench.oracle.runs import ORACLE_RUNS
+from rpbench.results.store import check_new_folder
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -37,6 +38,7 @@ def run(args: argparse.Namespace) -> int:
             raise ParameterError(f"--rounds {args.rounds!r}: expected round indices like 10,100,200") from None
     if args.largest < 1:
         raise ParameterError(f"--largest {args.largest} must be >= 1")
+    check_new_folder(args.out)              # before simulating: a bad --out must not cost the runs
     scenario = scenario_request(args).build()
     note(scenario.label)
     folder, entries = take_snapshots(scenario, strategies, args.solver, args.out, rounds=rounds,

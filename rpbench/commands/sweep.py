@@ -6,11 +6,21 @@ import argparse
 
 import pandas as pd
 
-from rpbench.commands._common import add_scenario_args, command_line, note, print_json, scenario_request
+from rpbench.commands._common import (
+    add_scenario_args,
+    add_strict_arg,
+    command_line,
+    note,
+    note_unproven,
+    print_json,
+    scenario_request,
+)
 from rpbench.exceptions import ParameterError
 from rpbench.harness.comparison import parse_run_options, parse_strategies
+from rpbench.harness.strict import strict_mode
 from rpbench.harness.sweep import SWEEPS, SweepSpec, expand, parse_over, run_sweep
 from rpbench.paths import require_data_dir
+from rpbench.results.store import check_new_folder
 from rpbench.scenarios import scenario_spec
 
 
@@ -30,6 +40,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--workers", type=int, default=None, help="parallel workers (default one per core)")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS", help="an existing Dask scheduler")
     p.add_argument("--json", action="store_true", help="print the sweep table as one JSON object")
+    add_strict_arg(p)
     p.set_defaults(handler=run)
 
 
@@ -56,13 +67,16 @@ def run(args: argparse.Namespace) -> int:
     if request.data_dir is None and scenario_spec(request.name).needs_data:
         # workers resolve no default folder of their own: pass the one found here
         request = request.replace(data_dir=str(require_data_dir(None, what=f"scenario {request.name!r}")))
+    check_new_folder(args.out)              # before simulating: a bad --out must not cost the whole sweep
     note(f"sweep {spec.name}: {len(points)} points x {', '.join(spec.strategies)} on {request.name}")
-    folder = run_sweep(spec, points, request=request, preset=args.solver, run_options=run_options, out=args.out,
-                       workers=args.workers, scheduler=args.scheduler, command=command_line())
+    with strict_mode(args.strict):          # the sweep's workers inherit it (rpbench.harness.parallel)
+        folder = run_sweep(spec, points, request=request, preset=args.solver, run_options=run_options,
+                           out=args.out, workers=args.workers, scheduler=args.scheduler, command=command_line())
     table = pd.read_csv(folder / "sweep.csv")
+    unproven = note_unproven(folder)
     if args.json:
         print_json({"results_dir": str(folder), "sweep": spec.name, "parameter": spec.parameter,
-                    "rows": table.to_dict(orient="records")})
+                    "rows": table.to_dict(orient="records"), "unproven": unproven})
         return 0
     sel = table[table["kpi"].isin(spec.kpis) & table["run"].isin(spec.strategies)]
     wide = sel.pivot_table(index="point", columns=["kpi", "run"], values="value")

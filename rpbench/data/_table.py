@@ -3,21 +3,30 @@
 Each reader names the columns it needs and their kinds; this module turns a
 missing file, a missing column or a non-numeric value into one clear
 :class:`~rpbench.exceptions.DataError` naming the file, the column and (for
-bad values) the first offending row.
+bad values) the first offending row.  A damaged gzip stream is a
+``DataError`` too, and so is an integer that does not fit an int64 exactly
+(a 20-digit id, or ``1e30``): numpy would wrap it around silently.
 """
 
 from __future__ import annotations
 
+import gzip
+import zlib
 from pathlib import Path
 from typing import Iterable, Mapping
 
 import numpy as np
 import pandas as pd
 
-from rpbench.exceptions import DataError, DataNotFoundError
+from rpbench.exceptions import DataError, DataNotFoundError, one_line
 
 #: Column kinds understood by :func:`read_table`.
 INT, FLOAT, TEXT, DATETIME = "int", "float", "text", "datetime"
+#: Integers written as floats (``1078.0``, ``1e3``) are exact only up to 2**53.
+_EXACT_FLOAT_INT = 2.0 ** 53
+_INT64 = np.iinfo(np.int64)
+#: What a truncated or corrupt ``.gz`` raises while pandas streams it.
+_GZIP_ERRORS = (gzip.BadGzipFile, EOFError, zlib.error)
 
 
 def require_file(path: Path, what: str) -> Path:
@@ -42,8 +51,11 @@ def read_table(path: Path, what: str, columns: Mapping[str, str], *,
     require_file(path, what)
     try:
         frame = pd.read_csv(path, usecols=lambda c: c in columns, low_memory=False)
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError, OSError, EOFError) as exc:
-        raise DataError(f"{what} file {str(path)!r} cannot be parsed as CSV: {exc}") from None
+    except _GZIP_ERRORS as exc:
+        raise DataError(f"{what} file {str(path)!r} is not a valid gzip stream (truncated or corrupt: "
+                        f"{one_line(exc)}); fetch it again (`rpbench data fetch` replaces damaged files)") from None
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError, OSError) as exc:
+        raise DataError(f"{what} file {str(path)!r} cannot be parsed as CSV: {one_line(exc)}") from None
     optional = set(optional)
     missing = [c for c in columns if c not in frame.columns and c not in optional]
     if missing:
@@ -75,17 +87,39 @@ def _convert(series: pd.Series, kind: str, path: Path, what: str, name: str) -> 
     _fail_on_bad(numeric.isna() | ~np.isfinite(numeric.to_numpy(dtype=float, na_value=np.nan)),
                  series, path, what, name, "a finite number")
     if kind == INT:
-        values = numeric.to_numpy(dtype=float)
-        whole = values == np.round(values)
-        _fail_on_bad(pd.Series(~whole, index=series.index), series, path, what, name, "a whole number")
-        return pd.Series(values.astype(np.int64), index=series.index)
+        return _to_int64(numeric, series, path, what, name)
     if kind == FLOAT:
         return numeric.astype(np.float64)
     raise ValueError(f"unknown column kind {kind!r}")
 
 
+def _to_int64(numeric: pd.Series, raw: pd.Series, path: Path, what: str, name: str) -> pd.Series:
+    """Whole numbers as int64, refusing any value that would not convert exactly.
+
+    pandas reads integers beyond int64 as uint64 or floats; ``astype(int64)``
+    would wrap them around (an id of 1e30 became -9223372036854775808, then
+    "not a node of the network"), and a float above 2**53 no longer holds the
+    integer that was written.
+    """
+    if pd.api.types.is_signed_integer_dtype(numeric.dtype):
+        return numeric.astype(np.int64)
+    if pd.api.types.is_unsigned_integer_dtype(numeric.dtype):
+        too_big = numeric.to_numpy() > np.uint64(_INT64.max)
+        _fail_on_bad(pd.Series(too_big, index=raw.index), raw, path, what, name,
+                     f"an integer within the 64-bit range (at most {_INT64.max})")
+        return numeric.astype(np.int64)
+    values = numeric.to_numpy(dtype=float)
+    _fail_on_bad(pd.Series(values != np.round(values), index=raw.index), raw, path, what, name, "a whole number")
+    _fail_on_bad(pd.Series(np.abs(values) > _EXACT_FLOAT_INT, index=raw.index), raw, path, what, name,
+                 "an exact integer (beyond the 64-bit range, or written as a float beyond ±2^53; "
+                 "write integers in plain digits)")
+    return pd.Series(values.astype(np.int64), index=raw.index)
+
+
 def _fail_on_bad(bad: pd.Series, raw: pd.Series, path: Path, what: str, name: str, expected: str) -> None:
     if bool(bad.any()):
         row = int(np.flatnonzero(bad.to_numpy())[0])
+        value = raw.iloc[row]
+        value = value.item() if isinstance(value, np.generic) else value    # 1e+30, not np.float64(1e+30)
         raise DataError(f"{what} file {str(path)!r}, column {name!r}, data row {row + 1}: "
-                        f"value {raw.iloc[row]!r} is not {expected}")
+                        f"value {value!r} is not {expected}")

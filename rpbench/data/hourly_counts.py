@@ -19,6 +19,8 @@ from rpbench.exceptions import DataError, DataNotFoundError
 
 HOURLY_FILE = Path("samples_and_aggregates") / "data_dayly_hourly_count.csv"
 _YEAR = 2017
+#: Sanity bound, ~200 times Haikou's busiest hour (about 5,000 orders).
+MAX_ORDERS_PER_HOUR = 1_000_000
 
 
 def read_hourly_counts(data_dir: Path) -> dict[str, np.ndarray]:
@@ -35,10 +37,14 @@ def read_hourly_counts(data_dir: Path) -> dict[str, np.ndarray]:
             raise DataError(f"{where}: date {date!r} is not MM/DD") from None
         try:
             counts = np.asarray(ast.literal_eval(str(hours)), dtype=np.int64)
-        except (ValueError, SyntaxError, TypeError):
+        except (ValueError, SyntaxError, TypeError, OverflowError, RecursionError, MemoryError):
             raise DataError(f"{where}: hour_count {hours!r} is not a list of 24 integers") from None
         if counts.shape != (24,) or (counts < 0).any():
             raise DataError(f"{where}: hour_count must hold 24 non-negative integers, got {hours!r}")
+        if (counts > MAX_ORDERS_PER_HOUR).any():
+            # The day scenario draws that many orders: an absurd count would exhaust memory, not fail.
+            raise DataError(f"{where}: an hour_count above {MAX_ORDERS_PER_HOUR:,} orders is not plausible "
+                            f"(got {int(counts.max()):,})")
         if int(counts.sum()) != int(total):
             raise DataError(f"{where}: hour_count sums to {int(counts.sum())}, day_count says {int(total)}")
         out[key] = counts

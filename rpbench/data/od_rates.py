@@ -24,6 +24,8 @@ MONTH_OD_FILE = Path("demand_0800_0900") / "month_5_OD.csv.gz"
 DAY_OD_FILE = Path("demand_0800_0900") / "OD_2017-05-01_0800-0900.csv"
 AUTHORS_PREDICTION_FILE = Path("demand_0800_0900") / "predict_result_2017-05-01_0800-0900.csv.gz"
 
+#: Sanity bound on one OD pair's rate (the whole Haikou table sums to 52 orders per minute).
+MAX_RATE_PER_MIN = 1e4
 _OD_COLUMNS = {"OD_id": INT, "origin_id": INT, "destination_id": INT, "lambda": FLOAT}
 
 
@@ -36,6 +38,11 @@ def read_od_rates(path: Path) -> pd.DataFrame:
     if (frame["lambda"] < 0).any():
         row = int((frame["lambda"] < 0).to_numpy().nonzero()[0][0])
         raise DataError(f"OD rate file {str(path)!r}, data row {row + 1}: negative rate {frame['lambda'][row]}")
+    if (frame["lambda"] > MAX_RATE_PER_MIN).any():
+        # Finite but absurd rates overflow the table's sum to inf, and every drawn probability becomes NaN.
+        row = int((frame["lambda"] > MAX_RATE_PER_MIN).to_numpy().nonzero()[0][0])
+        raise DataError(f"OD rate file {str(path)!r}, data row {row + 1}: rate {frame['lambda'][row]:g} per minute "
+                        f"exceeds {MAX_RATE_PER_MIN:g}; lambda is in orders per minute")
     frame["rate_per_s"] = frame.pop("lambda") / 60.0
     return frame
 

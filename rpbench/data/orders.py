@@ -4,6 +4,8 @@
   network nodes.  Only departures inside [date 08:00, date 09:00) are kept, as
   the authors' simulator does (2,018 of 2,035 rows on 2017-05-01).  Any date
   with a file in that format works; :func:`available_peak_dates` lists them.
+  A repeated order id is a ``DataError``; an hour without orders reads as an
+  empty frame (the ``haikou-peak`` generator refuses to simulate it).
 * ``demand_0800_0900/raw_orders_2017-05-01_0800-0900_by_departure_time.csv.gz``
   and ``samples_and_aggregates/dwv_order_make_haikou_1_min.csv.gz``: raw
   lon/lat orders, to be snapped by :func:`rpbench.network.snap`.
@@ -72,7 +74,14 @@ def read_peak_orders(data_dir: Path, date: str, *, start_hour: int = 8) -> pd.Da
     start = pd.Timestamp(parse_date(date)) + pd.Timedelta(hours=start_hour)
     inside = (frame["departure_time"] >= start) & (frame["departure_time"] < start + pd.Timedelta(hours=1))
     frame = frame[inside].sort_values(["departure_time", "order_id"], kind="stable")
+    _check_unique_ids(frame["order_id"], path, "peak-hour orders")
     return frame.reset_index(drop=True)
+
+
+def _check_unique_ids(ids: pd.Series, path: Path, what: str) -> None:
+    duplicated = ids.duplicated()
+    if duplicated.any():
+        raise DataError(f"{what} file {str(path)!r}: order id {int(ids[duplicated].iloc[0])} appears more than once")
 
 
 def read_raw_peak_orders(data_dir: Path) -> pd.DataFrame:

@@ -26,6 +26,8 @@ NODE_FILE = Path("network") / "node.csv"
 LINK_FILE = Path("network") / "link.csv.gz"
 PRED_VERTEX_FILE = Path("predecessor_trb2021_network") / "all_vertexes.csv.gz"
 PRED_EDGE_FILE = Path("predecessor_trb2021_network") / "all_edges.csv.gz"
+#: Longest road link accepted (1,000 km: longer is a unit error, and sums of absurd lengths overflow).
+MAX_LINK_M = 1e6
 
 
 @dataclass(frozen=True)
@@ -50,6 +52,7 @@ def read_haikou_network(data_dir: Path) -> NetworkTables:
     links = read_table(link_path, "network link",
                        {"link_id": INT, "from_node_id": INT, "to_node_id": INT, "length": FLOAT})
     _check_nodes(nodes["node_id"].to_numpy(), node_path)
+    _check_coordinates(nodes["x_coord"].to_numpy(), nodes["y_coord"].to_numpy(), node_path)
     a = links["from_node_id"].to_numpy()
     b = links["to_node_id"].to_numpy()
     length = links["length"].to_numpy()
@@ -77,6 +80,7 @@ def read_predecessor_network(data_dir: Path) -> NetworkTables:
     lonlat = np.array([_parse_pair(s, vpath, i) for i, s in enumerate(vertices["coor"])], dtype=float)
     ids = vertices["id"].to_numpy()
     _check_nodes(ids, vpath)
+    _check_coordinates(lonlat[:, 0], lonlat[:, 1], vpath)
     a = edges["head_ver"].to_numpy()
     b = edges["tail_ver"].to_numpy()
     length = edges["length"].to_numpy()
@@ -118,3 +122,17 @@ def _check_arcs(node_id: np.ndarray, a: np.ndarray, b: np.ndarray, length: np.nd
         row = int(np.flatnonzero(length <= 0)[0])
         raise DataError(f"network file {str(path)!r}, data row {row + 1}: length {length[row]} m "
                         "is not positive")
+    # A link of 1e300 m is finite, but path sums over such links overflow to inf (= "unreachable").
+    if (length > MAX_LINK_M).any():
+        row = int(np.flatnonzero(length > MAX_LINK_M)[0])
+        raise DataError(f"network file {str(path)!r}, data row {row + 1}: length {length[row]:g} m "
+                        f"exceeds {MAX_LINK_M:g} m; lengths are in metres")
+
+
+def _check_coordinates(lon: np.ndarray, lat: np.ndarray, path: Path) -> None:
+    """WGS84 degrees: anything else would snap orders to nonsense nodes."""
+    bad = ~((np.abs(lon) <= 180) & (np.abs(lat) <= 90))
+    if bad.any():
+        row = int(np.flatnonzero(bad)[0])
+        raise DataError(f"network file {str(path)!r}, data row {row + 1}: coordinates ({lon[row]:g}, {lat[row]:g}) "
+                        "are not WGS84 degrees (longitude in [-180, 180], latitude in [-90, 90])")

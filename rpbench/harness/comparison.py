@@ -23,11 +23,15 @@ import pandas as pd
 from rpbench import results
 from rpbench.backends import Preset, load_preset
 from rpbench.exceptions import ParameterError
+from rpbench.harness.strict import is_strict, require_proven
 from rpbench.oracle import find_candidates, solve_oracle
 from rpbench.oracle.runs import ORACLE_RUNS
 from rpbench.plugins import is_spec
 from rpbench.results import metrics
+from rpbench.results.check import inputs_digest
 from rpbench.results.report import with_competitive_ratios, write_report
+from rpbench.results.runs import run_label
+from rpbench.results.store import check_new_folder
 from rpbench.scenarios import ScenarioRequest
 from rpbench.scenarios.base import Scenario
 from rpbench.sim.simulator import SimResult, Simulator
@@ -126,8 +130,10 @@ def progress_bar(scenario: Scenario, label: str, enabled: bool | None):
 
 
 def simulate_strategy(scenario: Scenario, name: str, preset: Preset, *, options: RunOptions | None = None,
-                      progress: bool | None = None, canonical_ties: bool = True, capture=None) -> StrategyRun:
-    """Simulate one strategy and compute its KPIs from the event log."""
+                      progress: bool | None = None, canonical_ties: bool = True, capture=None,
+                      strict: bool = False) -> StrategyRun:
+    """Simulate one strategy and compute its KPIs from the event log (``strict``: an unproven round is an
+    error, see :mod:`rpbench.harness.strict`)."""
     cls = strategy_class(name)
     options = options if options is not None else cls.Options()
     strategy = cls(options)
@@ -140,7 +146,7 @@ def simulate_strategy(scenario: Scenario, name: str, preset: Preset, *, options:
     bar = progress_bar(scenario, name, progress)
     try:
         sim = Simulator(scenario, strategy, preset, canonical_ties=canonical_ties, progress=bar,
-                        capture=capture).run()
+                        capture=capture, strict=strict).run()
     finally:
         if bar is not None:
             bar.close()
@@ -160,14 +166,19 @@ def evaluate(scenario: Scenario, sim: SimResult, name: str, options: RunOptions)
 def run_comparison(scenario: Scenario, strategies: list[str], preset_name: str, *, out: str | Path | None = None,
                    run_options: dict[str, RunOptions | dict] | None = None, progress: bool | None = None,
                    request: ScenarioRequest | None = None, command: str | None = None,
-                   oracle_solver: str | None = None) -> tuple[Path, pd.DataFrame]:
+                   oracle_solver: str | None = None, strict: bool | None = None) -> tuple[Path, pd.DataFrame]:
     """Run every strategy (and oracle) on ``scenario`` and write one results folder.
 
     ``run_options`` maps a run name to its options (parsed, or a dict of
     values); ``request`` is what the folder records as the scenario's
     arguments.  The oracles are solved with ``oracle_solver`` (a preset
-    name), by default the comparison's own preset.
+    name), by default the comparison's own preset.  ``strict`` (default:
+    the policy of :mod:`rpbench.harness.strict`) makes any round or oracle
+    the solver did not prove optimal an error, before anything is written.
     """
+    strict = is_strict() if strict is None else strict
+    # A bad --out must fail now, not after the whole simulation.
+    check_new_folder(out)
     preset = load_preset(preset_name)
     options = {name: _typed(name, (run_options or {}).get(name)) for name in strategies}
     runs: list[StrategyRun] = []
@@ -178,7 +189,8 @@ def run_comparison(scenario: Scenario, strategies: list[str], preset_name: str, 
         run = done.get(name)
         if run is None or run.options != options[name]:
             run = simulate_strategy(scenario, name, preset, options=calibrated(scenario, name, options[name], preset,
-                                                                              done, progress), progress=progress)
+                                                                              done, progress, strict=strict),
+                                    progress=progress, strict=strict)
         done[name] = run
         runs.append(run)
     wanted = [n for n in strategies if n in ORACLE_RUNS]
@@ -186,6 +198,9 @@ def run_comparison(scenario: Scenario, strategies: list[str], preset_name: str, 
     if wanted:
         oracle_preset = load_preset(oracle_solver) if oracle_solver else preset
         oracle_results = solve_oracles(scenario, wanted, oracle_preset, options)
+    for name, res in oracle_results.items():
+        require_proven(f"{run_label(name)} (solver preset {res.solver!r})", res.solution.status.value,
+                       strict=strict)
     table = kpi_table(runs, oracle_results, strategies)
     default = f"{results.timestamp()}_{scenario.name}_{preset.name}"
     with results.new_results_folder(out, default) as (folder, final):
@@ -202,7 +217,7 @@ def _typed(name: str, options: RunOptions | dict | None) -> RunOptions:
 
 
 def calibrated(scenario: Scenario, name: str, options: RunOptions, preset: Preset, done: dict[str, StrategyRun],
-               progress: bool | None) -> RunOptions:
+               progress: bool | None, *, strict: bool = False) -> RunOptions:
     """``options`` completed from a run of the strategy's ``calibrated_by`` strategy on the same scenario.
 
     The calibration run uses that strategy's default options and is shared
@@ -216,7 +231,7 @@ def calibrated(scenario: Scenario, name: str, options: RunOptions, preset: Prese
     default = strategy_class(reference).Options()
     ref = done.get(reference)
     if ref is None or ref.options != default:
-        ref = simulate_strategy(scenario, reference, preset, options=default, progress=progress)
+        ref = simulate_strategy(scenario, reference, preset, options=default, progress=progress, strict=strict)
         done[reference] = ref
     hours = max(1, int(np.ceil(scenario.horizon_s / 3600.0)))
     return cls.calibrate(options, ref.kpis, ref.hourly, hours)
@@ -314,6 +329,10 @@ def write_folder(folder: Path, scenario: Scenario, runs: list[StrategyRun], orac
         "preset": preset.as_dict(),
         "strategies": strategies,
         "runs": meta_runs,
+        # What `rpbench check` holds the folder to (docs/guarantees.md): every run folder written, and the
+        # SHA-256 of the inputs, parameters and run options, so that a deleted run or an edit is caught.
+        "manifest": {"runs": list(meta_runs)},
+        "inputs_digest": inputs_digest(folder, scenario.params.as_dict(), meta_runs),
         **results.environment(),
         "written": time.strftime("%Y-%m-%dT%H:%M:%S"),
     }

@@ -14,11 +14,11 @@ from pathlib import Path
 import pandas as pd
 
 from rpbench import results
-from rpbench.exceptions import ResultsError
 from rpbench.harness.comparison import run_comparison
 from rpbench.harness.parallel import run_tasks
 from rpbench.paths import require_data_dir
 from rpbench.results.metrics import KPI_LABELS, KPI_ORDER
+from rpbench.results.parents import by_day_table, day_folders
 from rpbench.results.plots import per_day_figures
 from rpbench.results.report import RATIO_ROWS, findings, fmt, load_kpis, markdown_table, offline_notes
 from rpbench.results.runs import run_label
@@ -59,29 +59,14 @@ def run_days(request: ScenarioRequest, dates: list[str], *, strategies: list[str
                  for d in dates]
         run_tasks(run_day, tasks, workers=workers, scheduler=scheduler, label="days")
         results.write_json(tmp / "meta.json", {"rpbench_results": 1, "kind": "multi-day", "scenario": request.name,
-                                               "dates": dates, "strategies": strategies, "preset": preset,
+                                               "dates": dates, "children": list(dates),    # `rpbench check`'s manifest
+                                               "strategies": strategies, "preset": preset,
                                                "sample": request.sample, "seed": request.seed,
                                                "params": request.overrides, "command": command,
                                                **results.environment()})
         summarize(tmp)
         write_multiday_report(tmp, name=final.name)
     return final
-
-
-def day_folders(parent: Path) -> list[Path]:
-    return sorted(p for p in parent.iterdir() if p.is_dir() and (p / "meta.json").is_file())
-
-
-def by_day_table(parent: Path) -> pd.DataFrame:
-    """Tidy (date, run, kpi, value) over the day folders, with the ratio rows of the offline runs present."""
-    frames = []
-    for day in day_folders(parent):
-        wide = load_kpis(day)
-        tidy = wide.reset_index().melt(id_vars="kpi", var_name="run", value_name="value")
-        frames.append(tidy.assign(date=day.name))
-    if not frames:
-        raise ResultsError(f"{str(parent)!r} holds no per-day results folders")
-    return pd.concat(frames, ignore_index=True)[["date", "run", "kpi", "value"]]
 
 
 def summarize(parent: Path) -> pd.DataFrame:

@@ -10,16 +10,25 @@ which is what tests use.  Results come back in task order.
 
 from __future__ import annotations
 
+import logging
 import os
 import sys
+from dataclasses import dataclass
 from typing import Any, Callable, Sequence
 
 from rpbench.exceptions import ParameterError
+from rpbench.harness.strict import is_strict, strict_mode
 
 
 def run_tasks(fn: Callable[[Any], Any], tasks: Sequence[Any], *, workers: int | None = None,
               scheduler: str | None = None, label: str = "tasks", progress: bool | None = None) -> list[Any]:
-    """``[fn(t) for t in tasks]``, in parallel unless ``workers == 1``."""
+    """``[fn(t) for t in tasks]``, in parallel unless ``workers == 1``.
+
+    Worker processes run ``fn`` under the caller's ``--strict`` policy (:mod:`rpbench.harness.strict`).
+    An exception in a task, or in this process (Ctrl-C, SIGTERM turned into an exception by the CLI),
+    closes the client and a local cluster (its workers stop) before it propagates, so the caller's
+    results-folder cleanup does not race with workers still writing into it.
+    """
     if workers is not None and workers < 1:
         raise ParameterError(f"--workers {workers} must be >= 1")
     n = len(tasks)
@@ -34,8 +43,10 @@ def run_tasks(fn: Callable[[Any], Any], tasks: Sequence[Any], *, workers: int | 
     cluster = None
     if scheduler is None:
         n_workers = min(n, workers or os.cpu_count() or 1)
+        # CRITICAL: a failing task is reported once, as the caller's one-line error, not also as the
+        # workers' logged traceback on stderr
         cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
-                               dashboard_address=None, silence_logs=40)
+                               dashboard_address=None, silence_logs=logging.CRITICAL)
         client = Client(cluster)
     else:
         try:
@@ -43,7 +54,7 @@ def run_tasks(fn: Callable[[Any], Any], tasks: Sequence[Any], *, workers: int | 
         except OSError as exc:
             raise ParameterError(f"cannot reach the Dask scheduler {scheduler!r}: {exc}") from None
     try:
-        futures = client.map(fn, list(tasks), pure=False)
+        futures = client.map(_UnderPolicy(fn, is_strict()), list(tasks), pure=False)
         index = {f.key: i for i, f in enumerate(futures)}
         out: list[Any] = [None] * n
         done = as_completed(futures)
@@ -54,6 +65,18 @@ def run_tasks(fn: Callable[[Any], Any], tasks: Sequence[Any], *, workers: int | 
         client.close()
         if cluster is not None:
             cluster.close()
+
+
+@dataclass(frozen=True)
+class _UnderPolicy:
+    """``fn`` run in a worker under the strict-mode policy of the process that submitted it (picklable)."""
+
+    fn: Callable[[Any], Any]
+    strict: bool
+
+    def __call__(self, task: Any) -> Any:
+        with strict_mode(self.strict):
+            return self.fn(task)
 
 
 def _bar(iterable, label: str, enabled: bool, total: int | None = None):

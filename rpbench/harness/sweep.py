@@ -19,15 +19,14 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import pandas as pd
-
 from rpbench import paper, results
 from rpbench.exceptions import ParameterError
 from rpbench.harness.comparison import run_comparison
 from rpbench.harness.parallel import run_tasks
 from rpbench.results.metrics import KPI_LABELS
+from rpbench.results.parents import sweep_table
 from rpbench.results.plots import sweep_figure
-from rpbench.results.report import fmt, load_kpis
+from rpbench.results.report import fmt
 from rpbench.results.runs import run_label
 from rpbench.scenarios import ScenarioRequest
 from rpbench.scenarios.base import Params
@@ -141,22 +140,12 @@ def run_sweep(spec: SweepSpec, points: list[SweepPoint], *, request: ScenarioReq
         results.write_json(tmp / "meta.json", {
             "rpbench_results": 1, "kind": "sweep", "sweep": spec.name, "parameter": spec.parameter,
             "points": [{"label": p.label, "value": p.value, "overrides": p.overrides} for p in points],
+            "children": [p.label for p in points],                  # the point folders: `rpbench check`'s manifest
             "strategies": list(spec.strategies), "kpis": list(spec.kpis), "scenario": request.name,
             "scenario_args": request.meta(), "preset": preset, "command": command, **results.environment()})
         sweep_table(tmp).to_csv(tmp / "sweep.csv", index=False)
         write_sweep_report(tmp, name=final.name)
     return final
-
-
-def sweep_table(parent: Path) -> pd.DataFrame:
-    """Tidy (point, label, run, kpi, value) over a sweep folder's points."""
-    meta = results.read_meta(parent)
-    frames = []
-    for p in meta["points"]:
-        wide = load_kpis(parent / p["label"])
-        tidy = wide.reset_index().melt(id_vars="kpi", var_name="run", value_name="value")
-        frames.append(tidy.assign(point=p["value"], label=p["label"]))
-    return pd.concat(frames, ignore_index=True)[["point", "label", "run", "kpi", "value"]]
 
 
 def write_sweep_report(parent: Path, name: str | None = None) -> Path:

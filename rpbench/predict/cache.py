@@ -7,7 +7,9 @@ arrays and rates, the network-side parameters (R̄, D̄, v), every
 the model's arithmetic changes).  Only the per-OD and per-state results are
 stored (a few MB for the full 39,510-OD table); the matching sets are not.
 Entries are plain arrays: :mod:`.prediction` turns them back into a
-:class:`~.prediction.Prediction`.
+:class:`~.prediction.Prediction`.  A truncated, corrupt or incomplete entry
+is deleted and recomputed (one note on stderr), never an error that repeats
+on every run.
 """
 
 from __future__ import annotations
@@ -15,12 +17,17 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import pickle
+import sys
+import zipfile
+import zlib
 from pathlib import Path
 
 import numpy as np
 
+from rpbench.exceptions import one_line
 from rpbench.network import RoadNetwork
-from rpbench.paths import cache_dir
+from rpbench.paths import cache_dir, cache_write_error
 from rpbench.predict.config import PredictConfig
 from rpbench.predict.rates import OdRates
 from rpbench.scenarios.base import Params
@@ -43,30 +50,94 @@ def cache_path(key: str) -> Path:
     return cache_dir() / f"predict-{key}.npz"
 
 
+#: Everything reading a damaged ``.npz`` can raise: a truncated or corrupt zip (BadZipFile, EOFError,
+#: zlib.error), a bad ``.npy`` header or pickled member (ValueError, UnpicklingError), a missing member
+#: (KeyError), bad JSON or text (ValueError), an unreadable file (OSError).
+READ_ERRORS = (OSError, EOFError, ValueError, KeyError, TypeError, zipfile.BadZipFile, zlib.error,
+               pickle.UnpicklingError)
+
+
 def save(key: str, arrays: dict[str, np.ndarray], info: dict) -> Path:
-    """Write a prediction's arrays and facts atomically (a crash never leaves a half-written entry)."""
+    """Write a prediction's arrays and facts atomically (a crash never leaves a half-written entry).
+
+    A manifest of the arrays (name, dtype, shape) is stored beside them, so a
+    load can tell a complete entry from a damaged one.  A cache that cannot be
+    written is a :class:`~rpbench.exceptions.CacheError`.
+    """
     payload = dict(arrays)
-    payload["info_json"] = np.frombuffer(json.dumps(info, default=float).encode(), dtype=np.uint8)
+    manifest = {name: [np.asarray(a).dtype.str, list(np.shape(a))] for name, a in arrays.items()}
+    payload["info_json"] = _json_bytes(info)
+    payload["manifest_json"] = _json_bytes(manifest)
     path = cache_path(key)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    with open(tmp, "wb") as fh:
-        np.savez(fh, **payload)
-    os.replace(tmp, path)
+    try:
+        with open(tmp, "wb") as fh:
+            np.savez(fh, **payload)
+        os.replace(tmp, path)
+    except BaseException as exc:            # disk full, permissions, Ctrl-C: no temporary file left behind
+        tmp.unlink(missing_ok=True)
+        if isinstance(exc, OSError):
+            raise cache_write_error(path, exc) from None
+        raise
     return path
 
 
 def load(key: str, n_ods: int) -> tuple[dict[str, np.ndarray], dict] | None:
-    """The cached (arrays, facts) of a prediction over ``n_ods`` ODs, or None (missing or unreadable entries
-    are recomputed)."""
+    """The cached (arrays, facts) of a prediction over ``n_ods`` ODs, or None when it must be computed.
+
+    An entry that cannot be read or is incomplete is deleted (with one note
+    on stderr) so the caller recomputes and rewrites it, instead of failing
+    on it forever.
+    """
     path = cache_path(key)
-    if not path.is_file():
-        return None
     try:
-        with np.load(path) as data:
-            arrays = {name: data[name] for name in data.files if name != "info_json"}
-            info = json.loads(bytes(data["info_json"]).decode())
-    except (OSError, ValueError, KeyError, json.JSONDecodeError):
-        return None
+        before = path.stat()
+    except OSError:
+        return None                                 # not cached (yet)
+    try:
+        arrays, info, manifest = _read_entry(path)
+        problem = _entry_problem(arrays, manifest, n_ods)
+    except READ_ERRORS as exc:
+        problem = f"is unreadable ({type(exc).__name__}: {one_line(exc)})"
+    if problem is None:
+        return arrays, info
+    _discard(path, before, problem)
+    return None
+
+
+def _json_bytes(obj) -> np.ndarray:
+    return np.frombuffer(json.dumps(obj, default=float).encode(), dtype=np.uint8)
+
+
+def _read_entry(path: Path) -> tuple[dict[str, np.ndarray], dict, dict | None]:
+    """(arrays, facts, manifest) of an entry; the manifest is None in entries written before it existed."""
+    with np.load(path, allow_pickle=False) as data:
+        arrays = {name: data[name] for name in data.files if not name.endswith("_json")}
+        info = json.loads(bytes(data["info_json"]).decode())
+        manifest = json.loads(bytes(data["manifest_json"]).decode()) if "manifest_json" in data.files else None
+    if not isinstance(info, dict) or not isinstance(manifest, (dict, type(None))):
+        raise ValueError("info_json or manifest_json is not a JSON object")
+    return arrays, info, manifest
+
+
+def _entry_problem(arrays: dict[str, np.ndarray], manifest: dict | None, n_ods: int) -> str | None:
+    """What makes a readable entry unusable (None when it is complete)."""
+    # Entries written before the manifest existed are protected by the zip's per-member CRC only.
+    for name, (dtype, shape) in (manifest or {}).items():
+        a = arrays.get(name)
+        if a is None or a.dtype.str != dtype or list(a.shape) != shape:
+            return f"is incomplete (array {name!r} is missing or has the wrong type or shape)"
     if len(arrays.get("od_p_seeker", ())) != n_ods:
-        return None
-    return arrays, info
+        return f"does not hold {n_ods} ODs"
+    return None
+
+
+def _discard(path: Path, before: os.stat_result, problem: str) -> None:
+    """Delete a bad entry, unless another process has replaced it meanwhile (then it is the new one)."""
+    try:
+        now = path.stat()
+        if (now.st_ino, now.st_mtime_ns, now.st_size) == (before.st_ino, before.st_mtime_ns, before.st_size):
+            path.unlink()
+    except OSError:
+        pass                                        # gone already, or not ours to delete: recomputing is enough
+    print(f"rpbench: note: the cached prediction {path.name} {problem}; recomputing it", file=sys.stderr)

@@ -28,6 +28,8 @@ RATIO_ROWS = {"competitive_ratio_bound": "bound", "competitive_ratio": "oracle1"
 ORACLE1_NOTE = ("Oracle-1 (the paper's) pairs only orders requested within K̄ of each other, while the strategies "
                 "also pair en route, so a strategy can save more than Oracle-1: the saving / Oracle-1 row is a "
                 "reference, not a competitive ratio; the competitive ratio divides by the proven upper bound.")
+#: Marks the column of a run whose numbers rest on solver answers not proven optimal (see :func:`unproven_runs`).
+UNPROVEN_MARK = "*"
 _DECIMALS = {"response_rate": 2, "pairing_ratio": 2, "competitive_ratio": 3, "competitive_ratio_bound": 3,
              "pairing_ratio_of_orders": 2}
 
@@ -74,11 +76,13 @@ def table_rows(table: pd.DataFrame) -> list[str]:
     return [k for k in KPI_ORDER if k in table.index] + [k for k in RATIO_ROWS if k in table.index]
 
 
-def text_table(table: pd.DataFrame, *, title: str | None = None) -> str:
-    """A plain-text table for the terminal (KPIs as rows, runs as columns)."""
+def text_table(table: pd.DataFrame, *, title: str | None = None, unproven: dict[str, str] | None = None) -> str:
+    """A plain-text table for the terminal (KPIs as rows, runs as columns); the columns of ``unproven``
+    runs (:func:`unproven_runs`) are marked, with a footnote line."""
     rows = table_rows(table)
     cols = list(table.columns)
-    head = ["Metric"] + [run_label(c) for c in cols]
+    unproven = unproven or {}
+    head = ["Metric"] + [run_label(c) + (UNPROVEN_MARK if c in unproven else "") for c in cols]
     body = [[KPI_LABELS.get(k, k)] + [fmt(k, table.loc[k, c]) for c in cols] for k in rows]
     widths = [max(len(r[i]) for r in [head] + body) for i in range(len(head))]
     lines = []
@@ -88,14 +92,21 @@ def text_table(table: pd.DataFrame, *, title: str | None = None) -> str:
     lines.append("  ".join("-" * w for w in widths))
     for r in body:
         lines.append("  ".join(x.ljust(widths[0]) if i == 0 else x.rjust(widths[i]) for i, x in enumerate(r)))
+    if any(c in unproven for c in cols):
+        lines.append(f"{UNPROVEN_MARK} not proven optimal: the solver stopped early (time limit or gap), so these "
+                     "numbers are not those of the run as defined (details on stderr and in report.md)")
     return "\n".join(lines)
 
 
-def markdown_table(table: pd.DataFrame, paper_values: dict | None = None) -> str:
-    """The Table 2 layout in markdown; with ``paper_values`` each cell reads "rpbench (paper)"."""
+def markdown_table(table: pd.DataFrame, paper_values: dict | None = None,
+                   unproven: dict[str, str] | None = None) -> str:
+    """The Table 2 layout in markdown; with ``paper_values`` each cell reads "rpbench (paper)"; the columns
+    of ``unproven`` runs are marked (the footnote is :func:`unproven_notes`)."""
     rows = table_rows(table)
     cols = list(table.columns)
-    out = ["| Metric | " + " | ".join(run_label(c) for c in cols) + " |",
+    unproven = unproven or {}
+    out = ["| Metric | " + " | ".join(run_label(c) + ("\\" + UNPROVEN_MARK if c in unproven else "")
+                                     for c in cols) + " |",
            "|---|" + "---:|" * len(cols)]
     for k in rows:
         cells = []
@@ -132,9 +143,43 @@ def solver_summary(folder: Path) -> pd.DataFrame | None:
     })
 
 
+def unproven_runs(folder: Path) -> dict[str, str]:
+    """The runs of a results folder whose numbers rest on solver answers not proven optimal, each with why
+    ("3 of 95 rounds ended unproven (time_limit 3)", "stopped with status time_limit (gap unknown)"), in
+    the folder's run order.  Read from the files alone, like every report."""
+    meta = results.read_meta(folder)
+    found: dict[str, str] = {}
+    path = folder / "rounds.csv.gz"
+    if path.is_file():
+        rounds = pd.read_csv(path, usecols=["run", "status"])
+        for run, status in rounds.groupby("run", sort=False)["status"]:
+            bad = status[status != "optimal"].value_counts()
+            if len(bad):
+                kinds = ", ".join(f"{s} {n}" for s, n in bad.items())
+                found[str(run)] = f"{int(bad.sum())} of {len(status)} rounds ended unproven ({kinds})"
+    for run, facts in meta.get("runs", {}).items():
+        if facts.get("kind") == "oracle" and facts.get("status", "optimal") != "optimal":
+            gap = facts.get("gap")
+            found[run] = (f"stopped with status {facts['status']} "
+                          f"(gap {'unknown' if gap is None or gap != gap else f'{gap:.3g}'})")
+    order = meta.get("strategies", [])
+    return dict(sorted(found.items(), key=lambda kv: order.index(kv[0]) if kv[0] in order else len(order)))
+
+
+def unproven_notes(unproven: dict[str, str]) -> list[str]:
+    """The footnote of a report table with marked columns (nothing when every run is proven)."""
+    if not unproven:
+        return []
+    why = "; ".join(f"{run_label(r)}: {text}" for r, text in unproven.items())
+    return [f"\\{UNPROVEN_MARK} **Not proven optimal.** {why}. The solver stopped before proving optimality "
+            "(its preset's time limit or gap), so these columns are not the runs as defined; raise "
+            "`time_limit_s`, or rerun with `--strict` to make such runs fail.", ""]
+
+
 def report_markdown(folder: Path, name: str | None = None) -> str:
     meta = results.read_meta(folder)
     table = load_kpis(folder)
+    unproven = unproven_runs(folder)
     sc = meta["scenario"]
     args = sc.get("args", {})
     lines = [f"# rpbench results: {sc['label']}", ""]
@@ -147,11 +192,12 @@ def report_markdown(folder: Path, name: str | None = None) -> str:
               f"written {meta.get('created')}", ""]
     if meta.get("command"):
         lines += ["Command:", "", f"    {meta['command']}", ""]
-    lines += ["## Comparison (paper Table 2 layout)", "", markdown_table(table), ""] + offline_notes(table, meta)
+    lines += ["## Comparison (paper Table 2 layout)", "", markdown_table(table, unproven=unproven), ""]
+    lines += unproven_notes(unproven) + offline_notes(table, meta)
     if paper.table2_applies(sc["name"], args.get("date"), args.get("sample")):
         lines += ["## Beside the paper", "",
                   "Each cell: rpbench (paper Table 2). The paper's numbers are shown for comparison only; "
-                  "nothing is tuned to them.", "", markdown_table(table, paper.TABLE2), ""]
+                  "nothing is tuned to them.", "", markdown_table(table, paper.TABLE2, unproven), ""]
     summary = solver_summary(folder)
     if summary is not None:
         lines += ["## Solver statistics per run", "", summary.to_markdown() if _has_tabulate() else

@@ -22,7 +22,30 @@ from rpbench.network import RoadNetwork
 
 @dataclass(frozen=True)
 class Params:
-    """Simulation and dispatch parameters (the paper's defaults)."""
+    """Simulation and dispatch parameters (the paper's defaults).
+
+    Every value must be a finite number within sane physical bounds (an
+    absurd value otherwise gives garbage or a run that never ends: Δt = 1e-9 s
+    means 3.6e12 rounds per hour, a speed of 1e-300 m/s infinite travel times):
+
+    ===========================================  ================  ==================
+    parameter                                    range             paper's default
+    ===========================================  ================  ==================
+    ``dt_s`` (Δt)                                [0.1, 3600] s     10 s
+    ``speed_mps``                                [0.1, 100] m/s    8.33 m/s (30 km/h)
+    ``max_pickup_m``, ``max_detour_m``           (0, 1e6] m        3000 m
+    ``planner_patience_s``, ``patience_mean_s``  [1, 86400] s      90 s
+    ``patience_sd_s``, ``patience_floor_s``      [0, 86400] s      10 s, 30 s
+    ``alpha`` (α)                                (0, 10]           1.01
+    ``response_rate`` (r_w)                      [0, 1]            0.75
+    ``vehicles_per_100_orders``                  (0, 1000]         25
+    fares and driver pay                         [0, 1000] CNY/km  5, 3.5, 2
+    ===========================================  ================  ==================
+
+    R̄ and D̄ have no lower bound beyond > 0: a tiny tolerance is meaningful
+    ("no detour at all") and harmless.  The sweeps (Δt 2-60 s, K 60-600 s,
+    r_w 0.1-0.9, ratio 10-25) lie well inside.
+    """
 
     dt_s: float = 10.0                      # Δt, batch interval
     max_pickup_m: float = 3000.0            # R̄
@@ -43,11 +66,19 @@ class Params:
                  "patience_mean_s", "vehicles_per_100_orders")
     _NON_NEGATIVE = ("patience_sd_s", "patience_floor_s", "fare_solo_cny_per_km",
                      "fare_pooled_cny_per_km", "driver_pay_cny_per_km")
+    #: Upper bounds (and, where above 0, lower bounds) of the class docstring's table: name -> (low, high, unit).
+    _RANGE = {"dt_s": (0.1, 3600.0, "s"), "speed_mps": (0.1, 100.0, "m/s"), "max_pickup_m": (0.0, 1e6, "m"),
+              "max_detour_m": (0.0, 1e6, "m"), "planner_patience_s": (1.0, 86400.0, "s"),
+              "patience_mean_s": (1.0, 86400.0, "s"), "patience_sd_s": (0.0, 86400.0, "s"),
+              "patience_floor_s": (0.0, 86400.0, "s"), "alpha": (0.0, 10.0, ""),
+              "vehicles_per_100_orders": (0.0, 1000.0, ""), "fare_solo_cny_per_km": (0.0, 1000.0, "CNY/km"),
+              "fare_pooled_cny_per_km": (0.0, 1000.0, "CNY/km"), "driver_pay_cny_per_km": (0.0, 1000.0, "CNY/km")}
 
     def __post_init__(self) -> None:
         for name in self._POSITIVE + self._NON_NEGATIVE + ("alpha", "response_rate"):
             value = getattr(self, name)
-            if not isinstance(value, (int, float, np.floating, np.integer)) or not np.isfinite(value):
+            if (isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer))
+                    or not np.isfinite(value)):
                 raise ParameterError(f"parameter {name} = {value!r} is not a finite number")
         for name in self._POSITIVE:
             if getattr(self, name) <= 0:
@@ -59,6 +90,17 @@ class Params:
             raise ParameterError(f"parameter alpha = {self.alpha!r} must be > 0 (the paper uses 1.01)")
         if not 0 <= self.response_rate <= 1:
             raise ParameterError(f"parameter response_rate = {self.response_rate!r} must lie in [0, 1]")
+        self._check_ranges()
+
+    def _check_ranges(self) -> None:
+        """The sane physical bounds (signs are checked before, with their own messages)."""
+        for name, (low, high, unit) in self._RANGE.items():
+            value = getattr(self, name)
+            if value < low or value > high:
+                strict = low == 0 and (name in self._POSITIVE or name == "alpha")     # (0, high]
+                raise ParameterError(f"parameter {name} = {value!r} is outside its sane range "
+                                     f"{'(' if strict else '['}{low:g}, {high:g}]{' ' + unit if unit else ''} "
+                                     f"(the paper uses {getattr(Params, name):g})")
 
     def replace(self, **changes: Any) -> "Params":
         """A copy with some fields changed (validated); unknown names are an error."""

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from rpbench.data import read_haikou_network, read_predecessor_network
-from rpbench.exceptions import ParameterError
+from rpbench.exceptions import NoOrdersError, ParameterError
 from rpbench.network import RoadNetwork
 from rpbench.scenarios.base import Fleet, Orders, Params
 
@@ -57,6 +57,15 @@ def check_seed(seed: int) -> int:
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ParameterError(f"--seed {seed!r} must be a non-negative integer")
     return int(seed)
+
+
+def require_orders(n_keep: int, n_total: int, sample: float, where: str) -> None:
+    """Refuse a scenario without orders: a run of it would only write an empty results folder."""
+    if n_total == 0:
+        raise NoOrdersError(f"no orders to simulate: {where} holds no order")
+    if n_keep == 0:
+        raise NoOrdersError(f"no orders to simulate: --sample {sample:g} keeps none of the {n_total} orders "
+                            f"of {where}; raise --sample")
 
 
 def draw_patience(rng: np.random.Generator, n: int, params: Params) -> np.ndarray:

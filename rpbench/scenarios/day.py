@@ -32,6 +32,7 @@ from rpbench.scenarios.common import (
     haikou_network,
     hourly_fleet,
     make_orders,
+    require_orders,
 )
 
 DEFAULT_DATE = "2017-05-01"
@@ -53,6 +54,7 @@ def build_day(data_dir: Path, *, date: str = DEFAULT_DATE, sample: float = 1.0, 
     rng = Streams(seed)
     per_hour = np.round(sample * hourly).astype(np.int64)
     n = int(per_hour.sum())
+    require_orders(n, int(hourly.sum()), sample, f"{day} in the hourly counts")
     hour = np.repeat(np.arange(24), per_hour)
     request_s = hour * 3600.0 + rng.times.uniform(0.0, 3600.0, size=n)
     od = rng.od.choice(len(weight), size=n, p=weight / weight.sum())

@@ -15,7 +15,7 @@ import numpy as np
 import pandas as pd
 
 from rpbench.data import read_peak_orders
-from rpbench.data.orders import parse_date
+from rpbench.data.orders import parse_date, peak_order_path
 from rpbench.scenarios.base import Demand, Fleet, Params, Scenario
 from rpbench.scenarios.common import (
     Streams,
@@ -26,6 +26,7 @@ from rpbench.scenarios.common import (
     haikou_network,
     make_orders,
     place_fleet,
+    require_orders,
 )
 
 DEFAULT_DATE = "2017-05-01"
@@ -43,6 +44,7 @@ def build_peak(data_dir: Path, *, date: str = DEFAULT_DATE, sample: float = DEFA
     destination = network.index_of(frame["destination_id"], what=f"destination node id in the {day} orders")
     rng = Streams(seed)
     n_keep = int(round(sample * len(frame)))
+    require_orders(n_keep, len(frame), sample, f"the {day} 08:00-09:00 hour of {str(peak_order_path(data_dir, day))!r}")
     keep = np.sort(rng.sample.choice(len(frame), size=n_keep, replace=False)) if sample < 1 else np.arange(len(frame))
     start = pd.Timestamp(day) + pd.Timedelta(hours=8)
     request_s = (frame["departure_time"] - start).dt.total_seconds().to_numpy()[keep]

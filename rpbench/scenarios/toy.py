@@ -25,6 +25,7 @@ from rpbench.scenarios.common import (
     fleet_size,
     make_orders,
     place_fleet,
+    require_orders,
 )
 
 BLOCK_M = 500.0
@@ -71,6 +72,7 @@ def build_toy(*, sample: float = 1.0, seed: int = 0, params: Params | None = Non
     network = grid_network(size, seed=0)  # the city stays the same across seeds; demand varies
     rng = Streams(seed)
     n = int(round(sample * BASE_ORDERS))
+    require_orders(n, BASE_ORDERS, sample, "the toy city")
     homes = np.array([1 * size + 1, (size - 2) * size + 2, (size // 2) * size + size - 2])
     work = np.array([(size // 2) * size + size // 2, 2 * size + size - 3])
     origin = _hotspot_nodes(rng.od, homes, 0.6, n, size)

@@ -15,6 +15,7 @@ import numpy as np
 import pandas as pd
 
 from rpbench.data import read_trace_orders
+from rpbench.exceptions import DataError
 from rpbench.scenarios.base import Demand, Params, Scenario
 from rpbench.scenarios.common import (
     Streams,
@@ -24,9 +25,21 @@ from rpbench.scenarios.common import (
     hourly_fleet,
     make_orders,
     predecessor_network,
+    require_orders,
 )
 
 TRACE_DATE = "2017-07-01"
+
+
+def _check_within_day(frame: pd.DataFrame, start: pd.Timestamp) -> None:
+    """Every order must depart on the trace's day: the fleet schedule has one entry per hour from
+    ``start``, so a time before it breaks the hourly count and one years later allocates a huge schedule."""
+    departure = frame["departure_time"]
+    outside = ((departure < start) | (departure >= start + pd.Timedelta(days=1))).to_numpy()
+    if outside.any():
+        row = int(np.flatnonzero(outside)[0])
+        raise DataError(f"the {TRACE_DATE} trace: order {int(frame['order_id'].iloc[row])} departs at "
+                        f"{departure.iloc[row]}, outside {TRACE_DATE}; the trace covers that day only")
 
 
 def build_trace(data_dir: Path, *, sample: float = 1.0, seed: int = 0, params: Params | None = None,
@@ -39,8 +52,10 @@ def build_trace(data_dir: Path, *, sample: float = 1.0, seed: int = 0, params: P
     destination = network.index_of(frame["destination_id"], what="end_ver in the 2017-07-01 trace")
     rng = Streams(seed)
     n_keep = int(round(sample * len(frame)))
+    require_orders(n_keep, len(frame), sample, f"the {TRACE_DATE} trace")
     keep = np.sort(rng.sample.choice(len(frame), size=n_keep, replace=False)) if sample < 1 else np.arange(len(frame))
     start = pd.Timestamp(TRACE_DATE)
+    _check_within_day(frame, start)
     minute_s = (frame["departure_time"] - start).dt.total_seconds().to_numpy()[keep]
     request_s = minute_s + rng.times.uniform(0.0, 60.0, size=n_keep)
     orders = make_orders(frame["order_id"].to_numpy()[keep], request_s, origin[keep], destination[keep],

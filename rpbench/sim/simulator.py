@@ -24,6 +24,9 @@ passengers.
 from __future__ import annotations
 
 import math
+import os
+import re
+import stat
 import tempfile
 import time
 from dataclasses import dataclass
@@ -36,6 +39,7 @@ from rpbench.backends import Preset, solve
 from rpbench.exceptions import SolverError
 from rpbench.instances import save_instance
 from rpbench.model import Status
+from rpbench.paths import cache_dir
 from rpbench.scenarios.base import Scenario
 from rpbench.sim.fleet import DROPOFF, PICKUP, FleetState, Stop
 from rpbench.sim.ties import canonicalize
@@ -65,12 +69,39 @@ class SimResult:
     end_s: float
 
 
+#: Where a failed round's model is dumped: a private folder of the cache, not the shared /tmp.
+FAILED_ROUNDS = "failed-rounds"
+
+
+def _new_dump_file(stem: str) -> Path:
+    """A new, empty file of our own in ``<cache>/failed-rounds/`` to dump a failed round's model into.
+
+    The name is unpredictable and created with O_EXCL (``mkstemp``), so a link planted under a
+    guessable name is never followed and concurrent runs never clobber each other's dumps; the
+    folder is ours and private (0700), so nobody can swap the file for a link before it is written.
+    """
+    folder = cache_dir() / FAILED_ROUNDS
+    folder.mkdir(mode=0o700, exist_ok=True)
+    st = os.lstat(folder)
+    if not stat.S_ISDIR(st.st_mode) or st.st_uid != os.getuid():
+        raise OSError(f"{folder} is a link or not our own folder: not dumping into it")
+    safe = re.sub(r"[^A-Za-z0-9_.-]+", "_", stem)      # plug-in names hold ':' (mypkg.rules:Greedy)
+    fd, name = tempfile.mkstemp(prefix=f"{safe}-", suffix=".npz", dir=folder)
+    os.close(fd)
+    return Path(name)
+
+
 class Simulator:
     """One run of one strategy on one scenario with one solver backend."""
 
     def __init__(self, scenario: Scenario, strategy: Strategy, preset: Preset, *,
-                 canonical_ties: bool = True, progress=None, capture=None):
-        """``capture(round, t, round_model, solution)``, if given, sees every solved round (snapshots)."""
+                 canonical_ties: bool = True, progress=None, capture=None, strict: bool = False):
+        """``capture(round, t, round_model, solution)``, if given, sees every solved round (snapshots).
+
+        ``strict``: a round the solver stops before proving its optimum (time limit, gap) is an error
+        instead of a ``time_limit``/``feasible`` row in the round statistics (``--strict``).
+        """
+        self.strict = strict
         self.scenario = scenario
         self.strategy = strategy
         self.preset = preset
@@ -145,6 +176,11 @@ class Simulator:
             raise self._round_failure(k, t, model, str(exc)) from None
         if solution.status is Status.INFEASIBLE:
             raise self._round_failure(k, t, model, f"returned {solution.status.value}: {solution.message}")
+        if self.strict and solution.status is not Status.OPTIMAL:
+            # Fail at the first unproven round, not after hours of simulating on top of it.
+            raise self._round_failure(k, t, model, f"stopped with status {solution.status.value}, not proven "
+                                                   "optimal (--strict); raise the preset's time_limit_s or "
+                                                   "choose a faster exact preset")
         if self.capture is not None:
             self.capture(k, t, rm, solution)
         moves = 0
@@ -163,11 +199,16 @@ class Simulator:
         """A solver failure naming the strategy and round, with the round's model saved for `rpbench bench`."""
 
         where = f"{self.strategy.name} round {k} (t={t:g} s): solver preset {self.preset.name!r}: {what}"
-        path = Path(tempfile.gettempdir()) / f"rpbench-failed-{self.strategy.name}-round{k:05d}.npz"
+        meta = {"scenario": self.scenario.name, "seed": self.scenario.seed, "strategy": self.strategy.name,
+                "round": k, "t_s": t, "error": what}
         try:
-            save_instance(path, model, {"scenario": self.scenario.name, "seed": self.scenario.seed,
-                                        "strategy": self.strategy.name, "round": k, "t_s": t, "error": what})
+            path = _new_dump_file(f"{self.strategy.name}-round{k:05d}")
         except OSError:
+            return SolverError(where)
+        try:
+            save_instance(path, model, meta)
+        except OSError:
+            path.unlink(missing_ok=True)
             return SolverError(where)
         return SolverError(f"{where}; the round's model is saved as {path} (reproduce: rpbench bench {path})")
 

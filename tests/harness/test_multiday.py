@@ -42,7 +42,7 @@ def test_multi_day_folder(two_day_data, tmp_path):
 @pytest.mark.slow
 def test_dates_of_the_synthetic_full_day(fake_data, tmp_path):
     """--dates works for every dated scenario: haikou-day takes its dates from the hourly counts."""
-    request = ScenarioRequest("haikou-day", sample=0.01, data_dir=str(fake_data))
+    request = ScenarioRequest("haikou-day", sample=0.1, data_dir=str(fake_data))
     dates = request.dates("2017-05-01..2017-05-31")
     assert dates and all(d.startswith("2017-05") for d in dates)
     folder = run_days(request, dates[:1], strategies=["mb"], preset="highs", run_options={},

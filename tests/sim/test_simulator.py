@@ -9,7 +9,6 @@ from helpers import line_network, network_from_edges, scenario_of
 
 from rpbench.backends.presets import load_preset
 from rpbench.harness.comparison import simulate_strategy
-from rpbench.scenarios.base import Params
 
 
 @pytest.fixture(scope="module")
@@ -114,9 +113,10 @@ def test_a_solver_failure_names_the_round_and_saves_its_model(monkeypatch, tmp_p
     def broken(self, model, options, **kw):
         raise SolverError("HiGHS failed with model status kUnknown")
     monkeypatch.setattr(HighsBackend, "solve", broken)
-    monkeypatch.setattr("tempfile.tempdir", str(tmp_path))
+    monkeypatch.setenv("RPBENCH_CACHE", str(tmp_path))      # dumps go to <cache>/failed-rounds, never /tmp
     sc = scenario_of(line_network(6), [(0.0, 0, 3), (10.0, 1, 5)], vehicles=[0])
     with pytest.raises(SolverError, match=r"mb round 0 \(t=0 s\): solver preset 'highs': HiGHS failed .*rpbench bench"):
         simulate_strategy(sc, "mb", load_preset("highs"), progress=False)
-    model, meta = load_instance(tmp_path / "rpbench-failed-mb-round00000.npz")
+    [dump] = (tmp_path / "failed-rounds").glob("mb-round00000-*.npz")
+    model, meta = load_instance(dump)
     assert model.n_passengers == 1 and meta["strategy"] == "mb" and meta["round"] == 0

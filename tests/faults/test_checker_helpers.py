@@ -1,0 +1,216 @@
+"""Shared helpers of the checker's fault-injection tests tests/faults/test_checker_*.py (no test here).
+
+Each test module builds its clean folders once (module-scoped fixtures: a toy comparison of every kind of
+run, and the valid edge cases), then tampers with a copy per case and asserts the exact outcome: a named
+check failing with a given message fragment, or ``rpbench check`` exiting 2 with one error line.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import gzip
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from rpbench.cli import main
+from rpbench.harness.comparison import run_comparison
+from rpbench.results.check import check_tree
+from rpbench.scenarios import build_scenario
+
+#: The clean folder every tampering starts from: each kind of run rpbench writes.
+RUNS = ["mb", "rtv", "fl", "bound", "oracle1", "oracle2"]
+
+
+def build(out: Path, runs=RUNS, *, sample: float = 0.25, seed: int = 3, run_options=None, **overrides) -> Path:
+    scenario = build_scenario("toy", sample=sample, seed=seed, param_overrides=overrides or None)
+    folder, _ = run_comparison(scenario, list(runs), "highs", out=out, progress=False, oracle_solver="matching",
+                               run_options=run_options)
+    return folder
+
+
+@pytest.fixture(scope="module")
+def base(tmp_path_factory) -> Path:
+    return build(tmp_path_factory.mktemp("clean") / "toy")
+
+
+@pytest.fixture(scope="module")
+def enroute(tmp_path_factory) -> Path:
+    """Oracles with en-route pairs (the second order joins the first one's ride), both pick-up orders and
+    the pick-up test: every branch of the oracle rules."""
+    return build(tmp_path_factory.mktemp("enroute") / "toy", ["mb", "oracle1", "oracle2"], sample=0.5, seed=1,
+                 run_options={"oracle1": {"allow_enroute": "true", "both_pickup_orders": "true"},
+                              "oracle2": {"allow_enroute": "true", "pickup_check": "true"}})
+
+
+@pytest.fixture
+def folder(base, tmp_path) -> Path:
+    """A copy of the clean folder, to tamper with."""
+    return copy(base, tmp_path)
+
+
+def copy(source: Path, tmp_path: Path, name: str = "copy") -> Path:
+    target = tmp_path / name
+    shutil.copytree(source, target)
+    return target
+
+
+# ------------------------------------------------------------------- tampering
+def edit_csv(path: Path, fn) -> None:
+    table = pd.read_csv(path)
+    out = fn(table)
+    (table if out is None else out).to_csv(path, index=False)
+
+
+def edit_npz(path: Path, fn) -> None:
+    arrays = dict(np.load(path))
+    fn(arrays)
+    np.savez_compressed(path, **arrays)
+
+
+def edit_meta(folder: Path, fn) -> None:
+    meta = json.loads((folder / "meta.json").read_text())
+    fn(meta)
+    (folder / "meta.json").write_text(json.dumps(meta))
+
+
+def set_kpi(folder: Path, run: str, kpi: str, fn) -> None:
+    """Replace a reported KPI value by ``fn(value)`` (the column becomes text where fn returns text)."""
+    def edit(table):
+        table["value"] = table["value"].astype(object)
+        sel = (table["run"] == run) & (table["kpi"] == kpi)
+        assert sel.sum() == 1, (run, kpi)
+        table.loc[sel, "value"] = fn(table.loc[sel, "value"].iloc[0])
+    edit_csv(folder / "kpis.csv", edit)
+
+
+def events(folder: Path, run: str) -> pd.DataFrame:
+    return pd.read_csv(folder / "runs" / run / "events.csv.gz")
+
+
+def edit_events(folder: Path, run: str, fn) -> None:
+    edit_csv(folder / "runs" / run / "events.csv.gz", fn)
+
+
+def first_row(table: pd.DataFrame, **where) -> int:
+    sel = np.ones(len(table), dtype=bool)
+    for column, value in where.items():
+        sel &= (table[column] == value).to_numpy() if not callable(value) else value(table[column]).to_numpy()
+    return int(table.index[sel][0])
+
+
+def joined_pair(folder: Path, run: str = "mb") -> tuple[int, int, pd.Series]:
+    """(joining order, first order, its assign event) of a pair of the run."""
+    ev = events(folder, run)
+    row = ev.loc[first_row(ev, event="assign", partner=lambda c: c >= 0)]
+    return int(row["order"]), int(row["partner"]), row
+
+
+def truncate(path: Path, keep: float = 0.5) -> None:
+    data = path.read_bytes()
+    path.write_bytes(data[: int(len(data) * keep)])
+
+
+# -------------------------------------------------------------------- outcomes
+def violations(folder: Path) -> dict[str, list[str]]:
+    """Every failed check of the folder tree (runs and the folders' own checks), with its messages;
+    an unreadable folder raises AssertionError."""
+    out: dict[str, list[str]] = {}
+    for result in check_tree(folder):
+        assert result.error is None, result.error
+        for rc in result.checks:
+            for check, messages in rc.violations.items():
+                out.setdefault(check, []).extend(f"{rc.run}: {m}" for m in messages)
+    return out
+
+
+def assert_fails(folder: Path, check: str, fragment: str, run: str | None = None) -> dict[str, list[str]]:
+    """The check fails with a message containing ``fragment`` (for ``run`` when given)."""
+    found = violations(folder)
+    assert check in found, f"{check} did not fail; failures: {found}"
+    prefix = f"{run}: " if run else ""
+    assert any(m.startswith(prefix) and fragment in m for m in found[check]), found[check]
+    return found
+
+
+def assert_passes(folder: Path, capsys=None) -> list:
+    results = check_tree(folder)
+    bad = {r.folder: r.error or {c.run: c.violations for c in r.checks if not c.ok} for r in results
+           if r.status != "ok"}
+    assert not bad, bad
+    if capsys is not None:
+        capsys.readouterr()
+        assert main(["check", str(folder)]) == 0
+        out, err = capsys.readouterr()
+        assert "Traceback" not in out + err and "FAILED" not in out
+    return results
+
+
+def cli(args: list[str], capsys) -> tuple[int, str, str]:
+    capsys.readouterr()
+    code = main(args)
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def assert_unreadable(folder: Path, fragment: str, capsys) -> str:
+    """``rpbench check`` exits 2 with one error line naming the problem, no traceback, no verdict."""
+    code, out, err = cli(["check", str(folder)], capsys)
+    lines = [line for line in err.splitlines() if not line.startswith("rpbench: note:")]
+    assert code == 2, (code, out, err)
+    assert len(lines) == 1 and lines[0].startswith("rpbench: error: "), err
+    assert fragment in lines[0], lines[0]
+    assert "Traceback" not in out + err and out == ""
+    return lines[0]
+
+
+# ---------------------------------------------------------------- fake data
+def write_fake_haikou(root: Path, days=("2017-05-01", "2017-05-02")) -> Path:
+    """A tiny data folder in the Haikou format (3x3 grid, 40 orders per peak hour, as tests/conftest.py's
+    fake_data), with one order file per day: what a multi-day run needs."""
+    (root / "network").mkdir(parents=True)
+    nodes = ["node_id,name,x_coord,y_coord"]
+    for i in range(9):
+        r, c = divmod(i, 3)
+        nodes.append(f"{i},,{110.3 + 0.005 * c:.6f},{20.0 + 0.005 * r:.6f}")
+    (root / "network" / "node.csv").write_text("\n".join(nodes) + "\n")
+    links = ["link_id,from_node_id,to_node_id,link_type,geometry,length"]
+    k = 0
+    for i in range(9):
+        r, c = divmod(i, 3)
+        for j in ([i + 1] if c < 2 else []) + ([i + 3] if r < 2 else []):
+            links.append(f'{k},{i},{j},5,"LINESTRING (0 0, 1 1)",{600.0 + k:.1f}')
+            k += 1
+    _write_gz(root / "network" / "link.csv.gz", "\n".join(links) + "\n")
+    pre = "dwv_order_make_haikou_1."
+    rng = np.random.default_rng(1)
+    for day in days:
+        rows = [f",{pre}order_id,{pre}departure_time,O_location,D_location,OD_id,origin_id,destination_id"]
+        for n in range(40):
+            o, d = rng.choice(9, size=2, replace=False)
+            rows.append(f"{n},{1000 + n},{day} 08:{n:02d}:{(7 * n) % 60:02d},{o}.0,{d}.0,{n},{o},{d}")
+        _write_gz(root / "demand_0800_0900" / "orders" / f"{day}.csv.gz", "\n".join(rows) + "\n")
+    od = ["OD_id,origin_id,destination_id,lambda"] + [f"{i},{i % 9}.0,{(i + 4) % 9}.0,0.01" for i in range(9)]
+    _write_gz(root / "demand_0800_0900" / "month_5_OD.csv.gz", "\n".join(od) + "\n")
+    (root / "samples_and_aggregates").mkdir(parents=True)
+    (root / "samples_and_aggregates" / "data_dayly_hourly_count.csv").write_text(
+        f'date,day_count,hour_count\n05/01,240,"{[10] * 24}"\n')
+    return root
+
+
+def _write_gz(path: Path, text: str) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with gzip.open(path, "wt") as fh:
+        fh.write(text)
+
+
+def with_empty_hour(scenario):
+    """The scenario with its second half of orders moved two hours later: hour 1 has no order at all."""
+    o = scenario.orders
+    late = np.arange(len(o.request_s)) >= len(o.request_s) // 2
+    orders = dataclasses.replace(o, request_s=np.where(late, o.request_s + 7200.0, o.request_s))
+    return dataclasses.replace(scenario, orders=orders, horizon_s=3 * 3600.0)
