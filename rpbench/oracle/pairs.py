@@ -201,20 +201,10 @@ def find_candidates(distances: DistanceOracle | np.ndarray, orders: Orders, rule
     hi = np.searchsorted(t, t + reach + 1e-6 * (1.0 + np.abs(t) + reach), side="right")
     count = np.maximum(hi - np.arange(n) - 1, 0)
 
-    path = None
-    if rules.allow_enroute and n:
-        offsets, nodes = distances.paths_batch(o, d)
-        cum = dist[np.repeat(o, np.diff(offsets)), nodes]    # l(o_i, k-th node of P_i)
-        path = (np.asarray(offsets, np.int64), np.asarray(nodes, np.intp), cum)
-
+    path = _paths(distances, dist, o, d) if rules.allow_enroute and n else None
     parts: list[dict] = []
     evaluated = 0
-    for i0, i1 in _blocks(count, block_pairs):
-        ii = np.repeat(np.arange(i0, i1), count[i0:i1])
-        if not len(ii):
-            continue
-        starts = np.cumsum(count[i0:i1]) - count[i0:i1]
-        jj = ii + 1 + np.arange(len(ii)) - np.repeat(starts, count[i0:i1])
+    for ii, jj in _pair_blocks(count, block_pairs):
         evaluated += len(ii)
         dt = t[jj] - t[ii]
         waiting = dt <= k_bar
@@ -223,17 +213,36 @@ def find_candidates(distances: DistanceOracle | np.ndarray, orders: Orders, rule
             s = rules.speed_mps * (dt - k_bar)
             moving = ~waiting & (s > 0) & (s < solo[ii])
             parts.append(_enroute_pairs(dist, o, d, solo, ii[moving], jj[moving], s[moving], path, rules))
+    cand = _assemble(parts, rank, n, rules, evaluated, t0)
+    return replace(cand, stats={"waiting": int((~cand.enroute).sum()), "enroute": int(cand.enroute.sum())})
 
+
+def _paths(distances: DistanceOracle, dist, o, d):
+    """``(offsets, nodes, cum)``: every order's shortest path and ``l(o_i, k-th node of P_i)`` along it."""
+    offsets, nodes = distances.paths_batch(o, d)
+    return (np.asarray(offsets, np.int64), np.asarray(nodes, np.intp), dist[np.repeat(o, np.diff(offsets)), nodes])
+
+
+def _pair_blocks(count: np.ndarray, block_pairs: int):
+    """``(ii, jj)`` arrays of the (earlier, later) pairs inside the windows, about ``block_pairs`` at a time;
+    order ``i``'s window holds the ``count[i]`` orders after it (by time)."""
+    for i0, i1 in _blocks(count, block_pairs):
+        ii = np.repeat(np.arange(i0, i1), count[i0:i1])
+        if not len(ii):
+            continue
+        starts = np.cumsum(count[i0:i1]) - count[i0:i1]
+        yield ii, ii + 1 + np.arange(len(ii)) - np.repeat(starts, count[i0:i1])
+
+
+def _assemble(parts: list[dict], rank, n: int, rules: PairRules, evaluated: int, t0: float) -> "CandidatePairs":
+    """The evaluated blocks as one CandidatePairs, in scenario row positions and a canonical row order."""
     cols = {k: np.concatenate([p[k] for p in parts]) if parts else np.zeros(0, dtype)
             for k, dtype in _COLUMNS.items()}
-    # Back to scenario row positions; a canonical, deterministic row order.
     first, second = rank[cols.pop("first")].astype(np.int64), rank[cols.pop("second")].astype(np.int64)
     srt = np.lexsort((np.maximum(first, second), np.minimum(first, second)))
     cols = {k: v[srt] for k, v in cols.items()}
-    return CandidatePairs(
-        n_orders=n, first=first[srt], second=second[srt], rules=rules, evaluated=int(evaluated),
-        seconds=time.perf_counter() - t0,
-        stats={"waiting": int((~cols["enroute"]).sum()), "enroute": int(cols["enroute"].sum())}, **cols)
+    return CandidatePairs(n_orders=n, first=first[srt], second=second[srt], rules=rules, evaluated=int(evaluated),
+                          seconds=time.perf_counter() - t0, **cols)
 
 
 def bound_rules(params: Params) -> PairRules:
@@ -246,9 +255,7 @@ def _bound_candidates(distances: DistanceOracle, dist, orders: Orders, rules: Pa
     """Every pair the simulator can form, weighted by the largest saving it can realise (docs/bound.md)."""
     n = len(orders)
     patience = orders.patience_s[rank]
-    offsets, nodes = distances.paths_batch(o, d) if n else (np.zeros(1, np.int64), np.zeros(0, np.int32))
-    path = (np.asarray(offsets, np.int64), np.asarray(nodes, np.intp),
-            dist[np.repeat(o, np.diff(offsets)), nodes])          # l(o_i, k-th node of P_i) = arc length to it
+    path = _paths(distances, dist, o, d) if n else (np.zeros(1, np.int64), np.zeros(0, np.intp), np.zeros(0))
     # i (earlier) first: j requests before i's drop-off, at most t_i + K_i + (R̄ + l_i)/v; j first: i still
     # waits, t_j <= t_i + K_i.  Widened by the simulator's tolerances (1e-9 s on patience, TOLERANCE_M on R̄)
     # and a hair for rounding: a wider window only adds candidate pairs, it never drops one.
@@ -257,12 +264,7 @@ def _bound_candidates(distances: DistanceOracle, dist, orders: Orders, rules: Pa
     count = np.maximum(hi - np.arange(n) - 1, 0)
     parts: list[dict] = []
     evaluated = 0
-    for i0, i1 in _blocks(count, block_pairs):
-        ii = np.repeat(np.arange(i0, i1), count[i0:i1])
-        if not len(ii):
-            continue
-        starts = np.cumsum(count[i0:i1]) - count[i0:i1]
-        jj = ii + 1 + np.arange(len(ii)) - np.repeat(starts, count[i0:i1])
+    for ii, jj in _pair_blocks(count, block_pairs):
         evaluated += len(ii)
         reverse_ok = t[jj] - t[ii] <= patience[ii] + 1e-6
         # how far along its path the first passenger's vehicle can be while the second still waits
@@ -270,13 +272,7 @@ def _bound_candidates(distances: DistanceOracle, dist, orders: Orders, rules: Pa
         reach_r = rules.speed_mps * (t[ii] + patience[ii] - t[jj]) + 1e-6
         parts.append(_best_orientation(dist, o, d, solo, ii, jj, reverse_ok, rules,
                                        turn=(path, reach_f, reach_r)))
-    cols = {k: np.concatenate([p[k] for p in parts]) if parts else np.zeros(0, dtype)
-            for k, dtype in _COLUMNS.items()}
-    first, second = rank[cols.pop("first")].astype(np.int64), rank[cols.pop("second")].astype(np.int64)
-    srt = np.lexsort((np.maximum(first, second), np.minimum(first, second)))
-    cols = {k: v[srt] for k, v in cols.items()}
-    return CandidatePairs(n_orders=n, first=first[srt], second=second[srt], rules=rules, evaluated=int(evaluated),
-                          seconds=time.perf_counter() - t0, stats={"window": "bound"}, **cols)
+    return replace(_assemble(parts, rank, n, rules, evaluated, t0), stats={"window": "bound"})
 
 
 def _best_orientation(dist, o, d, solo, ii, jj, reverse_ok, rules: PairRules, turn=None) -> dict:
