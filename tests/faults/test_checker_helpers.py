@@ -8,7 +8,6 @@ check failing with a given message fragment, or ``rpbench check`` exiting 2 with
 from __future__ import annotations
 
 import dataclasses
-import gzip
 import json
 import shutil
 from pathlib import Path
@@ -17,6 +16,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from helpers import write_fake_haikou as _write_fake_haikou
 from rpbench.cli import main
 from rpbench.harness.comparison import run_comparison
 from rpbench.results.check import check_tree
@@ -170,42 +170,9 @@ def assert_unreadable(folder: Path, fragment: str, capsys) -> str:
 
 # ---------------------------------------------------------------- fake data
 def write_fake_haikou(root: Path, days=("2017-05-01", "2017-05-02")) -> Path:
-    """A tiny data folder in the Haikou format (3x3 grid, 40 orders per peak hour, as tests/conftest.py's
-    fake_data), with one order file per day: what a multi-day run needs."""
-    (root / "network").mkdir(parents=True)
-    nodes = ["node_id,name,x_coord,y_coord"]
-    for i in range(9):
-        r, c = divmod(i, 3)
-        nodes.append(f"{i},,{110.3 + 0.005 * c:.6f},{20.0 + 0.005 * r:.6f}")
-    (root / "network" / "node.csv").write_text("\n".join(nodes) + "\n")
-    links = ["link_id,from_node_id,to_node_id,link_type,geometry,length"]
-    k = 0
-    for i in range(9):
-        r, c = divmod(i, 3)
-        for j in ([i + 1] if c < 2 else []) + ([i + 3] if r < 2 else []):
-            links.append(f'{k},{i},{j},5,"LINESTRING (0 0, 1 1)",{600.0 + k:.1f}')
-            k += 1
-    _write_gz(root / "network" / "link.csv.gz", "\n".join(links) + "\n")
-    pre = "dwv_order_make_haikou_1."
-    rng = np.random.default_rng(1)
-    for day in days:
-        rows = [f",{pre}order_id,{pre}departure_time,O_location,D_location,OD_id,origin_id,destination_id"]
-        for n in range(40):
-            o, d = rng.choice(9, size=2, replace=False)
-            rows.append(f"{n},{1000 + n},{day} 08:{n:02d}:{(7 * n) % 60:02d},{o}.0,{d}.0,{n},{o},{d}")
-        _write_gz(root / "demand_0800_0900" / "orders" / f"{day}.csv.gz", "\n".join(rows) + "\n")
-    od = ["OD_id,origin_id,destination_id,lambda"] + [f"{i},{i % 9}.0,{(i + 4) % 9}.0,0.01" for i in range(9)]
-    _write_gz(root / "demand_0800_0900" / "month_5_OD.csv.gz", "\n".join(od) + "\n")
-    (root / "samples_and_aggregates").mkdir(parents=True)
-    (root / "samples_and_aggregates" / "data_dayly_hourly_count.csv").write_text(
-        f'date,day_count,hour_count\n05/01,240,"{[10] * 24}"\n')
-    return root
-
-
-def _write_gz(path: Path, text: str) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with gzip.open(path, "wt") as fh:
-        fh.write(text)
+    """The shared fake Haikou folder (tests/helpers.py) with one order file per day: what a multi-day run
+    needs."""
+    return _write_fake_haikou(root, days, reservation=False)
 
 
 def with_empty_hour(scenario):
