@@ -35,12 +35,10 @@ from typing import Callable
 import numpy as np
 
 from rpbench.predict._arrays import segment_exclusive_cumsum, segment_sums
+from rpbench.predict.kernels import savings_chunk, sweep_chunks
 from rpbench.predict.config import PredictConfig
-from rpbench.predict.match_sets import Block, Matching
+from rpbench.predict.match_sets import Matching
 from rpbench.predict.states import StateSpace
-
-_LOG_ZERO = -1e4               # log λ for λ = 0: exp() underflows to exactly 0
-
 
 @dataclass(frozen=True, eq=False)
 class System:
@@ -57,16 +55,13 @@ class System:
               config: PredictConfig) -> "System":
         return cls(space, matching, np.asarray(rate_per_s, dtype=np.float64), config)
 
-    def buffers(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(classes as intp, gathered log Q, running sums) sized for the largest block.
-
-        Allocated once: fresh multi-megabyte temporaries in every sweep would
-        cost page faults (a large share of the time on a virtual machine).
-        """
-        if "buffers" not in self.work:
-            n = max((len(b.cls) for b in self.matching.blocks), default=0)
-            self.work["buffers"] = (np.empty(n, dtype=np.intp), np.empty(n), np.empty(n))
-        return self.work["buffers"]
+    def scratch(self, rows: int, n_classes: int) -> np.ndarray:
+        """Per-chunk class sums of a sweep, allocated once: fresh tens of megabytes every
+        sweep would cost page faults (a large share of the time on a virtual machine)."""
+        buf = self.work.get("chunk_h")
+        if buf is None or buf.shape != (rows, n_classes):
+            buf = self.work["chunk_h"] = np.empty((rows, n_classes))
+        return buf
 
 
 @dataclass(frozen=True, eq=False)
@@ -105,50 +100,50 @@ class SolveInfo:
     history: tuple = ()          # residual per iteration
 
 
-ChunkHook = Callable[[Block, np.ndarray, np.ndarray, np.ndarray], None]
-
-
-def sweep(system: System, class_log_q: np.ndarray, hook: ChunkHook | None = None) -> tuple[np.ndarray, np.ndarray]:
+def sweep(system: System, class_log_q: np.ndarray, sums: PairSums | None = None) -> tuple[np.ndarray, np.ndarray]:
     """One pass over all seeker lists: returns (H_c per class, log(1 - p_s) per OD).
 
-    ``hook(block, classes, weight, log_q)`` sees each block's pair weights
-    ``λ_s Π_{c' ≻_s c} Q_c'`` and gathered ``log Q_c`` (used by :mod:`.savings`).
+    ``H_c = Σ_s λ_s Π_{c' ≻_s c} Q_c'`` and ``log(1 - p_s) = Σ_{c ∈ T_s} log Q_c``,
+    computed by the compiled kernels one chunk of seekers at a time (the pair
+    columns are usually memory maps).  With ``sums`` the pass also adds the
+    savings pass's pair sums (:mod:`.savings`) and gives the chunks' pages of
+    the distance columns back at once, so they never all sit in memory.
     """
-    n_classes = len(class_log_q)
-    h = np.zeros(n_classes)
     log_not_paired = np.zeros(len(system.rate_per_s))
-    with np.errstate(divide="ignore"):
-        log_lam = np.where(system.rate_per_s > 0, np.log(system.rate_per_s), _LOG_ZERO)
-    c_buf, v_buf, run_buf = system.buffers()
-    for block in system.matching.blocks:
-        off = block.off
-        n = int(off[-1])
-        if n == 0:
-            continue
-        c, v, run = c_buf[:n], v_buf[:n], run_buf[:n]
-        np.copyto(c, block.cls)                              # one conversion serves gather and bincount
-        np.take(class_log_q, c, out=v)                       # log Q of each listed class
-        nonempty = np.flatnonzero(off[1:] > off[:-1])
-        starts = off[nonempty]
-        totals = np.add.reduceat(v, starts)                  # log(1 - p_s)
-        seekers = block.s0 + nonempty
-        log_not_paired[seekers] = totals
-        # Exclusive running sum restarted per seeker and started at log λ_s: shift by one and, at
-        # each seeker start, replace the carried sum (previous seeker's total) by log λ_s.
-        run[0] = 0.0
-        run[1:] = v[:-1]
-        lam_start = log_lam[seekers]
-        run[starts[1:]] += lam_start[1:] - totals[:-1] - lam_start[:-1]
-        run[0] = lam_start[0]
-        np.cumsum(run, out=run)
-        np.exp(run, out=run)                                 # λ_s Π_{c' ≻ c} Q_c'
-        h += np.bincount(c, weights=run, minlength=n_classes)
-        if hook is not None:
-            hook(block, c, run, v)
-    return h, log_not_paired
+    q = np.exp(class_log_q)
+    m, lam = system.matching, system.rate_per_s
+    if sums is None:
+        chunk_start = np.array([s0 for s0, _, _, _ in m.chunks()] + [len(lam)], dtype=np.int64)
+        chunk_h = system.scratch(len(chunk_start) - 1, len(class_log_q))
+        sweep_chunks(m.seeker_off, m.cls, lam, q, class_log_q, chunk_start, chunk_h, log_not_paired)
+        return chunk_h.sum(axis=0), log_not_paired
+    one_minus_q = -np.expm1(class_log_q)
+    for s0, s1, i0, i1 in m.chunks():
+        savings_chunk(m.seeker_off[s0:s1 + 1] - i0, m.cls[i0:i1], m.saving_m[i0:i1], m.shared_m[i0:i1],
+                      m.seeker_detour_m[i0:i1], lam[s0:s1], q, class_log_q, one_minus_q, sums.by_class,
+                      sums.by_seeker[s0:s1], log_not_paired[s0:s1])
+        m.release(i0, i1, ("saving_m", "shared_m", "seeker_detour_m"))
+    return sums.by_class[:, 0].copy(), log_not_paired
 
 
-def evaluate(system: System, rho: np.ndarray, hook: ChunkHook | None = None) -> Evaluation:
+@dataclass(frozen=True, eq=False)
+class PairSums:
+    """Pair quantities summed with the sweep's weights: columns (1, E, shared, seeker detour).
+
+    ``by_class[c]`` sums ``w``-weighted values over the seekers listing c
+    (column 0 is H_c); ``by_seeker[s]`` sums them weighted by the pairing rate
+    ``w (1 - Q_c)`` over s's list.
+    """
+
+    by_class: np.ndarray        # (classes, 4)
+    by_seeker: np.ndarray       # (ODs, 4)
+
+    @classmethod
+    def zeros(cls, n_classes: int, n_od: int) -> "PairSums":
+        return cls(np.zeros((n_classes, 4)), np.zeros((n_od, 4)))
+
+
+def evaluate(system: System, rho: np.ndarray, sums: PairSums | None = None) -> Evaluation:
     """All variables of (A1)-(A6) from ρ, and the map's output clip(ρ')."""
     sp, cfg = system.space, system.config
     log_1m_rho = np.log1p(-rho)
@@ -157,7 +152,7 @@ def evaluate(system: System, rho: np.ndarray, hook: ChunkHook | None = None) -> 
     class_log_q = segment_sums(in_class, sp.class_off)
     member_log_r = np.empty(sp.n_states)
     member_log_r[members] = segment_exclusive_cumsum(in_class, sp.class_off)
-    class_h, log_not_paired = sweep(system, class_log_q, hook)
+    class_h, log_not_paired = sweep(system, class_log_q, sums)
     p_seeker = -np.expm1(log_not_paired)
     eta = np.exp(member_log_r) * class_h[sp.cls]
     x = eta * sp.tau_s

@@ -4,16 +4,15 @@
 rates λ_w from the scenario's :class:`~rpbench.scenarios.base.Demand` (or the
 scenario's own orders), rounds τ_0 to :data:`TAU0_RESOLUTION_S` so runs with
 nearly equal calibrations share one cached prediction, reuses a solved
-prediction from the disk cache, and otherwise solves the fixed point on one
-built model kept in memory: the matching sets depend only on the OD set, the
-geometry and the priority rule (minutes and gigabytes for the 39,510-OD
-month table), while the demand level and τ_0 enter the fixed point only.
+prediction from the disk cache, and otherwise solves the fixed point on the
+cached structure (:mod:`.structure`): the matching sets depend only on the OD
+set, the geometry and the priority rule (gigabytes for the 39,510-OD month
+table, built once per machine), while the demand level and τ_0 enter the
+fixed point only.
 """
 
 from __future__ import annotations
 
-import dataclasses
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -22,7 +21,7 @@ import rpbench.predict.cache as cache
 from rpbench.exceptions import ParameterError
 from rpbench.network import RoadNetwork
 from rpbench.predict.config import PredictConfig
-from rpbench.predict.prediction import Prediction, PredictionModel, build_model, solve_model
+from rpbench.predict.prediction import Prediction, build_model, solve_model
 from rpbench.predict.rates import OdRates, month_rates, order_rates
 from rpbench.scenarios.base import Params, Scenario
 
@@ -31,10 +30,6 @@ RATE_SOURCES = ("auto", "month", "scenario")
 #: τ_0 is rounded to this resolution, so runs whose calibrations differ by a few
 #: seconds (peak hours of different days, sweep points) share one prediction.
 TAU0_RESOLUTION_S = 10.0
-
-#: The last built model of this process (one only: the month table's takes gigabytes).
-_BUILT: dict[tuple, PredictionModel] = {}
-
 
 def scenario_predictions(scenario: Scenario, source: str, tau0_s: np.ndarray,
                          config: PredictConfig) -> list[Prediction]:
@@ -84,23 +79,11 @@ def hourly_rates(scenario: Scenario, source: str, hours: int) -> list[OdRates]:
 
 def cached_prediction(net: RoadNetwork, rates: OdRates, params: Params, config: PredictConfig, *,
                       rho0: np.ndarray | None = None) -> Prediction:
-    """A solved prediction: from the disk cache, else on the in-memory built model (built if needed)."""
+    """A solved prediction: from the disk cache, else solved on the cached structure (built once per machine)."""
     key = cache.cache_key(net, rates, params, config)
     hit = cache.load(key, len(rates))
     if hit is not None:
         return Prediction.from_arrays(hit, node_id=net.node_id, rates=rates, config=config)
-    structure = (net.content_hash, len(rates), hash(rates.key(net.n_nodes).tobytes()),
-                 tuple(getattr(params, f) for f in cache.PARAM_FIELDS),
-                 config.include_origin_state, config.priority, config.keep_nonpositive, config.order_rule)
-    model = _BUILT.get(structure)
-    if model is None:
-        _BUILT.clear()
-        print(f"rpbench: building the seeker/taker prediction model for {len(rates):,} OD pairs "
-              f"({rates.source}); cached afterwards", file=sys.stderr)
-        model = build_model(net, rates, params, config)
-        _BUILT[structure] = model
-    # The demand level and τ_0 enter the fixed point only (the origin states' sojourn).
-    space = dataclasses.replace(model.space, tau_s=np.where(model.space.k == 0, config.tau0_s, model.space.tau_s))
-    prediction = solve_model(dataclasses.replace(model, rates=rates, config=config, space=space), rho0=rho0)
+    prediction = solve_model(build_model(net, rates, params, config), rho0=rho0)
     cache.save(key, *prediction.arrays())
     return prediction

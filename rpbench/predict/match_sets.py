@@ -52,12 +52,17 @@ uses the order of the classes).  The taker's detour is
 
 from __future__ import annotations
 
+import mmap
+import sys
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
+from tqdm import tqdm
 
 from rpbench.geometry import TOLERANCE_M
+from rpbench.predict import kernels
 from rpbench.predict._arrays import expand_ranges, offsets_from_counts
 from rpbench.predict.config import PredictConfig
 from rpbench.predict.rates import OdRates
@@ -67,34 +72,28 @@ from rpbench.scenarios.base import Params
 GRID = float(1 << 20)          # priority / pick-up grid: 2^-20 m
 Q_BITS = 39                    # quantised priorities cover (-2^18, 2^18) m
 _Q_LIMIT = float(1 << 18) - 1.0
-BLOCK_PAIRS = 1 << 20          # pairs per stored block
 SORT_ENTRIES = 1 << 21         # entries expanded and sorted at once (bounds temporaries)
+CHUNK_PAIRS = 1 << 24          # pairs per chunk when the sweeps stream the columns
 
-
-@dataclass(frozen=True, eq=False)
-class Block:
-    """The sorted lists of seekers ``s0..s1-1`` (local CSR offsets)."""
-
-    s0: int
-    s1: int
-    off: np.ndarray               # int64 (s1-s0+1)
-    cls: np.ndarray               # int32 taker class per pair
-    saving_m: np.ndarray          # float32 E(s, t)
-    shared_m: np.ndarray          # float32 shared distance
-    seeker_detour_m: np.ndarray   # float32 detour of the seeker
-
-    @property
-    def nbytes(self) -> int:
-        return int(self.off.nbytes + self.cls.nbytes + self.saving_m.nbytes + self.shared_m.nbytes
-                   + self.seeker_detour_m.nbytes)
+#: The per-pair columns (name, dtype), each stored as one raw little-endian file ``<name>.bin``.
+COLUMNS = (("cls", "<i4"), ("saving_m", "<f4"), ("shared_m", "<f4"), ("seeker_detour_m", "<f4"))
 
 
 @dataclass(frozen=True, eq=False)
 class Matching:
-    """Each seeker's taker classes in priority order; blocks partition the ODs in order."""
+    """Each seeker's taker classes in priority order, as flat CSR columns (usually memory maps).
 
-    seeker_off: np.ndarray        # int64 (W+1): global offsets (pairs of s(w) are [off[w], off[w+1]))
-    blocks: tuple[Block, ...]
+    The pairs of seeker ``s(w)`` are ``[seeker_off[w], seeker_off[w+1])`` of
+    every column.  The columns are read-only maps of the files in
+    :attr:`directory` (see :mod:`.structure`): several processes share one
+    copy in the page cache, and a sweep only brings in what it touches.
+    """
+
+    seeker_off: np.ndarray        # int64 (W+1)
+    cls: np.ndarray               # int32 taker class per pair
+    saving_m: np.ndarray          # float32 E(s, t)
+    shared_m: np.ndarray          # float32 shared distance
+    seeker_detour_m: np.ndarray   # float32 detour of the seeker
     stats: dict = field(default_factory=dict)
 
     @property
@@ -103,103 +102,132 @@ class Matching:
         return int(self.seeker_off[-1])
 
     def n_state_pairs(self, space: StateSpace) -> int:
-        """Seeker-taker-state pairs of the model (Σ_s |T_s|)."""
+        """Seeker-taker-state pairs of the model (Σ_s |T_s|), summed a chunk at a time."""
         size = space.class_size
-        return int(sum(size[b.cls].sum() for b in self.blocks))
+        return int(sum(size[self.cls[i0:i1]].sum() for _, _, i0, i1 in self.chunks()))
 
     @property
     def nbytes(self) -> int:
-        return int(self.seeker_off.nbytes + sum(b.nbytes for b in self.blocks))
+        return int(self.seeker_off.nbytes + sum(getattr(self, name).nbytes for name, _ in COLUMNS))
+
+    def chunks(self, max_pairs: int = CHUNK_PAIRS):
+        """``(s0, s1, i0, i1)``: seeker ranges of about ``max_pairs`` pairs (at least one seeker each)."""
+        off, n_od = self.seeker_off, len(self.seeker_off) - 1
+        s0 = 0
+        while s0 < n_od:
+            s1 = int(np.searchsorted(off, off[s0] + max_pairs, side="right")) - 1
+            s1 = min(n_od, max(s1, s0 + 1))
+            yield s0, s1, int(off[s0]), int(off[s1])
+            s0 = s1
+
+    def release(self, i0: int, i1: int, names: tuple[str, ...]) -> None:
+        """Give back this process's pages of pairs ``[i0, i1)`` of the named memory-mapped columns.
+
+        The data stays in the page cache (a later read maps it again), but a
+        pass over 3.4 GB of distance columns no longer leaves them all resident.
+        Columns that are not memory maps are left alone.
+        """
+        for name in names:
+            col = getattr(self, name)
+            mapped = getattr(col, "_mmap", None)            # numpy keeps the mmap object of a np.memmap here
+            if mapped is None or not hasattr(mapped, "madvise"):
+                continue
+            start = i0 * col.itemsize // mmap.PAGESIZE * mmap.PAGESIZE     # the columns are mapped from byte 0
+            end = min(i1 * col.itemsize, len(mapped))
+            if end > start:
+                mapped.madvise(mmap.MADV_DONTNEED, start, end - start)
 
     def seeker(self, w: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(classes, E, shared, seeker detour) of seeker ``s(w)``, in priority order (views)."""
-        starts = np.fromiter((b.s0 for b in self.blocks), dtype=np.int64, count=len(self.blocks))
-        b = self.blocks[int(np.searchsorted(starts, w, side="right")) - 1]
-        i0, i1 = b.off[w - b.s0], b.off[w - b.s0 + 1]
-        return b.cls[i0:i1], b.saving_m[i0:i1], b.shared_m[i0:i1], b.seeker_detour_m[i0:i1]
+        i0, i1 = self.seeker_off[w], self.seeker_off[w + 1]
+        return self.cls[i0:i1], self.saving_m[i0:i1], self.shared_m[i0:i1], self.seeker_detour_m[i0:i1]
 
     def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """All pairs concatenated in OD order (for tests and small models)."""
-        if not self.blocks:
-            z = np.zeros(0, dtype=np.float32)
-            return np.zeros(0, dtype=np.int32), z, z, z
-        return tuple(np.concatenate([getattr(b, f) for b in self.blocks])
-                     for f in ("cls", "saving_m", "shared_m", "seeker_detour_m"))
+        """All pairs in OD order, as in-memory arrays (for tests and small models)."""
+        return tuple(np.array(getattr(self, name)) for name, _ in COLUMNS)
+
+    @classmethod
+    def open(cls, directory: Path, seeker_off: np.ndarray, stats: dict) -> "Matching":
+        """The matching whose columns lie in ``directory`` (read-only memory maps)."""
+        n = int(seeker_off[-1])
+        columns = {name: _open_column(directory / f"{name}.bin", dtype, n) for name, dtype in COLUMNS}
+        return cls(seeker_off=seeker_off, stats=stats, **columns)
+
+
+def _open_column(path: Path, dtype: str, n: int) -> np.ndarray:
+    if path.stat().st_size != n * np.dtype(dtype).itemsize:
+        raise ValueError(f"{path.name} holds {path.stat().st_size} bytes, expected {n} {dtype} values")
+    if n == 0:                                   # an empty file cannot be mapped
+        return np.zeros(0, dtype=dtype)
+    return np.memmap(path, dtype=dtype, mode="r", shape=(n,))
 
 
 def build_matching(space: StateSpace, rates: OdRates, dist: np.ndarray, params: Params,
-                   config: PredictConfig) -> Matching:
-    """Matching sets of every seeker (see the module docstring for the method)."""
+                   config: PredictConfig, directory: Path) -> Matching:
+    """Matching sets of every seeker, written into ``directory`` (see the module docstring for the method)."""
     t0 = time.perf_counter()
-    writer = _BlockWriter(len(rates))
+    writer = _ColumnWriter(directory, len(rates))
     origin = rates.origin
-    if len(origin):
-        builder = _Builder(space, rates, dist, params, config)
-        bounds = np.flatnonzero(np.diff(origin)) + 1
-        starts = np.concatenate([[0], bounds]).astype(np.int64)
-        ends = np.concatenate([bounds, [len(origin)]]).astype(np.int64)
-        for w0, w1 in zip(starts, ends):
-            builder.origin_block(int(origin[w0]), int(w0), int(w1), writer)
-        stats = builder.stats
-    else:
-        stats = {}
-    blocks = writer.finish()
-    lens = np.concatenate([np.diff(b.off) for b in blocks]) if blocks else np.zeros(0, dtype=np.int64)
-    return Matching(seeker_off=offsets_from_counts(lens), blocks=tuple(blocks),
-                    stats=dict(stats, build_s=time.perf_counter() - t0))
+    stats: dict = {}
+    try:
+        if len(origin):
+            builder = _Builder(space, rates, dist, params, config)
+            bounds = np.flatnonzero(np.diff(origin)) + 1
+            starts = np.concatenate([[0], bounds]).astype(np.int64)
+            ends = np.concatenate([bounds, [len(origin)]]).astype(np.int64)
+            bar = tqdm(total=len(origin), desc="prediction structure", unit="OD", file=sys.stderr, leave=False,
+                       disable=None)                             # off when stderr is not a terminal
+            with bar:
+                for w0, w1 in zip(starts, ends):
+                    builder.origin_block(int(origin[w0]), int(w0), int(w1), writer)
+                    bar.update(int(w1 - w0))
+            stats = builder.stats
+        seeker_off = writer.finish()
+    finally:
+        writer.close()
+    return Matching.open(directory, seeker_off, dict(stats, build_s=time.perf_counter() - t0))
 
 
-class _BlockWriter:
-    """Collects per-seeker lists in OD order into preallocated blocks of about BLOCK_PAIRS pairs.
+class _ColumnWriter:
+    """Appends the per-seeker lists, in OD order, to one raw file per column.
 
-    Sorted entries are written straight into the block's buffers (no
-    concatenation copy); a block keeps views of its filled part.
+    Entries are sorted straight into a reused buffer and written out at each
+    commit, so memory stays bounded by one sort batch whatever the total.
     """
 
-    def __init__(self, n_od: int) -> None:
+    def __init__(self, directory: Path, n_od: int) -> None:
         self.n_od = n_od
-        self.blocks: list[Block] = []
-        self.start = 0           # first seeker of the pending block
+        self.files = {name: open(directory / f"{name}.bin", "wb") for name, _ in COLUMNS}
         self.next = 0            # next seeker expected
         self.lens: list[np.ndarray] = []
-        self.buf: tuple[np.ndarray, ...] | None = None
-        self.fill = 0
+        self.buf: tuple[np.ndarray, ...] = tuple(np.empty(0, dtype=dtype) for _, dtype in COLUMNS)
 
     def reserve(self, n: int) -> tuple[np.ndarray, ...]:
         """Views for the next ``n`` pairs: (class int32, saving, shared, seeker detour float32)."""
-        if self.buf is None or self.fill + n > len(self.buf[0]):
-            if self.fill:
-                self._flush()
-            cap = max(BLOCK_PAIRS + SORT_ENTRIES, n)
-            self.buf = (np.empty(cap, dtype=np.int32), np.empty(cap, dtype=np.float32),
-                        np.empty(cap, dtype=np.float32), np.empty(cap, dtype=np.float32))
-        return tuple(b[self.fill:self.fill + n] for b in self.buf)
+        if len(self.buf[0]) < n:
+            cap = max(SORT_ENTRIES, n)
+            self.buf = tuple(np.empty(cap, dtype=dtype) for _, dtype in COLUMNS)
+        return tuple(b[:n] for b in self.buf)
 
     def commit(self, w0: int, lens: np.ndarray, n: int = 0) -> None:
         """Seekers ``w0 .. w0+len(lens)-1`` with ``lens`` pairs each (``n`` = their sum, just reserved)."""
         assert w0 == self.next, "seekers must be committed in OD order"
         self.lens.append(np.asarray(lens, dtype=np.int64))
         self.next = w0 + len(lens)
-        self.fill += n
-        if self.fill >= BLOCK_PAIRS:
-            self._flush()
+        for (name, _), b in zip(COLUMNS, self.buf):
+            if n:
+                self.files[name].write(memoryview(b[:n]))
 
-    def _flush(self) -> None:
-        if self.next == self.start:
-            return
-        lens = np.concatenate(self.lens)
-        if self.buf is None:
-            self.buf = (np.zeros(0, dtype=np.int32),) + tuple(np.zeros(0, dtype=np.float32) for _ in range(3))
-        for b in self.buf:          # give back the unused tail (realloc shrinks in place; no views remain)
-            b.resize(self.fill, refcheck=False)
-        self.blocks.append(Block(self.start, self.next, offsets_from_counts(lens), *self.buf))
-        self.start, self.lens, self.buf, self.fill = self.next, [], None, 0
-
-    def finish(self) -> list[Block]:
+    def finish(self) -> np.ndarray:
+        """The seekers' offsets (int64, W+1), once every seeker is committed (the rest get empty lists)."""
         if self.next < self.n_od:
             self.commit(self.next, np.zeros(self.n_od - self.next, dtype=np.int64))
-        self._flush()
-        return self.blocks
+        self.close()
+        return offsets_from_counts(np.concatenate(self.lens) if self.lens else np.zeros(0, dtype=np.int64))
+
+    def close(self) -> None:
+        for fh in self.files.values():
+            fh.close()
 
 
 class _Builder:
@@ -219,7 +247,7 @@ class _Builder:
         self.stats = {"stage1_candidates": 0, "stage1_kept": 0, "group_queries": 0}
 
     # ------------------------------------------------------------------ stage 1
-    def origin_block(self, o: int, w0: int, w1: int, writer: _BlockWriter) -> None:
+    def origin_block(self, o: int, w0: int, w1: int, writer: _ColumnWriter) -> None:
         """Sorted lists of the seekers ``w0..w1-1`` (all with origin ``o``), handed to ``writer``."""
         sp, cfg = self.space, self.config
         to_o = np.ascontiguousarray(self.dist[:, o])                          # l(h, o) for every node h
@@ -286,7 +314,7 @@ class _Builder:
             n_u=n_u, g_f=g_f, g_l=g_l)
         return pieces.nonempty(g, self.solo[w0:w1])
 
-    def _emit(self, g: "_Group", w0: int, w1: int, pc: "_Pieces", writer: _BlockWriter) -> None:
+    def _emit(self, g: "_Group", w0: int, w1: int, pc: "_Pieces", writer: _ColumnWriter) -> None:
         """Expand, prioritise and sort the pieces, a bounded number of entries at a time."""
         m = w1 - w0
         per_row = np.bincount(pc.row, weights=pc.n, minlength=m).astype(np.int64)
@@ -304,21 +332,40 @@ class _Builder:
             r0 = r1
 
     def _sorted_entries(self, g: "_Group", pc: "_Pieces", i0: int, i1: int, r0: int, w0: int, out) -> None:
-        """Pieces ``i0..i1-1`` (seeker rows from ``r0``) expanded, sorted and written into ``out``."""
-        n = pc.n[i0:i1]
-        piece = np.repeat(np.arange(i0, i1), n)
-        col = expand_ranges(pc.start[i0:i1], pc.start[i0:i1] + n)
-        if self.config.priority == "net_saving":
-            prio = np.repeat(pc.g[i0:i1], n)
-            prio += g.kappa[col]                               # E - pk = g - a - pk
+        """Pieces ``i0..i1-1`` (seeker rows from ``r0``) expanded, sorted and written into ``out``.
+
+        The sort key (row | descending priority | tie rank) is unique and names
+        its entry: the tie rank names the class survivor, and a survivor lies in
+        one piece of its row.  So the keys themselves are sorted (a SIMD sort,
+        several times faster than an argsort) and decoded by a compiled pass.
+        """
+        rows, start, n = pc.row[i0:i1] - r0, pc.start[i0:i1], pc.n[i0:i1]
+        keys = np.empty(int(n.sum()), dtype=np.uint64)
+        packable = 64 - Q_BITS - g.tie_bits >= max(1, int(rows.max()).bit_length())
+        if self.config.priority == "net_saving":             # E - pk = g - a - pk, computed in the kernel
+            packable = packable and kernels.net_saving_keys(rows, start, n, pc.g[i0:i1], g.kappa, g.tie_rank,
+                                                            g.tie_bits, Q_BITS, GRID, _Q_LIMIT, keys)
+            prio = None
         else:
-            e = pc.g[piece] - g.a[col]
-            prio = _priority(self.config.priority, e, g.pk[col], pc.shared[piece], pc.det[piece],
-                             g.rest[col], self.solo[w0 + pc.row[piece]])
-        perm = _priority_order(pc.row[i0:i1] - r0, n, prio, g.tie_rank[col], g.tie_bits)
-        col = col[perm]
-        piece = piece[perm]
+            piece = np.repeat(np.arange(i0, i1), n)
+            col = expand_ranges(start, start + n)
+            prio = _priority(self.config.priority, pc.g[piece] - g.a[col], g.pk[col], pc.shared[piece],
+                             pc.det[piece], g.rest[col], self.solo[w0 + pc.row[piece]])
+            packable = packable and _pack_keys(rows, n, prio, g.tie_rank[col], g.tie_bits, keys)
         cls, saving, shared, detour = out
+        if packable:
+            keys.sort()
+            kernels.decode_entries(keys, g.tie_bits, g.tie_col, rows, start, n, pc.g[i0:i1], pc.shared[i0:i1],
+                                   pc.det[i0:i1], g.cls, g.a, np.empty(g.n, dtype=np.int64),
+                                   cls, saving, shared, detour)
+            return
+        # Huge distances (beyond 2^18 m) or huge groups: the same order through a slower lexsort.
+        piece = np.repeat(np.arange(i0, i1), n)
+        col = expand_ranges(start, start + n)
+        if prio is None:
+            prio = pc.g[piece] + g.kappa[col]
+        perm = np.lexsort((g.tie_rank[col], np.floor(np.multiply(prio, -GRID)), np.repeat(rows, n)))
+        col, piece = col[perm], piece[perm]
         np.take(g.cls, col, out=cls)
         np.subtract(pc.g[piece], g.a[col], out=saving, casting="same_kind")
         np.take(pc.shared, piece, out=shared)
@@ -406,6 +453,7 @@ class _Group:
             tie = np.lexsort((order, pk_q[order]))
         self.tie_rank = np.empty(n, dtype=np.int64)
         self.tie_rank[tie] = np.arange(n)
+        self.tie_col = tie                                   # the survivor of each tie rank
         self.tie_bits = max(1, int(n).bit_length())
         row_bits = 64 - Q_BITS - self.tie_bits
         self.rows_per_sort = 1 << row_bits if row_bits >= 1 else 1   # 1: _priority_order uses lexsort
@@ -439,22 +487,14 @@ def _priority(kind: str, e, pk, shared, seeker_detour, rest, l_b) -> np.ndarray:
     return -0.5 * (seeker_detour + taker_detour) - 0.3 * pk + 0.2 * shared
 
 
-def _priority_order(piece_row, piece_len, prio, tie_rank, tie_bits: int) -> np.ndarray:
-    """Permutation sorting entries by (row, descending priority on the 2^-20 m grid, tie rank).
-
-    Entries come in runs (pieces) of one seeker row each.  The three keys
-    are packed into one uint64 (row | quantised priority | tie rank); keys
-    are unique, so the unstable quicksort is deterministic.
-    """
-    row_bits = 64 - Q_BITS - tie_bits
-    if row_bits >= 1 and int(piece_row.max()).bit_length() <= row_bits and np.abs(prio).max() < _Q_LIMIT:
-        desc = np.multiply(prio, -GRID)
-        desc += float(1 << (Q_BITS - 1))                    # in (0, 2^Q_BITS): larger priority, smaller key
-        key = desc.astype(np.uint64)                        # positive: truncation is the floor
-        key <<= np.uint64(tie_bits)
-        key |= tie_rank.astype(np.uint64)
-        key |= np.repeat(piece_row.astype(np.uint64) << np.uint64(Q_BITS + tie_bits), piece_len)
-        return np.argsort(key)
-    # Huge distances (beyond 2^18 m) or huge groups: the same order through a slower lexsort.
-    row = np.repeat(piece_row, piece_len)
-    return np.lexsort((tie_rank, np.floor(np.multiply(prio, -GRID)), row))
+def _pack_keys(piece_row, piece_len, prio, tie_rank, tie_bits: int, keys: np.ndarray) -> bool:
+    """Fill ``keys`` with (row | quantised descending priority | tie rank); False when they do not fit 64 bits."""
+    if len(prio) and not np.abs(prio).max() < _Q_LIMIT:
+        return False
+    desc = np.multiply(prio, -GRID)
+    desc += float(1 << (Q_BITS - 1))                    # in (0, 2^Q_BITS): larger priority, smaller key
+    keys[:] = desc.astype(np.uint64)                    # positive: truncation is the floor
+    keys <<= np.uint64(tie_bits)
+    keys |= tie_rank.astype(np.uint64)
+    keys |= np.repeat(piece_row.astype(np.uint64) << np.uint64(Q_BITS + tie_bits), piece_len)
+    return True

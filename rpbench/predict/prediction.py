@@ -24,10 +24,11 @@ from rpbench.exceptions import ParameterError
 from rpbench.network import RoadNetwork
 from rpbench.predict.config import PredictConfig
 from rpbench.predict.fixed_point import SolveInfo, System, solve
-from rpbench.predict.match_sets import Matching, build_matching
+from rpbench.predict.match_sets import Matching
 from rpbench.predict.rates import OdRates
 from rpbench.predict.savings import Outcome, outcome, waiting_saving
-from rpbench.predict.states import StateSpace, build_states
+from rpbench.predict.states import StateSpace
+from rpbench.predict.structure import load_structure
 from rpbench.scenarios.base import Params
 
 
@@ -175,23 +176,15 @@ class Prediction:
 
 # ---------------------------------------------------------------------- build
 def build_model(network: RoadNetwork, rates: OdRates, params: Params | None = None,
-                config: PredictConfig | None = None) -> PredictionModel:
-    """States and matching sets (the expensive, uncached part)."""
+                config: PredictConfig | None = None, *, use_cache: bool = True) -> PredictionModel:
+    """States and matching sets: the τ_0-independent structure from the disk cache (built once), τ_0 applied."""
     params = params or Params()
     config = config or PredictConfig()
     if len(rates) and (rates.origin.max() >= network.n_nodes or rates.destination.max() >= network.n_nodes):
         raise ParameterError("OD rates refer to nodes outside this network; build them for the same network")
-    t0 = time.perf_counter()
-    oracle = network.distances()
-    dist = np.ascontiguousarray(oracle.dist)
-    t1 = time.perf_counter()
-    space = build_states(network, oracle, rates, tau0_s=config.tau0_s, speed_mps=params.speed_mps,
-                         include_origin_state=config.include_origin_state)
-    t2 = time.perf_counter()
-    matching = build_matching(space, rates, dist, params, config)
-    t3 = time.perf_counter()
-    return PredictionModel(network, rates, params, config, space, matching,
-                 {"distances_s": t1 - t0, "states_s": t2 - t1, "matching_s": t3 - t2})
+    structure = load_structure(network, rates, params, config, use_cache=use_cache)
+    return PredictionModel(network, rates, params, config, structure.space_for(config.tau0_s),
+                           structure.matching, structure.build_s)
 
 
 def solve_model(model: PredictionModel, *, progress=None, rho0: np.ndarray | None = None) -> Prediction:
@@ -215,7 +208,7 @@ def predict(network: RoadNetwork, rates: OdRates, params: Params | None = None,
         if hit is not None:
             return Prediction.from_arrays(hit, node_id=network.node_id, rates=rates, config=config)
     t0, c0 = time.perf_counter(), time.process_time()
-    model = build_model(network, rates, params, config)
+    model = build_model(network, rates, params, config, use_cache=use_cache)
     prediction = solve_model(model, progress=progress)
     del model
     prediction.info["time_s"] = round(time.perf_counter() - t0, 4)

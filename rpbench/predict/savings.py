@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rpbench.predict._arrays import segment_sums
-from rpbench.predict.fixed_point import Evaluation, System, evaluate
+from rpbench.predict.fixed_point import Evaluation, PairSums, System, evaluate
 
 
 @dataclass(frozen=True, eq=False)
@@ -63,34 +63,16 @@ class Outcome:
         return self.p_seeker * self.e_seeker + (1.0 - self.p_seeker) * self.e_vacant
 
 
-class _Accumulator:
-    """Sweep hook summing pair quantities with the final weights."""
-
-    def __init__(self, system: System) -> None:
-        n_classes, n_od = system.space.n_classes, len(system.rate_per_s)
-        self.cls_sums = np.zeros((4, n_classes))     # Σ w, Σ w E, Σ w shared, Σ w seeker-detour
-        self.seek_sums = np.zeros((4, n_od))         # same with w' = w (1 - Q_c)
-
-    def __call__(self, block, c, weight, log_q) -> None:
-        n_classes = self.cls_sums.shape[1]
-        pair = weight * -np.expm1(log_q)             # pairing rate of the seeker with class c (telescoped)
-        s0, s1, off = block.s0, block.s1, block.off
-        self.seek_sums[0, s0:s1] += segment_sums(pair, off)
-        for i, values in enumerate((block.saving_m, block.shared_m, block.seeker_detour_m), start=1):
-            self.cls_sums[i] += np.bincount(c, weights=weight * values, minlength=n_classes)
-            self.seek_sums[i, s0:s1] += segment_sums(pair * values, off)
-
-
 def outcome(system: System, rho: np.ndarray) -> tuple[Evaluation, Outcome]:
     """Re-evaluate the map at ``rho`` (the solver's final ρ) and derive every expected quantity."""
-    acc = _Accumulator(system)
-    ev = evaluate(system, rho, hook=acc)
     sp = system.space
+    sums = PairSums.zeros(sp.n_classes, sp.n_od)
+    ev = evaluate(system, rho, sums)
     h = ev.class_h
     with np.errstate(divide="ignore", invalid="ignore"):
-        cls_mean = np.where(h > 0, acc.cls_sums[1:] / h, 0.0)           # E, shared, seeker detour | class
-        s_rate = acc.seek_sums[0]
-        seek_mean = np.where(s_rate > 0, acc.seek_sums[1:] / s_rate, 0.0)
+        cls_mean = np.where(h > 0, sums.by_class[:, 1:].T / h, 0.0)       # E, shared, seeker detour | class
+        s_rate = sums.by_seeker[:, 0]
+        seek_mean = np.where(s_rate > 0, sums.by_seeker[:, 1:].T / s_rate, 0.0)
     e_cls, shared_cls, sdet_cls = cls_mean
     c = sp.cls
     e_taker = e_cls[c]

@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 from rpbench.data.road import NetworkTables
 from rpbench.network import RoadNetwork
 from rpbench.predict import OdRates, PredictConfig, build_model, solve_model
-from rpbench.predict.fixed_point import evaluate
+from rpbench.predict.fixed_point import PairSums, evaluate
 from rpbench.scenarios.base import Params
 
 from .conftest import make_instance
@@ -96,17 +96,16 @@ def test_invariants_at_the_fixed_point(seed, rate, priority):
 def test_opportunity_rates_bounded_and_telescoping():       # I1 (η^s <= λ), I2
     model, pred = make_instance(seed=8, size=5, n_od=14, rate_per_h=30).solve()
     lam = model.rates.rate_per_s
-    seen = np.zeros(len(lam))
-
-    def hook(block, c, weight, log_q):
-        lens = np.diff(block.off)
-        owner = np.repeat(np.arange(block.s0, block.s1), lens)
-        assert np.all(weight <= lam[owner] * (1 + 1e-12))
-        # Σ_{t in class} ρ_t η_t^s telescopes to λ_s P_{s,c} (1 - Q_c); summed over the list: λ p_s
-        np.add.at(seen, owner, weight * -np.expm1(log_q))
-
-    ev = evaluate(model.system, pred.rho, hook=hook)
-    np.testing.assert_allclose(seen, lam * ev.p_seeker, rtol=1e-10, atol=1e-16)
+    sums = PairSums.zeros(model.space.n_classes, len(lam))
+    ev = evaluate(model.system, pred.rho, sums)
+    # I1: each pair weight λ_s Π_{c' ≻ c} Q_c' is at most λ_s, so a class's total is at most Σ λ_s over its seekers
+    cls, _, _, _ = model.matching.arrays()
+    owner = np.repeat(np.arange(len(lam)), np.diff(model.matching.seeker_off))
+    cap = np.bincount(cls, weights=lam[owner], minlength=model.space.n_classes)
+    assert np.all(sums.by_class[:, 0] <= cap * (1 + 1e-12))
+    np.testing.assert_array_equal(sums.by_class[:, 0], ev.class_h)
+    # I2: Σ_{t in class} ρ_t η_t^s telescopes to λ_s P_{s,c} (1 - Q_c); summed over the list: λ p_s
+    np.testing.assert_allclose(sums.by_seeker[:, 0], lam * ev.p_seeker, rtol=1e-10, atol=1e-16)
     # the same sum state by state, from the reference map
     _, eta_ref, _, _, _ = reference_map(model, pred.rho)
     assert np.sum(pred.rho * eta_ref) == pytest.approx(np.sum(lam * ev.p_seeker), rel=1e-10)

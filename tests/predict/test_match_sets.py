@@ -127,12 +127,15 @@ def test_pickup_threshold_is_inclusive(pickup, expected):
     assert (origin_state_of_taker in states) is expected
 
 
-def test_blocks_partition_the_seekers():
+def test_chunks_partition_the_seekers():
     model = make_instance(seed=2, size=6, n_od=60, max_pickup_m=3000, max_detour_m=3000).model()
     m = model.matching
-    assert m.blocks[0].s0 == 0 and m.blocks[-1].s1 == len(model.rates)
-    for a, b in zip(m.blocks[:-1], m.blocks[1:]):
-        assert a.s1 == b.s0
+    for max_pairs in (1, 7, 50, 10**9):
+        chunks = list(m.chunks(max_pairs))
+        assert chunks[0][0] == 0 and chunks[-1][1] == len(model.rates)
+        for (_, s1, _, i1), (s0, _, i0, _) in zip(chunks[:-1], chunks[1:]):
+            assert s1 == s0 and i1 == i0
+        assert all(s1 == s0 + 1 or i1 - i0 <= max_pairs for s0, s1, i0, i1 in chunks)
     cls, e, _, _ = m.arrays()
     assert len(cls) == m.n_pairs == m.seeker_off[-1]
     for w in (0, 17, 59):

@@ -1,0 +1,190 @@
+"""The τ_0-independent part of the prediction, built once per machine and shared through the disk cache.
+
+The taker states (:mod:`.states`) and the seekers' sorted matching lists
+(:mod:`.match_sets`) depend on the network, the OD set, R̄, D̄, v and the
+priority rule, but not on the demand level λ_w nor on τ_0: those enter the
+fixed point only.  For the 21-day month table the lists hold 282 M pairs
+(4.5 GB), so they are built once and kept in the cache folder as raw column
+files that every later run, τ_0, day of a multi-day run, sweep point and
+worker process maps read-only (one copy in the page cache for all of them).
+
+Layout of ``<cache>/predict-structure-<key>/``: ``states.npz`` (the
+:class:`~.states.StateSpace` with τ_0 = 0 in the origin states),
+``seeker_off.npy``, one ``<column>.bin`` per pair column and ``manifest.json``
+(sizes and build facts).  An entry is built in a temporary folder beside it
+and renamed into place, so it is complete or absent; concurrent builders take
+an exclusive lock on ``predict-structure-<key>.lock``, and the losers wait
+and then reuse the winner's entry.  A damaged entry (a column of the wrong
+size, an unreadable manifest) is deleted and rebuilt, with a note.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import fcntl
+import hashlib
+import json
+import os
+import shutil
+import sys
+import tempfile
+import time
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from rpbench.exceptions import one_line
+from rpbench.network import RoadNetwork
+from rpbench.paths import cache_dir, cache_write_error
+from rpbench.predict.config import PredictConfig
+from rpbench.predict.match_sets import COLUMNS, Matching, build_matching
+from rpbench.predict.rates import OdRates
+from rpbench.predict.states import StateSpace, build_states
+from rpbench.scenarios.base import Params
+
+#: Bump when the states or the lists change for the same inputs.
+STRUCTURE_VERSION = "1"
+#: The network-side parameters and the configuration fields the structure depends on.
+STRUCTURE_PARAMS = ("max_pickup_m", "max_detour_m", "speed_mps")
+STRUCTURE_CONFIG = ("include_origin_state", "priority", "keep_nonpositive", "order_rule")
+
+#: The structure this process used last (one: the month table's maps 1 GB of class lists when swept),
+#: so the hours of a day and the points of a sweep do not reopen it.
+_RECENT: dict[str, "Structure"] = {}
+
+
+@dataclass(frozen=True, eq=False)
+class Structure:
+    """States (τ_0 = 0 in the origin states) and matching lists; the lists are usually memory maps."""
+
+    space: StateSpace
+    matching: Matching
+    build_s: dict               # seconds per build stage (zero when loaded from the cache)
+    directory: Path | None      # the cache entry (None: a private build, already unlinked)
+
+    def space_for(self, tau0_s: float) -> StateSpace:
+        """The states with the origin states' sojourn set to ``tau0_s`` (A4)."""
+        sp = self.space
+        return dataclasses.replace(sp, tau_s=np.where(sp.k == 0, float(tau0_s), sp.tau_s))
+
+
+def structure_key(network: RoadNetwork, rates: OdRates, params: Params, config: PredictConfig) -> str:
+    """Hash of everything the structure depends on (not λ_w, not τ_0)."""
+    h = hashlib.sha256()
+    h.update(f"structure|{STRUCTURE_VERSION}|{network.content_hash}|".encode())
+    for arr in (rates.origin, rates.destination):
+        h.update(np.ascontiguousarray(arr, dtype=np.int64).tobytes())
+    h.update(json.dumps({k: float(getattr(params, k)) for k in STRUCTURE_PARAMS}, sort_keys=True).encode())
+    h.update(json.dumps({k: getattr(config, k) for k in STRUCTURE_CONFIG}, sort_keys=True).encode())
+    return h.hexdigest()[:24]
+
+
+def load_structure(network: RoadNetwork, rates: OdRates, params: Params, config: PredictConfig, *,
+                   use_cache: bool = True) -> Structure:
+    """The structure for these inputs: from the cache, else built (into the cache when ``use_cache``)."""
+    if not use_cache:
+        return _private_build(network, rates, params, config)
+    root = cache_dir()
+    key = structure_key(network, rates, params, config)
+    final = root / f"predict-structure-{key}"
+    if _RECENT.get(key) is not None and _RECENT[key].directory.is_dir():
+        return _RECENT[key]
+    _RECENT.clear()
+    found = _open_entry(final, len(rates))
+    if found is not None:
+        _RECENT[key] = found
+        return found
+    with _build_lock(root / f"predict-structure-{key}.lock", len(rates)):
+        found = _open_entry(final, len(rates))          # another process may have finished it meanwhile
+        if found is not None:
+            return found
+        print(f"rpbench: building the seeker/taker prediction structure for {len(rates):,} OD pairs "
+              f"({rates.source}); once per machine, cached in {root}", file=sys.stderr)
+        tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}.", dir=root))
+        try:
+            structure = _build_into(tmp, network, rates, params, config)
+            os.replace(tmp, final)
+        except BaseException as exc:                   # disk full, Ctrl-C: no half entry left behind
+            shutil.rmtree(tmp, ignore_errors=True)
+            if isinstance(exc, OSError) and not isinstance(exc, FileNotFoundError):
+                raise cache_write_error(final, exc) from None
+            raise
+    _RECENT[key] = dataclasses.replace(structure, directory=final)
+    return _RECENT[key]
+
+
+def _private_build(network, rates, params, config) -> Structure:
+    """A build for this process only: the files are unlinked at once (the maps keep them alive)."""
+    try:
+        tmp = Path(tempfile.mkdtemp(prefix=".predict-structure-private.", dir=cache_dir()))
+    except OSError:
+        tmp = Path(tempfile.mkdtemp(prefix="rpbench-structure-"))
+    try:
+        return dataclasses.replace(_build_into(tmp, network, rates, params, config), directory=None)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _build_into(directory: Path, network: RoadNetwork, rates: OdRates, params: Params,
+                config: PredictConfig) -> Structure:
+    t0 = time.perf_counter()
+    oracle = network.distances()
+    dist = np.ascontiguousarray(oracle.dist)
+    t1 = time.perf_counter()
+    space = build_states(network, oracle, rates, tau0_s=0.0, speed_mps=params.speed_mps,
+                         include_origin_state=config.include_origin_state)
+    t2 = time.perf_counter()
+    matching = build_matching(space, rates, dist, params, config, directory)
+    t3 = time.perf_counter()
+    build_s = {"distances_s": t1 - t0, "states_s": t2 - t1, "matching_s": t3 - t2}
+    np.savez(directory / "states.npz", **{f.name: getattr(space, f.name) for f in dataclasses.fields(space)})
+    np.save(directory / "seeker_off.npy", matching.seeker_off)
+    manifest = {"version": STRUCTURE_VERSION, "n_od": len(rates), "n_pairs": matching.n_pairs,
+                "columns": dict(COLUMNS), "stats": matching.stats, "build_s": build_s}
+    (directory / "manifest.json").write_text(json.dumps(manifest, default=float, indent=1))
+    return Structure(space=space, matching=matching, build_s=build_s, directory=directory)
+
+
+def _open_entry(directory: Path, n_od: int) -> Structure | None:
+    """The cached structure in ``directory``, or None (absent, or damaged and then deleted)."""
+    if not directory.is_dir():
+        return None
+    try:
+        manifest = json.loads((directory / "manifest.json").read_text())
+        if manifest.get("version") != STRUCTURE_VERSION or manifest.get("n_od") != n_od:
+            raise ValueError("it was written for other inputs")
+        with np.load(directory / "states.npz", allow_pickle=False) as data:
+            space = StateSpace(**{f.name: data[f.name] for f in dataclasses.fields(StateSpace)})
+        seeker_off = np.load(directory / "seeker_off.npy", allow_pickle=False)
+        if len(seeker_off) != n_od + 1 or int(seeker_off[-1]) != manifest.get("n_pairs"):
+            raise ValueError("its offsets do not match the manifest")
+        matching = Matching.open(directory, seeker_off, manifest.get("stats", {}))
+    except (OSError, ValueError, KeyError, TypeError, EOFError) as exc:
+        print(f"rpbench: note: the cached prediction structure {directory.name} is unusable "
+              f"({type(exc).__name__}: {one_line(exc)}); rebuilding it", file=sys.stderr)
+        shutil.rmtree(directory, ignore_errors=True)
+        return None
+    zero = {k: 0.0 for k in ("distances_s", "states_s", "matching_s")}
+    return Structure(space=space, matching=matching, build_s=zero, directory=directory)
+
+
+@contextmanager
+def _build_lock(path: Path, n_od: int):
+    """Exclusive lock of one entry's builders (released by the kernel if the process dies)."""
+    try:
+        fh = open(path, "a+")
+    except OSError as exc:
+        raise cache_write_error(path, exc) from None
+    with fh:
+        try:
+            fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            print(f"rpbench: another process is building the prediction structure for {n_od:,} ODs; "
+                  f"waiting for it", file=sys.stderr)
+            fcntl.flock(fh, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(fh, fcntl.LOCK_UN)
