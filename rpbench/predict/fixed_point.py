@@ -35,10 +35,11 @@ from typing import Callable
 import numpy as np
 
 from rpbench.predict._arrays import segment_exclusive_cumsum, segment_sums
-from rpbench.predict.kernels import savings_chunk, sweep_chunks
 from rpbench.predict.config import PredictConfig
-from rpbench.predict.match_sets import Matching
+from rpbench.predict.kernels import savings_chunk, sweep_chunks
+from rpbench.predict.match_sets import CHUNK_PAIRS, Matching
 from rpbench.predict.states import StateSpace
+
 
 @dataclass(frozen=True, eq=False)
 class System:
@@ -100,7 +101,8 @@ class SolveInfo:
     history: tuple = ()          # residual per iteration
 
 
-def sweep(system: System, class_log_q: np.ndarray, sums: PairSums | None = None) -> tuple[np.ndarray, np.ndarray]:
+def sweep(system: System, class_log_q: np.ndarray, sums: PairSums | None = None, *,
+          chunk_pairs: int = CHUNK_PAIRS) -> tuple[np.ndarray, np.ndarray]:
     """One pass over all seeker lists: returns (H_c per class, log(1 - p_s) per OD).
 
     ``H_c = Σ_s λ_s Π_{c' ≻_s c} Q_c'`` and ``log(1 - p_s) = Σ_{c ∈ T_s} log Q_c``,
@@ -113,12 +115,12 @@ def sweep(system: System, class_log_q: np.ndarray, sums: PairSums | None = None)
     q = np.exp(class_log_q)
     m, lam = system.matching, system.rate_per_s
     if sums is None:
-        chunk_start = np.array([s0 for s0, _, _, _ in m.chunks()] + [len(lam)], dtype=np.int64)
+        chunk_start = np.array([s0 for s0, _, _, _ in m.chunks(chunk_pairs)] + [len(lam)], dtype=np.int64)
         chunk_h = system.scratch(len(chunk_start) - 1, len(class_log_q))
         sweep_chunks(m.seeker_off, m.cls, lam, q, class_log_q, chunk_start, chunk_h, log_not_paired)
         return chunk_h.sum(axis=0), log_not_paired
     one_minus_q = -np.expm1(class_log_q)
-    for s0, s1, i0, i1 in m.chunks():
+    for s0, s1, i0, i1 in m.chunks(chunk_pairs):
         savings_chunk(m.seeker_off[s0:s1 + 1] - i0, m.cls[i0:i1], m.saving_m[i0:i1], m.shared_m[i0:i1],
                       m.seeker_detour_m[i0:i1], lam[s0:s1], q, class_log_q, one_minus_q, sums.by_class,
                       sums.by_seeker[s0:s1], log_not_paired[s0:s1])

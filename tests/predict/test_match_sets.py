@@ -140,3 +140,16 @@ def test_chunks_partition_the_seekers():
     assert len(cls) == m.n_pairs == m.seeker_off[-1]
     for w in (0, 17, 59):
         np.testing.assert_array_equal(m.seeker(w)[0], cls[m.seeker_off[w]:m.seeker_off[w + 1]])
+
+
+@pytest.mark.parametrize("priority", ["net_saving", "pickup"])
+def test_lexsort_fallback_gives_the_same_lists(monkeypatch, priority):
+    # Priorities beyond the packed key's range take the lexsort route; the lists must not change.
+    inst = make_instance(seed=4, size=5, n_od=25, max_pickup_m=2000, max_detour_m=2000)
+    packed = inst.model(priority=priority).matching.arrays()
+    monkeypatch.setattr("rpbench.predict.match_sets._Q_LIMIT", 1e-9)
+    model = build_model(inst.network, inst.rates, inst.params, inst.config.replace(priority=priority),
+                        use_cache=False)                     # a private build: the cached one is packed
+    for got, want in zip(model.matching.arrays(), packed):
+        np.testing.assert_array_equal(got, want)
+    check_against_brute_force(model)

@@ -1,0 +1,125 @@
+"""The τ_0-independent structure in the disk cache: its key, reuse, repair, private builds and the build lock."""
+
+from __future__ import annotations
+
+import fcntl
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import rpbench.predict.structure as structure
+from rpbench.predict import PredictConfig
+from rpbench.predict.rates import OdRates
+from rpbench.scenarios.base import Params
+
+from .conftest import make_instance
+
+
+@pytest.fixture
+def cache(tmp_path, monkeypatch) -> Path:
+    folder = tmp_path / "cache"
+    monkeypatch.setenv("RPBENCH_CACHE", str(folder))
+    structure._RECENT.clear()
+    yield folder
+    structure._RECENT.clear()
+
+
+def load(inst, **config):
+    return structure.load_structure(inst.network, inst.rates, inst.params, inst.config.replace(**config))
+
+
+def entries(folder: Path) -> list[Path]:
+    return sorted(p for p in folder.glob("predict-structure-*") if p.is_dir())
+
+
+def test_key_follows_the_structure_inputs_only():
+    inst = make_instance(seed=1)
+    key = structure.structure_key(inst.network, inst.rates, inst.params, inst.config)
+    same = [(inst.rates.scaled(3.0), inst.params, inst.config.replace(tau0_s=77.0, beta=0.25, tol=1e-8)),
+            (inst.rates, inst.params.replace(response_rate=0.5), inst.config.replace(accel="anderson"))]
+    for rates, params, config in same:
+        assert structure.structure_key(inst.network, rates, params, config) == key
+    other_ods = OdRates.from_arrays(inst.rates.origin[1:], inst.rates.destination[1:], inst.rates.rate_per_s[1:],
+                                    n_nodes=inst.network.n_nodes)
+    changed = [(other_ods, inst.params, inst.config),
+               (inst.rates, inst.params.replace(max_pickup_m=999.0), inst.config),
+               (inst.rates, inst.params.replace(speed_mps=9.0), inst.config),
+               (inst.rates, inst.params, inst.config.replace(priority="pickup")),
+               (inst.rates, inst.params, inst.config.replace(include_origin_state=False))]
+    keys = {structure.structure_key(inst.network, r, p, c) for r, p, c in changed}
+    assert key not in keys and len(keys) == len(changed)
+
+
+def test_built_once_then_mapped_from_the_cache(cache):
+    inst = make_instance(seed=2, size=6, n_od=40, max_pickup_m=3000, max_detour_m=3000)
+    first = load(inst)
+    assert first.build_s["matching_s"] > 0 and entries(cache) == [first.directory]
+    structure._RECENT.clear()                                  # a new process: reopened from disk
+    again = load(inst, tau0_s=300.0)
+    assert again.build_s["matching_s"] == 0 and again.directory == first.directory
+    assert isinstance(again.matching.cls, np.memmap)
+    for a, b in zip(again.matching.arrays(), first.matching.arrays()):
+        np.testing.assert_array_equal(a, b)
+    sp = again.space_for(300.0)
+    np.testing.assert_array_equal(sp.tau_s[sp.k == 0], 300.0)
+    np.testing.assert_array_equal(sp.tau_s[sp.k > 0], first.space.tau_s[first.space.k > 0])
+
+
+def test_a_damaged_entry_is_rebuilt_with_a_note(cache, capsys):
+    inst = make_instance(seed=3, size=6, n_od=40, max_pickup_m=3000, max_detour_m=3000)
+    good = load(inst).matching.arrays()
+    entry = entries(cache)[0]
+    with open(entry / "cls.bin", "r+b") as fh:
+        fh.truncate(8)
+    structure._RECENT.clear()
+    rebuilt = load(inst)
+    assert "unusable" in capsys.readouterr().err
+    assert rebuilt.build_s["matching_s"] > 0
+    for a, b in zip(rebuilt.matching.arrays(), good):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_a_private_build_leaves_nothing_behind(cache):
+    inst = make_instance(seed=4)
+    s = structure.load_structure(inst.network, inst.rates, inst.params, inst.config, use_cache=False)
+    assert s.directory is None and s.matching.n_pairs > 0
+    assert not [p for p in cache.glob("*structure*") if p.is_dir()]
+
+
+BUILDER = """
+import sys
+import rpbench.predict.structure as structure
+sys.path.insert(0, {tests!r})
+from predict.conftest import make_instance
+inst = make_instance(seed=5, size=6, n_od=40, max_pickup_m=3000, max_detour_m=3000)
+s = structure.load_structure(inst.network, inst.rates, inst.params, inst.config)
+print("built" if s.build_s["matching_s"] > 0 else "reused", s.matching.n_pairs)
+"""
+
+
+def test_a_second_builder_waits_for_the_first_and_reuses_its_entry(cache):
+    inst = make_instance(seed=5, size=6, n_od=40, max_pickup_m=3000, max_detour_m=3000)
+    key = structure.structure_key(inst.network, inst.rates, inst.params, inst.config)
+    cache.mkdir(parents=True, exist_ok=True)
+    tests = str(Path(__file__).resolve().parents[1])
+    with open(cache / f"predict-structure-{key}.lock", "a+") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)                      # we are "the first builder"
+        other = subprocess.Popen([sys.executable, "-c", BUILDER.format(tests=tests)], env=dict(os.environ),
+                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        note = other.stderr.readline()                         # it finds the lock held and says so
+        assert "waiting" in note
+        time.sleep(0.2)
+        assert other.poll() is None                            # and waits
+        tmp = cache / ".manual"
+        tmp.mkdir()
+        mine = structure._build_into(tmp, inst.network, inst.rates, inst.params, inst.config)
+        os.replace(tmp, cache / f"predict-structure-{key}")
+        fcntl.flock(lock, fcntl.LOCK_UN)
+    out, err = other.communicate(timeout=120)
+    assert other.returncode == 0, err
+    assert out.split() == ["reused", str(mine.matching.n_pairs)]
