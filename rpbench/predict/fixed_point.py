@@ -101,6 +101,9 @@ class SolveInfo:
     history: tuple = ()          # residual per iteration
 
 
+SAVINGS_CHUNK_PAIRS = 1 << 22
+
+
 def sweep(system: System, class_log_q: np.ndarray, sums: PairSums | None = None, *,
           chunk_pairs: int = CHUNK_PAIRS) -> tuple[np.ndarray, np.ndarray]:
     """One pass over all seeker lists: returns (H_c per class, log(1 - p_s) per OD).
@@ -120,11 +123,13 @@ def sweep(system: System, class_log_q: np.ndarray, sums: PairSums | None = None,
         sweep_chunks(m.seeker_off, m.cls, lam, q, class_log_q, chunk_start, chunk_h, log_not_paired)
         return chunk_h.sum(axis=0), log_not_paired
     one_minus_q = -np.expm1(class_log_q)
-    for s0, s1, i0, i1 in m.chunks(chunk_pairs):
+    # The savings pass is the last over the lists: each chunk's pages (of every column) are given back
+    # once summed, and small chunks keep the three distance columns' share of memory small.
+    for s0, s1, i0, i1 in m.chunks(min(chunk_pairs, SAVINGS_CHUNK_PAIRS)):
         savings_chunk(m.seeker_off[s0:s1 + 1] - i0, m.cls[i0:i1], m.saving_m[i0:i1], m.shared_m[i0:i1],
                       m.seeker_detour_m[i0:i1], lam[s0:s1], q, class_log_q, one_minus_q, sums.by_class,
                       sums.by_seeker[s0:s1], log_not_paired[s0:s1])
-        m.release(i0, i1, ("saving_m", "shared_m", "seeker_detour_m"))
+        m.release(i0, i1, ("cls", "saving_m", "shared_m", "seeker_detour_m"))
     return sums.by_class[:, 0].copy(), log_not_paired
 
 

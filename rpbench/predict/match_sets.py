@@ -55,10 +55,13 @@ from __future__ import annotations
 import mmap
 import sys
 import time
+from collections import deque
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from numba import get_num_threads
 from tqdm import tqdm
 
 from rpbench.geometry import TOLERANCE_M
@@ -164,64 +167,78 @@ def _open_column(path: Path, dtype: str, n: int) -> np.ndarray:
 
 def build_matching(space: StateSpace, rates: OdRates, dist: np.ndarray, params: Params,
                    config: PredictConfig, directory: Path) -> Matching:
-    """Matching sets of every seeker, written into ``directory`` (see the module docstring for the method)."""
+    """Matching sets of every seeker, written into ``directory`` (see the module docstring for the method).
+
+    Origins are independent, so they are processed by a few threads (numpy's
+    sorts and the compiled kernels release the GIL) and written in OD order:
+    the files do not depend on the number of threads.
+    """
     t0 = time.perf_counter()
     writer = _ColumnWriter(directory, len(rates))
     origin = rates.origin
-    stats: dict = {}
+    stats = {"stage1_candidates": 0, "stage1_kept": 0, "group_queries": 0}
     try:
         if len(origin):
             builder = _Builder(space, rates, dist, params, config)
             bounds = np.flatnonzero(np.diff(origin)) + 1
             starts = np.concatenate([[0], bounds]).astype(np.int64)
             ends = np.concatenate([bounds, [len(origin)]]).astype(np.int64)
+            tasks = [(int(origin[w0]), int(w0), int(w1)) for w0, w1 in zip(starts, ends)]
             bar = tqdm(total=len(origin), desc="prediction structure", unit="OD", file=sys.stderr, leave=False,
                        disable=None)                             # off when stderr is not a terminal
-            with bar:
-                for w0, w1 in zip(starts, ends):
-                    builder.origin_block(int(origin[w0]), int(w0), int(w1), writer)
-                    bar.update(int(w1 - w0))
-            stats = builder.stats
+            with bar, ThreadPoolExecutor(max(1, get_num_threads())) as pool:
+                for (_, w0, w1), lists in zip(tasks, _in_order(pool, builder.origin_lists, tasks)):
+                    writer.append(w0, lists.lens, lists.columns)
+                    for key, value in lists.stats.items():
+                        stats[key] += value
+                    bar.update(w1 - w0)
         seeker_off = writer.finish()
     finally:
         writer.close()
     return Matching.open(directory, seeker_off, dict(stats, build_s=time.perf_counter() - t0))
 
 
-class _ColumnWriter:
-    """Appends the per-seeker lists, in OD order, to one raw file per column.
+def _in_order(pool: ThreadPoolExecutor, fn, tasks, ahead: int = 4):
+    """``fn(*task)`` for each task, computed by ``pool`` at most ``ahead`` tasks in advance, yielded in order."""
+    pending: deque = deque()
+    for task in tasks:
+        pending.append(pool.submit(fn, *task))
+        if len(pending) > ahead:
+            yield pending.popleft().result()
+    while pending:
+        yield pending.popleft().result()
 
-    Entries are sorted straight into a reused buffer and written out at each
-    commit, so memory stays bounded by one sort batch whatever the total.
-    """
+
+@dataclass(frozen=True, eq=False)
+class _OriginLists:
+    """The sorted lists of the seekers of one origin: pairs per seeker and the pair columns."""
+
+    lens: np.ndarray
+    columns: tuple[np.ndarray, ...]
+    stats: dict
+
+
+class _ColumnWriter:
+    """Appends the per-seeker lists, in OD order, to one raw file per column."""
 
     def __init__(self, directory: Path, n_od: int) -> None:
         self.n_od = n_od
         self.files = {name: open(directory / f"{name}.bin", "wb") for name, _ in COLUMNS}
         self.next = 0            # next seeker expected
         self.lens: list[np.ndarray] = []
-        self.buf: tuple[np.ndarray, ...] = tuple(np.empty(0, dtype=dtype) for _, dtype in COLUMNS)
 
-    def reserve(self, n: int) -> tuple[np.ndarray, ...]:
-        """Views for the next ``n`` pairs: (class int32, saving, shared, seeker detour float32)."""
-        if len(self.buf[0]) < n:
-            cap = max(SORT_ENTRIES, n)
-            self.buf = tuple(np.empty(cap, dtype=dtype) for _, dtype in COLUMNS)
-        return tuple(b[:n] for b in self.buf)
-
-    def commit(self, w0: int, lens: np.ndarray, n: int = 0) -> None:
-        """Seekers ``w0 .. w0+len(lens)-1`` with ``lens`` pairs each (``n`` = their sum, just reserved)."""
-        assert w0 == self.next, "seekers must be committed in OD order"
+    def append(self, w0: int, lens: np.ndarray, columns: tuple[np.ndarray, ...] = ()) -> None:
+        """Seekers ``w0 .. w0+len(lens)-1`` with ``lens`` pairs each, and their pairs' columns."""
+        assert w0 == self.next, "seekers must be written in OD order"
         self.lens.append(np.asarray(lens, dtype=np.int64))
         self.next = w0 + len(lens)
-        for (name, _), b in zip(COLUMNS, self.buf):
-            if n:
-                self.files[name].write(memoryview(b[:n]))
+        for (name, dtype), values in zip(COLUMNS, columns):
+            self.files[name].write(memoryview(np.ascontiguousarray(values, dtype=dtype)))
 
     def finish(self) -> np.ndarray:
-        """The seekers' offsets (int64, W+1), once every seeker is committed (the rest get empty lists)."""
+        """The seekers' offsets (int64, W+1), once every seeker is written (the rest get empty lists)."""
         if self.next < self.n_od:
-            self.commit(self.next, np.zeros(self.n_od - self.next, dtype=np.int64))
+            self.append(self.next, np.zeros(self.n_od - self.next, dtype=np.int64))
         self.close()
         return offsets_from_counts(np.concatenate(self.lens) if self.lens else np.zeros(0, dtype=np.int64))
 
@@ -244,16 +261,15 @@ class _Builder:
         if np.any(np.diff(space.class_head) < 0):
             raise ValueError("taker classes must be numbered by head node")
         self.head_off = offsets_from_counts(np.bincount(space.class_head, minlength=dist.shape[0]))
-        self.stats = {"stage1_candidates": 0, "stage1_kept": 0, "group_queries": 0}
 
     # ------------------------------------------------------------------ stage 1
-    def origin_block(self, o: int, w0: int, w1: int, writer: _ColumnWriter) -> None:
-        """Sorted lists of the seekers ``w0..w1-1`` (all with origin ``o``), handed to ``writer``."""
+    def origin_lists(self, o: int, w0: int, w1: int) -> _OriginLists:
+        """Sorted lists of the seekers ``w0..w1-1`` (all with origin ``o``); safe to call from threads."""
         sp, cfg = self.space, self.config
         to_o = np.ascontiguousarray(self.dist[:, o])                          # l(h, o) for every node h
         near = np.flatnonzero(to_o <= self.r_lim)                            # within R̄ of the seekers
         cand = expand_ranges(self.head_off[near], self.head_off[near + 1])   # sorted by class index
-        self.stats["stage1_candidates"] += len(cand)
+        stats = {"stage1_candidates": len(cand), "stage1_kept": 0, "group_queries": 0}
         row_o = self.dist[o]
         p = to_o[sp.class_head[cand]]
         pk = sp.class_pre_m[cand] + p
@@ -264,12 +280,13 @@ class _Builder:
         if not cfg.keep_nonpositive:
             keep &= a < 0                                                   # E <= l(h,d_A) - p
         if not keep.any():
-            writer.commit(w0, np.zeros(w1 - w0, dtype=np.int64))
-            return
+            return _OriginLists(np.zeros(w1 - w0, dtype=np.int64), (), stats)
         g = _Group(cand[keep], a[keep], pk[keep], rest[keep], d_a[keep], row_o)
-        self.stats["stage1_kept"] += g.n
+        stats["stage1_kept"] = g.n
         pieces = self._pieces(g, w0, w1)
-        self._emit(g, w0, w1, pieces, writer)
+        stats["group_queries"] = g.queries
+        lens, columns = self._emit(g, w0, w1, pieces)
+        return _OriginLists(lens, columns, stats)
 
     # ------------------------------------------------------------------ stage 2
     def _pieces(self, g: "_Group", w0: int, w1: int) -> "_Pieces":
@@ -304,8 +321,6 @@ class _Builder:
             lo_f = np.zeros(len(sel_f), dtype=np.int64)
         hi_l = g.count(us[sel_l], np.minimum(thr_l[sel_l], cut_l[sel_l]))
         hi_f = g.count(us[sel_f], cut_f[sel_f])
-        self.stats["group_queries"] += g.queries
-        g.queries = 0
         pieces = _Pieces(
             flat=np.concatenate([sel_l, sel_f]),
             lo=np.concatenate([np.zeros(len(sel_l), dtype=np.int64), lo_f]),
@@ -314,11 +329,12 @@ class _Builder:
             n_u=n_u, g_f=g_f, g_l=g_l)
         return pieces.nonempty(g, self.solo[w0:w1])
 
-    def _emit(self, g: "_Group", w0: int, w1: int, pc: "_Pieces", writer: _ColumnWriter) -> None:
-        """Expand, prioritise and sort the pieces, a bounded number of entries at a time."""
+    def _emit(self, g: "_Group", w0: int, w1: int, pc: "_Pieces") -> tuple[np.ndarray, tuple[np.ndarray, ...]]:
+        """Pairs per seeker and the sorted columns: pieces expanded, prioritised and sorted a batch at a time."""
         m = w1 - w0
         per_row = np.bincount(pc.row, weights=pc.n, minlength=m).astype(np.int64)
         cum = np.cumsum(per_row)
+        columns = tuple(np.empty(int(cum[-1]) if m else 0, dtype=dtype) for _, dtype in COLUMNS)
         r0 = 0
         while r0 < m:
             base = cum[r0 - 1] if r0 else 0
@@ -327,9 +343,9 @@ class _Builder:
             i0, i1 = (int(i) for i in np.searchsorted(pc.row, [r0, r1]))
             total = int(cum[r1 - 1] - base)
             if total:
-                self._sorted_entries(g, pc, i0, i1, r0, w0, writer.reserve(total))
-            writer.commit(w0 + r0, per_row[r0:r1], total)
+                self._sorted_entries(g, pc, i0, i1, r0, w0, tuple(c[base:base + total] for c in columns))
             r0 = r1
+        return per_row, columns
 
     def _sorted_entries(self, g: "_Group", pc: "_Pieces", i0: int, i1: int, r0: int, w0: int, out) -> None:
         """Pieces ``i0..i1-1`` (seeker rows from ``r0``) expanded, sorted and written into ``out``.

@@ -20,6 +20,7 @@ size, an unreadable manifest) is deleted and rebuilt, with a note.
 
 from __future__ import annotations
 
+import ctypes
 import dataclasses
 import fcntl
 import hashlib
@@ -144,7 +145,17 @@ def _build_into(directory: Path, network: RoadNetwork, rates: OdRates, params: P
     manifest = {"version": STRUCTURE_VERSION, "n_od": len(rates), "n_pairs": matching.n_pairs,
                 "columns": dict(COLUMNS), "stats": matching.stats, "build_s": build_s}
     (directory / "manifest.json").write_text(json.dumps(manifest, default=float, indent=1))
+    _release_free_heap()
     return Structure(space=space, matching=matching, build_s=build_s, directory=directory)
+
+
+def _release_free_heap() -> None:
+    """Hand the build's freed temporaries back to the system (glibc keeps them in its per-thread arenas
+    otherwise, and the sweeps that follow would add the mapped lists on top of them)."""
+    try:
+        ctypes.CDLL("libc.so.6").malloc_trim(0)
+    except (OSError, AttributeError):          # not glibc: nothing to do
+        pass
 
 
 def _open_entry(directory: Path, n_od: int) -> Structure | None:

@@ -27,7 +27,7 @@ COLUMNS = ("matching_prob", "e_vacant", "e_seeker")
 
 def table(data_dir: Path, kind: str) -> pd.DataFrame:
     net = haikou_network(data_dir)
-    rates = load_rates(kind, net, data_dir, "2017-05-01")
+    rates = load_rates(kind, net, data_dir, "2017-05-01" if kind == "day" else None)
     return predict(net, rates, Params(), PredictConfig(), use_cache=False).per_od_table()
 
 
