@@ -15,9 +15,10 @@ Seeker lists hold taker classes (:mod:`.states`): the members of a class are
 adjacent in every list, so a seeker's running product is carried per class
 (``Q_c``) and the opportunity rate of member t is ``η_t = r_t H_c`` with
 ``H_c = Σ_s λ_s Π_{c' ≻_s c} Q_c'`` and ``r_t`` the product over earlier
-members of the same class.  Running products are sums of ``log1p(-ρ)``
-(segmented cumulative sums that restart per seeker), ``1 - e^{-x}`` is
-``-expm1(-x)``, and ``log(1 - p_t) = -η_t τ_t`` exactly.  Everything is float64.
+members of the same class.  The sweep over the seekers' lists is compiled
+(:mod:`.kernels`): a seeker's running product ``λ_s Π Q_c'`` is carried as a
+product and its total ``log(1 - p_s)`` as a sum of ``log Q_c``; ``1 - e^{-x}``
+is ``-expm1(-x)``, and ``log(1 - p_t) = -η_t τ_t`` exactly.  Everything is float64.
 
 :func:`solve` iterates ``ρ <- (1-β)ρ + β clip(ρ')`` from ρ = 0 (A9): β halves
 after ``grow_patience`` growing residuals in a row (floor ``beta_floor``), the

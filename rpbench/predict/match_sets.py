@@ -41,13 +41,19 @@ a grid of 2^-20 m (about 1 µm): values closer than that are ties, broken by
 ascending ``pk`` (same grid), then by class index (classes are numbered by
 head node, entry link, destination), and within a class by ``(w, k)``.
 
-**Storage.**  Seekers are stored in blocks of about 2^20 pairs (consecutive
-ODs), so the lists are never copied into one huge array.  Per pair: the
-class (int32), the saving ``E``, the shared distance and the seeker's detour
-(float32: sub-millimetre rounding at urban distances; the fixed point only
-uses the order of the classes).  The taker's detour is
-``shared - E - detour_seeker`` and its ride from ``h`` is
-``l(h,d_A) - E - detour_seeker + shared``.
+**Storage.**  Per pair: the class (int32), the saving ``E``, the shared
+distance and the seeker's detour (float32: sub-millimetre rounding at urban
+distances; the fixed point only uses the order of the classes), 16 bytes a
+pair, appended origin by origin to one raw file per column (see
+:mod:`.structure`, which keeps them in the cache) and read back as read-only
+memory maps.  The taker's detour is ``shared - E - detour_seeker`` and its
+ride from ``h`` is ``l(h,d_A) - E - detour_seeker + shared``.
+
+**Speed.**  Origins are independent and run in a few threads.  Sorting
+(step 3) sorts the packed keys themselves, not an index: a key is unique and
+names its entry (the tie rank names the class survivor, which lies in one
+piece of its seeker's row), so a compiled pass (:mod:`.kernels`) decodes the
+sorted keys into the columns.
 """
 
 from __future__ import annotations
