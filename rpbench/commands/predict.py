@@ -53,7 +53,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--priority", choices=PRIORITIES, default=None, help="seeker priority order (default net_saving)")
     p.add_argument("--accel", choices=ACCELERATIONS, default=None,
                    help="fixed-point acceleration (default none: the plain damped iteration)")
-    p.add_argument("--no-cache", action="store_true", help="recompute the prediction and its seeker/taker structure even when cached (the structure is then built in a private temporary folder)")
+    p.add_argument("--no-cache", action="store_true",
+                   help="recompute the prediction and its seeker/taker structure even when cached "
+                        "(the structure is then built in a private temporary folder)")
     p.add_argument("--validate-fcfs", action="store_true",
                    help="also simulate an FCFS dispatcher on Poisson demand and report MAPE/RMSE")
     p.add_argument("--hours", type=float, default=100.0, help="simulated hours for --validate-fcfs (default 100)")
