@@ -123,3 +123,19 @@ def test_a_second_builder_waits_for_the_first_and_reuses_its_entry(cache):
     out, err = other.communicate(timeout=120)
     assert other.returncode == 0, err
     assert out.split() == ["reused", str(mine.matching.n_pairs)]
+
+
+def test_a_failed_build_leaves_no_half_entry_and_says_so_in_one_line(cache, monkeypatch):
+    import errno
+
+    from rpbench.exceptions import CacheError
+    inst = make_instance(seed=6)
+
+    def disk_full(directory, *args):
+        (directory / "cls.bin").write_bytes(b"partial")
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(structure, "_build_into", disk_full)
+    with pytest.raises(CacheError, match="No space left on device"):
+        load(inst)
+    assert not [p for p in cache.iterdir() if p.is_dir()]          # neither the entry nor its temporary folder
