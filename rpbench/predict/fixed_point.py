@@ -37,7 +37,7 @@ import numpy as np
 
 from rpbench.predict._arrays import segment_exclusive_cumsum, segment_sums
 from rpbench.predict.config import PredictConfig
-from rpbench.predict.kernels import savings_chunk, sweep_chunks
+from rpbench.predict.kernels import savings_chunks, sweep_chunks
 from rpbench.predict.match_sets import CHUNK_PAIRS, Matching
 from rpbench.predict.states import StateSpace
 
@@ -103,6 +103,7 @@ class SolveInfo:
 
 
 SAVINGS_CHUNK_PAIRS = 1 << 22
+SAVINGS_PARTS = 2
 
 
 def sweep(system: System, class_log_q: np.ndarray, sums: PairSums | None = None, *,
@@ -124,13 +125,20 @@ def sweep(system: System, class_log_q: np.ndarray, sums: PairSums | None = None,
         sweep_chunks(m.seeker_off, m.cls, lam, q, class_log_q, chunk_start, chunk_h, log_not_paired)
         return chunk_h.sum(axis=0), log_not_paired
     one_minus_q = -np.expm1(class_log_q)
-    # The savings pass is the last over the lists: each chunk's pages (of every column) are given back
-    # once summed, and small chunks keep the three distance columns' share of memory small.
-    for s0, s1, i0, i1 in m.chunks(min(chunk_pairs, SAVINGS_CHUNK_PAIRS)):
-        savings_chunk(m.seeker_off[s0:s1 + 1] - i0, m.cls[i0:i1], m.saving_m[i0:i1], m.shared_m[i0:i1],
-                      m.seeker_detour_m[i0:i1], lam[s0:s1], q, class_log_q, one_minus_q, sums.by_class,
-                      sums.by_seeker[s0:s1], log_not_paired[s0:s1])
-        m.release(i0, i1, ("cls", "saving_m", "shared_m", "seeker_detour_m"))
+    # The savings pass is the last over the lists: SAVINGS_PARTS chunks at a time run in parallel, each
+    # summing its classes into its own part (added in order: the result does not depend on the
+    # threads), and their pages (every column) are given back once summed; small chunks keep the three
+    # distance columns' share of memory small.
+    chunks = list(m.chunks(min(chunk_pairs, SAVINGS_CHUNK_PAIRS)))
+    parts = np.zeros((SAVINGS_PARTS, len(class_log_q), 4))
+    for b in range(0, len(chunks), SAVINGS_PARTS):
+        batch = chunks[b:b + SAVINGS_PARTS]
+        chunk_start = np.array([c[0] for c in batch] + [batch[-1][1]], dtype=np.int64)
+        savings_chunks(m.seeker_off, m.cls, m.saving_m, m.shared_m, m.seeker_detour_m, lam, q, class_log_q,
+                       one_minus_q, chunk_start, parts, sums.by_seeker, log_not_paired)
+        m.release(batch[0][2], batch[-1][3], ("cls", "saving_m", "shared_m", "seeker_detour_m"))
+    for part in parts:
+        np.add(sums.by_class, part, out=sums.by_class)
     return sums.by_class[:, 0].copy(), log_not_paired
 
 

@@ -91,6 +91,17 @@ def savings_chunk(off, cls, saving, shared, detour, lam, q, log_q, one_minus_q, 
         by_seeker[s, 3] += rate_det
 
 
+@njit(cache=True, parallel=True)
+def savings_chunks(off, cls, saving, shared, detour, lam, q, log_q, one_minus_q, chunk_start, by_class_parts,
+                   by_seeker, log_not_paired):  # pragma: no cover - compiled
+    """:func:`savings_chunk` over a few consecutive chunks in parallel threads; chunk k sums its
+    classes into ``by_class_parts[k]`` (fixed, so the result does not depend on the threads)."""
+    for k in prange(len(chunk_start) - 1):
+        s0, s1 = chunk_start[k], chunk_start[k + 1]
+        savings_chunk(off[s0:s1 + 1], cls, saving, shared, detour, lam[s0:s1], q, log_q, one_minus_q,
+                      by_class_parts[k], by_seeker[s0:s1], log_not_paired[s0:s1])
+
+
 @njit(cache=True, nogil=True)
 def net_saving_keys(rows, start, n, piece_g, kappa, tie_rank, tie_bits, q_bits, grid, q_limit,
                     keys):  # pragma: no cover - compiled
