@@ -31,6 +31,7 @@ RATE_SOURCES = ("auto", "month", "scenario")
 #: seconds (peak hours of different days, sweep points) share one prediction.
 TAU0_RESOLUTION_S = 10.0
 
+
 def scenario_predictions(scenario: Scenario, source: str, tau0_s: np.ndarray,
                          config: PredictConfig) -> list[Prediction]:
     """One prediction per hour of ``scenario`` (``len(tau0_s)`` hours; hours with equal inputs share one)."""
@@ -48,9 +49,12 @@ def scenario_predictions(scenario: Scenario, source: str, tau0_s: np.ndarray,
             same_ods = previous is not None and len(previous.rates) == len(rates[h]) and \
                 np.array_equal(previous.rates.origin, rates[h].origin) and \
                 np.array_equal(previous.rates.destination, rates[h].destination)
-            memo[key] = cached_prediction(scenario.network, rates[h], scenario.params, cfg,
-                                          rho0=previous.rho if same_ods else None)
-            previous = memo[key]
+            previous = cached_prediction(scenario.network, rates[h], scenario.params, cfg,
+                                         rho0=previous.rho if same_ods else None)
+            # The dispatcher reads per-OD values only: keeping 24 hours of per-state arrays (about
+            # 100 MB an hour for the month table) would cost gigabytes; the last hour's ρ stays for
+            # the next warm start.
+            memo[key] = previous.slim()
         out.append(memo[key])
     return out
 

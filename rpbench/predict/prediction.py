@@ -98,6 +98,12 @@ class Prediction:
         return cls(node_id=node_id, rates=rates, params=info.get("params", {}), config=config, od=od, info=info,
                    from_cache=True, **{name: arrays[name] for name in cls.STATE_FIELDS})
 
+    def slim(self) -> "Prediction":
+        """The same prediction without its per-state arrays (what a dispatcher needs: per-OD values)."""
+        empty = np.zeros(0)
+        od = dataclasses.replace(self.od, **{name: empty for name in Outcome.STATE_FIELDS})
+        return dataclasses.replace(self, od=od, **{name: empty for name in self.STATE_FIELDS})
+
     # ------------------------------------------------------------------ queries
     @cached_property
     def _keys(self) -> np.ndarray:

@@ -53,6 +53,9 @@ class Outcome:
     state_shared_m: np.ndarray
     state_detour_m: np.ndarray
 
+    #: The per-state fields (the rest are per OD).
+    STATE_FIELDS = ("e_taker", "state_pair_prob", "state_ride_m", "state_shared_m", "state_detour_m")
+
     @property
     def detour_m(self) -> np.ndarray:
         return self.ride_m - self.solo_m
