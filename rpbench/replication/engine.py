@@ -32,10 +32,14 @@ from rpbench.exceptions import ParameterError
 from rpbench.model import AssignmentModel, quantize
 from rpbench.replication import weights as W
 from rpbench.replication.cells import NO_CELL, node_cells
+from rpbench.replication.rtv import build_round as build_rtv_round
+from rpbench.replication.rtv import pair_geometry as rtv_geometry
 from rpbench.replication.switches import Switches
 from rpbench.scenarios.base import Scenario
 
-STRATEGIES = ("np", "mb", "fl-nd", "fl")
+STRATEGIES = ("np", "mb", "rtv", "fl-nd", "fl")
+#: Strategies whose authors' code returns before moving anyone in a round without passengers or free vehicles.
+EARLY_RETURN = ("mb", "fl-nd", "fl")
 SECONDS_PER_M = 0.12           # the authors' unit_driving_time (30 km/h)
 DT_S = 10.0
 SOLO_TIMEOUT_S = 600.0
@@ -150,8 +154,7 @@ class AuthorsEngine:
                  predictions: pd.DataFrame | None = None, denominator: int | None = None,
                  reposition_origins: np.ndarray | None = None):
         if strategy not in STRATEGIES:
-            raise ParameterError(f"the authors' engine runs {', '.join(STRATEGIES)}; not {strategy!r} "
-                                 "(RTV is not ported yet)")
+            raise ParameterError(f"the authors' engine runs {', '.join(STRATEGIES)}; not {strategy!r}")
         self.sc = scenario
         self.strategy = strategy
         self.preset = preset
@@ -161,7 +164,7 @@ class AuthorsEngine:
         self.o, self.d = orders.origin.astype(np.int64), orders.destination.astype(np.int64)
         self.req = orders.request_s
         self.solo = self.dist.dist[self.o, self.d]
-        floor = 30.0 if (strategy == "fl" or not self.sw.authors_weights) else 0.0
+        floor = 30.0 if (strategy in ("fl", "rtv") or not self.sw.authors_weights) else 0.0
         self.patience = np.maximum(orders.patience_s, floor)
         self.e_seeker, self.e_taker = self._predictions(predictions)
         self.flp = W.fl_params(self.sw.authors_ledger)
@@ -218,13 +221,18 @@ class AuthorsEngine:
                 self.fresh[i] = True
             self._advance_proper(t)
             active = [v for v, veh in enumerate(self.vehicles) if t > veh.active_at]
-            if self.sw.teleport and (not seekers or not active):
+            if self.sw.teleport and self.strategy in EARLY_RETURN and (not seekers or not active):
                 # The authors return before moving anyone, and keep passengers with a fixed 90 s patience.
                 waiting = [i for i in seekers if not self.responded[i] and t - self.req[i] < AUTHORS_PATIENCE_CONST_S]
                 self._mark_waiting(waiting, t)
                 t += DT_S
                 continue
-            matches = self._match(t, seekers, active) if seekers and active else {}
+            if not (seekers and active):
+                matches = {}
+            elif self.strategy == "rtv":
+                matches = self._match_rtv(t, seekers, active)
+            else:
+                matches = self._match(t, seekers, active)
             self._apply(t, matches, active)
             waiting = [i for i in seekers if not self.responded[i] and t - self.req[i] < self.patience[i]]
             self._mark_waiting(waiting, t)
@@ -330,11 +338,36 @@ class AuthorsEngine:
         return (self.sw.authors_weights
                 and t - self.req[veh.p0] - SECONDS_PER_M * veh.p0_pickup_m > SOLO_TIMEOUT_S)
 
+    def _taker_geometry_one(self, veh: Vehicle, b: int, *, from_vehicle: bool) -> dict[str, float]:
+        """One passenger's pair geometry as floats; ``from_vehicle`` (with the authors' pick-up rule): the
+        authors' RTV test measured from the vehicle's node, without the first passenger's ridden distance."""
+        if from_vehicle and self.sw.pickup_from_first_origin:
+            lead = float(self.l(veh.node, self.o[b]))
+            g = rtv_geometry(self.dist.dist, self.o, self.d, self.solo, veh.p0, b, lead, True)
+            g["pk"] = lead
+            return g
+        g = self._taker_geometry(veh, np.asarray([b]))
+        return {key: float(np.asarray(val).ravel()[0]) for key, val in g.items()}
+
+    def _match_rtv(self, t: float, seekers: list[int], active: list[int]) -> dict[int, tuple[int, ...]]:
+        model, decode = build_rtv_round(self, t, seekers, active)
+        if model.n_cols == 0:
+            return {}
+        sol = solve(model, self.preset)
+        return {decode[int(c)][0]: decode[int(c)][1] for c in sol.chosen}
+
     # ------------------------------------------------------------ commit and move
     def _apply(self, t: float, matches: dict[int, int], active: list[int]) -> None:
         for vi in active:
             veh = self.vehicles[vi]
-            b = matches.get(vi)
+            trip = matches.get(vi)
+            if isinstance(trip, tuple) and len(trip) == 2:
+                for r in trip:
+                    self.responded[r] = True
+                    self.assigned.append((r, vi, t))
+                self._dispatch_two(vi, veh, trip, t)
+                continue
+            b = trip[0] if isinstance(trip, tuple) else trip
             if b is not None:
                 self.responded[b] = True
                 self.assigned.append((b, vi, t))
@@ -342,6 +375,8 @@ class AuthorsEngine:
                     self._dispatch_pair(vi, veh, b, t)
                 else:
                     self._take_first(vi, veh, b, t)
+                    if self.strategy == "rtv" and self.sw.teleport:
+                        self._move_taker(vi, veh, t)       # the authors' RTV moves it in the same round
             elif veh.p0 >= 0:
                 self._move_taker(vi, veh, t)
             else:
@@ -410,6 +445,23 @@ class AuthorsEngine:
             veh.node = int(self.d[b]) if g["fofo"] else int(self.d[a])
         veh.p0, veh.picked, veh.leg, veh.p0_pickup_m, veh.idle_target = -1, False, None, 0.0, -1
 
+    def _dispatch_two(self, vi: int, veh: Vehicle, trip: tuple[int, ...], t: float) -> None:
+        """RTV: a vacant vehicle takes two passengers at once; the earlier request is picked up first."""
+        a, b = trip if self.req[trip[0]] <= self.req[trip[1]] else (trip[1], trip[0])
+        pickup = float(self.l(veh.node, self.o[a]))
+        between = float(self.l(self.o[a], self.o[b]))
+        # The authors count the vehicle's pick-up as the first passenger's ride and leave O_a -> O_b out.
+        lead = pickup if self.sw.pickup_from_first_origin else between
+        g = rtv_geometry(self.dist.dist, self.o, self.d, self.solo, a, b, lead, self.sw.pickup_from_first_origin)
+        self.pair_saving.append(g["saving"])
+        self.shared.append(g["shared"])
+        self.records.append(Record(a, vi, t, t - self.req[a], pickup, True, b, g["detour_a"], g["shared"], g["a_in"]))
+        self.records.append(Record(b, vi, t, t - self.req[b], between, True, a, g["detour_b"], g["shared"], g["b_in"]))
+        route = pickup + g["rest"] + (0.0 if self.sw.pickup_from_first_origin else between)
+        veh.active_at = t + SECONDS_PER_M * route
+        veh.node = int(self.d[b]) if g["fofo"] else int(self.d[a])
+        veh.p0, veh.picked, veh.leg, veh.p0_pickup_m, veh.idle_target = -1, False, None, 0.0, -1
+
     def _first_wait(self, a: int) -> float:
         for o, _v, t in self.assigned:
             if o == a:
@@ -463,6 +515,17 @@ class AuthorsEngine:
 
     def _idle(self, veh: Vehicle, t: float) -> None:
         if not self.sw.idle_jumps:
+            return
+        if self.sw.teleport and self.strategy == "rtv":
+            # The authors' RTV draws a new random target every round and jumps there once the first link's
+            # time has passed since the last jump.
+            target = int(self.rng.choice(list(self.idle_origins)))
+            if target == veh.node:
+                veh.reposition_s = t
+                return
+            path = self.dist.path_nodes(veh.node, target)
+            if t > veh.reposition_s + SECONDS_PER_M * self.l(path[0], path[1]):
+                veh.reposition_s, veh.node = t, target
             return
         if self.sw.teleport:
             if veh.idle_target < 0 or veh.idle_target == veh.node:
