@@ -7,8 +7,8 @@ passengers and dummy-dummy cells carry constants, so the matrix is the same
 optimisation as an :class:`~rpbench.model.AssignmentModel` whose pair column
 is worth ``w + offset`` and whose keep-waiting column is worth ``wait``:
 
-* MB and FL-no_delay (dummies -3000, dummy-dummy -5000): offset +1000, wait 0;
-* NP (dummies -5000, dummy-dummy -8000): offset +2000, wait 0;
+* MB (dummies -3000, dummy-dummy -5000): offset +1000, wait 0;
+* NP and FL-no_delay (dummies -5000, dummy-dummy -8000): offset +2000, wait 0;
 * FL (vehicle dummies -8000, passenger dummies = their waiting utility):
   offset 0, wait = the waiting utility.
 
@@ -82,7 +82,7 @@ def offset(strategy: str, authors: bool) -> float:
     """What the authors' dummy rows and columns add to every pair column (see the module docstring)."""
     if not authors or strategy == "fl":
         return 0.0
-    return 2000.0 if strategy == "np" else 1000.0
+    return 2000.0 if strategy in ("np", "fl-nd") else 1000.0
 
 
 def wait_values(strategy: str, authors: bool, e_seeker: np.ndarray, k: np.ndarray, p: FLParams) -> np.ndarray:
