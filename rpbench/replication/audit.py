@@ -115,7 +115,7 @@ def audit_folder(folder: Path) -> list[tuple[str, dict, dict, dict]]:
     for row in rows.to_dict("records"):
         name = f"{row['date']}/{row['strategy']}/{row['engine']}"
         path = records_file(folder, row["date"], row["strategy"], row["engine"])
-        if row["engine"] == "rpbench":
+        if str(row["engine"]).startswith("rpbench"):
             out.append((name, {}, {}, {"all": "rpbench's own engine: check its results folder "
                                               "(rpbench run --scenario haikou-paper-input) with rpbench check"}))
             continue

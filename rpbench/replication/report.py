@@ -140,7 +140,9 @@ def markdown(frame: pd.DataFrame, meta: dict) -> str:
               "14 days; NP's response rate within 0.03."), ""]
     parts += [f"- {s}: {v}" for s, v in crit.items()] + ["", agreement_table(frame), ""]
     parts += ["## Ablation (means over the dates; one mechanism off at a time)", "",
-              "`share of saving gap` = (engine - authors) / (rpbench - authors) of the mean total saving.", "",
+              ("`share of saving gap` = (engine - authors) / (rpbench - authors) of the mean total saving, where "
+               "`rpbench` is rpbench's engine on the authors' input; `rpbench-peak` is rpbench's engine on its own "
+               "input (haikou-peak), the counterpart of `authors-all-off`."), "",
               ablation_table(frame), ""]
     table2 = paper_table(frame)
     if table2:

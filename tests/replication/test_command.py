@@ -38,7 +38,7 @@ def test_replicate_json_contract_full(capsys, data_dir, tmp_path):
     assert code == 0
     runs = json.loads(out)["runs"]
     engines = [r["engine"] for r in runs]
-    assert engines[0] == "authors" and engines[-1] == "rpbench" and "authors-all-off" in engines
+    assert engines[0] == "authors" and engines[-2:] == ["rpbench", "rpbench-peak"] and "authors-all-off" in engines
     assert all(CONTRACT <= set(r) for r in runs)
 
 
