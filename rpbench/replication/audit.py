@@ -66,7 +66,7 @@ def audit_run(records: pd.DataFrame, row: dict) -> tuple[dict[str, list[str]], d
         fail("assignment", f"vehicle {int(r['vehicle'])} took two passengers in the round at {r['assign_s']:g} s")
     checked["assignment"] += 4 * len(rec)
     pooled = rec[rec["pooled"].astype(bool)]
-    by_id = rec.set_index("order_id")
+    by_id = rec.drop_duplicates("order_id").set_index("order_id")     # a duplicate is reported above
     for _, r in pooled.iterrows():
         p = int(r["partner"])
         if p not in by_id.index or int(by_id.at[p, "partner"]) != int(r["order_id"]):

@@ -421,8 +421,10 @@ class AuthorsEngine:
         g = {key: float(np.asarray(val).ravel()[0]) for key, val in g.items()}
         if not veh.picked:
             # The authors put the vehicle at O_a; its pick-up distance grows by the whole remaining way
-            # (which, with the second pick-up measured from O_a, does not delay the pair).
-            veh.p0_pickup_m += float(self.l(veh.node, self.o[a]))
+            # (which, with the second pick-up measured from O_a, does not delay the pair).  Driving by the
+            # clock, the whole pick-up was booked at assignment already.
+            if self.sw.teleport:
+                veh.p0_pickup_m += float(self.l(veh.node, self.o[a]))
             veh.picked = True
         pk_b = g["lead"] if self.sw.pickup_from_first_origin else g["pk"]
         saving = g["saving"]
