@@ -15,6 +15,7 @@ from rpbench.paths import require_data_dir
 from rpbench.replication import audit
 from rpbench.replication.report import criterion, markdown
 from rpbench.replication.runner import parse_strategies, replicate
+from rpbench.replication.switches import steps_for
 from rpbench.results import store as results
 from rpbench.results.store import check_new_folder
 from rpbench.scenarios.request import parse_dates
@@ -35,7 +36,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help=f"comma-separated subset of {DEFAULT_STRATEGIES} (default all; RTV runs under rpbench's "
                         "engine only)")
     p.add_argument("--solver", default="highs", help="solver preset for every round (default highs)")
-    p.add_argument("--no-ablation", action="store_true", help="only the authors' engine and rpbench's")
+    p.add_argument("--ablation", default="single", metavar="MODE",
+                   help="single (default): one mechanism off at a time; cumulative: mechanisms 1..k off, k = 1..8 "
+                        "(the steps add up to the whole difference); both; none")
+    p.add_argument("--no-ablation", action="store_true", help="same as --ablation none")
     p.add_argument("--no-rpbench", action="store_true", help="skip rpbench's own engine")
     p.add_argument("--out", default=None, help="results folder to create (default ./rpbench-runs/<stamp>_replicate)")
     p.add_argument("--json", action="store_true",
@@ -55,13 +59,15 @@ def run(args: argparse.Namespace) -> int:
     dates = parse_dates(args.dates or args.date or "2017-05-01", have)
     preset = load_preset(args.solver)
     check_new_folder(args.out)
-    result = replicate(data_dir, dates, strategies, preset, ablation=not args.no_ablation,
+    mode = "none" if args.no_ablation else args.ablation
+    steps_for(mode)                          # a bad --ablation is one line before anything runs
+    result = replicate(data_dir, dates, strategies, preset, ablation=mode,
                        rpbench_engine=not args.no_rpbench, progress=args.progress)
     frame = pd.DataFrame(result.rows)
     meta = {"kind": "replication", "command": command_line(), "dates": dates,
             "dates_text": f"{dates[0]} .. {dates[-1]}" if len(dates) > 1 else dates[0],
             "strategies": strategies, "preset": preset.name, "data_dir": str(data_dir),
-            "ablation": not args.no_ablation, "version": None, **results.environment()}
+            "ablation": mode, "version": None, **results.environment()}
     meta["version"] = meta["versions"]["rpbench"]
     text = markdown(frame, meta)
     default = f"{results.timestamp()}_replicate"

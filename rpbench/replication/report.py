@@ -86,6 +86,30 @@ def ablation_table(frame: pd.DataFrame) -> str:
     return "\n".join(lines)
 
 
+def cumulative_table(frame: pd.DataFrame) -> str:
+    """The cumulative path authors -> mechanisms 1..k off -> all off (means over the dates): each step's
+    change, and its share of the whole authors-to-all-off change of the total saving (the shares add to 1)."""
+    cum = frame[frame["engine"].str.startswith("authors-cum") | (frame["engine"] == "authors")]
+    if not cum["engine"].str.startswith("authors-cum").any():
+        return ""
+    lines = [("| strategy | step (mechanisms 1..k off) | pairing | saving km | response | change of saving km | "
+              "share of the whole change |"), "|---|---|---:|---:|---:|---:|---:|"]
+    for strategy, part in cum.groupby("strategy", sort=False):
+        means = part.groupby("engine", sort=False)[["pairing_ratio", "total_saving_km", "response_rate"]].mean()
+        order = ["authors"] + sorted((e for e in means.index if e != "authors"),
+                                     key=lambda e: int(e.split("-")[1][3:]))
+        means = means.loc[order]
+        whole = means["total_saving_km"].iloc[-1] - means["total_saving_km"].iloc[0]
+        previous = None
+        for engine, r in means.iterrows():
+            change = np.nan if previous is None else r["total_saving_km"] - previous
+            share = change / whole if np.isfinite(change) and whole else np.nan
+            lines.append(f"| {strategy} | {engine} | {_fmt(r['pairing_ratio'])} | {_fmt(r['total_saving_km'], 1)} | "
+                         f"{_fmt(r['response_rate'])} | {_fmt(change, 1)} | {_fmt(100 * share, 0)} % |")
+            previous = r["total_saving_km"]
+    return "\n".join(lines)
+
+
 def paper_table(frame: pd.DataFrame, date: str = "2017-05-01") -> str:
     """The paper's Table 2 beside the authors' engine, rpbench's engine and the committed output."""
     rows = frame[frame["date"] == date]
@@ -144,6 +168,10 @@ def markdown(frame: pd.DataFrame, meta: dict) -> str:
                "`rpbench` is rpbench's engine on the authors' input; `rpbench-peak` is rpbench's engine on its own "
                "input (haikou-peak), the counterpart of `authors-all-off`."), "",
               ablation_table(frame), ""]
+    cumulative = cumulative_table(frame)
+    if cumulative:
+        parts += ["## Cumulative ablation (mechanisms 1..k off, in the fixed order; means over the dates)", "",
+                  cumulative, ""]
     table2 = paper_table(frame)
     if table2:
         parts += ["## Beside the paper's Table 2 (2017-05-01)", "",

@@ -30,7 +30,7 @@ from rpbench.exceptions import ParameterError
 from rpbench.replication import reference
 from rpbench.replication.engine import STRATEGIES as AUTHORS_STRATEGIES
 from rpbench.replication.engine import AuthorsEngine, Outcome
-from rpbench.replication.switches import Switches, ablation_steps
+from rpbench.replication.switches import steps_for
 from rpbench.scenarios.paper_input import PaperInput, load_paper_input
 from rpbench.scenarios.peak import build_peak
 
@@ -83,7 +83,7 @@ def engine_name(label: str) -> str:
     return label if label == "authors" else f"authors-{label}"
 
 
-def run_authors(inputs: Inputs, strategy: str, switches: Switches, preset: Preset) -> Outcome:
+def run_authors(inputs: Inputs, strategy: str, switches, preset: Preset) -> Outcome:
     chosen = inputs.paper if switches.authors_input else inputs.peak
     return AuthorsEngine(chosen.scenario, strategy, preset, switches=switches, predictions=chosen.predictions,
                          denominator=chosen.response_denominator).run()
@@ -104,10 +104,12 @@ def run_rpbench(chosen: PaperInput, strategy: str, preset: Preset, done: dict) -
     return k
 
 
-def replicate(data_dir: Path, dates: list[str], strategies: list[str], preset: Preset, *, ablation: bool = True,
+def replicate(data_dir: Path, dates: list[str], strategies: list[str], preset: Preset, *, ablation: str = "single",
               rpbench_engine: bool = True, progress: bool = False) -> Replication:
+    """Every (date, strategy): the authors' engine and the ablation steps of ``ablation`` (single, cumulative,
+    both, none), then rpbench's engine on both inputs unless ``rpbench_engine`` is false."""
     committed = reference.read_committed(data_dir)
-    steps = ablation_steps() if ablation else [("authors", Switches.authors())]
+    steps = steps_for(ablation)
     out = Replication()
     for date in dates:
         inputs = load_inputs(data_dir, date)

@@ -109,6 +109,32 @@ class Switches:
         return "authors-" + "-".join(off)
 
 
+ABLATIONS = ("single", "cumulative", "both", "none")
+
+
+def cumulative_steps() -> list[tuple[str, Switches]]:
+    """The path from the authors' engine to all-off: mechanisms 1..k off for k = 1..8, in the fixed order.
+
+    The differences between consecutive steps telescope, so they add up to the whole authors-to-all-off
+    difference: each is what that mechanism explains *given the ones before it are fixed*.
+    """
+    return [(f"cum{k}-{name}", Switches().without(*NAMES[:k])) for k, name in enumerate(NAMES, start=1)]
+
+
+def steps_for(mode: str) -> list[tuple[str, Switches]]:
+    """The engine runs of an ablation mode (always starting with the authors' engine)."""
+    if mode not in ABLATIONS:
+        raise ParameterError(f"--ablation {mode!r}: expected one of {', '.join(ABLATIONS)}")
+    single = ablation_steps()
+    if mode == "none":
+        return single[:1]
+    if mode == "single":
+        return single
+    if mode == "cumulative":
+        return single[:1] + cumulative_steps()
+    return single + cumulative_steps()[:-1]          # the last cumulative step is all-off, already in single
+
+
 def ablation_steps() -> list[tuple[str, Switches]]:
     """The fixed ablation: the authors' engine, then one mechanism off at a time, then all off.
 

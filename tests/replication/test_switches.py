@@ -15,7 +15,7 @@ from rpbench.replication import weights as W
 from rpbench.replication.cells import NO_CELL, node_cells
 from rpbench.replication.engine import AuthorsEngine, Leg, Vehicle
 from rpbench.replication.runner import Inputs, run_authors
-from rpbench.replication.switches import NAMES, Switches, ablation_steps
+from rpbench.replication.switches import NAMES, Switches, ablation_steps, steps_for
 from rpbench.scenarios.paper_input import PaperInput
 
 PRESET = load_preset("highs")
@@ -37,6 +37,11 @@ def test_all_on_is_the_authors_and_the_ablation_is_one_off_at_a_time():
     steps = ablation_steps()
     assert [name for name, _ in steps] == ["authors"] + [f"no-{n}" for n in NAMES] + ["all-off"]
     assert all(len(sw.off()) == 1 for _, sw in steps[1:-1])
+    cumulative = steps_for("cumulative")
+    assert [len(sw.off()) for _, sw in cumulative] == list(range(len(NAMES) + 1))      # 1..k off, k = 0..8
+    assert cumulative[-1][1] == Switches.none()
+    with pytest.raises(ParameterError, match="--ablation 'some'"):
+        steps_for("some")
     with pytest.raises(ParameterError, match="unknown mechanism 'warp'"):
         Switches().without("warp")
 
