@@ -200,7 +200,8 @@ class AuthorsEngine:
         scale = 2.0 if self.sw.authors_ledger else 1.0        # the authors double both when loading
         return scale * seeker, scale * taker
 
-    def l(self, a, b):
+    def dist_m(self, a, b):
+        """Shortest distance a -> b (m), vectorised."""
         return self.dist.dist[a, b]
 
     # ------------------------------------------------------------ the loop
@@ -255,18 +256,18 @@ class AuthorsEngine:
         oa, da, la = self.o[a], self.d[a], self.solo[a]
         ob, db, lb = self.o[b], self.d[b], self.solo[b]
         if self.sw.pickup_from_first_origin:
-            pk_weight = self.l(ob, oa)                      # the authors' weight: passenger origin -> first origin
-            lead = self.l(oa, ob)                           # the ledger: first origin -> second origin
+            pk_weight = self.dist_m(ob, oa)                      # the authors' weight: passenger origin -> first origin
+            lead = self.dist_m(oa, ob)                           # the ledger: first origin -> second origin
         else:
             x = veh.node
             if veh.picked:
-                lead = self.l(oa, x) + self.l(x, ob)        # p0 has ridden O_a -> x along its shortest route
-                pk_weight = self.l(x, ob)
+                lead = self.dist_m(oa, x) + self.dist_m(x, ob)        # p0 has ridden O_a -> x along its shortest route
+                pk_weight = self.dist_m(x, ob)
             else:
-                lead = self.l(oa, ob)
-                pk_weight = self.l(x, oa) + self.l(oa, ob)
-        f1, f2 = self.l(ob, da), self.l(da, db)
-        l1, l2 = lb, self.l(db, da)
+                lead = self.dist_m(oa, ob)
+                pk_weight = self.dist_m(x, oa) + self.dist_m(oa, ob)
+        f1, f2 = self.dist_m(ob, da), self.dist_m(da, db)
+        l1, l2 = lb, self.dist_m(db, da)
         fofo = (f1 + f2 < l1 + l2) if self.sw.pickup_from_first_origin else (f1 + f2 <= l1 + l2)
         a_in = np.where(fofo, lead + f1, lead + l1 + l2)
         b_in = np.where(fofo, f1 + f2, l1)
@@ -342,7 +343,7 @@ class AuthorsEngine:
         """One passenger's pair geometry as floats; ``from_vehicle`` (with the authors' pick-up rule): the
         authors' RTV test measured from the vehicle's node, without the first passenger's ridden distance."""
         if from_vehicle and self.sw.pickup_from_first_origin:
-            lead = float(self.l(veh.node, self.o[b]))
+            lead = float(self.dist_m(veh.node, self.o[b]))
             g = rtv_geometry(self.dist.dist, self.o, self.d, self.solo, veh.p0, b, lead, True)
             g["pk"] = lead
             return g
@@ -383,7 +384,7 @@ class AuthorsEngine:
                 self._idle(veh, t)
 
     def _take_first(self, vi: int, veh: Vehicle, b: int, t: float) -> None:
-        pickup_m = self.l(veh.node, self.o[b])
+        pickup_m = self.dist_m(veh.node, self.o[b])
         if self.strategy == "np":
             # The authors' NP: jump to the destination, blocked for the real pick-up and ride.
             done = t + SECONDS_PER_M * (pickup_m + self.solo[b])
@@ -424,7 +425,7 @@ class AuthorsEngine:
             # (which, with the second pick-up measured from O_a, does not delay the pair).  Driving by the
             # clock, the whole pick-up was booked at assignment already.
             if self.sw.teleport:
-                veh.p0_pickup_m += float(self.l(veh.node, self.o[a]))
+                veh.p0_pickup_m += float(self.dist_m(veh.node, self.o[a]))
             veh.picked = True
         pk_b = g["lead"] if self.sw.pickup_from_first_origin else g["pk"]
         saving = g["saving"]
@@ -450,8 +451,8 @@ class AuthorsEngine:
     def _dispatch_two(self, vi: int, veh: Vehicle, trip: tuple[int, ...], t: float) -> None:
         """RTV: a vacant vehicle takes two passengers at once; the earlier request is picked up first."""
         a, b = trip if self.req[trip[0]] <= self.req[trip[1]] else (trip[1], trip[0])
-        pickup = float(self.l(veh.node, self.o[a]))
-        between = float(self.l(self.o[a], self.o[b]))
+        pickup = float(self.dist_m(veh.node, self.o[a]))
+        between = float(self.dist_m(self.o[a], self.o[b]))
         # The authors count the vehicle's pick-up as the first passenger's ride and leave O_a -> O_b out.
         lead = pickup if self.sw.pickup_from_first_origin else between
         g = rtv_geometry(self.dist.dist, self.o, self.d, self.solo, a, b, lead, self.sw.pickup_from_first_origin)
@@ -484,7 +485,7 @@ class AuthorsEngine:
         if self.sw.authors_ledger:
             self.records.append(Record(a, vi, veh.assigned_s, self._first_wait(a), veh.p0_pickup_m,
                                        ride_m=self.solo[a]))
-        real_done = veh.assigned_s + SECONDS_PER_M * (self.l(veh.assign_node, self.o[a]) + self.solo[a])
+        real_done = veh.assigned_s + SECONDS_PER_M * (self.dist_m(veh.assign_node, self.o[a]) + self.solo[a])
         veh.active_at = vacant_from if self.sw.early_release else max(vacant_from, real_done)
         veh.node = int(self.d[a])
         veh.p0, veh.picked, veh.leg, veh.p0_pickup_m = -1, False, None, 0.0
@@ -494,7 +495,7 @@ class AuthorsEngine:
             return                                   # proper movement is advanced by the clock
         a = veh.p0
         if self._timed_out(veh, t):
-            travel = self.l(veh.node, self.d[a])
+            travel = self.dist_m(veh.node, self.d[a])
             self._deliver_solo(vi, veh, t, veh.active_at + SECONDS_PER_M * travel)
             return
         target = int(self.o[a]) if not veh.picked else int(self.d[a])
@@ -506,11 +507,11 @@ class AuthorsEngine:
                 self._deliver_solo(vi, veh, t, t)
             return
         path = self.dist.path_nodes(veh.node, target)
-        first_link = self.l(path[0], path[1])
+        first_link = self.dist_m(path[0], path[1])
         if t - veh.active_at > SECONDS_PER_M * first_link:
-            last_link = self.l(path[-2], path[-1])
+            last_link = self.dist_m(path[-2], path[-1])
             if not veh.picked:
-                whole = self.l(veh.node, target)
+                whole = self.dist_m(veh.node, target)
                 veh.p0_pickup_m += last_link if (self.sw.authors_ledger and self.strategy == "mb") else whole
                 veh.active_at = t
             veh.node = target                        # the LAST node of the route: the jump
@@ -526,7 +527,7 @@ class AuthorsEngine:
                 veh.reposition_s = t
                 return
             path = self.dist.path_nodes(veh.node, target)
-            if t > veh.reposition_s + SECONDS_PER_M * self.l(path[0], path[1]):
+            if t > veh.reposition_s + SECONDS_PER_M * self.dist_m(path[0], path[1]):
                 veh.reposition_s, veh.node = t, target
             return
         if self.sw.teleport:
@@ -539,7 +540,7 @@ class AuthorsEngine:
                     veh.idle_target = -1
                 return
             path = self.dist.path_nodes(veh.node, veh.idle_target)
-            if t > veh.reposition_s + SECONDS_PER_M * self.l(path[0], path[1]):
+            if t > veh.reposition_s + SECONDS_PER_M * self.dist_m(path[0], path[1]):
                 veh.reposition_s, veh.node, veh.idle_target = t, veh.idle_target, -1
             return
         if veh.leg is None or t >= veh.leg.end_s:
