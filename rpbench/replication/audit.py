@@ -7,7 +7,8 @@ re-verified from the folder's own files:
 
 * ``assignment``: every served order is served once, never before its request
   nor after its patience ran out (plus one round), a vehicle takes at most one
-  passenger per round, pool partners are mutual and share the vehicle;
+  passenger per round (or, RTV, one two-request trip of mutual partners), pool
+  partners are mutual and share the vehicle;
 * ``accounting``: each pair's saving is l_a + l_b - (ride_a + ride_b - shared)
   and its detours ride - l, shared <= both rides; the reported KPIs (served,
   pooled passengers, response rate over the recorded denominator, pairing ratio,
@@ -60,10 +61,14 @@ def audit_run(records: pd.DataFrame, row: dict) -> tuple[dict[str, list[str]], d
     late = rec["assign_s"] - rec["request_s"] > np.maximum(rec["patience_s"], 90.0) + ROUND_S + 1e-9
     if late.any():
         fail("assignment", f"order {int(rec.loc[late, 'order_id'].iloc[0])} assigned after its patience ran out")
-    same_round = rec.duplicated(["vehicle", "assign_s"])
-    if same_round.any():
-        r = rec[same_round].iloc[0]
-        fail("assignment", f"vehicle {int(r['vehicle'])} took two passengers in the round at {r['assign_s']:g} s")
+    # One passenger per vehicle and round, except RTV's two-request trip: two mutual partners at once.
+    for (vehicle, t), group in rec.groupby(["vehicle", "assign_s"]):
+        if len(group) == 1:
+            continue
+        ids, partners = group["order_id"].tolist(), group["partner"].tolist()
+        if len(group) > 2 or sorted(ids) != sorted(partners):
+            fail("assignment", f"vehicle {int(vehicle)} took {len(group)} passengers in the round at {t:g} s "
+                               "that are not one trip")
     checked["assignment"] += 4 * len(rec)
     pooled = rec[rec["pooled"].astype(bool)]
     by_id = rec.drop_duplicates("order_id").set_index("order_id")     # a duplicate is reported above

@@ -125,7 +125,8 @@ def paper_table(frame: pd.DataFrame, date: str = "2017-05-01") -> str:
             ours = part[kpi].get("authors") if "authors" in part.index else None
             rp = part[kpi].get("rpbench") if "rpbench" in part.index else None
             ref = part.iloc[0]
-            origin = ref.get(f"paper_{kpi}_origin") or ""
+            origin = ref.get(f"paper_{kpi}_origin")
+            origin = origin if isinstance(origin, str) else ""      # NaN when read back from runs.csv
             paper_value = ref.get(f"paper_{kpi}")
             shown = _fmt(paper_value, digits) + (f" ({origin})" if origin else "")
             lines.append(f"| {strategy} | {kpi} | {_fmt(ours, digits)} | {_fmt(rp, digits)} | "

@@ -41,3 +41,12 @@ def test_a_passenger_served_twice_and_a_one_sided_partner_are_named():
     rec.loc[1, "partner"] = 3
     bad, _ = audit_run(rec, row())
     assert any("not mutual" in m for m in bad["assignment"])
+
+
+def test_a_two_request_trip_is_one_assignment_but_two_strangers_are_not():
+    rec = records()
+    rec.loc[1, ["assign_s", "request_s"]] = [10.0, 5.0]     # RTV: both partners taken by vehicle 0 in one round
+    assert audit_run(rec, row())[0] == {}
+    rec.loc[2, ["vehicle", "assign_s"]] = [0, 10.0]
+    bad, _ = audit_run(rec, row())
+    assert any("not one trip" in m for m in bad["assignment"])
