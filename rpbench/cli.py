@@ -25,7 +25,7 @@ from rpbench.exceptions import RpbenchError
 
 #: Subcommand modules, in the order ``rpbench --help`` lists them.
 COMMANDS = ("run", "check", "oracle", "predict", "snapshot", "bench", "sweep", "report", "publish", "scenario",
-            "list", "data")
+            "list", "data", "replicate")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -6,7 +6,10 @@ Feng, Hu, He, Tables 2-6 (Haikou, 2017-05-01 08:00-09:00, order-driver ratio
 100:25 unless stated).  The paper does not state a sampling rate, but its
 NP occupied distance (3,333 km at response rate 0.74) matches about 30 % of
 the hour's 2,018 orders (mean solo trip 7.2 km), which is why haikou-peak
-samples 30 % by default and reports compare against the paper only then.  The paper's own tables disagree
+samples 30 % by default and reports compare against the paper only then.  (The authors' committed
+2017-05-01 outputs were in fact simulated from the 1,766 orders selected by *arrive_time*, not from
+the departure-time file: 530 sampled orders and 132 vehicles; the ``haikou-paper-input`` scenario
+rebuilds that input, see docs/replication.md.)  The paper's own tables disagree
 in places (A21: RTV pairing ratio 0.2 in Table 2 vs 0.14 in Table 3 at
 K = 90 s; FL profit 4438 vs 4238).
 """

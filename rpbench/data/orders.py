@@ -8,7 +8,14 @@
   empty frame (the ``haikou-peak`` generator refuses to simulate it).
 * ``demand_0800_0900/raw_orders_2017-05-01_0800-0900_by_departure_time.csv.gz``
   and ``samples_and_aggregates/dwv_order_make_haikou_1_min.csv.gz``: raw
-  lon/lat orders, to be snapped by :func:`rpbench.network.snap`.
+  lon/lat orders, to be snapped by :func:`rpbench.network.snap`.  The
+  departure-time file is *not* the input of the authors' committed 2017-05-01
+  outputs: those come from the 1,766 orders selected by ``arrive_time``
+  (``raw_orders_2017-05-01_0800-0900_by_arrive_time.csv.gz``), sampled with
+  pandas ``random_state=1`` (530 orders, 132 vehicles); that input is read by
+  :mod:`rpbench.data.paper_orders` and built by the ``haikou-paper-input``
+  scenario.  The days 2017-05-02.. of the committed outputs use the order
+  files above (all rows sampled, then released only inside the hour).
 * ``predecessor_trb2021_network/SIMULATION_RESULTS_ALL_DIDI_CHUXING_HAIKOU_2017-07-01.csv.gz``:
   the real 2017-07-01 00:00-13:06 trace on the predecessor network.
 """

@@ -192,10 +192,26 @@ def check_tree(path: str | Path) -> list[FolderResult]:
             meta = results.read_meta(path)
         except RpbenchError as exc:
             return [FolderResult(str(path), error=one_line(exc))]
+    if meta is not None and meta.get("kind") == "replication":
+        return [_check_replication(path)]
     if meta is not None and meta.get("kind") in PARENT_KINDS:
         parent, children = _check_parent(path, meta)
         return [parent] + [check_results(child) for child in children]
     return [check_results(folder) for folder in results.run_folders(path)]
+
+
+def _check_replication(folder: Path) -> FolderResult:
+    """A ``rpbench replicate`` folder: the checks that apply to the authors' engine, the rest skipped by
+    name with the reason (:mod:`rpbench.replication.audit`)."""
+    # Imported here: rpbench.replication imports rpbench.results, never the other way at import time.
+    from rpbench.replication.audit import audit_folder
+    out = FolderResult(str(folder))
+    try:
+        for name, violations, checked, skipped in audit_folder(folder):
+            out.runs.append(RunCheck(name, violations=violations, checked=checked, skipped=skipped))
+    except RpbenchError as exc:
+        out.error = one_line(exc)
+    return out
 
 
 def check_results(folder: str | Path) -> FolderResult:

@@ -18,6 +18,7 @@ from rpbench.exceptions import ParameterError
 from rpbench.paths import find_data_dir, require_data_dir
 from rpbench.scenarios.base import Params, Scenario
 from rpbench.scenarios.day import build_day
+from rpbench.scenarios.paper_input import build_paper_input
 from rpbench.scenarios.peak import build_peak
 from rpbench.scenarios.toy import build_toy
 from rpbench.scenarios.trace import build_trace
@@ -42,6 +43,9 @@ SCENARIOS: dict[str, ScenarioSpec] = {
     spec.name: spec for spec in [
         ScenarioSpec("haikou-peak", "a date's real 08:00-09:00 DiDi orders on the authors' network "
                      "(default 2017-05-01, 30 % sample)", True, 0.3, build_peak, available_peak_dates),
+        ScenarioSpec("haikou-paper-input", "the authors' exact input behind their committed outputs: arrive-time "
+                     "selection on 2017-05-01, pandas sample random_state=1, int(n/4) vehicles",
+                     True, 0.3, build_paper_input, available_peak_dates),
         ScenarioSpec("haikou-day", "SYNTHETIC 24-hour stand-in: a date's real hourly volumes, OD pairs "
                      "from the 21-day OD rate table", True, 1.0, build_day, _hourly_count_dates),
         ScenarioSpec("haikou-trace", "the real 2017-07-01 00:00-13:06 trace on the TR-B 2021 network",

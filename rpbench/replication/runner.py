@@ -1,0 +1,158 @@
+"""``rpbench replicate``'s work: per date and strategy, the authors' engine, the ablation steps, rpbench's engine.
+
+Every run is one row (a dict) with the engine, the strategy, the date, the
+KPIs in the authors' definitions (response = served / the run's denominator)
+and, beside them, the authors' committed output and the paper's printed value
+with its origin.  Engines:
+
+* ``authors``: every switch on (:class:`~rpbench.replication.switches.Switches`);
+* ``authors-no-<mechanism>``: that one mechanism off, the others on;
+* ``authors-all-off``: every switch off;
+* ``rpbench``: rpbench's own simulator (``rpbench/sim``) on the authors'
+  input (haikou-paper-input), its response rate over the same denominator;
+* ``rpbench-peak``: rpbench's own simulator on its own input (haikou-peak,
+  seed 0), i.e. rpbench's published numbers: the end of the chain that
+  ``authors-all-off`` approaches.
+"""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from rpbench.backends.presets import Preset
+from rpbench.data.paper_orders import PREDICTION_COLUMNS
+from rpbench.exceptions import ParameterError
+from rpbench.replication import reference
+from rpbench.replication.engine import STRATEGIES as AUTHORS_STRATEGIES
+from rpbench.replication.engine import AuthorsEngine, Outcome
+from rpbench.replication.switches import steps_for
+from rpbench.scenarios.paper_input import PaperInput, load_paper_input
+from rpbench.scenarios.peak import build_peak
+
+KNOWN_STRATEGIES = ("np", "mb", "rtv", "fl-nd", "fl")
+KPIS = ("response_rate", "pairing_ratio", "total_saving_km", "avg_detour_m", "avg_shared_m",
+        "avg_response_time_s", "avg_pickup_time_s")
+
+
+@dataclass
+class Inputs:
+    """Both inputs of one date: the authors' and rpbench's haikou-peak (for the authors_input switch)."""
+
+    paper: PaperInput
+    peak: PaperInput
+
+
+@dataclass
+class Replication:
+    rows: list[dict] = field(default_factory=list)
+    outcomes: dict[tuple[str, str, str], Outcome] = field(default_factory=dict)   # (date, strategy, engine)
+
+
+def parse_strategies(text: str) -> list[str]:
+    names = [s.strip().lower() for s in text.split(",") if s.strip()]
+    unknown = [s for s in names if s not in KNOWN_STRATEGIES]
+    if not names or unknown:
+        raise ParameterError(f"--strategies {text!r}: expected a comma-separated subset of "
+                             f"{', '.join(KNOWN_STRATEGIES)}")
+    return list(dict.fromkeys(names))
+
+
+def load_inputs(data_dir: Path, date: str) -> Inputs:
+    paper = load_paper_input(data_dir, date=date)
+    peak_scenario = build_peak(data_dir, date=date, sample=0.3, seed=0)
+    peak = PaperInput(scenario=peak_scenario, predictions=_peak_predictions(data_dir, date, peak_scenario),
+                      response_denominator=len(peak_scenario.orders))
+    return Inputs(paper=paper, peak=peak)
+
+
+def _peak_predictions(data_dir: Path, date: str, scenario) -> pd.DataFrame:
+    """The order file's per-order predictions aligned with a haikou-peak scenario's orders."""
+    from rpbench.data.orders import peak_order_path
+    raw = pd.read_csv(peak_order_path(data_dir, date))
+    raw = raw.drop_duplicates("dwv_order_make_haikou_1.order_id").set_index("dwv_order_make_haikou_1.order_id")
+    cols = [c for c in PREDICTION_COLUMNS if c in raw.columns]
+    return raw.loc[scenario.orders.order_id, cols].reset_index(drop=True)
+
+
+def engine_name(label: str) -> str:
+    return label if label == "authors" else f"authors-{label}"
+
+
+def run_authors(inputs: Inputs, strategy: str, switches, preset: Preset) -> Outcome:
+    chosen = inputs.paper if switches.authors_input else inputs.peak
+    return AuthorsEngine(chosen.scenario, strategy, preset, switches=switches, predictions=chosen.predictions,
+                         denominator=chosen.response_denominator).run()
+
+
+def run_rpbench(chosen: PaperInput, strategy: str, preset: Preset, done: dict) -> dict[str, float]:
+    """rpbench's own engine on ``chosen``; response over its denominator (the authors': the whole sample)."""
+    from rpbench.harness.comparison import calibrated, simulate_strategy
+    from rpbench.strategies import strategy_class
+    scenario = chosen.scenario
+    options = calibrated(scenario, strategy, strategy_class(strategy).Options(), preset, done, False)
+    run = simulate_strategy(scenario, strategy, preset, options=options, progress=False)
+    done[strategy] = run
+    k = dict(run.kpis)
+    k["response_denominator"] = chosen.response_denominator
+    k["response_rate"] = k["served"] / chosen.response_denominator
+    k["vehicles"] = len(scenario.fleet)
+    return k
+
+
+def replicate(data_dir: Path, dates: list[str], strategies: list[str], preset: Preset, *, ablation: str = "single",
+              rpbench_engine: bool = True, progress: bool = False) -> Replication:
+    """Every (date, strategy): the authors' engine and the ablation steps of ``ablation`` (single, cumulative,
+    both, none), then rpbench's engine on both inputs unless ``rpbench_engine`` is false."""
+    committed = reference.read_committed(data_dir)
+    steps = steps_for(ablation)
+    out = Replication()
+    for date in dates:
+        inputs = load_inputs(data_dir, date)
+        done: dict = {}
+        done_peak: dict = {}
+        for strategy in strategies:
+            if strategy in AUTHORS_STRATEGIES:
+                for label, switches in steps:
+                    outcome = run_authors(inputs, strategy, switches, preset)
+                    name = engine_name(label)
+                    out.outcomes[(date, strategy, name)] = outcome
+                    out.rows.append(_row(name, strategy, date, outcome.kpis(), switches.off(), committed))
+                    if progress:
+                        print(f"rpbench: {date} {strategy:>5} {name:<40} pairing {out.rows[-1]['pairing_ratio']:.3f}"
+                              f" saving {out.rows[-1]['total_saving_km']:.1f} km", file=sys.stderr, flush=True)
+            if rpbench_engine:
+                for name, chosen, cache in (("rpbench", inputs.paper, done), ("rpbench-peak", inputs.peak, done_peak)):
+                    kpis = run_rpbench(chosen, strategy, preset, cache)
+                    out.rows.append(_row(name, strategy, date, kpis, ["(rpbench's simulator)"], committed))
+                    if progress:
+                        print(f"rpbench: {date} {strategy:>5} {name:<40} pairing {kpis['pairing_ratio']:.3f}"
+                              f" saving {kpis['total_saving_km']:.1f} km", file=sys.stderr, flush=True)
+    return out
+
+
+def _row(engine: str, strategy: str, date: str, kpis: dict, off: list[str], committed: pd.DataFrame) -> dict:
+    row = {"engine": engine, "strategy": strategy, "date": date, "switches_off": ",".join(off)}
+    for k in ("orders", "response_denominator", "vehicles", "served", "pooled_passengers"):
+        if k in kpis:
+            row[k] = int(kpis[k])
+    for k in KPIS:
+        row[k] = _clean(kpis.get(k, float("nan")))
+    for k in reference.KPIS:
+        c = reference.committed_value(committed, strategy, date, k)
+        row[f"committed_{k}"] = _clean(c)
+        row[f"diff_{k}"] = _clean(row[k] - c) if np.isfinite(c) else None
+        printed, origin = reference.printed_value(strategy, date, k)
+        row[f"paper_{k}"] = _clean(printed)
+        row[f"paper_{k}_origin"] = origin or None
+    return row
+
+
+def _clean(x) -> float | None:
+    """JSON-friendly: NaN -> None."""
+    x = float(x)
+    return None if not np.isfinite(x) else x
