@@ -70,6 +70,7 @@ class FleetState:
         self._next_k = np.zeros(n, dtype=np.int64)
         self._next_node = np.asarray(initial_nodes, dtype=np.int64).copy()
         self._next_tt = np.full(n, -np.inf)
+        self._next_odo = np.zeros(n)
         self._idle = np.zeros(n, dtype=bool)
         # Out-neighbours per node as plain lists: the random walk steps one node at a time.
         heads = network.arc_head[network.out_arcs]
@@ -110,7 +111,7 @@ class FleetState:
     def position(self, v: int, t: float) -> tuple[int, int, float]:
         """(plan index of the next node, that node, metres before reaching it) at time ``t``."""
         plan = self.plans[v]
-        k = int(np.searchsorted(plan.tt, t - _EPS_S, side="left"))
+        k = int(plan.tt.searchsorted(t - _EPS_S, side="left"))
         if k >= len(plan.nodes):
             if plan.cruising:
                 self._extend_cruise(v, t)
@@ -129,14 +130,24 @@ class FleetState:
         """
         vehicles = np.asarray(vehicles, dtype=np.int64)
         stale = vehicles[(self._next_tt[vehicles] < t - _EPS_S) & ~self._idle[vehicles]]
-        for v in stale:
-            k, node, _ = self.position(int(v), t)
+        for v in stale.tolist():
+            k, node, _ = self.position(v, t)
             plan = self.plans[v]
-            self._next_k[v], self._next_node[v] = k, node
-            self._idle[v] = k == len(plan.nodes) - 1 and plan.tt[k] <= t and not plan.cruising
-            self._next_tt[v] = plan.tt[k]
+            tt_k = plan.tt[k]
+            self._next_k[v] = k
+            self._next_node[v] = node
+            self._idle[v] = k == len(plan.nodes) - 1 and tt_k <= t and not plan.cruising
+            self._next_tt[v] = tt_k
+            self._next_odo[v] = plan.odo[k]
         pre = np.where(self._idle[vehicles], 0.0, np.maximum(0.0, (self._next_tt[vehicles] - t) * self.speed))
         return self._next_k[vehicles].copy(), self._next_node[vehicles].copy(), pre
+
+    def next_odometers(self, vehicles: np.ndarray) -> np.ndarray:
+        """Odometer at the plan node each vehicle reaches next, as found by the last :meth:`positions` call.
+
+        Valid for vehicles passed to :meth:`positions` at the current time and not replanned since.
+        """
+        return self._next_odo[np.asarray(vehicles, dtype=np.int64)]
 
     def _invalidate(self, v: int) -> None:
         self._next_tt[v] = -np.inf
