@@ -65,15 +65,15 @@ class HighsBackend(ProgramBackend):
         with clock("build_s"):
             h = highspy.Highs()
             configure(h, options, time_limit, relax=relax)
-            A = prog.A
-            n, m = prog.n, A.shape[0]
+            n, m = prog.n, prog.n_rows
             inf = highspy.kHighsInf
             integrality = np.full(n, 0 if relax else int(highspy.HighsVarType.kInteger), dtype=np.int32)
-            status = h.passModel(n, m, int(A.nnz), int(highspy.MatrixFormat.kColwise),
+            status = h.passModel(n, m, len(prog.indices), int(highspy.MatrixFormat.kColwise),
                                  int(highspy.ObjSense.kMaximize), 0.0, prog.c, np.zeros(n), np.ones(n),
                                  np.where(np.isfinite(prog.lo), prog.lo, -inf),
                                  np.where(np.isfinite(prog.hi), prog.hi, inf),
-                                 A.indptr.astype(np.int32), A.indices.astype(np.int32), A.data.astype(np.float64),
+                                 prog.indptr.astype(np.int32), prog.indices.astype(np.int32),
+                                 np.ones(len(prog.indices), dtype=np.float64),
                                  integrality)
             if status.name == "kError":
                 raise SolverError("HiGHS rejected the model passed by rpbench (passModel returned kError)")
