@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rpbench.network import DistanceOracle, RoadNetwork
+from rpbench.sim.lookahead import PlanWindows
 
 PICKUP, DROPOFF = 0, 1
 CRUISE_ARCS = 24          # random-walk arcs added per extension (~11 km on Haikou)
@@ -72,6 +73,7 @@ class FleetState:
         self._next_tt = np.full(n, -np.inf)
         self._next_odo = np.zeros(n)
         self._idle = np.zeros(n, dtype=bool)
+        self._windows = PlanWindows(n)                              # plan nodes ahead, for vectorised lookups
         # Out-neighbours per node as plain lists: the random walk steps one node at a time.
         heads = network.arc_head[network.out_arcs]
         off = network.out_offsets
@@ -130,15 +132,28 @@ class FleetState:
         """
         vehicles = np.asarray(vehicles, dtype=np.int64)
         stale = vehicles[(self._next_tt[vehicles] < t - _EPS_S) & ~self._idle[vehicles]]
-        for v in stale.tolist():
-            k, node, _ = self.position(v, t)
+        before = t - _EPS_S
+        if len(stale):
+            found = self._windows.find(stale, before)
+            hit = found.vehicles
+            self._next_k[hit] = found.k
+            self._next_node[hit] = found.node
+            self._idle[hit] = found.at_end & (found.tt <= t)
+            self._next_tt[hit] = found.tt
+            self._next_odo[hit] = found.odo
+            stale = found.missed
+        for v in stale.tolist():                        # past the window: look up the plan, then refill
             plan = self.plans[v]
+            k = int(plan.tt.searchsorted(before))       # :meth:`position`, inlined for the common case
+            if k >= len(plan.nodes):
+                k = self.position(v, t)[0]              # past the plan's end: cruise extended, or standing
             tt_k = plan.tt[k]
             self._next_k[v] = k
-            self._next_node[v] = node
+            self._next_node[v] = plan.nodes[k]
             self._idle[v] = k == len(plan.nodes) - 1 and tt_k <= t and not plan.cruising
             self._next_tt[v] = tt_k
             self._next_odo[v] = plan.odo[k]
+            self._windows.fill(v, plan.nodes, plan.tt, plan.odo, plan.cruising, k)
         pre = np.where(self._idle[vehicles], 0.0, np.maximum(0.0, (self._next_tt[vehicles] - t) * self.speed))
         return self._next_k[vehicles].copy(), self._next_node[vehicles].copy(), pre
 
@@ -152,6 +167,7 @@ class FleetState:
     def _invalidate(self, v: int) -> None:
         self._next_tt[v] = -np.inf
         self._idle[v] = False
+        self._windows.drop(v)
 
     def replan(self, v: int, anchor: int, nodes_tail: np.ndarray, stops: list[Stop], *, cruising: bool = False,
                start_t: float | None = None) -> None:
