@@ -1,12 +1,13 @@
-"""Which node pairs lie within a distance: a bit table that pre-filters pick-up candidates.
+"""Which node pairs lie within a distance: a table that pre-filters pick-up candidates.
 
 A round's candidate search asks, for every (vehicle, passenger) pair, whether
 ``pre + l(node, origin) <= R̄``.  Gathering ``l`` for all pairs from the
-all-pairs table (120 MB for Haikou) costs one cache miss per pair, while only
-a few per cent of node pairs are within R̄.  Since ``pre >= 0``, a pair can
-only qualify if ``l(node, origin) <= R̄`` alone, which one bit per node pair
-answers from a table small enough to stay in cache (1.9 MB for Haikou); the
-exact test then runs on the pairs that pass.
+all-pairs table (120 MB for Haikou, one row per vehicle node) costs about one
+cache miss per pair, while only a few per cent of node pairs are within R̄.
+Since ``pre >= 0``, a pair can only qualify if ``l(node, origin) <= R̄``
+alone.  A boolean table stored by *destination* answers that for a round from
+one short row per passenger origin (3.9 kB for Haikou), which stays in cache;
+the exact test then runs on the few pairs that pass.
 """
 
 from __future__ import annotations
@@ -18,23 +19,26 @@ import numpy as np
 
 @dataclass(frozen=True, eq=False)
 class NearTable:
-    """Bit ``[u, v]`` is set when ``dist[u, v] <= threshold_m`` (rows packed little-endian)."""
+    """``reach[v, u]`` is True when ``dist[u, v] <= threshold_m`` (row: the destination node)."""
 
     dist: np.ndarray
     threshold_m: float
-    bits: np.ndarray          # uint8 (n, ceil(n / 8))
+    reach: np.ndarray          # bool (n, n)
+
+    #: Source rows compared per block while transposing (bounds the temporary to block x n booleans).
+    BLOCK = 256
 
     @classmethod
     def build(cls, dist: np.ndarray, threshold_m: float) -> NearTable:
-        bits = np.packbits(dist <= threshold_m, axis=1, bitorder="little")
-        return cls(dist, float(threshold_m), bits)
+        n = dist.shape[0]
+        reach = np.empty((dist.shape[1], n), dtype=bool)
+        for start in range(0, n, cls.BLOCK):     # blockwise: a whole-table bool transpose is 4x slower
+            reach[:, start:start + cls.BLOCK] = (dist[start:start + cls.BLOCK] <= threshold_m).T
+        return cls(dist, float(threshold_m), reach)
 
     def mask(self, from_nodes: np.ndarray, to_nodes: np.ndarray) -> np.ndarray:
         """Boolean ``(len(to_nodes), len(from_nodes))``: ``dist[from, to] <= threshold`` (rows: ``to_nodes``)."""
-        to = np.asarray(to_nodes, dtype=np.int64)[:, None]
-        rows = np.asarray(from_nodes, dtype=np.int64)[None, :]
-        bit = np.left_shift(np.uint8(1), (to & 7).astype(np.uint8))
-        return (self.bits[rows, to >> 3] & bit) != 0
+        return self.reach[np.asarray(to_nodes, dtype=np.int64)][:, np.asarray(from_nodes, dtype=np.int64)]
 
 
 _last: NearTable | None = None
