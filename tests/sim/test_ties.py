@@ -81,3 +81,12 @@ def test_canonical_choice_is_independent_of_the_start_on_symmetric_models():
         best = max(s[0] for s in sols)
         outcomes = {tuple(canonicalize(m, optimal(m, list(c)))[0].chosen) for v, c in sols if v == best}
         assert len(outcomes) == 1
+
+
+def test_pairs_of_equals_triu_indices_and_is_read_only():
+    from rpbench.sim.ties import _pairs_of
+
+    for m in range(8):
+        x, y = _pairs_of(m)
+        ex, ey = np.triu_indices(m, k=1)
+        assert np.array_equal(x, ex) and np.array_equal(y, ey) and not x.flags.writeable
