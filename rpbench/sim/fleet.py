@@ -85,13 +85,13 @@ class FleetState:
 
     def _plan_from(self, start_node: int, t: float, odo: float, nodes_tail: np.ndarray) -> Plan:
         """A plan driving ``start_node`` then ``nodes_tail`` (consecutive nodes joined by arcs)."""
-        nodes = np.concatenate([[start_node], nodes_tail]).astype(np.int32)
+        nodes = np.empty(len(nodes_tail) + 1, dtype=np.int32)
+        nodes[0] = start_node
+        nodes[1:] = nodes_tail
+        cum = np.zeros(len(nodes))
         if len(nodes) > 1:
             arcs = self.network.arc_index(nodes[:-1], nodes[1:])
-            step = self.network.arc_length_m[arcs]
-        else:
-            step = np.zeros(0)
-        cum = np.concatenate([[0.0], np.cumsum(step)])
+            np.cumsum(self.network.arc_length_m[arcs], out=cum[1:])
         return Plan(nodes, t + cum / self.speed, odo + cum)
 
     def route_through(self, waypoints: list[int]) -> tuple[np.ndarray, list[int]]:
