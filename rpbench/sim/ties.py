@@ -99,7 +99,10 @@ def _repair(model, chosen: np.ndarray, resource: np.ndarray, items: tuple[np.nda
                                                                      model.n_rows):
             moves += 1
             continue
-        x, y = _pairs_of(len(chosen))
+        # Only columns holding a resource can swap it: pairs among them, in the same (row-major) order.
+        movable = np.flatnonzero(resource[chosen] >= 0)
+        x, y = _pairs_of(len(movable))
+        x, y = movable[x], movable[y]
         cx, cy = chosen[x], chosen[y]
         rx, ry = resource[cx], resource[cy]
         ok = (rx >= 0) & (ry >= 0) & (rx != ry)
