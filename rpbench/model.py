@@ -63,6 +63,23 @@ def quantize(values_m, unit_m: float = 1e-3) -> np.ndarray:
     return np.round(np.asarray(values_m, dtype=np.float64) / unit_m)
 
 
+def _distinct_rows(table: np.ndarray) -> bool:
+    """Whether the rows of an int64 table (entries >= -1) are pairwise distinct.
+
+    Each row becomes one mixed-radix integer, so a 1-D sort decides (``np.unique(axis=0)`` sorts a
+    structured view and dominated a simulation round's model check); tables whose radix product
+    could overflow int64 are compared row-wise.
+    """
+    radix = table.max(axis=0, initial=-1) + 2
+    if np.prod(radix.astype(np.float64)) >= 2.0 ** 62:
+        return len(np.unique(table, axis=0)) == len(table)
+    key = np.zeros(len(table), dtype=np.int64)
+    for col, base in zip(table.T, radix):
+        key = key * base + (col + 1)
+    key.sort()
+    return not (key[1:] == key[:-1]).any()
+
+
 # --------------------------------------------------------------------- models
 @dataclass(frozen=True, eq=False)
 class _Model:
@@ -85,7 +102,22 @@ class _Model:
         raise NotImplementedError
 
     def column_rows(self) -> tuple[np.ndarray, np.ndarray]:
-        """Rows covered by each column as CSC ``(col_start, row_index)``."""
+        """Rows covered by each column as CSC ``(col_start, row_index)`` (read-only arrays).
+
+        Computed once per model: a simulation round asks for them several times (size, program,
+        verification, tie canonicalisation).
+        """
+        cached = self.__dict__.get("_column_rows_cache")
+        if cached is None:
+            start, rows = self._column_rows()
+            start.setflags(write=False)
+            rows.setflags(write=False)
+            cached = (start, rows)
+            object.__setattr__(self, "_column_rows_cache", cached)
+        return cached
+
+    def _column_rows(self) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`column_rows` computed from the column arrays."""
         raise NotImplementedError
 
     def incidence(self) -> sp.csc_matrix:
@@ -135,11 +167,11 @@ class _Model:
         if self.n_cols < 2:
             return
         table = np.stack([np.asarray(k, dtype=np.int64) for k in keys], axis=1)
-        uniq = np.unique(table, axis=0)
-        if len(uniq) != self.n_cols:
-            srt = np.lexsort(table.T[::-1])
-            dup = np.flatnonzero((np.diff(table[srt], axis=0) == 0).all(axis=1))[0]
-            raise ModelError(f"model {self.name!r}: columns {int(srt[dup])} and {int(srt[dup + 1])} are duplicates")
+        if _distinct_rows(table):
+            return
+        srt = np.lexsort(table.T[::-1])
+        dup = np.flatnonzero((np.diff(table[srt], axis=0) == 0).all(axis=1))[0]
+        raise ModelError(f"model {self.name!r}: columns {int(srt[dup])} and {int(srt[dup + 1])} are duplicates")
 
     # -- solutions -------------------------------------------------------------
     def objective_of(self, chosen) -> float:
@@ -216,7 +248,7 @@ class AssignmentModel(_Model):
     def row_exact(self) -> np.ndarray:
         return np.concatenate([np.ones(self.n_passengers, bool), np.zeros(self.n_vehicles, bool)])
 
-    def column_rows(self) -> tuple[np.ndarray, np.ndarray]:
+    def _column_rows(self) -> tuple[np.ndarray, np.ndarray]:
         has_v = self.col_vehicle >= 0
         counts = 1 + has_v.astype(np.int64)
         start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
@@ -279,7 +311,7 @@ class TripPackingModel(_Model):
     def row_exact(self) -> np.ndarray:
         return np.zeros(self.n_rows, dtype=bool)
 
-    def column_rows(self) -> tuple[np.ndarray, np.ndarray]:
+    def _column_rows(self) -> tuple[np.ndarray, np.ndarray]:
         pair = self.col_request2 >= 0
         counts = 2 + pair.astype(np.int64)
         start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
@@ -341,7 +373,7 @@ class PairingModel(_Model):
     def row_exact(self) -> np.ndarray:
         return np.zeros(self.n_orders, dtype=bool)
 
-    def column_rows(self) -> tuple[np.ndarray, np.ndarray]:
+    def _column_rows(self) -> tuple[np.ndarray, np.ndarray]:
         start = np.arange(0, 2 * self.n_cols + 1, 2, dtype=np.int64)
         rows = np.empty(2 * self.n_cols, dtype=np.int32)
         rows[0::2] = self.col_a

@@ -124,3 +124,28 @@ def test_solutions_recompute_the_objective():
 def test_quantize_rounds_to_integral_units():
     assert quantize([1.2344, 1.2346, -0.0004]).tolist() == [1234.0, 1235.0, -0.0]
     assert quantize([1500.0], unit_m=1.0).tolist() == [1500.0]
+
+
+def test_column_rows_are_computed_once_and_read_only():
+    m = assignment()
+    start, rows = m.column_rows()
+    assert m.column_rows()[0] is start and m.column_rows()[1] is rows
+    with pytest.raises(ValueError):
+        rows[0] = 1
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_distinct_rows_matches_numpy_unique(seed):
+    from rpbench.model import _distinct_rows
+
+    rng = np.random.default_rng(seed)
+    table = rng.integers(-1, 4, size=(int(rng.integers(1, 12)), int(rng.integers(1, 4)))).astype(np.int64)
+    assert _distinct_rows(table) == (len(np.unique(table, axis=0)) == len(table))
+
+
+def test_distinct_rows_with_huge_entries_falls_back_to_row_comparison():
+    from rpbench.model import _distinct_rows
+
+    big = 2 ** 40
+    assert _distinct_rows(np.array([[big, 1, big], [big, 2, big]], dtype=np.int64))
+    assert not _distinct_rows(np.array([[big, 1, big], [big, 1, big]], dtype=np.int64))

@@ -89,3 +89,15 @@ def test_authors_snapping_rule_reproduces_their_nodes(data_dir, haikou):
 def test_unknown_snapping_rule(haikou):
     with pytest.raises(ParameterError, match="unknown snapping rule"):
         snap(haikou, [110.3], [20.0], rule="closest")
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_arc_index_finds_each_arc_and_only_arcs(seed):
+    net = grid_network(4)
+    rng = np.random.default_rng(seed)
+    tail, head = rng.integers(0, net.n_nodes, 40), rng.integers(0, net.n_nodes, 40)
+    tail[:10], head[:10] = net.arc_tail[:10], net.arc_head[:10]            # some real arcs among them
+    arcs = {(int(a), int(b)): i for i, (a, b) in enumerate(zip(net.arc_tail, net.arc_head))}
+    expected = [arcs.get((int(a), int(b)), -1) for a, b in zip(tail, head)]
+    assert net.arc_index(tail, head).tolist() == expected
+    assert int(net.arc_index(int(tail[0]), int(head[0]))) == expected[0]

@@ -22,6 +22,7 @@ import math
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
@@ -61,31 +62,57 @@ class Clock:
 class Program:
     """``maximise c·x  s.t.  lo <= A x <= hi,  x ∈ {0,1}^n`` (or ``[0,1]^n`` relaxed).
 
-    ``A`` is the model's 0/1 incidence matrix (CSC), optionally with one extra
-    row ``Σ x >= k`` (the cardinality stage of Oracle-2).
+    ``A`` is the model's 0/1 incidence matrix, optionally with one extra row
+    ``Σ x >= k`` (the cardinality stage of Oracle-2), kept as CSC index arrays
+    (rows sorted within each column); adapters that want a scipy matrix read
+    :attr:`A`, built on first use (a simulation round, solved by HiGHS from the
+    arrays, then never pays for scipy's construction checks).
     """
 
     c: np.ndarray
-    A: sp.csc_matrix
+    indptr: np.ndarray     # column starts, n + 1 entries
+    indices: np.ndarray    # row of each nonzero
     lo: np.ndarray
     hi: np.ndarray
 
     @property
     def n(self) -> int:
-        return self.A.shape[1]
+        return len(self.indptr) - 1
+
+    @property
+    def n_rows(self) -> int:
+        return len(self.lo)
+
+    @cached_property
+    def A(self) -> sp.csc_matrix:
+        data = np.ones(len(self.indices), dtype=np.float64)
+        return sp.csc_matrix((data, self.indices, self.indptr), shape=(self.n_rows, self.n))
 
 
 def program(model: Model, c: np.ndarray | None = None, min_count: int | None = None) -> Program:
     """The model as a 0/1 program; ``c`` defaults to its values."""
-    A = model.incidence()
     exact = model.row_exact()
     lo = np.where(exact, 1.0, -np.inf)
     hi = np.ones(model.n_rows)
-    if min_count is not None:
-        A = sp.vstack([A, sp.csr_matrix(np.ones((1, model.n_cols)))], format="csc")
-        lo, hi = np.append(lo, float(min_count)), np.append(hi, np.inf)
-    A.sort_indices()
-    return Program(c=np.asarray(model.values if c is None else c, dtype=np.float64), A=A, lo=lo, hi=hi)
+    start, rows = model.column_rows()
+    if min_count is not None or not _sorted_within_columns(start, rows):
+        A = model.incidence()
+        if min_count is not None:
+            A = sp.vstack([A, sp.csr_matrix(np.ones((1, model.n_cols)))], format="csc")
+            lo, hi = np.append(lo, float(min_count)), np.append(hi, np.inf)
+        A.sort_indices()
+        start, rows = A.indptr, A.indices
+    return Program(c=np.asarray(model.values if c is None else c, dtype=np.float64), indptr=start, indices=rows,
+                   lo=lo, hi=hi)
+
+
+def _sorted_within_columns(start: np.ndarray, rows: np.ndarray) -> bool:
+    """Whether the CSC row indices increase strictly within every column (as scipy's sorted form)."""
+    if len(rows) < 2:
+        return True
+    rising = rows[1:] > rows[:-1]
+    rising[start[1:-1][(start[1:-1] > 0) & (start[1:-1] < len(rows))] - 1] = True    # column boundaries
+    return bool(rising.all())
 
 
 @dataclass

@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rpbench.network import DistanceOracle, RoadNetwork
+from rpbench.sim.lookahead import PlanWindows
 
 PICKUP, DROPOFF = 0, 1
 CRUISE_ARCS = 24          # random-walk arcs added per extension (~11 km on Haikou)
@@ -70,7 +71,9 @@ class FleetState:
         self._next_k = np.zeros(n, dtype=np.int64)
         self._next_node = np.asarray(initial_nodes, dtype=np.int64).copy()
         self._next_tt = np.full(n, -np.inf)
+        self._next_odo = np.zeros(n)
         self._idle = np.zeros(n, dtype=bool)
+        self._windows = PlanWindows(n)                              # plan nodes ahead, for vectorised lookups
         # Out-neighbours per node as plain lists: the random walk steps one node at a time.
         heads = network.arc_head[network.out_arcs]
         off = network.out_offsets
@@ -82,13 +85,13 @@ class FleetState:
 
     def _plan_from(self, start_node: int, t: float, odo: float, nodes_tail: np.ndarray) -> Plan:
         """A plan driving ``start_node`` then ``nodes_tail`` (consecutive nodes joined by arcs)."""
-        nodes = np.concatenate([[start_node], nodes_tail]).astype(np.int32)
+        nodes = np.empty(len(nodes_tail) + 1, dtype=np.int32)
+        nodes[0] = start_node
+        nodes[1:] = nodes_tail
+        cum = np.zeros(len(nodes))
         if len(nodes) > 1:
             arcs = self.network.arc_index(nodes[:-1], nodes[1:])
-            step = self.network.arc_length_m[arcs]
-        else:
-            step = np.zeros(0)
-        cum = np.concatenate([[0.0], np.cumsum(step)])
+            np.cumsum(self.network.arc_length_m[arcs], out=cum[1:])
         return Plan(nodes, t + cum / self.speed, odo + cum)
 
     def route_through(self, waypoints: list[int]) -> tuple[np.ndarray, list[int]]:
@@ -110,7 +113,7 @@ class FleetState:
     def position(self, v: int, t: float) -> tuple[int, int, float]:
         """(plan index of the next node, that node, metres before reaching it) at time ``t``."""
         plan = self.plans[v]
-        k = int(np.searchsorted(plan.tt, t - _EPS_S, side="left"))
+        k = int(plan.tt.searchsorted(t - _EPS_S, side="left"))
         if k >= len(plan.nodes):
             if plan.cruising:
                 self._extend_cruise(v, t)
@@ -129,18 +132,42 @@ class FleetState:
         """
         vehicles = np.asarray(vehicles, dtype=np.int64)
         stale = vehicles[(self._next_tt[vehicles] < t - _EPS_S) & ~self._idle[vehicles]]
-        for v in stale:
-            k, node, _ = self.position(int(v), t)
+        before = t - _EPS_S
+        if len(stale):
+            found = self._windows.find(stale, before)
+            hit = found.vehicles
+            self._next_k[hit] = found.k
+            self._next_node[hit] = found.node
+            self._idle[hit] = found.at_end & (found.tt <= t)
+            self._next_tt[hit] = found.tt
+            self._next_odo[hit] = found.odo
+            stale = found.missed
+        for v in stale.tolist():                        # past the window: look up the plan, then refill
             plan = self.plans[v]
-            self._next_k[v], self._next_node[v] = k, node
-            self._idle[v] = k == len(plan.nodes) - 1 and plan.tt[k] <= t and not plan.cruising
-            self._next_tt[v] = plan.tt[k]
+            k = int(plan.tt.searchsorted(before))       # :meth:`position`, inlined for the common case
+            if k >= len(plan.nodes):
+                k = self.position(v, t)[0]              # past the plan's end: cruise extended, or standing
+            tt_k = plan.tt[k]
+            self._next_k[v] = k
+            self._next_node[v] = plan.nodes[k]
+            self._idle[v] = k == len(plan.nodes) - 1 and tt_k <= t and not plan.cruising
+            self._next_tt[v] = tt_k
+            self._next_odo[v] = plan.odo[k]
+            self._windows.fill(v, plan.nodes, plan.tt, plan.odo, plan.cruising, k)
         pre = np.where(self._idle[vehicles], 0.0, np.maximum(0.0, (self._next_tt[vehicles] - t) * self.speed))
         return self._next_k[vehicles].copy(), self._next_node[vehicles].copy(), pre
+
+    def next_odometers(self, vehicles: np.ndarray) -> np.ndarray:
+        """Odometer at the plan node each vehicle reaches next, as found by the last :meth:`positions` call.
+
+        Valid for vehicles passed to :meth:`positions` at the current time and not replanned since.
+        """
+        return self._next_odo[np.asarray(vehicles, dtype=np.int64)]
 
     def _invalidate(self, v: int) -> None:
         self._next_tt[v] = -np.inf
         self._idle[v] = False
+        self._windows.drop(v)
 
     def replan(self, v: int, anchor: int, nodes_tail: np.ndarray, stops: list[Stop], *, cruising: bool = False,
                start_t: float | None = None) -> None:

@@ -121,6 +121,7 @@ class Simulator:
         self.state = np.full(self.n_orders, PENDING, dtype=np.int8)
         self.vehicle_of = np.full(self.n_orders, -1, dtype=np.int64)
         self.pickup_odo = np.full(self.n_orders, np.nan)
+        self.rider = np.full(len(scenario.fleet.initial_node), -1, dtype=np.int64)   # last vacant assignment
         rng = np.random.default_rng(np.random.SeedSequence([scenario.seed, 20170501]))
         self.fleet = FleetState(scenario.network, self.distances, scenario.fleet.initial_node, self.params.speed_mps, rng)
         self.events: list[tuple] = []
@@ -218,24 +219,19 @@ class Simulator:
         v0 = np.flatnonzero((fl.load == 0) & fl.on_duty)
         v1 = np.flatnonzero((fl.load == 1) & ~fl.paired & fl.on_duty)
         _, v0_node, v0_pre = fl.positions(v0, t)
-        v1_node = np.empty(len(v1), np.int64)
+        # A V1 vehicle's one passenger is the one its vacant assignment gave it (a join or a
+        # trip pairs the vehicle), so one array lookup replaces a scan of its passenger lists.
+        v1_order = self.rider[v1]
+        v1_onboard = self.state[v1_order] == ONBOARD
+        v1_node = self.origin[v1_order]          # not yet picked up: h = o_A, δ = 0, pre = 0 (A14)
         v1_delta = np.zeros(len(v1))
         v1_pre = np.zeros(len(v1))
-        v1_order = np.empty(len(v1), np.int64)
-        v1_onboard = np.zeros(len(v1), bool)
         if len(v1):
-            k_next, node_next, pre_next = fl.positions(v1, t)
-            for i, v in enumerate(v1):
-                if fl.onboard[v]:
-                    a = fl.onboard[v][0]
-                    v1_onboard[i] = True
-                    v1_node[i] = node_next[i]
-                    v1_pre[i] = pre_next[i]
-                    v1_delta[i] = fl.plans[v].odo[k_next[i]] - self.pickup_odo[a]
-                else:   # still driving to its first passenger: h = o_A, δ = 0, pre = 0 (A14)
-                    a = fl.assigned[v][0]
-                    v1_node[i] = self.origin[a]
-                v1_order[i] = a
+            _, node_next, pre_next = fl.positions(v1, t)
+            odo_next = fl.next_odometers(v1)
+            v1_node = np.where(v1_onboard, node_next, v1_node)
+            v1_pre = np.where(v1_onboard, pre_next, v1_pre)
+            v1_delta = np.where(v1_onboard, odo_next - self.pickup_odo[v1_order], v1_delta)
         waited = np.maximum(1, np.ceil((t - self.request[p]) / self.params.dt_s - 1e-9)).astype(np.int64)
         return RoundState(
             t_s=t, params=self.params, dist=self.dist, p_order=p, p_origin=self.origin[p],
@@ -262,6 +258,7 @@ class Simulator:
                 tail, reach = fl.route_through([h, self.origin[a], self.destination[a]])
                 stops = [Stop(reach[0], PICKUP, a), Stop(reach[1], DROPOFF, a)]
                 fl.replan(v, k, tail, stops)
+                self.rider[v] = a
                 self._assign(a, v, t, rm, c, partner=-1)
                 served += 1
             elif kind == Kind.JOIN:

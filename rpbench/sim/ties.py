@@ -26,6 +26,8 @@ Solutions that are not proven optimal are left untouched.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from rpbench.model import AssignmentModel, Solution, Status, TripPackingModel, make_solution
@@ -97,7 +99,10 @@ def _repair(model, chosen: np.ndarray, resource: np.ndarray, items: tuple[np.nda
                                                                      model.n_rows):
             moves += 1
             continue
-        x, y = np.triu_indices(len(chosen), k=1)
+        # Only columns holding a resource can swap it: pairs among them, in the same (row-major) order.
+        movable = np.flatnonzero(resource[chosen] >= 0)
+        x, y = _pairs_of(len(movable))
+        x, y = movable[x], movable[y]
         cx, cy = chosen[x], chosen[y]
         rx, ry = resource[cx], resource[cy]
         ok = (rx >= 0) & (ry >= 0) & (rx != ry)
@@ -112,6 +117,15 @@ def _repair(model, chosen: np.ndarray, resource: np.ndarray, items: tuple[np.nda
         chosen[x[i]], chosen[y[i]] = nx[i], ny[i]
         moves += 1
     return np.sort(chosen), moves
+
+
+@functools.lru_cache(maxsize=512)
+def _pairs_of(m: int) -> tuple[np.ndarray, np.ndarray]:
+    """``np.triu_indices(m, k=1)`` (every pair i < j, row-major), read-only and kept: each round asks for it."""
+    x, y = np.triu_indices(m, k=1)
+    x.setflags(write=False)
+    y.setflags(write=False)
+    return x, y
 
 
 def _replace_once(chosen, values, exact_key, exact, rows_of, n_rows) -> bool:

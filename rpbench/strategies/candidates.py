@@ -18,6 +18,7 @@ import numpy as np
 from rpbench.geometry import TOLERANCE_M, choose_order, pair_geometry
 from rpbench.model import AssignmentModel, quantize
 from rpbench.strategies.base import Kind, RoundModel, RoundState
+from rpbench.strategies.nearby import near_table
 
 #: Utility of keeping a passenger waiting when the strategy has no waiting
 #: option (MB, FL-no_delay, NP): -M with M = 10^6 m, so a passenger is
@@ -52,19 +53,22 @@ def vacant_options(state: RoundState) -> VacantOptions:
     if state.n_passengers == 0 or state.n_v0 == 0:
         empty = np.zeros(0, np.int64)
         return VacantOptions(empty, empty, np.zeros(0))
-    pk = state.v0_pre_m[None, :] + state.dist[state.v0_node[None, :], state.p_origin[:, None]]
-    p, v = np.nonzero(pk <= state.params.max_pickup_m + TOLERANCE_M)
-    return VacantOptions(p, v, pk[p, v])
+    limit = state.params.max_pickup_m + TOLERANCE_M
+    p, v = _within_road_distance(state, state.v0_node, state.v0_pre_m, limit)
+    pk = state.v0_pre_m[v] + state.dist[state.v0_node[v], state.p_origin[p]]
+    ok = pk <= limit
+    return VacantOptions(p[ok], v[ok], pk[ok])
 
 
 def join_options(state: RoundState, order_rule: str = "min_feasible") -> JoinOptions:
     """Every (waiting passenger, partially occupied vehicle) pair that POOL accepts."""
     if state.n_passengers == 0 or state.n_v1 == 0:
         return JoinOptions.empty()
-    p, v = (a.ravel() for a in np.meshgrid(np.arange(state.n_passengers), np.arange(state.n_v1), indexing="ij"))
     # Cheap pick-up filter first: most pairs fail R̄.
+    limit = state.params.max_pickup_m + TOLERANCE_M
+    p, v = _within_road_distance(state, state.v1_node, state.v1_pre_m, limit)
     pk = state.v1_pre_m[v] + state.dist[state.v1_node[v], state.p_origin[p]]
-    near = pk <= state.params.max_pickup_m + TOLERANCE_M
+    near = pk <= limit
     p, v = p[near], v[near]
     g = pair_geometry(state.dist, state.v1_origin[v], state.v1_destination[v], state.v1_solo_m[v],
                       state.p_origin[p], state.p_destination[p], state.p_solo_m[p],
@@ -72,6 +76,19 @@ def join_options(state: RoundState, order_rule: str = "min_feasible") -> JoinOpt
     r = choose_order(g, state.params.max_pickup_m, order_rule)
     ok = r.feasible
     return JoinOptions(p[ok], v[ok], r.pk[ok], r.saving[ok], r.fofo[ok])
+
+
+def _within_road_distance(state: RoundState, nodes: np.ndarray, pre_m: np.ndarray, limit_m: float):
+    """(passenger, vehicle) position pairs, passenger-major, that may have ``pre + l(node, o_p) <= limit``.
+
+    With ``pre >= 0`` only pairs whose road distance alone is within the limit can (:mod:`.nearby`);
+    otherwise every pair is returned.  The caller applies the exact test.
+    """
+    if np.all(pre_m >= 0):
+        mask = near_table(state.dist, limit_m).mask(nodes, state.p_origin)
+    else:
+        mask = np.ones((state.n_passengers, len(nodes)), dtype=bool)
+    return np.nonzero(mask)
 
 
 def assignment_round(state: RoundState, vac: VacantOptions, vac_utility_m: np.ndarray, join: JoinOptions,

@@ -141,7 +141,13 @@ class RTV(Strategy):
         n = state.n_passengers
         if n < 2 or len(vac.p) == 0:
             return
-        i, j = np.triu_indices(n, k=1)
+        # Only passengers with a vacant vehicle within R̄ can share a size-2 trip: the pairs among them, in
+        # the same (row-major) order as among all passengers, spare POOL the pairs that could never qualify.
+        riders = np.unique(vac.p)
+        if len(riders) < 2:
+            return
+        a, b = np.triu_indices(len(riders), k=1)
+        i, j = riders[a], riders[b]
         rr_pickup = state.params.max_pickup_m if self.options.rr_pickup_check else np.inf
         # Direction i -> j (i picked up first) and j -> i; drop order chosen by POOL.
         fwd = pool(state.dist, state.p_origin[i], state.p_destination[i], state.p_origin[j], state.p_destination[j],

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import scipy.sparse as sp
 
 from rpbench.backends import SolveOptions
 from rpbench.backends._common import INFEASIBLE, LIMIT, OPTIMAL, Clock, Raw, classify, finish, integral_bound, program
@@ -73,6 +74,41 @@ def test_program_rows_and_cardinality_row():
     prog = program(PAIR, c=np.ones(3), min_count=2)
     assert prog.A.shape == (5, 3) and prog.lo[-1] == 2 and np.isinf(prog.hi[-1]) and prog.c.tolist() == [1, 1, 1]
 
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_program_arrays_are_the_sorted_incidence_matrix(seed):
+    # The CSC arrays handed to solvers equal scipy's sorted incidence matrix, with or without the extra row.
+    rng = np.random.default_rng(seed)
+    n_req, n_veh, n = 6, 4, int(rng.integers(1, 15))
+    r1 = rng.integers(0, n_req - 1, n)
+    r2 = np.where(rng.random(n) < 0.5, -1, r1 + 1 + rng.integers(0, n_req - 1 - r1))
+    keys = {(int(v), int(a), int(b)) for v, a, b in zip(rng.integers(0, n_veh, n), r1, r2)}
+    v, a, b = (np.array(x) for x in zip(*sorted(keys)))
+    model = TripPackingModel(n_req, n_veh, v, a, b, rng.integers(-5, 5, len(v)).astype(float))
+    for min_count in (None, 1):
+        prog = program(model, min_count=min_count)
+        expected = model.incidence()
+        if min_count is not None:
+            expected = sp.vstack([expected, sp.csr_matrix(np.ones((1, model.n_cols)))], format="csc")
+        expected.sort_indices()
+        assert np.array_equal(prog.indptr, expected.indptr) and np.array_equal(prog.indices, expected.indices)
+        assert (prog.A != expected).nnz == 0 and prog.n_rows == expected.shape[0] and prog.n == model.n_cols
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_sorted_within_columns_agrees_with_scipy(seed):
+    from rpbench.backends._common import _sorted_within_columns
+
+    rng = np.random.default_rng(seed)
+    counts = rng.integers(0, 4, int(rng.integers(1, 8)))
+    start = np.concatenate([[0], np.cumsum(counts)])
+    rows = rng.integers(0, 6, start[-1]).astype(np.int32)
+    A = sp.csc_matrix((np.ones(len(rows)), rows, start), shape=(6, len(counts)))
+    strictly = all((np.diff(rows[start[c]:start[c + 1]]) > 0).all() for c in range(len(counts)))
+    assert _sorted_within_columns(start, rows) == strictly
+    if strictly:
+        assert A.has_sorted_indices
 
 class _Scripted(ProgramBackend):
     """A fake MILP backend replaying raw answers, to test the shared drivers."""

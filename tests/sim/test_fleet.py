@@ -127,6 +127,15 @@ def test_positions_over_successive_rounds(line):
         assert float(pres[0]) == pytest.approx(pre), t
 
 
+
+def test_next_odometers_follow_positions(line):
+    # The odometer at the next plan node, cached with it: 1000 m per node on the line.
+    fl = fleet(line, [0, 3])
+    fl.replan(0, 0, fl.route_through([0, 5])[0], [])
+    for t, odo in {0.0: 0.0, 150.0: 2000.0, 420.0: 5000.0, 900.0: 5000.0}.items():
+        fl.positions(np.array([0, 1]), t)
+        assert fl.next_odometers(np.array([0, 1])).tolist() == [odo, 0.0], t
+
 def test_replan_at_an_anchor_keeps_the_history(tee):
     fl = fleet(tee, [4])
     tail, reach = fl.route_through([4, 0, 3])

@@ -81,3 +81,56 @@ def test_canonical_choice_is_independent_of_the_start_on_symmetric_models():
         best = max(s[0] for s in sols)
         outcomes = {tuple(canonicalize(m, optimal(m, list(c)))[0].chosen) for v, c in sols if v == best}
         assert len(outcomes) == 1
+
+
+def test_pairs_of_equals_triu_indices_and_is_read_only():
+    from rpbench.sim.ties import _pairs_of
+
+    for m in range(8):
+        x, y = _pairs_of(m)
+        ex, ey = np.triu_indices(m, k=1)
+        assert np.array_equal(x, ex) and np.array_equal(y, ey) and not x.flags.writeable
+
+
+def _reference_swaps(model, chosen):
+    """The resource swaps of the canonicalisation, over every pair of chosen columns in row-major order."""
+    by_key = {(int(p), int(v)): c for c, (p, v) in enumerate(zip(model.col_passenger, model.col_vehicle))}
+    values = model.values
+    chosen = sorted(chosen)
+    while True:
+        for i, j in itertools.combinations(range(len(chosen)), 2):
+            cx, cy = chosen[i], chosen[j]
+            rx, ry = int(model.col_vehicle[cx]), int(model.col_vehicle[cy])
+            if rx < 0 or ry < 0 or rx == ry:
+                continue
+            nx = by_key.get((int(model.col_passenger[cx]), ry))
+            ny = by_key.get((int(model.col_passenger[cy]), rx))
+            if nx is None or ny is None or values[nx] + values[ny] != values[cx] + values[cy]:
+                continue
+            if min(nx, ny) < min(cx, cy):
+                chosen[i], chosen[j] = nx, ny
+                chosen = sorted(chosen)
+                break
+        else:
+            return chosen
+
+
+def test_swaps_match_a_pairwise_reference_with_waiting_columns_among_the_chosen():
+    # Distinct values per passenger (no replacement moves), waits chosen next to assignments.
+    rng = np.random.default_rng(7)
+    moved = 0
+    for _ in range(30):
+        n_p, n_v = 6, 4
+        cp, cv, vals = [], [], []
+        for p in range(n_p):
+            rank = rng.permutation(n_v) if p % 2 else np.arange(n_v)   # equal rankings make swaps value-neutral
+            for v in range(n_v):
+                cp.append(p), cv.append(v), vals.append(-10 * int(rank[v]) - p)
+            cp.append(p), cv.append(-1), vals.append(-1000 - p)
+        m = AssignmentModel(n_p, n_v, cp, cv, vals)
+        perm = rng.permutation(n_v)
+        start = [p * (n_v + 1) + (int(perm[p]) if p < n_v else n_v) for p in range(n_p)]
+        got = canonicalize(m, optimal(m, start))[0].chosen.tolist()
+        assert got == _reference_swaps(m, start)
+        moved += got != sorted(start)
+    assert moved > 0

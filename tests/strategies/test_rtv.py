@@ -221,3 +221,34 @@ def test_reassign_is_refused():
     from rpbench.exceptions import ParameterError
     with pytest.raises(ParameterError, match="reassign is not supported"):
         make_strategy("rtv", reassign=True)
+
+
+class _EveryPassengerRides:
+    """numpy for rtv's pair enumeration, with np.unique(vac.p) replaced by every passenger (the plain search)."""
+
+    def __init__(self, n: int):
+        self.n = n
+
+    def __getattr__(self, name):
+        return getattr(np, name)
+
+    def unique(self, _):
+        return np.arange(self.n)
+
+
+def test_pair_trips_among_passengers_with_a_vehicle_equal_those_among_all(monkeypatch):
+    import rpbench.strategies.rtv as rtv_module
+
+    pair_trips = 0
+    for seed in range(12):
+        rng = np.random.default_rng(seed)
+        state = random_state(rng, grid(5), n_pass=9, n_vac=3, n_occ=2, params=Params(max_pickup_m=900.0))
+        fast = make_strategy("rtv").build(state)
+        with monkeypatch.context() as patch:
+            patch.setattr(rtv_module, "np", _EveryPassengerRides(state.n_passengers))
+            plain = make_strategy("rtv").build(state)
+        for name in ("kind", "vehicle", "first", "second", "fofo", "utility_m", "pickup_m"):
+            assert np.array_equal(getattr(fast, name), getattr(plain, name)), (seed, name)
+        assert np.array_equal(fast.model.values, plain.model.values)
+        pair_trips += int((fast.kind == Kind.TRIP2).sum())
+    assert pair_trips > 0

@@ -1,0 +1,44 @@
+"""The HiGHS adapter's kept instance (rpbench.backends.highs.kept_instance): reuse must not change answers."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rpbench.backends import SolveOptions, get_backend
+from rpbench.backends.highs import highs_settings, kept_instance
+from rpbench.bench import synthetic
+from rpbench.exceptions import SolverError
+
+
+def _models():
+    return [synthetic.assignment(20, 15, seed=1), synthetic.trip_packing(12, 6, seed=2),
+            synthetic.assignment(8, 30, seed=3), synthetic.trip_packing(10, 10, seed=4)]
+
+
+def test_a_kept_instance_answers_as_a_fresh_one(monkeypatch):
+    # Solve a mix of LPs and MIPs on the kept instance, then each on a new instance: the same columns.
+    from rpbench.backends import highs
+
+    backend, options = get_backend("highs"), SolveOptions(threads=1)
+    kept = [backend.solve(m, options).chosen for m in _models()]
+    fresh = []
+    for m in _models():
+        monkeypatch.setattr(highs, "_kept", highs._Kept())
+        fresh.append(backend.solve(m, options).chosen)
+    assert all(np.array_equal(a, b) for a, b in zip(kept, fresh))
+
+
+def test_options_of_a_previous_solve_do_not_leak():
+    lp = highs_settings(SolveOptions(), None, relax=True)
+    h = kept_instance(lp)
+    assert h.getOptionValue("presolve")[1] == "off"
+    h = kept_instance(highs_settings(SolveOptions(), None, relax=False))
+    assert h.getOptionValue("presolve")[1] == "choose"        # HiGHS's default again
+
+
+def test_a_rejected_option_is_an_error_and_the_next_solve_starts_clean():
+    with pytest.raises(SolverError, match="rejected option"):
+        kept_instance({"output_flag": False, "no_such_option": 1})
+    h = kept_instance({"output_flag": False})
+    assert h.getNumCol() == 0

@@ -1,0 +1,95 @@
+"""The node-pair bit table (rpbench.strategies.nearby) and the candidate search that it pre-filters."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from helpers import network_from_edges, round_state
+
+from rpbench.geometry import TOLERANCE_M, choose_order, pair_geometry
+from rpbench.scenarios.base import Params
+from rpbench.strategies.candidates import join_options, vacant_options
+from rpbench.strategies.nearby import NearTable, near_table
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_mask_matches_the_distance_test(seed):
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(1, 20))
+    dist = rng.integers(0, 10, size=(n, n)).astype(float)
+    dist[rng.random((n, n)) < 0.1] = np.inf                     # unreachable pairs
+    frm, to = rng.integers(0, n, int(rng.integers(0, 12))), rng.integers(0, n, int(rng.integers(0, 12)))
+    table = NearTable.build(dist, 5.0)                          # 5.0 itself is within (<=)
+    assert np.array_equal(table.mask(frm, to), dist[frm[None, :], to[:, None]] <= 5.0)
+
+
+def test_the_table_is_kept_for_the_same_array_and_threshold():
+    dist = np.zeros((3, 3))
+    first = near_table(dist, 1.0)
+    assert near_table(dist, 1.0) is first
+    assert near_table(dist, 2.0) is not first and near_table(dist.copy(), 2.0).dist is not dist
+
+
+def _grid(size=5, length=400.0):
+    edges = [(r * size + c, r * size + c + 1, length + 37.0 * c) for r in range(size) for c in range(size - 1)]
+    edges += [(r * size + c, (r + 1) * size + c, length + 11.0 * r) for r in range(size - 1) for c in range(size)]
+    return network_from_edges(edges, name="grid")
+
+
+def _reference_vacant(state):
+    """The exhaustive search: every (passenger, vacant vehicle) pair within R̄."""
+    pk = state.v0_pre_m[None, :] + state.dist[state.v0_node[None, :], state.p_origin[:, None]]
+    p, v = np.nonzero(pk <= state.params.max_pickup_m + TOLERANCE_M)
+    return p, v, pk[p, v]
+
+
+def _reference_join(state):
+    """The exhaustive search: every (passenger, occupied vehicle) pair, R̄ first, then POOL."""
+    p, v = (a.ravel() for a in np.meshgrid(np.arange(state.n_passengers), np.arange(state.n_v1), indexing="ij"))
+    pk = state.v1_pre_m[v] + state.dist[state.v1_node[v], state.p_origin[p]]
+    near = pk <= state.params.max_pickup_m + TOLERANCE_M
+    p, v = p[near], v[near]
+    g = pair_geometry(state.dist, state.v1_origin[v], state.v1_destination[v], state.v1_solo_m[v],
+                      state.p_origin[p], state.p_destination[p], state.p_solo_m[p],
+                      state.v1_node[v], state.v1_delta_m[v], state.v1_pre_m[v], state.params.max_detour_m)
+    r = choose_order(g, state.params.max_pickup_m, "min_feasible")
+    return p[r.feasible], v[r.feasible], r.pk[r.feasible], r.saving[r.feasible]
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_candidates_equal_the_exhaustive_search(seed):
+    rng = np.random.default_rng(seed)
+    net = _grid()
+    nodes = net.node_id
+
+    def pick(k):
+        return rng.choice(nodes, k).tolist()
+
+    passengers = list(zip(pick(8), pick(8)))
+    vacant = [(node, float(pre)) for node, pre in zip(pick(6), rng.choice([0.0, 150.0, 399.5], 6))]
+    occupied = [{"node": a, "origin": b, "destination": c, "delta": float(rng.integers(0, 300)),
+                 "pre": float(rng.choice([0.0, 200.0])), "onboard": bool(rng.random() < 0.5)}
+                for a, b, c in zip(pick(5), pick(5), pick(5))]
+    params = Params(max_pickup_m=float(rng.choice([400.0, 800.0, 1600.0])), max_detour_m=900.0)
+    state = round_state(net, passengers, vacant, occupied=occupied, params=params)
+    vac = vacant_options(state)
+    p, v, pk = _reference_vacant(state)
+    assert np.array_equal(vac.p, p) and np.array_equal(vac.v, v) and np.array_equal(vac.pickup_m, pk)
+    join = join_options(state)
+    p, v, pk, saving = _reference_join(state)
+    assert np.array_equal(join.p, p) and np.array_equal(join.v, v)
+    assert np.array_equal(join.pickup_m, pk) and np.array_equal(join.saving_m, saving)
+
+
+def test_a_negative_lead_distance_searches_every_pair():
+    # pre < 0 is outside the simulator's states; the filter must then not drop anything.
+    net = _grid()
+    state = round_state(net, [(net.node_id[0], net.node_id[24])], [(net.node_id[24], 0.0)],
+                        params=Params(max_pickup_m=500.0))
+    state = replace(state, v0_pre_m=np.array([-5000.0]))
+    vac = vacant_options(state)
+    p, v, pk = _reference_vacant(state)
+    assert np.array_equal(vac.p, p) and np.array_equal(vac.v, v) and np.array_equal(vac.pickup_m, pk)
+    assert len(p) == 1
