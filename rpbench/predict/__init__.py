@@ -55,7 +55,8 @@ from rpbench.predict.rates import (
 )
 
 __all__ = [
-    "ACCELERATIONS", "Lookup", "OdRates", "PredictionModel", "RATE_SOURCES", "scenario_predictions", "PRIORITIES", "PredictConfig", "Prediction", "RHO_MODES", "build_model",
-    "RATE_KINDS", "day_table_rates", "load_rates", "month_rates", "order_rates", "peak_order_rates", "predict", "scenario_rates",
+    "ACCELERATIONS", "build_model", "day_table_rates", "load_rates", "Lookup", "month_rates", "OdRates",
+    "order_rates", "peak_order_rates", "predict", "PredictConfig", "Prediction", "PredictionModel",
+    "PRIORITIES", "RATE_KINDS", "RATE_SOURCES", "RHO_MODES", "scenario_predictions", "scenario_rates",
     "solve_model", "table_rates",
 ]

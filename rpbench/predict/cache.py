@@ -82,8 +82,12 @@ def save(key: str, arrays: dict[str, np.ndarray], info: dict) -> Path:
     return path
 
 
-def load(key: str, n_ods: int) -> tuple[dict[str, np.ndarray], dict] | None:
+def load(key: str, n_ods: int, *, skip: frozenset[str] = frozenset()) -> tuple[dict[str, np.ndarray], dict] | None:
     """The cached (arrays, facts) of a prediction over ``n_ods`` ODs, or None when it must be computed.
+
+    The arrays named in ``skip`` are not read (an ``.npz`` is read member by
+    member): a dispatcher needs the per-OD arrays only, a few MB instead of
+    about 100 MB of per-state arrays for the month table.
 
     An entry that cannot be read or is incomplete is deleted (with one note
     on stderr) so the caller recomputes and rewrites it, instead of failing
@@ -95,7 +99,9 @@ def load(key: str, n_ods: int) -> tuple[dict[str, np.ndarray], dict] | None:
     except OSError:
         return None                                 # not cached (yet)
     try:
-        arrays, info, manifest = _read_entry(path)
+        arrays, info, manifest = _read_entry(path, skip)
+        if manifest is not None:
+            manifest = {name: spec for name, spec in manifest.items() if name not in skip}
         problem = _entry_problem(arrays, manifest, n_ods)
     except READ_ERRORS as exc:
         problem = f"is unreadable ({type(exc).__name__}: {one_line(exc)})"
@@ -109,10 +115,10 @@ def _json_bytes(obj) -> np.ndarray:
     return np.frombuffer(json.dumps(obj, default=float).encode(), dtype=np.uint8)
 
 
-def _read_entry(path: Path) -> tuple[dict[str, np.ndarray], dict, dict | None]:
+def _read_entry(path: Path, skip: frozenset[str] = frozenset()) -> tuple[dict[str, np.ndarray], dict, dict | None]:
     """(arrays, facts, manifest) of an entry; the manifest is None in entries written before it existed."""
     with np.load(path, allow_pickle=False) as data:
-        arrays = {name: data[name] for name in data.files if not name.endswith("_json")}
+        arrays = {name: data[name] for name in data.files if not name.endswith("_json") and name not in skip}
         info = json.loads(bytes(data["info_json"]).decode())
         manifest = json.loads(bytes(data["manifest_json"]).decode()) if "manifest_json" in data.files else None
     if not isinstance(info, dict) or not isinstance(manifest, (dict, type(None))):

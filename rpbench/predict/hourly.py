@@ -34,29 +34,40 @@ TAU0_RESOLUTION_S = 10.0
 
 def scenario_predictions(scenario: Scenario, source: str, tau0_s: np.ndarray,
                          config: PredictConfig) -> list[Prediction]:
-    """One prediction per hour of ``scenario`` (``len(tau0_s)`` hours; hours with equal inputs share one)."""
+    """One prediction per hour of ``scenario`` (``len(tau0_s)`` hours; hours with equal inputs share one).
+
+    The dispatcher reads per-OD values only, so the hours come back slim
+    (24 hours of per-state arrays would be 2.4 GB for the month table); an
+    hour that must be solved is warm-started from the previous hour's ρ,
+    read back from the cache when that hour was cached.
+    """
     hours = len(tau0_s)
     tau0_s = np.maximum(TAU0_RESOLUTION_S, np.round(np.asarray(tau0_s) / TAU0_RESOLUTION_S) * TAU0_RESOLUTION_S)
     rates = hourly_rates(scenario, source, hours)
+    net, params = scenario.network, scenario.params
     out: list[Prediction] = []
     memo: dict[tuple, Prediction] = {}
-    previous: Prediction | None = None
+    previous: tuple[OdRates, PredictConfig, Prediction] | None = None
     for h in range(hours):
         cfg = config.replace(tau0_s=float(tau0_s[h]))
         key = (id(rates[h]), cfg.tau0_s)
         if key not in memo:
-            # Warm-start from the previous hour when the OD set is the same (only the demand level moved).
-            same_ods = previous is not None and len(previous.rates) == len(rates[h]) and \
-                np.array_equal(previous.rates.origin, rates[h].origin) and \
-                np.array_equal(previous.rates.destination, rates[h].destination)
-            previous = cached_prediction(scenario.network, rates[h], scenario.params, cfg,
-                                         rho0=previous.rho if same_ods else None)
-            # The dispatcher reads per-OD values only: keeping 24 hours of per-state arrays (about
-            # 100 MB an hour for the month table) would cost gigabytes; the last hour's ρ stays for
-            # the next warm start.
-            memo[key] = previous.slim()
+            prediction = cached_prediction(net, rates[h], params, cfg, slim=True)
+            if prediction is None:
+                # Warm-start from the previous hour when the OD set is the same (only the demand level moved).
+                rho0 = None
+                if previous is not None and _same_ods(previous[0], rates[h]):
+                    rho0 = previous[2].rho if len(previous[2].rho) else \
+                        cached_prediction(net, previous[0], params, previous[1]).rho
+                prediction = cached_prediction(net, rates[h], params, cfg, rho0=rho0)
+            previous = (rates[h], cfg, prediction)
+            memo[key] = prediction.slim()
         out.append(memo[key])
     return out
+
+
+def _same_ods(a: OdRates, b: OdRates) -> bool:
+    return len(a) == len(b) and np.array_equal(a.origin, b.origin) and np.array_equal(a.destination, b.destination)
 
 
 def hourly_rates(scenario: Scenario, source: str, hours: int) -> list[OdRates]:
@@ -82,12 +93,17 @@ def hourly_rates(scenario: Scenario, source: str, hours: int) -> list[OdRates]:
 
 
 def cached_prediction(net: RoadNetwork, rates: OdRates, params: Params, config: PredictConfig, *,
-                      rho0: np.ndarray | None = None) -> Prediction:
-    """A solved prediction: from the disk cache, else solved on the cached structure (built once per machine)."""
+                      rho0: np.ndarray | None = None, slim: bool = False) -> Prediction | None:
+    """A solved prediction: from the disk cache, else solved on the cached structure (built once per machine).
+
+    ``slim=True`` only reads the cache (per-OD arrays) and returns None when the prediction is not cached.
+    """
     key = cache.cache_key(net, rates, params, config)
-    hit = cache.load(key, len(rates))
+    hit = cache.load(key, len(rates), skip=Prediction.per_state_members() if slim else frozenset())
     if hit is not None:
         return Prediction.from_arrays(hit, node_id=net.node_id, rates=rates, config=config)
+    if slim:
+        return None
     prediction = solve_model(build_model(net, rates, params, config), rho0=rho0)
     cache.save(key, *prediction.arrays())
     return prediction

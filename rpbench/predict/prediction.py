@@ -94,9 +94,15 @@ class Prediction:
                     config: PredictConfig) -> "Prediction":
         """A prediction from the disk cache's (arrays, facts)."""
         arrays, info = stored
-        od = Outcome(**{f.name: arrays[f"od_{f.name}"] for f in dataclasses.fields(Outcome)})
+        empty = np.zeros(0)          # per-state arrays not read (a slim load) stay empty
+        od = Outcome(**{f.name: arrays.get(f"od_{f.name}", empty) for f in dataclasses.fields(Outcome)})
         return cls(node_id=node_id, rates=rates, params=info.get("params", {}), config=config, od=od, info=info,
-                   from_cache=True, **{name: arrays[name] for name in cls.STATE_FIELDS})
+                   from_cache=True, **{name: arrays.get(name, empty) for name in cls.STATE_FIELDS})
+
+    @classmethod
+    def per_state_members(cls) -> frozenset[str]:
+        """The disk cache's per-state members (skipped by a slim load)."""
+        return frozenset(cls.STATE_FIELDS) | {f"od_{name}" for name in Outcome.STATE_FIELDS}
 
     def slim(self) -> "Prediction":
         """The same prediction without its per-state arrays (what a dispatcher needs: per-OD values)."""

@@ -21,6 +21,7 @@ doubled; ``E`` is already the pair's total saving).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -60,7 +61,7 @@ class Outcome:
     def detour_m(self) -> np.ndarray:
         return self.ride_m - self.solo_m
 
-    @property
+    @cached_property                 # read for every waiting passenger of every FL round
     def e_bracket(self) -> np.ndarray:
         """``p_s ē(s) + (1 - p_s) ē(p)``: the expected saving once assigned (second bracket of Eq. 10)."""
         return self.p_seeker * self.e_seeker + (1.0 - self.p_seeker) * self.e_vacant
