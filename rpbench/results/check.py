@@ -75,6 +75,7 @@ import pandas as pd
 from rpbench import results
 from rpbench.exceptions import ResultsError, RpbenchError, one_line
 from rpbench.results.parents import by_day_table, sweep_table
+from rpbench.results.replication_audit import audit_folder
 from rpbench.results.report import report_markdown
 from rpbench.scenarios.base import Params
 
@@ -202,9 +203,7 @@ def check_tree(path: str | Path) -> list[FolderResult]:
 
 def _check_replication(folder: Path) -> FolderResult:
     """A ``rpbench replicate`` folder: the checks that apply to the authors' engine, the rest skipped by
-    name with the reason (:mod:`rpbench.replication.audit`)."""
-    # Imported here: rpbench.replication imports rpbench.results, never the other way at import time.
-    from rpbench.replication.audit import audit_folder
+    name with the reason (:mod:`rpbench.results.replication_audit`)."""
     out = FolderResult(str(folder))
     try:
         for name, violations, checked, skipped in audit_folder(folder):

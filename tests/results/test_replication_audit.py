@@ -2,7 +2,7 @@
 
 import pandas as pd
 
-from rpbench.replication.audit import audit_run
+from rpbench.results.replication_audit import audit_run
 
 
 def records() -> pd.DataFrame:
