@@ -51,29 +51,23 @@ def sweep_chunk(off, cls, lam, q, log_q, h, log_not_paired):  # pragma: no cover
             total_b += log_q[d]
             i += 1
             j += 1
-        while i < end_a:
-            c = cls[i]
-            h[c] += weight_a
-            weight_a *= q[c]
-            total_a += log_q[c]
-            i += 1
-        while j < end_b:
-            d = cls[j]
-            h[d] += weight_b
-            weight_b *= q[d]
-            total_b += log_q[d]
-            j += 1
-        log_not_paired[s] = total_a
-        log_not_paired[s + 1] = total_b
+        log_not_paired[s] = _walk(i, end_a, cls, weight_a, total_a, q, log_q, h)       # the longer list's rest
+        log_not_paired[s + 1] = _walk(j, end_b, cls, weight_b, total_b, q, log_q, h)
         s += 2
     if s < m:
-        weight, total = lam[s], 0.0
-        for i in range(off[s], off[s + 1]):
-            c = cls[i]
-            h[c] += weight
-            weight *= q[c]
-            total += log_q[c]
-        log_not_paired[s] = total
+        log_not_paired[s] = _walk(off[s], off[s + 1], cls, lam[s], 0.0, q, log_q, h)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _walk(i, end, cls, weight, total, q, log_q, h):  # pragma: no cover - compiled
+    """One seeker's pairs ``i..end-1`` from running product ``weight`` and log sum ``total``; the final sum."""
+    while i < end:
+        c = cls[i]
+        h[c] += weight
+        weight *= q[c]
+        total += log_q[c]
+        i += 1
+    return total
 
 
 @njit(cache=True, parallel=True)

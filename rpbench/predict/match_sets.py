@@ -364,13 +364,13 @@ class _Builder:
         rows, start, n = pc.row[i0:i1] - r0, pc.start[i0:i1], pc.n[i0:i1]
         keys = np.empty(int(n.sum()), dtype=np.uint64)
         packable = 64 - Q_BITS - g.tie_bits >= max(1, int(rows.max()).bit_length())
+        piece = col = None
         if self.config.priority == "net_saving":             # E - pk = g - a - pk, computed in the kernel
             packable = packable and kernels.net_saving_keys(rows, start, n, pc.g[i0:i1], g.kappa, g.tie_rank,
                                                             g.tie_bits, Q_BITS, GRID, _Q_LIMIT, keys)
             prio = None
         else:
-            piece = np.repeat(np.arange(i0, i1), n)
-            col = expand_ranges(start, start + n)
+            piece, col = np.repeat(np.arange(i0, i1), n), expand_ranges(start, start + n)
             prio = _priority(self.config.priority, pc.g[piece] - g.a[col], g.pk[col], pc.shared[piece],
                              pc.det[piece], g.rest[col], self.solo[w0 + pc.row[piece]])
             packable = packable and _pack_keys(rows, n, prio, g.tie_rank[col], g.tie_bits, keys)
@@ -382,8 +382,8 @@ class _Builder:
                                    cls, saving, shared, detour)
             return
         # Huge distances (beyond 2^18 m) or huge groups: the same order through a slower lexsort.
-        piece = np.repeat(np.arange(i0, i1), n)
-        col = expand_ranges(start, start + n)
+        if piece is None:
+            piece, col = np.repeat(np.arange(i0, i1), n), expand_ranges(start, start + n)
         if prio is None:
             prio = pc.g[piece] + g.kappa[col]
         perm = np.lexsort((g.tie_rank[col], np.floor(np.multiply(prio, -GRID)), np.repeat(rows, n)))
