@@ -119,24 +119,28 @@ def sweep(system: System, class_log_q: np.ndarray, sums: PairSums | None = None,
     log_not_paired = np.zeros(len(system.rate_per_s))
     q = np.exp(class_log_q)
     m, lam = system.matching, system.rate_per_s
+    blocks = m.blocks
+    block_args = (blocks.seeker_off, blocks.cls, blocks.cls_off)
     if sums is None:
-        chunk_start = np.array([s0 for s0, _, _, _ in m.chunks(chunk_pairs)] + [len(lam)], dtype=np.int64)
-        chunk_h = system.scratch(len(chunk_start) - 1, len(class_log_q))
-        sweep_chunks(m.seeker_off, m.cls, lam, q, class_log_q, chunk_start, chunk_h, log_not_paired)
+        chunk_block = blocks.chunks(m.seeker_off, chunk_pairs)
+        chunk_h = system.scratch(len(chunk_block) - 1, len(class_log_q))
+        sweep_chunks(m.seeker_off, m.local, lam, q, class_log_q, *block_args, chunk_block, chunk_h, log_not_paired,
+                     blocks.width)
         return chunk_h.sum(axis=0), log_not_paired
     one_minus_q = -np.expm1(class_log_q)
     # The savings pass is the last over the lists: SAVINGS_PARTS chunks at a time run in parallel, each
     # summing its classes into its own part (added in order: the result does not depend on the
     # threads), and their pages (every column) are given back once summed; small chunks keep the three
     # distance columns' share of memory small.
-    chunks = list(m.chunks(min(chunk_pairs, SAVINGS_CHUNK_PAIRS)))
+    chunk_block = blocks.chunks(m.seeker_off, min(chunk_pairs, SAVINGS_CHUNK_PAIRS))
+    first_pair = m.seeker_off[blocks.seeker_off]
     parts = np.zeros((SAVINGS_PARTS, len(class_log_q), 4))
-    for b in range(0, len(chunks), SAVINGS_PARTS):
-        batch = chunks[b:b + SAVINGS_PARTS]
-        chunk_start = np.array([c[0] for c in batch] + [batch[-1][1]], dtype=np.int64)
-        savings_chunks(m.seeker_off, m.cls, m.saving_m, m.shared_m, m.seeker_detour_m, lam, q, class_log_q,
-                       one_minus_q, chunk_start, parts, sums.by_seeker, log_not_paired)
-        m.release(batch[0][2], batch[-1][3], ("cls", "saving_m", "shared_m", "seeker_detour_m"))
+    for k in range(0, len(chunk_block) - 1, SAVINGS_PARTS):
+        batch = chunk_block[k:k + SAVINGS_PARTS + 1]
+        savings_chunks(m.seeker_off, m.local, m.saving_m, m.shared_m, m.seeker_detour_m, lam, q, class_log_q,
+                       one_minus_q, *block_args, batch, parts, sums.by_seeker, log_not_paired, blocks.width)
+        m.release(int(first_pair[batch[0]]), int(first_pair[batch[-1]]),
+                  ("local", "saving_m", "shared_m", "seeker_detour_m"))
     for part in parts:
         np.add(sums.by_class, part, out=sums.by_class)
     return sums.by_class[:, 0].copy(), log_not_paired

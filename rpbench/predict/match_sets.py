@@ -41,12 +41,12 @@ a grid of 2^-20 m (about 1 µm): values closer than that are ties, broken by
 ascending ``pk`` (same grid), then by class index (classes are numbered by
 head node, entry link, destination), and within a class by ``(w, k)``.
 
-**Storage.**  Per pair: the class (int32), the saving ``E``, the shared
-distance and the seeker's detour (float32: sub-millimetre rounding at urban
-distances; the fixed point only uses the order of the classes), 16 bytes a
-pair, appended origin by origin to one raw file per column (see
-:mod:`.structure`, which keeps them in the cache) and read back as read-only
-memory maps.  The taker's detour is ``shared - E - detour_seeker`` and its
+**Storage.**  Per pair: the class, as a block-local number (uint16, see
+:mod:`.blocks`), the saving ``E``, the shared distance and the seeker's
+detour (float32: sub-millimetre rounding at urban distances; the fixed point
+only uses the order of the classes), 14 bytes a pair, appended origin by
+origin to one raw file per column (see :mod:`.structure`, which keeps them in
+the cache) and read back as read-only memory maps.  The taker's detour is ``shared - E - detour_seeker`` and its
 ride from ``h`` is ``l(h,d_A) - E - detour_seeker + shared``.
 
 **Speed.**  Origins are independent and run in a few threads.  Sorting
@@ -73,6 +73,7 @@ from tqdm import tqdm
 from rpbench.geometry import TOLERANCE_M
 from rpbench.predict import kernels
 from rpbench.predict._arrays import expand_ranges, offsets_from_counts
+from rpbench.predict.blocks import BLOCK_CLASSES, ClassBlocks, Localizer, localize_lists
 from rpbench.predict.config import PredictConfig
 from rpbench.predict.rates import OdRates
 from rpbench.predict.states import StateSpace
@@ -84,8 +85,9 @@ _Q_LIMIT = float(1 << 18) - 1.0
 SORT_ENTRIES = 1 << 21         # entries expanded and sorted at once (bounds temporaries)
 CHUNK_PAIRS = 1 << 24          # pairs per chunk when the sweeps stream the columns
 
-#: The per-pair columns (name, dtype), each stored as one raw little-endian file ``<name>.bin``.
-COLUMNS = (("cls", "<i4"), ("saving_m", "<f4"), ("shared_m", "<f4"), ("seeker_detour_m", "<f4"))
+#: The per-pair distance columns (name, dtype), each stored as one raw little-endian file ``<name>.bin``;
+#: the classes are stored as ``local.bin`` (block-local numbers, uint16 or int32) and ``blocks.npz``.
+COLUMNS = (("saving_m", "<f4"), ("shared_m", "<f4"), ("seeker_detour_m", "<f4"))
 
 
 @dataclass(frozen=True, eq=False)
@@ -99,11 +101,27 @@ class Matching:
     """
 
     seeker_off: np.ndarray        # int64 (W+1)
-    cls: np.ndarray               # int32 taker class per pair
+    local: np.ndarray             # uint16 (or int32) taker class per pair, numbered within its block
     saving_m: np.ndarray          # float32 E(s, t)
     shared_m: np.ndarray          # float32 shared distance
     seeker_detour_m: np.ndarray   # float32 detour of the seeker
+    blocks: ClassBlocks           # the seekers' blocks and the global class of each local number
     stats: dict = field(default_factory=dict)
+
+    @classmethod
+    def from_lists(cls, seeker_off, classes, saving_m, shared_m, seeker_detour_m, *, n_classes: int | None = None,
+                   limit: int = BLOCK_CLASSES) -> "Matching":
+        """A matching held in memory, from global class lists (tests and small models)."""
+        classes = np.asarray(classes, dtype=np.int32)
+        n_classes = int(classes.max()) + 1 if n_classes is None and len(classes) else (n_classes or 0)
+        local, blocks = localize_lists(np.asarray(seeker_off, dtype=np.int64), classes, n_classes, limit)
+        return cls(seeker_off=np.asarray(seeker_off, dtype=np.int64), local=local, saving_m=saving_m,
+                   shared_m=shared_m, seeker_detour_m=seeker_detour_m, blocks=blocks)
+
+    @property
+    def cls(self) -> np.ndarray:
+        """The taker class of every pair (int32, computed in memory: for tests and small models)."""
+        return self.blocks.classes(self.local, self.seeker_off, 0, len(self.seeker_off) - 1)
 
     @property
     def n_pairs(self) -> int:
@@ -113,11 +131,13 @@ class Matching:
     def n_state_pairs(self, space: StateSpace) -> int:
         """Seeker-taker-state pairs of the model (Σ_s |T_s|), summed a chunk at a time."""
         size = space.class_size
-        return int(sum(size[self.cls[i0:i1]].sum() for _, _, i0, i1 in self.chunks()))
+        return int(sum(size[self.blocks.classes(self.local, self.seeker_off, s0, s1)].sum()
+                       for s0, s1, _, _ in self.chunks()))
 
     @property
     def nbytes(self) -> int:
-        return int(self.seeker_off.nbytes + sum(getattr(self, name).nbytes for name, _ in COLUMNS))
+        return int(self.seeker_off.nbytes + self.local.nbytes
+                   + sum(getattr(self, name).nbytes for name, _ in COLUMNS))
 
     def chunks(self, max_pairs: int = CHUNK_PAIRS):
         """``(s0, s1, i0, i1)``: seeker ranges of about ``max_pairs`` pairs (at least one seeker each)."""
@@ -149,18 +169,23 @@ class Matching:
     def seeker(self, w: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(classes, E, shared, seeker detour) of seeker ``s(w)``, in priority order (views)."""
         i0, i1 = self.seeker_off[w], self.seeker_off[w + 1]
-        return self.cls[i0:i1], self.saving_m[i0:i1], self.shared_m[i0:i1], self.seeker_detour_m[i0:i1]
+        classes = self.blocks.classes(self.local, self.seeker_off, w, w + 1)
+        return classes, self.saving_m[i0:i1], self.shared_m[i0:i1], self.seeker_detour_m[i0:i1]
 
     def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """All pairs in OD order, as in-memory arrays (for tests and small models)."""
-        return tuple(np.array(getattr(self, name)) for name, _ in COLUMNS)
+        """All pairs in OD order as in-memory arrays: classes, E, shared, seeker detour (tests, small models)."""
+        return (self.cls,) + tuple(np.array(getattr(self, name)) for name, _ in COLUMNS)
 
     @classmethod
-    def open(cls, directory: Path, seeker_off: np.ndarray, stats: dict) -> "Matching":
+    def open(cls, directory: Path, seeker_off: np.ndarray, stats: dict, local_dtype: str) -> "Matching":
         """The matching whose columns lie in ``directory`` (read-only memory maps)."""
         n = int(seeker_off[-1])
+        if np.dtype(local_dtype) not in (np.dtype("<u2"), np.dtype("<i4")):
+            raise ValueError(f"local class numbers of type {local_dtype!r} are not supported")
         columns = {name: _open_column(directory / f"{name}.bin", dtype, n) for name, dtype in COLUMNS}
-        return cls(seeker_off=seeker_off, stats=stats, **columns)
+        local = _open_column(directory / "local.bin", local_dtype, n)
+        blocks = ClassBlocks.load(directory, len(seeker_off) - 1)
+        return cls(seeker_off=seeker_off, stats=stats, local=local, blocks=blocks, **columns)
 
 
 def _open_column(path: Path, dtype: str, n: int) -> np.ndarray:
@@ -180,7 +205,7 @@ def build_matching(space: StateSpace, rates: OdRates, dist: np.ndarray, params: 
     the files do not depend on the number of threads.
     """
     t0 = time.perf_counter()
-    writer = _ColumnWriter(directory, len(rates))
+    writer = _ColumnWriter(directory, len(rates), space.n_classes)
     origin = rates.origin
     stats = {"stage1_candidates": 0, "stage1_kept": 0, "group_queries": 0}
     try:
@@ -198,10 +223,11 @@ def build_matching(space: StateSpace, rates: OdRates, dist: np.ndarray, params: 
                     for key, value in lists.stats.items():
                         stats[key] += value
                     bar.update(w1 - w0)
-        seeker_off = writer.finish()
+        seeker_off, local_dtype = writer.finish()
     finally:
         writer.close()
-    return Matching.open(directory, seeker_off, dict(stats, build_s=time.perf_counter() - t0))
+    stats = dict(stats, build_s=time.perf_counter() - t0, local_dtype=local_dtype)
+    return Matching.open(directory, seeker_off, stats, local_dtype)
 
 
 def _in_order(pool: ThreadPoolExecutor, fn, tasks, ahead: int = 4):
@@ -225,28 +251,39 @@ class _OriginLists:
 
 
 class _ColumnWriter:
-    """Appends the per-seeker lists, in OD order, to one raw file per column."""
+    """Appends the per-seeker lists, in OD order, to one raw file per column; the classes go through
+    a :class:`~.blocks.Localizer` into ``local.bin`` and ``blocks.npz``."""
 
-    def __init__(self, directory: Path, n_od: int) -> None:
+    def __init__(self, directory: Path, n_od: int, n_classes: int) -> None:
         self.n_od = n_od
+        self.directory = directory
         self.files = {name: open(directory / f"{name}.bin", "wb") for name, _ in COLUMNS}
+        self.files["local"] = open(directory / "local.bin", "w+b")
+        self.localizer = Localizer(n_classes, self.files["local"])
         self.next = 0            # next seeker expected
         self.lens: list[np.ndarray] = []
 
     def append(self, w0: int, lens: np.ndarray, columns: tuple[np.ndarray, ...] = ()) -> None:
-        """Seekers ``w0 .. w0+len(lens)-1`` with ``lens`` pairs each, and their pairs' columns."""
+        """Seekers ``w0 .. w0+len(lens)-1`` with ``lens`` pairs each, and their pairs' columns
+        (global classes, E, shared, seeker detour)."""
         assert w0 == self.next, "seekers must be written in OD order"
-        self.lens.append(np.asarray(lens, dtype=np.int64))
+        lens = np.asarray(lens, dtype=np.int64)
+        self.lens.append(lens)
         self.next = w0 + len(lens)
-        for (name, dtype), values in zip(COLUMNS, columns):
+        classes, *distances = columns or (np.zeros(0, dtype=np.int32),)
+        self.localizer.append(lens, classes)
+        for (name, dtype), values in zip(COLUMNS, distances):
             self.files[name].write(memoryview(np.ascontiguousarray(values, dtype=dtype)))
 
-    def finish(self) -> np.ndarray:
-        """The seekers' offsets (int64, W+1), once every seeker is written (the rest get empty lists)."""
+    def finish(self) -> tuple[np.ndarray, str]:
+        """The seekers' offsets (int64, W+1) and the local numbers' dtype, once every seeker is
+        written (the rest get empty lists)."""
         if self.next < self.n_od:
             self.append(self.next, np.zeros(self.n_od - self.next, dtype=np.int64))
+        self.localizer.finish().save(self.directory)
         self.close()
-        return offsets_from_counts(np.concatenate(self.lens) if self.lens else np.zeros(0, dtype=np.int64))
+        seeker_off = offsets_from_counts(np.concatenate(self.lens) if self.lens else np.zeros(0, dtype=np.int64))
+        return seeker_off, self.localizer.dtype.str
 
     def close(self) -> None:
         for fh in self.files.values():
@@ -340,7 +377,8 @@ class _Builder:
         m = w1 - w0
         per_row = np.bincount(pc.row, weights=pc.n, minlength=m).astype(np.int64)
         cum = np.cumsum(per_row)
-        columns = tuple(np.empty(int(cum[-1]) if m else 0, dtype=dtype) for _, dtype in COLUMNS)
+        n = int(cum[-1]) if m else 0
+        columns = (np.empty(n, dtype=np.int32),) + tuple(np.empty(n, dtype=dtype) for _, dtype in COLUMNS)
         r0 = 0
         while r0 < m:
             base = cum[r0 - 1] if r0 else 0

@@ -13,7 +13,7 @@ from rpbench.predict.match_sets import Matching
 from .conftest import make_instance
 
 
-def random_lists(seed: int, n_od: int = 40, n_classes: int = 30, empty_share: float = 0.2):
+def random_lists(seed: int, n_od: int = 40, n_classes: int = 30, empty_share: float = 0.2, block_classes: int = 20):
     """Seeker lists of random lengths (some empty) over random classes, with random per-pair distances."""
     rng = np.random.default_rng(seed)
     lens = rng.integers(1, 12, n_od) * (rng.random(n_od) > empty_share)
@@ -21,7 +21,7 @@ def random_lists(seed: int, n_od: int = 40, n_classes: int = 30, empty_share: fl
     cls = np.concatenate([rng.choice(n_classes, k, replace=False) for k in lens]).astype(np.int32)
     n = len(cls)
     cols = [rng.uniform(0, 3000, n).astype(np.float32) for _ in range(3)]
-    matching = Matching(seeker_off=off, cls=cls, saving_m=cols[0], shared_m=cols[1], seeker_detour_m=cols[2])
+    matching = Matching.from_lists(off, cls, cols[0], cols[1], cols[2], n_classes=n_classes, limit=block_classes)
     lam = rng.uniform(0, 0.01, n_od) * (rng.random(n_od) > 0.1)          # some λ = 0
     log_q = np.log1p(-rng.uniform(0, 0.9, n_classes))
     return matching, lam, log_q
@@ -43,8 +43,9 @@ def reference_sweep(matching: Matching, lam: np.ndarray, log_q: np.ndarray):
 
 @pytest.mark.parametrize("seed", range(5))
 @pytest.mark.parametrize("chunk_pairs", [1, 5, 64, 1 << 24])
-def test_sweep_equals_the_log_space_reference(seed, chunk_pairs):
-    matching, lam, log_q = random_lists(seed)
+@pytest.mark.parametrize("block_classes", [1, 20, 1 << 16])
+def test_sweep_equals_the_log_space_reference(seed, chunk_pairs, block_classes):
+    matching, lam, log_q = random_lists(seed, block_classes=block_classes)
     system = System.build(None, matching, lam, PredictConfig())
     h_ref, lnp_ref, cls_ref, seek_ref = reference_sweep(matching, lam, log_q)
     h, lnp = sweep(system, log_q, chunk_pairs=chunk_pairs)

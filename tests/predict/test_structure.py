@@ -62,7 +62,7 @@ def test_built_once_then_mapped_from_the_cache(cache):
     structure._RECENT.clear()                                  # a new process: reopened from disk
     again = load(inst, tau0_s=300.0)
     assert again.build_s["matching_s"] == 0 and again.directory == first.directory
-    assert isinstance(again.matching.cls, np.memmap)
+    assert isinstance(again.matching.local, np.memmap) and again.matching.local.dtype == np.uint16
     for a, b in zip(again.matching.arrays(), first.matching.arrays()):
         np.testing.assert_array_equal(a, b)
     sp = again.space_for(300.0)
@@ -74,7 +74,7 @@ def test_a_damaged_entry_is_rebuilt_with_a_note(cache, capsys):
     inst = make_instance(seed=3, size=6, n_od=40, max_pickup_m=3000, max_detour_m=3000)
     good = load(inst).matching.arrays()
     entry = entries(cache)[0]
-    with open(entry / "cls.bin", "r+b") as fh:
+    with open(entry / "local.bin", "r+b") as fh:
         fh.truncate(8)
     structure._RECENT.clear()
     rebuilt = load(inst)
@@ -132,7 +132,7 @@ def test_a_failed_build_leaves_no_half_entry_and_says_so_in_one_line(cache, monk
     inst = make_instance(seed=6)
 
     def disk_full(directory, *args):
-        (directory / "cls.bin").write_bytes(b"partial")
+        (directory / "local.bin").write_bytes(b"partial")
         raise OSError(errno.ENOSPC, "No space left on device")
 
     monkeypatch.setattr(structure, "_build_into", disk_full)
