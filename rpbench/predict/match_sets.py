@@ -129,10 +129,20 @@ class Matching:
         return int(self.seeker_off[-1])
 
     def n_state_pairs(self, space: StateSpace) -> int:
-        """Seeker-taker-state pairs of the model (Σ_s |T_s|), summed a chunk at a time."""
-        size = space.class_size
-        return int(sum(size[self.blocks.classes(self.local, self.seeker_off, s0, s1)].sum()
-                       for s0, s1, _, _ in self.chunks()))
+        """Seeker-taker-state pairs of the model (Σ_s |T_s|): recorded when the lists were built."""
+        if "state_pairs" in self.stats:
+            return int(self.stats["state_pairs"])
+        return self.count_state_pairs(space.class_size)
+
+    def count_state_pairs(self, class_size: np.ndarray) -> int:
+        """Σ_s |T_s| counted block by block: how often each local class is listed, times its size."""
+        total, b = 0, self.blocks
+        for k in range(b.n_blocks):
+            i0, i1 = self.seeker_off[b.seeker_off[k]], self.seeker_off[b.seeker_off[k + 1]]
+            table = b.cls[b.cls_off[k]:b.cls_off[k + 1]]
+            listed = np.bincount(self.local[i0:i1], minlength=len(table))
+            total += int(listed @ class_size[table])
+        return total
 
     @property
     def nbytes(self) -> int:
@@ -226,8 +236,10 @@ def build_matching(space: StateSpace, rates: OdRates, dist: np.ndarray, params: 
         seeker_off, local_dtype = writer.finish()
     finally:
         writer.close()
-    stats = dict(stats, build_s=time.perf_counter() - t0, local_dtype=local_dtype)
-    return Matching.open(directory, seeker_off, stats, local_dtype)
+    matching = Matching.open(directory, seeker_off, dict(stats, local_dtype=local_dtype), local_dtype)
+    matching.stats["state_pairs"] = matching.count_state_pairs(space.class_size)    # for reports, once
+    matching.stats["build_s"] = time.perf_counter() - t0
+    return matching
 
 
 def _in_order(pool: ThreadPoolExecutor, fn, tasks, ahead: int = 4):

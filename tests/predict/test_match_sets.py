@@ -153,3 +153,10 @@ def test_lexsort_fallback_gives_the_same_lists(monkeypatch, priority):
     for got, want in zip(model.matching.arrays(), packed):
         np.testing.assert_array_equal(got, want)
     check_against_brute_force(model)
+
+
+def test_recorded_state_pair_count_equals_a_direct_count():
+    model = make_instance(seed=8, size=6, n_od=40, max_pickup_m=3000, max_detour_m=3000).model()
+    m, sp = model.matching, model.space
+    direct = int(sp.class_size[m.cls].sum())
+    assert m.stats["state_pairs"] == direct == m.count_state_pairs(sp.class_size) == m.n_state_pairs(sp)
