@@ -15,8 +15,9 @@ Seeker lists hold taker classes (:mod:`.states`): the members of a class are
 adjacent in every list, so a seeker's running product is carried per class
 (``Q_c``) and the opportunity rate of member t is ``η_t = r_t H_c`` with
 ``H_c = Σ_s λ_s Π_{c' ≻_s c} Q_c'`` and ``r_t`` the product over earlier
-members of the same class.  The sweep over the seekers' lists is compiled
-(:mod:`.kernels`): a seeker's running product ``λ_s Π Q_c'`` is carried as a
+members of the same class.  The sweep over the seekers' lists, and the
+per-class and per-state passes around it, are compiled (:mod:`.kernels`):
+a seeker's running product ``λ_s Π Q_c'`` is carried as a
 product and its total ``log(1 - p_s)`` as a sum of ``log Q_c``; ``1 - e^{-x}``
 is ``-expm1(-x)``, and ``log(1 - p_t) = -η_t τ_t`` exactly.  Everything is float64.
 
@@ -35,9 +36,8 @@ from typing import Callable
 
 import numpy as np
 
-from rpbench.predict._arrays import segment_exclusive_cumsum, segment_sums
 from rpbench.predict.config import PredictConfig
-from rpbench.predict.kernels import savings_chunks, sweep_chunks
+from rpbench.predict.kernels import class_products, savings_chunks, sweep_chunks, taker_map
 from rpbench.predict.match_sets import CHUNK_PAIRS, Matching
 from rpbench.predict.states import StateSpace
 
@@ -166,26 +166,15 @@ class PairSums:
 def evaluate(system: System, rho: np.ndarray, sums: PairSums | None = None) -> Evaluation:
     """All variables of (A1)-(A6) from ρ, and the map's output clip(ρ')."""
     sp, cfg = system.space, system.config
-    log_1m_rho = np.log1p(-rho)
-    members = sp.class_members
-    in_class = log_1m_rho[members]
-    class_log_q = segment_sums(in_class, sp.class_off)
+    class_log_q = np.empty(sp.n_classes)
     member_log_r = np.empty(sp.n_states)
-    member_log_r[members] = segment_exclusive_cumsum(in_class, sp.class_off)
+    class_products(rho, sp.class_members, sp.class_off, class_log_q, member_log_r)
     class_h, log_not_paired = sweep(system, class_log_q, sums)
     p_seeker = -np.expm1(log_not_paired)
-    eta = np.exp(member_log_r) * class_h[sp.cls]
-    x = eta * sp.tau_s
-    p_taker = -np.expm1(-x)
-    log_not_taker = segment_exclusive_cumsum(x, sp.od_state_off)     # Σ_{j<k} η_j τ_j
-    lam_w = system.rate_per_s[sp.od]
-    lam_taker = lam_w * np.exp(log_not_paired[sp.od] - log_not_taker)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        g = np.where(x > 0, p_taker / x, 1.0)                       # (1 - e^{-x})/x, 1 at x = 0
-    load = lam_taker * sp.tau_s * g                                 # Little's law (A5)
-    rho_raw = -np.expm1(-load) if cfg.rho_mode == "poisson" else load
-    clipped = rho_raw > cfg.rho_cap
-    rho_next = np.clip(rho_raw, 0.0, cfg.rho_cap)
+    eta, p_taker, log_not_taker, lam_taker, rho_next = (np.empty(sp.n_states) for _ in range(5))
+    clipped = np.empty(sp.n_states, dtype=bool)
+    taker_map(class_h, log_not_paired, member_log_r, sp.cls, sp.tau_s, sp.od_state_off, system.rate_per_s,
+              cfg.rho_mode == "poisson", cfg.rho_cap, eta, p_taker, log_not_taker, lam_taker, rho_next, clipped)
     return Evaluation(rho=rho, rho_next=rho_next, clipped=clipped, eta=eta, p_taker=p_taker, lam_taker=lam_taker,
                       log_not_taker=log_not_taker, p_seeker=p_seeker, class_log_q=class_log_q, class_h=class_h,
                       member_log_r=member_log_r)

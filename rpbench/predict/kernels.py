@@ -276,3 +276,47 @@ def decode_entries(keys, tie_bits, tie_col, rows, start, n, piece_g, piece_share
             detour_out[i] = piece_detour[p]
         e += count
         j = j1
+
+
+@njit(cache=True, nogil=True)
+def class_products(rho, members, class_off, class_log_q, member_log_r):  # pragma: no cover - compiled
+    """Per class c: ``log Q_c = Σ_{t∈c} log(1 - ρ_t)``; per member t: ``log r_t``, the same sum over
+    the members before t (members in ``(w, k)`` order, ``members`` grouped by ``class_off``)."""
+    for c in range(len(class_off) - 1):
+        total = 0.0
+        for i in range(class_off[c], class_off[c + 1]):
+            t = members[i]
+            member_log_r[t] = total
+            total += np.log1p(-rho[t])
+        class_log_q[c] = total
+
+
+@njit(cache=True, nogil=True)
+def taker_map(class_h, log_not_paired, member_log_r, cls, tau, od_state_off, rate, poisson, rho_cap, eta,
+              p_taker, log_not_taker, lam_taker, rho_next, clipped):  # pragma: no cover - compiled
+    """(A2), (A3), (A5), (A6) along each OD's taker states, in one pass (see :func:`.fixed_point.evaluate`).
+
+    ``η_t = r_t H_c``, ``x = η_t τ_t``, ``p_t = 1 - e^{-x}``; ``Σ_{j<k} x_j``
+    along the path; ``λ_t = λ_w (1 - p_s) / Π_{j<k} (1 - p_j)`` in log space;
+    ``ρ'_t = λ_t τ_t (1 - e^{-x}) / x`` (Little's law, A5; ``λ_t τ_t`` at x =
+    0), or ``1 - e^{-that}`` when ``poisson``; clipped to ``[0, rho_cap]``.
+    """
+    for w in range(len(od_state_off) - 1):
+        before = 0.0
+        lam_w = rate[w]
+        log_free = log_not_paired[w]
+        for t in range(od_state_off[w], od_state_off[w + 1]):
+            e = np.exp(member_log_r[t]) * class_h[cls[t]]
+            x = e * tau[t]
+            p = -np.expm1(-x)
+            lam = lam_w * np.exp(log_free - before)
+            g = p / x if x > 0 else 1.0
+            load = lam * tau[t] * g
+            raw = -np.expm1(-load) if poisson else load
+            eta[t] = e
+            p_taker[t] = p
+            log_not_taker[t] = before
+            lam_taker[t] = lam
+            clipped[t] = raw > rho_cap
+            rho_next[t] = min(max(raw, 0.0), rho_cap)
+            before += x
