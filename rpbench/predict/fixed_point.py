@@ -31,13 +31,15 @@ consistent.  ρ' is clipped to ``[0, rho_cap]`` (A8) and the clips counted.
 from __future__ import annotations
 
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
+from numba import get_num_threads
 
 from rpbench.predict.config import PredictConfig
-from rpbench.predict.kernels import class_products, savings_chunks, sweep_chunks, taker_map
+from rpbench.predict.kernels import class_products, savings_blocks, sweep_blocks, taker_map
 from rpbench.predict.match_sets import CHUNK_PAIRS, Matching
 from rpbench.predict.states import StateSpace
 
@@ -120,12 +122,18 @@ def sweep(system: System, class_log_q: np.ndarray, sums: PairSums | None = None,
     q = np.exp(class_log_q)
     m, lam = system.matching, system.rate_per_s
     blocks = m.blocks
+    width = blocks.width
     block_args = (blocks.seeker_off, blocks.cls, blocks.cls_off)
     if sums is None:
         chunk_block = blocks.chunks(m.seeker_off, chunk_pairs)
         chunk_h = system.scratch(len(chunk_block) - 1, len(class_log_q))
-        sweep_chunks(m.seeker_off, m.local, lam, q, class_log_q, *block_args, chunk_block, chunk_h, log_not_paired,
-                     blocks.width)
+
+        def sweep_chunk(k: int) -> None:
+            chunk_h[k].fill(0.0)
+            sweep_blocks(m.seeker_off, m.local, lam, q, class_log_q, *block_args, chunk_block[k], chunk_block[k + 1],
+                         chunk_h[k], log_not_paired, np.empty(width), np.empty(width), np.empty(width))
+
+        _in_threads(sweep_chunk, len(chunk_block) - 1)
         return chunk_h.sum(axis=0), log_not_paired
     one_minus_q = -np.expm1(class_log_q)
     # The savings pass is the last over the lists: SAVINGS_PARTS chunks at a time run in parallel, each
@@ -135,15 +143,33 @@ def sweep(system: System, class_log_q: np.ndarray, sums: PairSums | None = None,
     chunk_block = blocks.chunks(m.seeker_off, min(chunk_pairs, SAVINGS_CHUNK_PAIRS))
     first_pair = m.seeker_off[blocks.seeker_off]
     parts = np.zeros((SAVINGS_PARTS, len(class_log_q), 4))
-    for k in range(0, len(chunk_block) - 1, SAVINGS_PARTS):
-        batch = chunk_block[k:k + SAVINGS_PARTS + 1]
-        savings_chunks(m.seeker_off, m.local, m.saving_m, m.shared_m, m.seeker_detour_m, lam, q, class_log_q,
-                       one_minus_q, *block_args, batch, parts, sums.by_seeker, log_not_paired, blocks.width)
+    for k0 in range(0, len(chunk_block) - 1, SAVINGS_PARTS):
+        batch = chunk_block[k0:k0 + SAVINGS_PARTS + 1]
+
+        def savings_chunk(k: int) -> None:
+            savings_blocks(m.seeker_off, m.local, m.saving_m, m.shared_m, m.seeker_detour_m, lam, q, class_log_q,
+                           one_minus_q, *block_args, batch[k], batch[k + 1], parts[k], sums.by_seeker,
+                           log_not_paired, np.empty((width, 7)))
+
+        _in_threads(savings_chunk, len(batch) - 1)
         m.release(int(first_pair[batch[0]]), int(first_pair[batch[-1]]),
                   ("local", "saving_m", "shared_m", "seeker_detour_m"))
     for part in parts:
         np.add(sums.by_class, part, out=sums.by_class)
     return sums.by_class[:, 0].copy(), log_not_paired
+
+
+def _in_threads(task: Callable[[int], None], n: int) -> None:
+    """``task(0) .. task(n-1)`` on ``numba.get_num_threads()`` threads (the kernels release the GIL).
+    Each task writes its own outputs, so the order they run in does not matter."""
+    threads = min(n, get_num_threads())
+    if threads <= 1:
+        for k in range(n):
+            task(k)
+        return
+    with ThreadPoolExecutor(threads) as pool:
+        for _ in pool.map(task, range(n)):          # re-raises a task's exception here
+            pass
 
 
 @dataclass(frozen=True, eq=False)

@@ -20,13 +20,16 @@ in the core's cache instead of megabytes spread over the whole class table
 (about 15-20 % faster per sweep on the month table, and half the bytes
 streamed per pair).  ``cache=True`` stores the machine code beside this
 module (or in ``NUMBA_CACHE_DIR``), so only the first run on a machine pays
-the compilation (a few seconds).
+the compilation (a few seconds).  Every kernel releases the GIL (``nogil``);
+the callers run chunks of blocks in a thread pool rather than with numba's
+``parallel=True``, whose compilation alone took 7 s of a fresh machine's
+first run.
 """
 
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 
 @njit(cache=True, nogil=True)
@@ -95,23 +98,6 @@ def _walk(i, end, cls, weight, total, q, log_q, h):  # pragma: no cover - compil
     return total
 
 
-@njit(cache=True, parallel=True)
-def sweep_chunks(off, local, lam, q, log_q, block_seeker, block_cls, block_cls_off, chunk_block, chunk_h,
-                 log_not_paired, width):  # pragma: no cover - compiled
-    """:func:`sweep_blocks` over fixed chunks of blocks, in parallel threads.
-
-    Chunk k (blocks ``chunk_block[k]..chunk_block[k+1]-1``) sums into its own
-    row ``chunk_h[k]``; the caller adds the rows in chunk order, so the result
-    does not depend on the number of threads nor on their scheduling.
-    ``width`` is the widest block's class count.
-    """
-    for k in prange(len(chunk_block) - 1):
-        chunk_h[k, :] = 0.0
-        sweep_blocks(off, local, lam, q, log_q, block_seeker, block_cls, block_cls_off, chunk_block[k],
-                     chunk_block[k + 1], chunk_h[k], log_not_paired, np.empty(width), np.empty(width),
-                     np.empty(width))
-
-
 @njit(cache=True, nogil=True)
 def savings_blocks(off, local, saving, shared, detour, lam, q, log_q, one_minus_q, block_seeker, block_cls,
                    block_cls_off, b0, b1, by_class, by_seeker, log_not_paired, loc):  # pragma: no cover
@@ -160,18 +146,6 @@ def savings_blocks(off, local, saving, shared, detour, lam, q, log_q, one_minus_
             c = block_cls[k0 + j]
             for col in range(4):
                 by_class[c, col] += loc[j, 3 + col]
-
-
-@njit(cache=True, parallel=True)
-def savings_chunks(off, local, saving, shared, detour, lam, q, log_q, one_minus_q, block_seeker, block_cls,
-                   block_cls_off, chunk_block, by_class_parts, by_seeker, log_not_paired,
-                   width):  # pragma: no cover - compiled
-    """:func:`savings_blocks` over a few consecutive chunks of blocks in parallel threads; chunk k sums
-    its classes into ``by_class_parts[k]`` (fixed, so the result does not depend on the threads)."""
-    for k in prange(len(chunk_block) - 1):
-        savings_blocks(off, local, saving, shared, detour, lam, q, log_q, one_minus_q, block_seeker, block_cls,
-                       block_cls_off, chunk_block[k], chunk_block[k + 1], by_class_parts[k], by_seeker,
-                       log_not_paired, np.empty((width, 7)))
 
 
 @njit(cache=True, nogil=True)
