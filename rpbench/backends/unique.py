@@ -39,26 +39,29 @@ def unique_optimum(model, highs) -> np.ndarray | None:
     """
     import highspy
 
-    c_all = model.values
-    start, rows = model.column_rows()
-    keep = np.flatnonzero(c_all >= 0)
+    c = model.values
+    col_start, col_rows = model.column_rows()
+    keep = np.flatnonzero(c >= 0)
     if len(keep) == 0:
         return keep                                   # x = 0 is the only optimum
-    count = np.diff(start)[keep]
-    col_start = np.zeros(len(keep) + 1, dtype=np.int64)
-    np.cumsum(count, out=col_start[1:])
-    offset = np.arange(col_start[-1]) - np.repeat(col_start[:-1], count)
-    used, col_rows = np.unique(rows[np.repeat(start[keep], count) + offset], return_inverse=True)
-    c = c_all[keep]
-    n, m = len(keep), len(used)
+    count = np.diff(col_start)
+    if len(keep) < len(c):                            # rare: most rounds have no negative column
+        count = count[keep]
+        entries = np.repeat(col_start[keep] - np.cumsum(count) + count, count) + np.arange(count.sum())
+        col_rows, c = col_rows[entries], c[keep]
+        col_start = np.zeros(len(keep) + 1, dtype=np.int64)
+        np.cumsum(count, out=col_start[1:])
+    used = np.zeros(model.n_rows, dtype=bool)
+    used[col_rows] = True
+    index = np.cumsum(used, dtype=np.int32) - 1       # rows no column uses are dropped
+    col_rows = index[col_rows]
+    n, m = len(keep), int(index[-1]) + 1
     if m == len(col_rows):                            # disjoint trips: take every one that has value
         return keep if (c > 0).all() else None
 
     inf = highspy.kHighsInf
-    ones = np.ones(n)
-    col_rows = col_rows.astype(np.int32)
     highs.passModel(n, m, len(col_rows), int(highspy.MatrixFormat.kColwise), int(highspy.ObjSense.kMaximize), 0.0,
-                    c, np.zeros(n), ones, np.full(m, -inf), np.ones(m), col_start.astype(np.int32), col_rows,
+                    c, np.zeros(n), np.ones(n), np.full(m, -inf), np.ones(m), col_start.astype(np.int32), col_rows,
                     np.ones(len(col_rows)), np.zeros(n, dtype=np.int32))
     highs.run()
     if highs.getModelStatus().name != "kOptimal":
