@@ -145,17 +145,16 @@ class RTV(Strategy):
         # reach: POOL is asked about those pairs alone (half of all rider pairs on the full day), in the same
         # row-major order, and vehicles are numbered among the reached ones in increasing order, so the trips
         # come out exactly as from every pair on every vehicle.
-        riders, rider = np.unique(vac.p, return_inverse=True)
+        riders, rider = _present(vac.p, n)
         if len(riders) < 2:
             return
-        fleet, vehicle = np.unique(vac.v, return_inverse=True)
+        fleet, vehicle = _present(vac.v, state.n_v0)
         pk = np.full((len(riders), len(fleet)), np.inf)
         pk[rider, vehicle] = vac.pickup_m                  # RV edges only (others stay infinite)
         reach = np.isfinite(pk)
-        a, b = np.triu_indices(len(riders), k=1)
-        shared = reach.astype(np.float64) @ reach.T.astype(np.float64)     # vehicles both reach, counted exactly
-        together = shared[a, b] > 0
-        a, b = a[together], b[together]
+        reach_f = reach.astype(np.float64)
+        shared = reach_f @ reach_f.T > 0                   # a vehicle both reach (whole counts, exact)
+        a, b = np.nonzero(np.triu(shared, k=1))            # pairs a < b, row-major
         if len(a) == 0:
             return
         i, j = riders[a], riders[b]
@@ -185,6 +184,17 @@ class RTV(Strategy):
         cols["fofo"].append(np.where(take_f, fwd_fofo[e], bwd_fofo[e]))
         cols["value"].append(np.where(take_f, val_f, val_b))
         cols["pickup"].append(np.where(take_f, pk_i, pk_j))
+
+
+def _present(index: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct values of ``index`` (in ``0..size-1``) in increasing order, and each entry's rank among them.
+
+    ``np.unique(index, return_inverse=True)`` by counting: it sorted, and cost more than POOL on small rounds.
+    """
+    present = np.zeros(size, dtype=bool)
+    present[index] = True
+    rank = np.cumsum(present) - 1
+    return np.flatnonzero(present), rank[index]
 
 
 def _top_k_per_request(cols: dict, k: int) -> dict:
