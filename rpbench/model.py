@@ -392,7 +392,8 @@ class Solution:
     ``objective`` and ``bound`` are in model units (``Σ values[chosen]``);
     ``gap`` is relative, ``(bound - objective) / max(1, |objective|)``, when a
     bound is known.  Times are seconds: building the solver's own model,
-    solving, and reading the answer back.
+    solving, and reading the answer back.  ``unique``: proven to be the only
+    optimum, so there is no tie to resolve.
     """
 
     chosen: np.ndarray
@@ -405,6 +406,7 @@ class Solution:
     solve_s: float = 0.0
     extract_s: float = 0.0
     message: str = ""
+    unique: bool = False
 
     @property
     def total_s(self) -> float:

@@ -82,7 +82,7 @@ class BlossomBackend(Backend):
             return lapmod_solution(model, self.name)
         if model.structure is Structure.TRIP_PACKING:
             sol = HighsBackend().solve(model, options)
-            note = "; ".join(m for m in ("trip packing solved by the HiGHS MIP", sol.message) if m)
+            note = "; ".join(m for m in ("trip packing solved by HiGHS (LP or MIP)", sol.message) if m)
             return replace(sol, backend=self.name, message=note)
         if model.n_cols == 0:
             return empty_solution(model, self.name)

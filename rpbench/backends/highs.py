@@ -12,13 +12,16 @@ HiGHS bundled in OR-Tools 9.15, and the two then cannot load in one process.
 from __future__ import annotations
 
 import threading
+from dataclasses import replace
 
 import numpy as np
 
 from rpbench.backends._common import INFEASIBLE, LIMIT, OPTIMAL, Clock, Program, Raw, raw_state
 from rpbench.backends._milp import ProgramBackend
 from rpbench.backends.base import SolveOptions
+from rpbench.backends.unique import unique_optimum
 from rpbench.exceptions import SolverError
+from rpbench.model import Model, Solution, Status, Structure, make_solution
 
 #: HiGHS model status name -> raw state (x in [0, 1]: "unbounded or infeasible" is infeasible).
 STATUS = {"kOptimal": OPTIMAL, "kInfeasible": INFEASIBLE, "kUnboundedOrInfeasible": INFEASIBLE,
@@ -60,42 +63,69 @@ def _apply(h, settings: dict) -> None:
 
 
 class _Kept(threading.local):
-    """This thread's HiGHS instance and the settings its options were last set to (None: unknown)."""
+    """This thread's HiGHS instances by role, with the settings their options were last set to (None: unknown)."""
 
-    highs = None
-    settings: dict | None = None
+    def __init__(self) -> None:
+        self.highs: dict[str, object] = {}
+        self.settings: dict[str, dict | None] = {}
 
 
 _kept = _Kept()
 
 
-def kept_instance(settings: dict):
-    """This thread's ``highspy.Highs``, its previous model cleared and its options set to ``settings``.
+def kept_instance(settings: dict, role: str = "solve"):
+    """This thread's ``highspy.Highs`` for ``role``, its previous model cleared and its options set to ``settings``.
 
     Constructing a Highs object costs about 0.15 ms, more than solving a typical
     simulation round's LP, so one instance per thread is kept.  ``clearModel``
     drops the previous model with its solution and basis; options are reset to
     HiGHS's defaults before ``settings`` are applied whenever they differ from
-    the previous solve's.
+    the previous solve's.  A second role (the trip-packing LP of
+    :mod:`.unique`) keeps its own instance, so alternating LP and MIP rounds
+    do not reset options every time.
     """
     import highspy
 
-    if _kept.highs is None:
-        _kept.highs = highspy.Highs()
+    h = _kept.highs.get(role)
+    if h is None:
+        h = _kept.highs[role] = highspy.Highs()
     else:
-        _kept.highs.clearModel()
-    if _kept.settings != settings:
-        _kept.highs.resetOptions()
-        _kept.settings = None                  # unknown until every option is accepted
-        _apply(_kept.highs, settings)
-        _kept.settings = dict(settings)
-    return _kept.highs
+        h.clearModel()
+    if _kept.settings.get(role) != settings:
+        h.resetOptions()
+        _kept.settings[role] = None            # unknown until every option is accepted
+        _apply(h, settings)
+        _kept.settings[role] = dict(settings)
+    return h
 
 
 class HighsBackend(ProgramBackend):
     name = "highs"
     requires = ("highspy",)
     description = "HiGHS via highspy (bulk CSC arrays): simplex LP for the assignment, MIP for packing and pairing"
+
+    def solve(self, model: Model, options: SolveOptions, hint: np.ndarray | None = None) -> Solution:
+        """As :meth:`ProgramBackend.solve`; trip packing first tries the LP with a uniqueness proof.
+
+        Most simulation rounds have one optimum, which the LP relaxation finds and
+        :mod:`.unique` proves in a fraction of the MIP's time (its primal heuristics
+        alone cost more); rounds with ties or a fractional LP go to the MIP as before.
+        ``method = "mip"`` or a positive ``mip_rel_gap`` (which may stop short of the
+        optimum) skip the attempt.
+        """
+        if not (model.structure is Structure.TRIP_PACKING and model.n_cols and options.method in (None, "lp")
+                and options.mip_rel_gap == 0):
+            return super().solve(model, options, hint)
+        self.ensure_installed()
+        clock = Clock()
+        with clock("solve_s"):
+            h = kept_instance(highs_settings(options, options.time_limit_s, relax=True), role="packing_lp")
+            chosen = unique_optimum(model, h)
+        if chosen is None:
+            sol = super().solve(model, options, hint)
+            return replace(sol, solve_s=sol.solve_s + clock.times["solve_s"])
+        sol = make_solution(model, chosen, Status.OPTIMAL, self.name, unique=True, **clock.times)
+        return replace(sol, bound=sol.objective, gap=0.0)
 
     def run(self, prog: Program, options: SolveOptions, clock: Clock, *, relax: bool = False,
             time_limit: float | None = None, hint: np.ndarray | None = None) -> Raw:

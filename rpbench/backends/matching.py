@@ -77,7 +77,7 @@ class MatchingBackend(Backend):
             return empty_solution(model, self.name)
         if model.structure is Structure.TRIP_PACKING:
             sol = HighsBackend().solve(model, options)
-            note = "; ".join(m for m in ("trip packing solved by the HiGHS MIP", sol.message) if m)
+            note = "; ".join(m for m in ("trip packing solved by HiGHS (LP or MIP)", sol.message) if m)
             return replace(sol, backend=self.name, message=note)
         if model.structure is Structure.ASSIGNMENT:
             return lapmod_solution(model, self.name)

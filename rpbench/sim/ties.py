@@ -35,7 +35,8 @@ from rpbench.model import AssignmentModel, Solution, Status, TripPackingModel, m
 
 def canonicalize(model, solution: Solution) -> tuple[Solution, int]:
     """Return the canonical optimum reachable from ``solution`` and the number of moves made."""
-    if solution.status != Status.OPTIMAL or len(solution.chosen) == 0:
+    # A proven-unique optimum has no value-neutral move (each would give a second optimum).
+    if solution.status != Status.OPTIMAL or len(solution.chosen) == 0 or solution.unique:
         return solution, 0
     if isinstance(model, AssignmentModel):
         resource = model.col_vehicle.astype(np.int64)

@@ -141,12 +141,22 @@ class RTV(Strategy):
         n = state.n_passengers
         if n < 2 or len(vac.p) == 0:
             return
-        # Only passengers with a vacant vehicle within R̄ can share a size-2 trip: the pairs among them, in
-        # the same (row-major) order as among all passengers, spare POOL the pairs that could never qualify.
-        riders = np.unique(vac.p)
+        # Only passengers with a vacant vehicle within R̄ can share a size-2 trip, and only on a vehicle both
+        # reach: POOL is asked about those pairs alone (half of all rider pairs on the full day), in the same
+        # row-major order, and vehicles are numbered among the reached ones in increasing order, so the trips
+        # come out exactly as from every pair on every vehicle.
+        riders, rider = _present(vac.p, n)
         if len(riders) < 2:
             return
-        a, b = np.triu_indices(len(riders), k=1)
+        fleet, vehicle = _present(vac.v, state.n_v0)
+        pk = np.full((len(riders), len(fleet)), np.inf)
+        pk[rider, vehicle] = vac.pickup_m                  # RV edges only (others stay infinite)
+        reach = np.isfinite(pk)
+        reach_f = reach.astype(np.float64)
+        shared = reach_f @ reach_f.T > 0                   # a vehicle both reach (whole counts, exact)
+        a, b = np.nonzero(np.triu(shared, k=1))            # pairs a < b, row-major
+        if len(a) == 0:
+            return
         i, j = riders[a], riders[b]
         rr_pickup = state.params.max_pickup_m if self.options.rr_pickup_check else np.inf
         # Direction i -> j (i picked up first) and j -> i; drop order chosen by POOL.
@@ -157,26 +167,34 @@ class RTV(Strategy):
         edge = fwd.feasible | bwd.feasible                # the request-request edge
         if not edge.any():
             return
-        i, j = i[edge], j[edge]
+        a, b, i, j = a[edge], b[edge], i[edge], j[edge]
         fwd_ok, bwd_ok = fwd.feasible[edge], bwd.feasible[edge]
         fwd_e, bwd_e = fwd.saving[edge], bwd.saving[edge]
         fwd_fofo, bwd_fofo = fwd.fofo[edge], bwd.fofo[edge]
-        pk = np.full((n, state.n_v0), np.inf)
-        pk[vac.p, vac.v] = vac.pickup_m                    # RV edges only (others stay infinite)
-        e, v = np.nonzero(np.isfinite(pk[i]) & np.isfinite(pk[j]))
-        if len(e) == 0:
-            return
-        val_f = np.where(fwd_ok[e], 2 * c_ko + self._net(fwd_e[e], pk[i[e], v]), -np.inf)
-        val_b = np.where(bwd_ok[e], 2 * c_ko + self._net(bwd_e[e], pk[j[e], v]), -np.inf)
+        e, v = np.nonzero(reach[a] & reach[b])
+        pk_i, pk_j = pk[a[e], v], pk[b[e], v]
+        val_f = np.where(fwd_ok[e], 2 * c_ko + self._net(fwd_e[e], pk_i), -np.inf)
+        val_b = np.where(bwd_ok[e], 2 * c_ko + self._net(bwd_e[e], pk_j), -np.inf)
         take_f = val_f >= val_b                            # tie -> the lower-index request first
         cols["kind"].append(np.full(len(e), Kind.TRIP2))
-        cols["vehicle_row"].append(v)
+        cols["vehicle_row"].append(fleet[v])
         cols["r1"].append(i[e])
         cols["r2"].append(j[e])
         cols["first"].append(np.where(take_f, i[e], j[e]))
         cols["fofo"].append(np.where(take_f, fwd_fofo[e], bwd_fofo[e]))
         cols["value"].append(np.where(take_f, val_f, val_b))
-        cols["pickup"].append(np.where(take_f, pk[i[e], v], pk[j[e], v]))
+        cols["pickup"].append(np.where(take_f, pk_i, pk_j))
+
+
+def _present(index: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct values of ``index`` (in ``0..size-1``) in increasing order, and each entry's rank among them.
+
+    ``np.unique(index, return_inverse=True)`` by counting: it sorted, and cost more than POOL on small rounds.
+    """
+    present = np.zeros(size, dtype=bool)
+    present[index] = True
+    rank = np.cumsum(present) - 1
+    return np.flatnonzero(present), rank[index]
 
 
 def _top_k_per_request(cols: dict, k: int) -> dict:

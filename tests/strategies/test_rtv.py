@@ -223,32 +223,53 @@ def test_reassign_is_refused():
         make_strategy("rtv", reassign=True)
 
 
-class _EveryPassengerRides:
-    """numpy for rtv's pair enumeration, with np.unique(vac.p) replaced by every passenger (the plain search)."""
+def _plain_pair_trips(self, state, vac, c_ko: float, cols: dict) -> None:
+    """RTV's size-2 trips the plain way: POOL on every pair of passengers, every vacant vehicle tried."""
+    from rpbench.geometry import pool
 
-    def __init__(self, n: int):
-        self.n = n
+    n = state.n_passengers
+    if n < 2 or len(vac.p) == 0:
+        return
+    i, j = np.triu_indices(n, k=1)
+    rr_pickup = state.params.max_pickup_m if self.options.rr_pickup_check else np.inf
+    kw = dict(max_pickup_m=rr_pickup, max_detour_m=state.params.max_detour_m, order_rule=self.options.order_rule)
+    fwd = pool(state.dist, state.p_origin[i], state.p_destination[i], state.p_origin[j], state.p_destination[j], **kw)
+    bwd = pool(state.dist, state.p_origin[j], state.p_destination[j], state.p_origin[i], state.p_destination[i], **kw)
+    edge = fwd.feasible | bwd.feasible
+    i, j = i[edge], j[edge]
+    pk = np.full((n, state.n_v0), np.inf)
+    pk[vac.p, vac.v] = vac.pickup_m
+    e, v = np.nonzero(np.isfinite(pk[i]) & np.isfinite(pk[j]))
+    val_f = np.where(fwd.feasible[edge][e], 2 * c_ko + self._net(fwd.saving[edge][e], pk[i[e], v]), -np.inf)
+    val_b = np.where(bwd.feasible[edge][e], 2 * c_ko + self._net(bwd.saving[edge][e], pk[j[e], v]), -np.inf)
+    take_f = val_f >= val_b
+    cols["kind"].append(np.full(len(e), Kind.TRIP2))
+    cols["vehicle_row"].append(v)
+    cols["r1"].append(i[e])
+    cols["r2"].append(j[e])
+    cols["first"].append(np.where(take_f, i[e], j[e]))
+    cols["fofo"].append(np.where(take_f, fwd.fofo[edge][e], bwd.fofo[edge][e]))
+    cols["value"].append(np.where(take_f, val_f, val_b))
+    cols["pickup"].append(np.where(take_f, pk[i[e], v], pk[j[e], v]))
 
-    def __getattr__(self, name):
-        return getattr(np, name)
 
-    def unique(self, _):
-        return np.arange(self.n)
-
-
-def test_pair_trips_among_passengers_with_a_vehicle_equal_those_among_all(monkeypatch):
-    import rpbench.strategies.rtv as rtv_module
+@pytest.mark.parametrize("n_pass, n_vac, pickup", [(9, 3, 900.0), (14, 6, 1200.0), (20, 10, 700.0)])
+def test_pair_trips_on_shared_vehicles_equal_those_of_the_plain_search(monkeypatch, n_pass, n_vac, pickup):
+    # rtv asks POOL only about passenger pairs that share a reachable vacant vehicle; the model must be the
+    # one of every pair on every vehicle, column for column.
+    from rpbench.strategies.rtv import RTV
 
     pair_trips = 0
     for seed in range(12):
         rng = np.random.default_rng(seed)
-        state = random_state(rng, grid(5), n_pass=9, n_vac=3, n_occ=2, params=Params(max_pickup_m=900.0))
+        state = random_state(rng, grid(5), n_pass=n_pass, n_vac=n_vac, n_occ=2, params=Params(max_pickup_m=pickup))
         fast = make_strategy("rtv").build(state)
         with monkeypatch.context() as patch:
-            patch.setattr(rtv_module, "np", _EveryPassengerRides(state.n_passengers))
+            patch.setattr(RTV, "_add_pair_trips", _plain_pair_trips)
             plain = make_strategy("rtv").build(state)
         for name in ("kind", "vehicle", "first", "second", "fofo", "utility_m", "pickup_m"):
             assert np.array_equal(getattr(fast, name), getattr(plain, name)), (seed, name)
-        assert np.array_equal(fast.model.values, plain.model.values)
+        for name in ("values", "col_vehicle", "col_request1", "col_request2"):
+            assert np.array_equal(getattr(fast.model, name), getattr(plain.model, name)), (seed, name)
         pair_trips += int((fast.kind == Kind.TRIP2).sum())
     assert pair_trips > 0
