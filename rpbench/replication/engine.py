@@ -147,12 +147,16 @@ class AuthorsEngine:
     ``predictions`` (FL, FL-no_delay) holds per order the columns
     ``saved_distance_for_seeker`` and ``saved_distance_for_taker`` aligned with
     ``scenario.orders``; ``denominator`` is the response-rate denominator
-    (default: the released orders).
+    (default: the released orders).  ``reposition_origins`` is the list idle
+    vehicles draw targets from (default: the released orders' distinct
+    origins); ``release_rank`` (one integer per order) orders each round's new
+    passengers (default: request time) -- the authors list them in their
+    sample's row order, which decides who is "first" in an RTV pair edge.
     """
 
     def __init__(self, scenario: Scenario, strategy: str, preset: Preset, *, switches: Switches | None = None,
                  predictions: pd.DataFrame | None = None, denominator: int | None = None,
-                 reposition_origins: np.ndarray | None = None):
+                 reposition_origins: np.ndarray | None = None, release_rank: np.ndarray | None = None):
         if strategy not in STRATEGIES:
             raise ParameterError(f"the authors' engine runs {', '.join(STRATEGIES)}; not {strategy!r}")
         self.sc = scenario
@@ -177,6 +181,9 @@ class AuthorsEngine:
                              else np.asarray(pd.unique(self.o)))
         self.rng = random.Random(len(self.vehicles) - 1)
         self.rng.choice(list(self.idle_origins))
+        self.release_rank = None if release_rank is None else np.asarray(release_rank, dtype=np.int64)
+        if self.release_rank is not None and len(self.release_rank) != len(orders):
+            raise ParameterError(f"release_rank has {len(self.release_rank)} entries for {len(orders)} orders")
         self.records: list[Record] = []
         self.pair_saving: list[float] = []
         self.shared: list[float] = []
@@ -216,6 +223,8 @@ class AuthorsEngine:
             rounds += 1
             new_end = int(np.searchsorted(self.req, t, side="right"))
             new = [i for i in range(released, new_end) if self.req[i] > t - DT_S]
+            if self.release_rank is not None:
+                new.sort(key=lambda i: self.release_rank[i])
             released = new_end
             seekers = new + waiting
             for i in new:
@@ -377,7 +386,7 @@ class AuthorsEngine:
                 else:
                     self._take_first(vi, veh, b, t)
                     if self.strategy == "rtv" and self.sw.teleport:
-                        self._move_taker(vi, veh, t)       # the authors' RTV moves it in the same round
+                        self._rtv_first_move(vi, veh, t)
             elif veh.p0 >= 0:
                 self._move_taker(vi, veh, t)
             else:
@@ -401,6 +410,19 @@ class AuthorsEngine:
             veh.pickup_s = t + SECONDS_PER_M * pickup_m
             veh.arrive_s = veh.leg.end_s
             veh.p0_pickup_m = pickup_m
+
+    def _rtv_first_move(self, vi: int, veh: Vehicle, t: float) -> None:
+        """The authors' RTV moves a vehicle in the round it is assigned.
+
+        It notes the vehicle's node as its "origin" before moving; a vehicle
+        already standing at the passenger's origin therefore counts as having
+        picked the passenger up, and its activity time is left as it was (it
+        is not reset to this round, as a pick-up found in a later round is).
+        """
+        if veh.node == int(self.o[veh.p0]):
+            veh.picked = True
+            return
+        self._move_taker(vi, veh, t)
 
     def d_node(self, b: int) -> int:
         return int(self.d[b])

@@ -86,7 +86,8 @@ def engine_name(label: str) -> str:
 def run_authors(inputs: Inputs, strategy: str, switches, preset: Preset) -> Outcome:
     chosen = inputs.paper if switches.authors_input else inputs.peak
     return AuthorsEngine(chosen.scenario, strategy, preset, switches=switches, predictions=chosen.predictions,
-                         denominator=chosen.response_denominator).run()
+                         denominator=chosen.response_denominator, reposition_origins=chosen.idle_origins,
+                         release_rank=chosen.sample_rank).run()
 
 
 def run_rpbench(chosen: PaperInput, strategy: str, preset: Preset, done: dict) -> dict[str, float]:

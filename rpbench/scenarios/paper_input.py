@@ -17,7 +17,10 @@ authors' simulation input step by step (their ``Simulation.__init__`` and
    engine does that, see :mod:`rpbench.replication`);
 5. only orders departing in (08:00, 09:00] are ever released (rounds release
    (t - 10 s, t]); the rest stay in the response-rate denominator, which is
-   the whole sample (``provenance['response_denominator']``).
+   the whole sample (``provenance['response_denominator']``);
+6. a round's new passengers are listed in sample order (``sample_rank``), and
+   idle vehicles draw their targets from the sample's distinct origins in
+   sample order (``idle_origins``), as the authors' loop does.
 
 The scenario's ``orders`` are the released ones, so rpbench's own engine can
 run the same input; its response rate must then be rescaled by
@@ -55,6 +58,12 @@ class PaperInput:
     predictions: pd.DataFrame
     #: The authors' response-rate denominator: every sampled order, released or not.
     response_denominator: int
+    #: Per order of ``scenario.orders``, its position in the pandas sample: the authors list a round's new
+    #: passengers in this order (not by request time), which decides who is "first" in their RTV pair edges.
+    sample_rank: np.ndarray | None = None
+    #: The sample's distinct origins in sample order (network indices), released or not: the list the
+    #: authors place the fleet on and draw idle-vehicle targets from (``order_list['O_location'].unique()``).
+    idle_origins: np.ndarray | None = None
 
 
 def sample_like_pandas(frame: pd.DataFrame, frac: float) -> pd.DataFrame:
@@ -97,6 +106,9 @@ def load_paper_input(data_dir: Path, *, date: str = DEFAULT_DATE, sample: float 
     fleet = Fleet(initial_node=network.index_of(fleet_ids, what="vehicle start node").astype(np.int32))
     by_id = kept.set_index("order_id")
     predictions = by_id.loc[orders.order_id, list(PREDICTION_COLUMNS)].reset_index(drop=True)
+    rank = pd.Series(np.flatnonzero(released), index=kept["order_id"].to_numpy())
+    sample_rank = rank.loc[orders.order_id].to_numpy(dtype=np.int64)
+    idle_origins = network.index_of(pd.unique(drawn["origin_id"].to_numpy()), what="sampled origin node id")
     source = paper_order_source(data_dir, day)
     scenario = Scenario(
         name="haikou-paper-input",
@@ -114,7 +126,8 @@ def load_paper_input(data_dir: Path, *, date: str = DEFAULT_DATE, sample: float 
                     "release_window": "(08:00, 09:00]"},
         demand=Demand(table="month", data_dir=str(data_dir)),
     )
-    return PaperInput(scenario=scenario, predictions=predictions, response_denominator=len(drawn))
+    return PaperInput(scenario=scenario, predictions=predictions, response_denominator=len(drawn),
+                      sample_rank=sample_rank, idle_origins=idle_origins.astype(np.int64))
 
 
 def build_paper_input(data_dir: Path, *, date: str = DEFAULT_DATE, sample: float = PAPER_SAMPLE, seed: int = 0,
