@@ -32,6 +32,7 @@ import shutil
 import sys
 import tempfile
 import time
+import zipfile
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -175,7 +176,7 @@ def _open_entry(directory: Path, n_od: int) -> Structure | None:
         if len(seeker_off) != n_od + 1 or int(seeker_off[-1]) != manifest.get("n_pairs"):
             raise ValueError("its offsets do not match the manifest")
         matching = Matching.open(directory, seeker_off, manifest.get("stats", {}), manifest["columns"]["local"])
-    except (OSError, ValueError, KeyError, TypeError, EOFError) as exc:
+    except (OSError, ValueError, KeyError, TypeError, EOFError, zipfile.BadZipFile) as exc:   # npz: a zip
         print(f"rpbench: note: the cached prediction structure {directory.name} is unusable "
               f"({type(exc).__name__}: {one_line(exc)}); rebuilding it", file=sys.stderr)
         shutil.rmtree(directory, ignore_errors=True)

@@ -84,6 +84,19 @@ def test_a_damaged_entry_is_rebuilt_with_a_note(cache, capsys):
         np.testing.assert_array_equal(a, b)
 
 
+@pytest.mark.parametrize("name", ["blocks.npz", "states.npz"])
+def test_a_truncated_array_file_is_rebuilt_with_a_note(cache, capsys, name):
+    inst = make_instance(seed=3, size=6, n_od=40, max_pickup_m=3000, max_detour_m=3000)
+    good = load(inst).matching.arrays()
+    path = entries(cache)[0] / name
+    path.write_bytes(path.read_bytes()[:100])
+    structure._RECENT.clear()
+    rebuilt = load(inst)
+    assert "unusable" in capsys.readouterr().err
+    for a, b in zip(rebuilt.matching.arrays(), good):
+        np.testing.assert_array_equal(a, b)
+
+
 def test_a_private_build_leaves_nothing_behind(cache):
     inst = make_instance(seed=4)
     s = structure.load_structure(inst.network, inst.rates, inst.params, inst.config, use_cache=False)
