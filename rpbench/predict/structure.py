@@ -115,8 +115,25 @@ def load_structure(network: RoadNetwork, rates: OdRates, params: Params, config:
             if isinstance(exc, OSError) and not isinstance(exc, FileNotFoundError):
                 raise cache_write_error(final, exc) from None
             raise
+    _remove_outdated(root)
     _RECENT[key] = dataclasses.replace(structure, directory=final)
     return _RECENT[key]
+
+
+def _remove_outdated(root: Path) -> None:
+    """Delete cache entries written by an older structure format (several GB each that no version of
+    this code reads again); entries of a newer format, or without a readable manifest, are left alone."""
+    for entry in root.glob("predict-structure-*"):
+        try:
+            version = json.loads((entry / "manifest.json").read_text()).get("version")
+            outdated = int(version) < int(STRUCTURE_VERSION)
+        except (OSError, ValueError, TypeError, AttributeError):
+            continue
+        if outdated:
+            size = sum(f.stat().st_size for f in entry.iterdir() if f.is_file())
+            shutil.rmtree(entry, ignore_errors=True)
+            print(f"rpbench: removed the outdated prediction structure {entry.name} "
+                  f"(format {version}, {size / 1e9:.1f} GB) from the cache", file=sys.stderr)
 
 
 def _private_build(network, rates, params, config) -> Structure:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import fcntl
+import json
 import os
 import subprocess
 import sys
@@ -95,6 +96,18 @@ def test_a_truncated_array_file_is_rebuilt_with_a_note(cache, capsys, name):
     assert "unusable" in capsys.readouterr().err
     for a, b in zip(rebuilt.matching.arrays(), good):
         np.testing.assert_array_equal(a, b)
+
+
+def test_a_build_removes_entries_of_older_formats_only(cache, capsys):
+    old, newer, odd = (cache / f"predict-structure-{name}" for name in ("old", "newer", "odd"))
+    for entry, version in ((old, "1"), (newer, str(int(structure.STRUCTURE_VERSION) + 1)), (odd, None)):
+        entry.mkdir(parents=True)
+        (entry / "cls.bin").write_bytes(b"x" * 10)
+        if version is not None:
+            (entry / "manifest.json").write_text(json.dumps({"version": version}))
+    load(make_instance(seed=4))
+    assert not old.exists() and newer.exists() and odd.exists()
+    assert "removed the outdated prediction structure predict-structure-old" in capsys.readouterr().err
 
 
 def test_a_private_build_leaves_nothing_behind(cache):
