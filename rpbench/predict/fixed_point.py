@@ -113,8 +113,9 @@ def sweep(system: System, class_log_q: np.ndarray, sums: PairSums | None = None,
     """One pass over all seeker lists: returns (H_c per class, log(1 - p_s) per OD).
 
     ``H_c = Σ_s λ_s Π_{c' ≻_s c} Q_c'`` and ``log(1 - p_s) = Σ_{c ∈ T_s} log Q_c``,
-    computed by the compiled kernels one chunk of seekers at a time (the pair
-    columns are usually memory maps).  With ``sums`` the pass also adds the
+    computed by the compiled kernels one chunk of class blocks (:mod:`.blocks`)
+    at a time, the chunks in parallel threads (the pair columns are usually
+    memory maps).  With ``sums`` the pass also adds the
     savings pass's pair sums (:mod:`.savings`) and gives the chunks' pages of
     the distance columns back at once, so they never all sit in memory.
     """
