@@ -78,7 +78,8 @@ class Vehicle:
     assign_node: int = -1
     p0_pickup_m: float = 0.0            # the authors' ledger of p0's pick-up
     leg: Leg | None = None
-    idle_target: int = -1
+    idle_route: list[int] = field(default_factory=list)   # teleport: nodes still to visit, taken from the end
+    idle_first_m: float = 0.0           # teleport: first link of the idle route (the authors' waiting test)
     reposition_s: float = 0.0
 
 
@@ -398,11 +399,11 @@ class AuthorsEngine:
             # The authors' NP: jump to the destination, blocked for the real pick-up and ride.
             done = t + SECONDS_PER_M * (pickup_m + self.solo[b])
             self.records.append(Record(b, vi, t, t - self.req[b], pickup_m, ride_m=self.solo[b]))
-            veh.node, veh.active_at, veh.leg, veh.idle_target = int(self.d_node(b)), done, None, -1
+            veh.node, veh.active_at, veh.leg, veh.idle_route = int(self.d_node(b)), done, None, []
             return
         veh.p0, veh.picked, veh.assigned_s, veh.assign_node = b, False, t, veh.node
         veh.p0_pickup_m = 0.0
-        veh.idle_target, veh.leg = -1, None
+        veh.idle_route, veh.leg = [], None
         if not self.sw.authors_ledger:
             self.records.append(Record(b, vi, t, t - self.req[b], pickup_m, ride_m=self.solo[b]))
         if not self.sw.teleport:
@@ -410,6 +411,11 @@ class AuthorsEngine:
             veh.pickup_s = t + SECONDS_PER_M * pickup_m
             veh.arrive_s = veh.leg.end_s
             veh.p0_pickup_m = pickup_m
+        elif veh.node == int(self.o[b]):
+            # The authors note the vehicle's node as its "origin" when they assign it; standing at the
+            # passenger's origin, it counts as having picked the passenger up, its activity time left as it
+            # was (no round spent boarding, no reset to this round).
+            veh.picked = True
 
     def _rtv_first_move(self, vi: int, veh: Vehicle, t: float) -> None:
         """The authors' RTV moves a vehicle in the round it is assigned.
@@ -468,7 +474,7 @@ class AuthorsEngine:
             veh.node = int(self.d[b])
         else:
             veh.node = int(self.d[b]) if g["fofo"] else int(self.d[a])
-        veh.p0, veh.picked, veh.leg, veh.p0_pickup_m, veh.idle_target = -1, False, None, 0.0, -1
+        veh.p0, veh.picked, veh.leg, veh.p0_pickup_m, veh.idle_route = -1, False, None, 0.0, []
 
     def _dispatch_two(self, vi: int, veh: Vehicle, trip: tuple[int, ...], t: float) -> None:
         """RTV: a vacant vehicle takes two passengers at once; the earlier request is picked up first."""
@@ -485,7 +491,7 @@ class AuthorsEngine:
         route = pickup + g["rest"] + (0.0 if self.sw.pickup_from_first_origin else between)
         veh.active_at = t + SECONDS_PER_M * route
         veh.node = int(self.d[b]) if g["fofo"] else int(self.d[a])
-        veh.p0, veh.picked, veh.leg, veh.p0_pickup_m, veh.idle_target = -1, False, None, 0.0, -1
+        veh.p0, veh.picked, veh.leg, veh.p0_pickup_m, veh.idle_route = -1, False, None, 0.0, []
 
     def _first_wait(self, a: int) -> float:
         for o, _v, t in self.assigned:
@@ -553,17 +559,20 @@ class AuthorsEngine:
                 veh.reposition_s, veh.node = t, target
             return
         if self.sw.teleport:
-            if veh.idle_target < 0 or veh.idle_target == veh.node:
-                if veh.idle_target == veh.node:
-                    veh.reposition_s, veh.idle_target = t, -1
-                    return
-                veh.idle_target = int(self.rng.choice(list(self.idle_origins)))
-                if veh.idle_target == veh.node:
-                    veh.idle_target = -1
-                return
-            path = self.dist.path_nodes(veh.node, veh.idle_target)
-            if t > veh.reposition_s + SECONDS_PER_M * self.dist_m(path[0], path[1]):
-                veh.reposition_s, veh.node, veh.idle_target = t, veh.idle_target, -1
+            # The authors' other loops (NP, MB, FL-no_delay, FL): a vehicle without a route draws a target and
+            # keeps the route's nodes; in every unmatched round, once its first link's time has passed since
+            # the last move, it moves to the last node still kept -- the target at once, then back along the
+            # route one node per round -- and draws again only when none is left.  Drawing and the first
+            # jump can happen in the same round.
+            if not veh.idle_route:
+                target = int(self.rng.choice(list(self.idle_origins)))
+                path = self.dist.path_nodes(veh.node, target)
+                veh.idle_route = [int(x) for x in path[1:]]
+                veh.idle_first_m = float(self.dist_m(path[0], path[1])) if len(path) > 1 else 0.0
+            if not veh.idle_route:
+                veh.reposition_s = t                 # drew its own node: stays, the round noted
+            elif t > veh.reposition_s + SECONDS_PER_M * veh.idle_first_m:
+                veh.reposition_s, veh.node = t, veh.idle_route.pop()
             return
         if veh.leg is None or t >= veh.leg.end_s:
             target = int(self.rng.choice(list(self.idle_origins)))

@@ -28,7 +28,8 @@ MECHANISMS: tuple[Mechanism, ...] = (
     Mechanism("teleport", 1,
               "a vehicle steps by popping the LAST node of its route: one passenger's vehicle jumps to the "
               "origin in one round and to the destination a few rounds later; vehicles move only in rounds "
-              "with waiting passengers and free vehicles",
+              "with waiting passengers and free vehicles; a vehicle assigned while standing at the passenger's "
+              "origin counts as having picked the passenger up, its activity time kept",
               "vehicles travel their shortest routes at 30 km/h and are where the clock says"),
     Mechanism("early_release", 2,
               "a solo vehicle is vacant again when it has jumped to the destination (about a minute after "
@@ -45,7 +46,9 @@ MECHANISMS: tuple[Mechanism, ...] = (
               "pick-ups are measured from the vehicle's position along its route (the first passenger's ridden "
               "distance counts); ties go to first-on-first-off; the vehicle ends at its last drop-off"),
     Mechanism("idle_jumps", 5,
-              "an unmatched vacant vehicle heads for a random order origin (and, with teleport, jumps there)",
+              "an unmatched vacant vehicle heads for a random order origin (and, with teleport, jumps there "
+              "once its route's first link's time has passed, then steps back along the route one node per "
+              "round until the route is used up; RTV draws anew every round)",
               "an unmatched vacant vehicle waits where it is"),
     Mechanism("authors_input", 6,
               "the authors' exact input: haikou-paper-input (arrive-time selection on 2017-05-01, pandas "

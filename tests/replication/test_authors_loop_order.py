@@ -1,10 +1,12 @@
-"""Details of the authors' loop that the published RTV code showed when run step by step beside the engine.
+"""Details of the authors' loop that their published code showed when run step by step beside the engine.
 
 Running the authors' published RTV folder and this engine round by round on 2017-05-02
 (docs/replication.md) found three places where the engine's state parted from theirs:
 the order in which a round's new passengers are listed, the list idle vehicles draw
 targets from, and a vehicle assigned while already standing at its passenger's origin.
-Line networks have 1,000 m links (120 s each at the authors' 0.12 s/m).
+The same comparison with their MB folder (``baseline2_batch_matching``) found two more, in
+the loop MB shares with NP and FL: how an idle vehicle moves, and the same vehicle-at-origin
+rule.  Line networks have 1,000 m links (120 s each at the authors' 0.12 s/m).
 """
 
 import random
@@ -111,3 +113,38 @@ def test_run_authors_passes_the_inputs_order_and_origins(monkeypatch):
                        sample_rank=np.array([4]), idle_origins=net.index_of([2]))
     run_authors(Inputs(paper=paper, peak=paper), "rtv", Switches(), PRESET)
     assert list(seen["release_rank"]) == [4] and list(seen["reposition_origins"]) == list(net.index_of([2]))
+
+
+@pytest.mark.parametrize("start, picked, node_next", [
+    (1, True, 5),               # at the origin: picked up at once, so the next round already delivers
+    (0, False, 1),              # one link away: the next round jumps to the origin (boarding comes after)
+])
+def test_mb_vehicle_assigned_at_the_origin_counts_as_picked_up(start, picked, node_next):
+    net = line_network(7)
+    sc = scenario_of(net, [(5.0, 1, 5)], [start])
+    eng = AuthorsEngine(sc, "mb", PRESET)
+    veh = eng.vehicles[0]
+    eng._apply(130.0, {0: 0}, [0])
+    assert veh.p0 == 0 and veh.picked is picked
+    assert veh.active_at == 0.0 and veh.node == net.index_of([start])[0]   # MB moves nobody it has just assigned
+    eng._apply(140.0, {}, [0])                        # 140 s > 120 s (first link) since it was last active
+    assert veh.node == net.index_of([node_next])[0]
+
+
+def test_idle_vehicle_jumps_in_the_round_it_draws_then_walks_back_along_the_route():
+    net = line_network(7)
+    sc = scenario_of(net, [(5.0, 5, 6)], [0])
+    eng = AuthorsEngine(sc, "mb", PRESET)
+    veh = eng.vehicles[0]
+    node = {int(i): n for n, i in enumerate(net.index_of(list(range(7))))}
+    eng._idle(veh, 130.0)                             # draws node 5 and, 130 s > 120 s, jumps there at once
+    assert node[veh.node] == 5 and veh.reposition_s == 130.0
+    eng._idle(veh, 250.0)                             # 120 s since the last move: not more than the first link
+    assert node[veh.node] == 5
+    seen = []
+    for t in (251.0, 380.0, 510.0, 640.0):            # then one node back along the route per round
+        eng._idle(veh, t)
+        seen.append(node[veh.node])
+    assert seen == [4, 3, 2, 1]
+    eng._idle(veh, 770.0)                             # route used up: draws node 5 again, jumps (130 s > 120 s)
+    assert node[veh.node] == 5
