@@ -21,6 +21,7 @@ already wrote).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 from typing import BinaryIO
 
@@ -47,7 +48,7 @@ class ClassBlocks:
     def n_blocks(self) -> int:
         return len(self.seeker_off) - 1
 
-    @property
+    @cached_property                     # asked for by every sweep
     def width(self) -> int:
         """Classes of the widest block (the gather buffers' length)."""
         return int(np.diff(self.cls_off).max()) if self.n_blocks else 0

@@ -46,8 +46,9 @@ head node, entry link, destination), and within a class by ``(w, k)``.
 detour (float32: sub-millimetre rounding at urban distances; the fixed point
 only uses the order of the classes), 14 bytes a pair, appended origin by
 origin to one raw file per column (see :mod:`.structure`, which keeps them in
-the cache) and read back as read-only memory maps.  The taker's detour is ``shared - E - detour_seeker`` and its
-ride from ``h`` is ``l(h,d_A) - E - detour_seeker + shared``.
+the cache) and read back as read-only memory maps.  The taker's detour is
+``shared - E - detour_seeker`` and its ride from ``h`` is
+``l(h,d_A) - E - detour_seeker + shared``.
 
 **Speed.**  Origins are independent and run in a few threads.  Sorting
 (step 3) sorts the packed keys themselves, not an index: a key is unique and
@@ -113,7 +114,8 @@ class Matching:
                    limit: int = BLOCK_CLASSES) -> "Matching":
         """A matching held in memory, from global class lists (tests and small models)."""
         classes = np.asarray(classes, dtype=np.int32)
-        n_classes = int(classes.max()) + 1 if n_classes is None and len(classes) else (n_classes or 0)
+        if n_classes is None:
+            n_classes = int(classes.max()) + 1 if len(classes) else 0
         local, blocks = localize_lists(np.asarray(seeker_off, dtype=np.int64), classes, n_classes, limit)
         return cls(seeker_off=np.asarray(seeker_off, dtype=np.int64), local=local, saving_m=saving_m,
                    shared_m=shared_m, seeker_detour_m=seeker_detour_m, blocks=blocks)
@@ -236,7 +238,7 @@ def build_matching(space: StateSpace, rates: OdRates, dist: np.ndarray, params: 
         seeker_off, local_dtype = writer.finish()
     finally:
         writer.close()
-    matching = Matching.open(directory, seeker_off, dict(stats, local_dtype=local_dtype), local_dtype)
+    matching = Matching.open(directory, seeker_off, stats, local_dtype)
     matching.stats["state_pairs"] = matching.count_state_pairs(space.class_size)    # for reports, once
     matching.stats["build_s"] = time.perf_counter() - t0
     return matching

@@ -14,9 +14,9 @@ Layout of ``<cache>/predict-structure-<key>/``: ``states.npz`` (the
 block-local numbers in ``local.bin``, with ``blocks.npz``: see :mod:`.blocks`)
 and ``manifest.json`` (sizes, the local numbers' dtype and build facts).  An
 entry is built in a temporary folder beside it and renamed into place, so it
-is complete or absent; concurrent builders take
-an exclusive lock on ``predict-structure-<key>.lock``, and the losers wait
-and then reuse the winner's entry.  A damaged entry (a column of the wrong
+is complete or absent; concurrent builders take an exclusive lock on
+``predict-structure-<key>.lock``, and the losers wait and then reuse the
+winner's entry.  A damaged entry (a column of the wrong
 size, an unreadable manifest) is deleted and rebuilt, with a note.
 """
 
@@ -163,7 +163,7 @@ def _build_into(directory: Path, network: RoadNetwork, rates: OdRates, params: P
     np.savez(directory / "states.npz", **{f.name: getattr(space, f.name) for f in dataclasses.fields(space)})
     np.save(directory / "seeker_off.npy", matching.seeker_off)
     manifest = {"version": STRUCTURE_VERSION, "n_od": len(rates), "n_pairs": matching.n_pairs,
-                "columns": dict(COLUMNS, local=matching.stats["local_dtype"]), "stats": matching.stats,
+                "columns": dict(COLUMNS, local=matching.local.dtype.str), "stats": matching.stats,
                 "build_s": build_s}
     (directory / "manifest.json").write_text(json.dumps(manifest, default=float, indent=1))
     _release_free_heap()
