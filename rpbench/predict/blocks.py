@@ -96,41 +96,52 @@ class Localizer:
 
     ``out`` receives the local numbers (uint16, or int32 once a seeker names
     more than :data:`BLOCK_CLASSES` classes: the numbers written so far are
-    then rewritten wider, once).
+    then rewritten wider, once).  With ``class_size`` (members per class) it
+    also counts Σ_s |T_s|, the seeker-taker *state* pairs, in the same pass.
     """
 
-    def __init__(self, n_classes: int, out: BinaryIO | None = None, limit: int = BLOCK_CLASSES) -> None:
+    def __init__(self, n_classes: int, out: BinaryIO | None = None, limit: int = BLOCK_CLASSES,
+                 class_size: np.ndarray | None = None) -> None:
         self.limit = int(limit)
         self.out = out
         self.dtype = np.dtype("<u2") if self.limit <= NARROW_LIMIT else np.dtype("<i4")
         self.stamp = np.full(max(n_classes, 1), -1, dtype=np.int64)
         self.local_id = np.zeros(max(n_classes, 1), dtype=np.int64)
-        self.state = np.zeros(4, dtype=np.int64)          # open block, its classes, seekers, block classes
+        self.class_size = (np.ones(max(n_classes, 1), dtype=np.int64) if class_size is None
+                           else np.asarray(class_size, dtype=np.int64))
+        # open block, its classes, seekers, block classes, Σ class_size over the pairs
+        self.state = np.zeros(5, dtype=np.int64)
         self.block_seeker, self.block_pos, self.block_cls = [np.zeros(1, np.int64)], [np.zeros(1, np.int64)], []
         self.parts: list[np.ndarray] = []               # the local numbers, when there is no file
 
     def append(self, lens: np.ndarray, cls: np.ndarray) -> np.ndarray:
         """The local numbers of seekers with ``lens`` pairs and global classes ``cls`` (written to ``out``)."""
         lens = np.asarray(lens, dtype=np.int64)
-        cls = np.asarray(cls, dtype=np.int64)
+        cls = np.asarray(cls)
+        if cls.dtype not in (np.int32, np.int64):          # the kernel reads int32 lists as they are
+            cls = cls.astype(np.int64)
         # A block names at most max(limit, the longest list) classes; 16 bits hold NARROW_LIMIT.
         if len(lens) and int(lens.max()) > NARROW_LIMIT and self.dtype.itemsize == 2:
             self._widen()
-        local = np.empty(len(cls), dtype=np.int64)
+        local = np.empty(len(cls), dtype=self.dtype)       # written in its final type by the kernel
         new_seeker = np.empty(len(lens) + 1, dtype=np.int64)
         new_pos = np.empty(len(lens) + 1, dtype=np.int64)
         block_cls = np.empty(len(cls), dtype=np.int32)
-        n_new, n_cls = kernels.localize(lens, cls, self.limit, self.stamp, self.local_id, self.state, local,
-                                        new_seeker, new_pos, block_cls)
+        n_new, n_cls = kernels.localize(lens, cls, self.limit, self.stamp, self.local_id, self.class_size,
+                                        self.state, local, new_seeker, new_pos, block_cls)
         self.block_seeker.append(new_seeker[:n_new].copy())
         self.block_pos.append(new_pos[:n_new].copy())
         self.block_cls.append(block_cls[:n_cls].copy())
-        local = local.astype(self.dtype)
         if self.out is None:
             self.parts.append(local)
         else:
             self.out.write(memoryview(local))
         return local
+
+    @property
+    def state_pairs(self) -> int:
+        """Σ ``class_size`` over the pairs appended so far (the pair count without ``class_size``)."""
+        return int(self.state[4])
 
     def finish(self) -> ClassBlocks:
         seekers, written = int(self.state[2]), int(self.state[3])

@@ -149,10 +149,11 @@ def savings_blocks(off, local, saving, shared, detour, lam, q, log_q, one_minus_
 
 
 @njit(cache=True, nogil=True)
-def localize(lens, cls, limit, stamp, local_id, state, local_out, new_block_seeker, new_block_pos,
+def localize(lens, cls, limit, stamp, local_id, class_size, state, local_out, new_block_seeker, new_block_pos,
              block_cls_out):  # pragma: no cover - compiled
     """Cut the seekers of ``lens`` (pairs ``cls``) into blocks of at most ``limit`` classes, continuing
-    the open block of ``state`` = [block number, its class count, seekers so far, block classes so far].
+    the open block of ``state`` = [block number, its class count, seekers so far, block classes so far,
+    Σ class_size over the pairs so far].
 
     A seeker starts a new block when its classes would overflow the open one
     (a seeker with more than ``limit`` classes gets a block of its own).
@@ -163,7 +164,7 @@ def localize(lens, cls, limit, stamp, local_id, state, local_out, new_block_seek
     entry per class) carry the open block's numbering between calls.
     Returns (new blocks, block classes written).
     """
-    block, width, seen, written = state[0], state[1], state[2], state[3]
+    block, width, seen, written, members = state[0], state[1], state[2], state[3], state[4]
     n_new = 0
     pos = 0
     i = 0
@@ -189,8 +190,9 @@ def localize(lens, cls, limit, stamp, local_id, state, local_out, new_block_seek
                 pos += 1
                 width += 1
             local_out[e] = local_id[c]
+            members += class_size[c]
         i += n
-    state[0], state[1], state[2], state[3] = block, width, seen + len(lens), written + pos
+    state[0], state[1], state[2], state[3], state[4] = block, width, seen + len(lens), written + pos, members
     return n_new, pos
 
 
@@ -221,13 +223,16 @@ def net_saving_keys(rows, start, n, piece_g, kappa, tie_rank, tie_bits, q_bits, 
 
 
 @njit(cache=True, nogil=True)
-def decode_entries(keys, tie_bits, tie_col, rows, start, n, piece_g, piece_shared, piece_detour, group_cls,
-                   group_a, scratch, cls_out, saving_out, shared_out, detour_out):  # pragma: no cover
+def decode_entries(keys, tie_bits, rows, start, n, piece_g, piece_shared, piece_detour, tie_rank, by_rank,
+                   cls_out, saving_out, shared_out, detour_out):  # pragma: no cover - compiled
     """Write the sorted entries' columns from their keys.
 
-    The pieces come grouped by row, and the sorted keys of row r occupy the
-    same span as r's pieces' entries; within a row each survivor belongs to
-    one piece, which ``scratch[survivor]`` records before the row is decoded.
+    A key's low ``tie_bits`` bits are its survivor's tie rank r; ``by_rank[r]``
+    holds that survivor's ``(a, class)`` and, as scratch, the piece it lies in
+    for the row being decoded (the pieces come grouped by row, and the sorted
+    keys of row r occupy the same span as r's pieces' entries; within a row
+    each survivor belongs to one piece).  One table indexed by rank means one
+    random access per entry, to a line the row's scratch pass just touched.
     """
     mask = (np.uint64(1) << np.uint64(tie_bits)) - np.uint64(1)
     e = 0
@@ -238,14 +243,14 @@ def decode_entries(keys, tie_bits, tie_col, rows, start, n, piece_g, piece_share
         count = 0
         while j1 < m and rows[j1] == rows[j]:
             for col in range(start[j1], start[j1] + n[j1]):
-                scratch[col] = j1
+                by_rank[tie_rank[col], 2] = j1
             count += n[j1]
             j1 += 1
         for i in range(e, e + count):
-            col = tie_col[np.int64(keys[i] & mask)]
-            p = scratch[col]
-            cls_out[i] = group_cls[col]
-            saving_out[i] = piece_g[p] - group_a[col]
+            r = np.int64(keys[i] & mask)
+            p = np.int64(by_rank[r, 2])
+            cls_out[i] = np.int32(by_rank[r, 1])
+            saving_out[i] = piece_g[p] - by_rank[r, 0]
             shared_out[i] = piece_shared[p]
             detour_out[i] = piece_detour[p]
         e += count

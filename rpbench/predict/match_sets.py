@@ -217,7 +217,7 @@ def build_matching(space: StateSpace, rates: OdRates, dist: np.ndarray, params: 
     the files do not depend on the number of threads.
     """
     t0 = time.perf_counter()
-    writer = _ColumnWriter(directory, len(rates), space.n_classes)
+    writer = _ColumnWriter(directory, len(rates), space.class_size)
     origin = rates.origin
     stats = {"stage1_candidates": 0, "stage1_kept": 0, "group_queries": 0}
     try:
@@ -238,8 +238,8 @@ def build_matching(space: StateSpace, rates: OdRates, dist: np.ndarray, params: 
         seeker_off, local_dtype = writer.finish()
     finally:
         writer.close()
+    stats["state_pairs"] = writer.localizer.state_pairs                  # Σ_s |T_s|, for reports
     matching = Matching.open(directory, seeker_off, stats, local_dtype)
-    matching.stats["state_pairs"] = matching.count_state_pairs(space.class_size)    # for reports, once
     matching.stats["build_s"] = time.perf_counter() - t0
     return matching
 
@@ -268,12 +268,12 @@ class _ColumnWriter:
     """Appends the per-seeker lists, in OD order, to one raw file per column; the classes go through
     a :class:`~.blocks.Localizer` into ``local.bin`` and ``blocks.npz``."""
 
-    def __init__(self, directory: Path, n_od: int, n_classes: int) -> None:
+    def __init__(self, directory: Path, n_od: int, class_size: np.ndarray) -> None:
         self.n_od = n_od
         self.directory = directory
         self.files = {name: open(directory / f"{name}.bin", "wb") for name, _ in COLUMNS}
         self.files["local"] = open(directory / "local.bin", "w+b")
-        self.localizer = Localizer(n_classes, self.files["local"])
+        self.localizer = Localizer(len(class_size), self.files["local"], class_size=class_size)
         self.next = 0            # next seeker expected
         self.lens: list[np.ndarray] = []
 
@@ -429,9 +429,8 @@ class _Builder:
         cls, saving, shared, detour = out
         if packable:
             keys.sort()
-            kernels.decode_entries(keys, g.tie_bits, g.tie_col, rows, start, n, pc.g[i0:i1], pc.shared[i0:i1],
-                                   pc.det[i0:i1], g.cls, g.a, np.empty(g.n, dtype=np.int64),
-                                   cls, saving, shared, detour)
+            kernels.decode_entries(keys, g.tie_bits, rows, start, n, pc.g[i0:i1], pc.shared[i0:i1], pc.det[i0:i1],
+                                   g.tie_rank, g.by_rank, cls, saving, shared, detour)
             return
         # Huge distances (beyond 2^18 m) or huge groups: the same order through a slower lexsort.
         if piece is None:
@@ -527,7 +526,11 @@ class _Group:
             tie = np.lexsort((order, pk_q[order]))
         self.tie_rank = np.empty(n, dtype=np.int64)
         self.tie_rank[tie] = np.arange(n)
-        self.tie_col = tie                                   # the survivor of each tie rank
+        # Per tie rank: the survivor's (a, class, piece scratch) in one row, for decoding sorted keys
+        # (classes < 2^31 and pieces are exact in float64).
+        self.by_rank = np.empty((n, 3))
+        self.by_rank[:, 0] = self.a[tie]
+        self.by_rank[:, 1] = self.cls[tie]
         self.tie_bits = max(1, int(n).bit_length())
         row_bits = 64 - Q_BITS - self.tie_bits
         self.rows_per_sort = 1 << row_bits if row_bits >= 1 else 1   # 1: _priority_order uses lexsort
