@@ -132,7 +132,7 @@ def sweep(system: System, class_log_q: np.ndarray, sums: PairSums | None = None,
         def sweep_chunk(k: int) -> None:
             chunk_h[k].fill(0.0)
             sweep_blocks(m.seeker_off, m.local, lam, q, class_log_q, *block_args, chunk_block[k], chunk_block[k + 1],
-                         chunk_h[k], log_not_paired, np.empty(width), np.empty(width), np.empty(width))
+                         chunk_h[k], log_not_paired, np.empty((width, 4)))
 
         _in_threads(sweep_chunk, len(chunk_block) - 1)
         return chunk_h.sum(axis=0), log_not_paired
@@ -173,6 +173,14 @@ def _in_threads(task: Callable[[int], None], n: int) -> None:
             pass
 
 
+def _cut(offsets: np.ndarray) -> np.ndarray:
+    """Boundaries cutting the groups of CSR ``offsets`` into one range per thread, of about equal members."""
+    parts = max(1, get_num_threads())
+    targets = np.linspace(0, offsets[-1], parts + 1)[1:-1]
+    inner = np.searchsorted(offsets, targets)
+    return np.unique(np.concatenate([[0], inner, [len(offsets) - 1]])).astype(np.int64)
+
+
 @dataclass(frozen=True, eq=False)
 class PairSums:
     """Pair quantities summed with the sweep's weights: columns (1, E, shared, seeker detour).
@@ -195,13 +203,20 @@ def evaluate(system: System, rho: np.ndarray, sums: PairSums | None = None) -> E
     sp, cfg = system.space, system.config
     class_log_q = np.empty(sp.n_classes)
     member_log_r = np.empty(sp.n_states)
-    class_products(rho, sp.class_members, sp.class_off, class_log_q, member_log_r)
+    # The per-class and per-state passes run in threads too, on ranges of classes / ODs (each writes its own
+    # entries, so the values do not depend on the split).
+    class_cut = _cut(sp.class_off)
+    _in_threads(lambda k: class_products(rho, sp.class_members, sp.class_off, class_log_q, member_log_r,
+                                         class_cut[k], class_cut[k + 1]), len(class_cut) - 1)
     class_h, log_not_paired = sweep(system, class_log_q, sums)
     p_seeker = -np.expm1(log_not_paired)
     eta, p_taker, log_not_taker, lam_taker, rho_next = (np.empty(sp.n_states) for _ in range(5))
     clipped = np.empty(sp.n_states, dtype=bool)
-    taker_map(class_h, log_not_paired, member_log_r, sp.cls, sp.tau_s, sp.od_state_off, system.rate_per_s,
-              cfg.rho_mode == "poisson", cfg.rho_cap, eta, p_taker, log_not_taker, lam_taker, rho_next, clipped)
+    od_cut = _cut(sp.od_state_off)
+    _in_threads(lambda k: taker_map(class_h, log_not_paired, member_log_r, sp.cls, sp.tau_s, sp.od_state_off,
+                                    system.rate_per_s, cfg.rho_mode == "poisson", cfg.rho_cap, eta, p_taker,
+                                    log_not_taker, lam_taker, rho_next, clipped, od_cut[k], od_cut[k + 1]),
+                len(od_cut) - 1)
     return Evaluation(rho=rho, rho_next=rho_next, clipped=clipped, eta=eta, p_taker=p_taker, lam_taker=lam_taker,
                       log_not_taker=log_not_taker, p_seeker=p_seeker, class_log_q=class_log_q, class_h=class_h,
                       member_log_r=member_log_r)

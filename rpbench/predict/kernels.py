@@ -18,9 +18,10 @@ gathered into small arrays first and the pairs index them with block-local
 16-bit numbers, so the per-pair lookups hit a few hundred kilobytes that stay
 in the core's cache instead of megabytes spread over the whole class table
 (about 15-20 % faster per sweep on the month table, and half the bytes
-streamed per pair).  ``cache=True`` stores the machine code beside this
-module (or in ``NUMBA_CACHE_DIR``), so only the first run on a machine pays
-the compilation (a few seconds).  Every kernel releases the GIL (``nogil``);
+streamed per pair).  A class's Q, log Q and H share one row of that table,
+so a pair touches one cache line of it.  ``cache=True`` stores the machine
+code beside this module (or in ``NUMBA_CACHE_DIR``), so only the first run
+on a machine pays the compilation (a few seconds).  Every kernel releases the GIL (``nogil``);
 the callers run chunks of blocks in a thread pool rather than with numba's
 ``parallel=True``, whose compilation alone took 7 s of a fresh machine's
 first run.
@@ -34,32 +35,32 @@ from numba import njit
 
 @njit(cache=True, nogil=True)
 def sweep_blocks(off, local, lam, q, log_q, block_seeker, block_cls, block_cls_off, b0, b1, h, log_not_paired,
-                 q_loc, log_q_loc, h_loc):  # pragma: no cover - compiled
+                 loc):  # pragma: no cover - compiled
     """Blocks ``b0..b1-1``: ``h[c] += λ_s Π_{c' ≻_s c} Q_c'`` and ``log_not_paired[s] = Σ log Q_c``.
 
     Block b holds seekers ``block_seeker[b]..block_seeker[b+1]-1`` and the
     classes ``block_cls[block_cls_off[b]:block_cls_off[b+1]]`` their lists
     name; ``local`` indexes a pair's class within its block (see
-    :mod:`.blocks`).  A block's ``Q``, ``log Q`` and ``H`` are gathered into
-    ``*_loc`` (sized for the widest block), so the pairs' random accesses hit
-    an array that fits the core's cache, and ``H`` is scattered back per block.
+    :mod:`.blocks`).  A block's ``Q`` and ``log Q`` are gathered into the rows
+    of ``loc`` (width x 4: Q, log Q, the block's H sum, padding), so a pair's
+    three values share one cache line of a table that fits the core's cache,
+    and ``H`` is scattered back per block.
     """
     for b in range(b0, b1):
         k0 = block_cls_off[b]
         k = block_cls_off[b + 1] - k0
         for j in range(k):
             c = block_cls[k0 + j]
-            q_loc[j] = q[c]
-            log_q_loc[j] = log_q[c]
-            h_loc[j] = 0.0
-        _sweep_seekers(off, local, lam, q_loc, log_q_loc, h_loc, log_not_paired, block_seeker[b],
-                       block_seeker[b + 1])
+            loc[j, 0] = q[c]
+            loc[j, 1] = log_q[c]
+            loc[j, 2] = 0.0
+        _sweep_seekers(off, local, lam, loc, log_not_paired, block_seeker[b], block_seeker[b + 1])
         for j in range(k):
-            h[block_cls[k0 + j]] += h_loc[j]
+            h[block_cls[k0 + j]] += loc[j, 2]
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _sweep_seekers(off, cls, lam, q, log_q, h, log_not_paired, s0, s1):  # pragma: no cover - compiled
+def _sweep_seekers(off, cls, lam, loc, log_not_paired, s0, s1):  # pragma: no cover - compiled
     """Seekers ``s0..s1-1``, walked two at a time, interleaved: their running products are two
     independent multiplication chains, which the processor overlaps with the class lookups."""
     s = s0
@@ -71,29 +72,29 @@ def _sweep_seekers(off, cls, lam, q, log_q, h, log_not_paired, s0, s1):  # pragm
         while i < end_a and j < end_b:
             c = cls[i]
             d = cls[j]
-            h[c] += weight_a
-            weight_a *= q[c]
-            total_a += log_q[c]
-            h[d] += weight_b
-            weight_b *= q[d]
-            total_b += log_q[d]
+            loc[c, 2] += weight_a
+            weight_a *= loc[c, 0]
+            total_a += loc[c, 1]
+            loc[d, 2] += weight_b
+            weight_b *= loc[d, 0]
+            total_b += loc[d, 1]
             i += 1
             j += 1
-        log_not_paired[s] = _walk(i, end_a, cls, weight_a, total_a, q, log_q, h)       # the longer list's rest
-        log_not_paired[s + 1] = _walk(j, end_b, cls, weight_b, total_b, q, log_q, h)
+        log_not_paired[s] = _walk(i, end_a, cls, weight_a, total_a, loc)       # the longer list's rest
+        log_not_paired[s + 1] = _walk(j, end_b, cls, weight_b, total_b, loc)
         s += 2
     if s < s1:
-        log_not_paired[s] = _walk(off[s], off[s + 1], cls, lam[s], 0.0, q, log_q, h)
+        log_not_paired[s] = _walk(off[s], off[s + 1], cls, lam[s], 0.0, loc)
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _walk(i, end, cls, weight, total, q, log_q, h):  # pragma: no cover - compiled
+def _walk(i, end, cls, weight, total, loc):  # pragma: no cover - compiled
     """One seeker's pairs ``i..end-1`` from running product ``weight`` and log sum ``total``; the final sum."""
     while i < end:
         c = cls[i]
-        h[c] += weight
-        weight *= q[c]
-        total += log_q[c]
+        loc[c, 2] += weight
+        weight *= loc[c, 0]
+        total += loc[c, 1]
         i += 1
     return total
 
@@ -258,10 +259,10 @@ def decode_entries(keys, tie_bits, rows, start, n, piece_g, piece_shared, piece_
 
 
 @njit(cache=True, nogil=True)
-def class_products(rho, members, class_off, class_log_q, member_log_r):  # pragma: no cover - compiled
-    """Per class c: ``log Q_c = Σ_{t∈c} log(1 - ρ_t)``; per member t: ``log r_t``, the same sum over
-    the members before t (members in ``(w, k)`` order, ``members`` grouped by ``class_off``)."""
-    for c in range(len(class_off) - 1):
+def class_products(rho, members, class_off, class_log_q, member_log_r, c0, c1):  # pragma: no cover - compiled
+    """Per class c in ``c0..c1-1``: ``log Q_c = Σ_{t∈c} log(1 - ρ_t)``; per member t: ``log r_t``, the same
+    sum over the members before t (members in ``(w, k)`` order, ``members`` grouped by ``class_off``)."""
+    for c in range(c0, c1):
         total = 0.0
         for i in range(class_off[c], class_off[c + 1]):
             t = members[i]
@@ -272,15 +273,16 @@ def class_products(rho, members, class_off, class_log_q, member_log_r):  # pragm
 
 @njit(cache=True, nogil=True)
 def taker_map(class_h, log_not_paired, member_log_r, cls, tau, od_state_off, rate, poisson, rho_cap, eta,
-              p_taker, log_not_taker, lam_taker, rho_next, clipped):  # pragma: no cover - compiled
-    """(A2), (A3), (A5), (A6) along each OD's taker states, in one pass (see :func:`.fixed_point.evaluate`).
+              p_taker, log_not_taker, lam_taker, rho_next, clipped, w0, w1):  # pragma: no cover - compiled
+    """(A2), (A3), (A5), (A6) along the taker states of ODs ``w0..w1-1``, in one pass (see
+    :func:`.fixed_point.evaluate`).
 
     ``η_t = r_t H_c``, ``x = η_t τ_t``, ``p_t = 1 - e^{-x}``; ``Σ_{j<k} x_j``
     along the path; ``λ_t = λ_w (1 - p_s) / Π_{j<k} (1 - p_j)`` in log space;
     ``ρ'_t = λ_t τ_t (1 - e^{-x}) / x`` (Little's law, A5; ``λ_t τ_t`` at x =
     0), or ``1 - e^{-that}`` when ``poisson``; clipped to ``[0, rho_cap]``.
     """
-    for w in range(len(od_state_off) - 1):
+    for w in range(w0, w1):
         before = 0.0
         lam_w = rate[w]
         log_free = log_not_paired[w]
