@@ -48,7 +48,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--workers", type=int, default=None, help="parallel worker processes for --dates "
                    "(default: one per core; 1 = in this process)")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                   help="run --dates on an existing Dask cluster (e.g. tcp://host:8786) instead of a local one")
+                   help="run --dates on an existing Dask cluster (e.g. tcp://host:8786) instead of local worker "
+                        "processes (needs the dask extra: pip install 'rpbench[dask]')")
     p.set_defaults(handler=run)
 
 

@@ -28,7 +28,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("sweep", help="parameter sweeps (the paper's Tables 3-6)",
                        description="Run a parameter sweep: a predefined one of the paper "
                                    f"({', '.join(SWEEPS)}) or --over NAME=V1,V2,...; points run in parallel "
-                                   "on Dask (a local cluster by default).")
+                                   "in local worker processes (or on an existing Dask cluster, --scheduler).")
     p.add_argument("sweep", nargs="?", choices=list(SWEEPS), help="predefined sweep")
     p.add_argument("--over", default=None, metavar="NAME=V1,V2,...", help="sweep any parameter instead")
     p.add_argument("--values", default=None, help="override a predefined sweep's values, e.g. 60,90,120")
@@ -38,7 +38,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--opt", action="append", default=[], metavar="STRATEGY.KEY=VALUE", help="strategy option")
     p.add_argument("--out", default=None, help="sweep folder to create")
     p.add_argument("--workers", type=int, default=None, help="parallel workers (default one per core)")
-    p.add_argument("--scheduler", default=None, metavar="ADDRESS", help="an existing Dask scheduler")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS", help="an existing Dask scheduler, e.g. tcp://host:8786 "
+                   "(needs the dask extra: pip install 'rpbench[dask]')")
     p.add_argument("--json", action="store_true", help="print the sweep table as one JSON object")
     add_strict_arg(p)
     p.set_defaults(handler=run)

@@ -1,18 +1,21 @@
-"""Run independent tasks (days, sweep points) in parallel on Dask.
+"""Run independent tasks (days, sweep points) in parallel.
 
-The default is a Dask ``LocalCluster`` of worker *processes* on this machine
-(one thread each: the solvers and numpy already use the core they get).
-``scheduler="tcp://host:8786"`` submits to an existing Dask cluster instead,
-for sweeps that outgrow one machine (workers need rpbench installed and the
-data folder at the same path).  ``workers=1`` runs in-process, serially,
-which is what tests use.  Results come back in task order.
+The default is a pool of worker *processes* on this machine
+(:class:`concurrent.futures.ProcessPoolExecutor`, started with ``spawn``:
+the parent holds solver and numba threads, which ``fork`` would copy in an
+unknown state).  ``scheduler="tcp://host:8786"`` submits to an existing Dask
+cluster instead, for sweeps that outgrow one machine (the optional ``dask``
+extra; workers need rpbench installed and the data folder at the same path).
+``workers=1`` runs in-process, serially, which is what tests use.  Results
+come back in task order.
 """
 
 from __future__ import annotations
 
-import logging
+import multiprocessing
 import os
 import sys
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from typing import Any, Callable, Sequence
 
@@ -24,10 +27,12 @@ def run_tasks(fn: Callable[[Any], Any], tasks: Sequence[Any], *, workers: int | 
               scheduler: str | None = None, label: str = "tasks", progress: bool | None = None) -> list[Any]:
     """``[fn(t) for t in tasks]``, in parallel unless ``workers == 1``.
 
-    Worker processes run ``fn`` under the caller's ``--strict`` policy (:mod:`rpbench.harness.strict`).
-    An exception in a task, or in this process (Ctrl-C, SIGTERM turned into an exception by the CLI),
-    closes the client and a local cluster (its workers stop) before it propagates, so the caller's
-    results-folder cleanup does not race with workers still writing into it.
+    ``fn`` and the tasks must pickle (``fn`` a module-level function).  Worker
+    processes run ``fn`` under the caller's ``--strict`` policy
+    (:mod:`rpbench.harness.strict`).  An exception in a task, or in this
+    process (Ctrl-C, SIGTERM turned into an exception by the CLI), stops the
+    workers before it propagates, so the caller's results-folder cleanup does
+    not race with workers still writing into it.
     """
     if workers is not None and workers < 1:
         raise ParameterError(f"--workers {workers} must be >= 1")
@@ -36,35 +41,68 @@ def run_tasks(fn: Callable[[Any], Any], tasks: Sequence[Any], *, workers: int | 
         return []
     if progress is None:
         progress = sys.stderr.isatty()
-    if scheduler is None and (workers == 1 or n == 1):
+    job = _UnderPolicy(fn, is_strict())
+    if scheduler is not None:
+        return _on_dask(job, tasks, scheduler, label, progress)
+    if workers == 1 or n == 1:
         return [fn(t) for t in _bar(tasks, label, progress)]
-    from dask.distributed import Client, LocalCluster, as_completed
+    return _in_processes(job, tasks, min(n, workers or os.cpu_count() or 1), label, progress)
 
-    cluster = None
-    if scheduler is None:
-        n_workers = min(n, workers or os.cpu_count() or 1)
-        # CRITICAL: a failing task is reported once, as the caller's one-line error, not also as the
-        # workers' logged traceback on stderr
-        cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
-                               dashboard_address=None, silence_logs=logging.CRITICAL)
-        client = Client(cluster)
-    else:
-        try:
-            client = Client(scheduler, timeout="10s")
-        except OSError as exc:
-            raise ParameterError(f"cannot reach the Dask scheduler {scheduler!r}: {exc}") from None
+
+def _in_processes(job: Callable[[Any], Any], tasks: Sequence[Any], n_workers: int, label: str,
+                  progress: bool) -> list[Any]:
+    """The tasks on a local pool of ``n_workers`` processes; the first failure stops the rest."""
+    pool = ProcessPoolExecutor(n_workers, mp_context=multiprocessing.get_context("spawn"))
     try:
-        futures = client.map(_UnderPolicy(fn, is_strict()), list(tasks), pure=False)
+        futures = [pool.submit(job, t) for t in tasks]
+        for future in _bar(as_completed(futures), label, progress, total=len(futures)):
+            future.result()             # re-raises a task's exception (BrokenProcessPool if a worker died)
+        results = [f.result() for f in futures]
+    except BaseException:
+        _terminate(pool)
+        raise
+    pool.shutdown(wait=True)
+    return results
+
+
+def _terminate(pool: ProcessPoolExecutor) -> None:
+    """Stop the pool at once: queued tasks are cancelled and running ones' workers terminated."""
+    terminate = getattr(pool, "terminate_workers", None)       # Python >= 3.14
+    if terminate is not None:
+        terminate()
+        return
+    # Before 3.14 the executor has no public way to stop a running task; its process table is the only
+    # handle (read before shutdown, which drops it).
+    processes = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for process in processes:
+        if process.is_alive():
+            process.terminate()
+    for process in processes:
+        process.join()
+
+
+def _on_dask(job: Callable[[Any], Any], tasks: Sequence[Any], scheduler: str, label: str,
+             progress: bool) -> list[Any]:
+    """The tasks on an existing Dask cluster (``--scheduler ADDRESS``)."""
+    try:
+        from dask.distributed import Client
+        from dask.distributed import as_completed as dask_completed
+    except ImportError:
+        raise ParameterError("--scheduler needs Dask, which is not installed: pip install 'rpbench[dask]'") from None
+    try:
+        client = Client(scheduler, timeout="10s")
+    except OSError as exc:
+        raise ParameterError(f"cannot reach the Dask scheduler {scheduler!r}: {exc}") from None
+    try:
+        futures = client.map(job, list(tasks), pure=False)
         index = {f.key: i for i, f in enumerate(futures)}
-        out: list[Any] = [None] * n
-        done = as_completed(futures)
-        for future in _bar(done, label, progress, total=n):
+        out: list[Any] = [None] * len(futures)
+        for future in _bar(dask_completed(futures), label, progress, total=len(futures)):
             out[index[future.key]] = future.result()
         return out
     finally:
         client.close()
-        if cluster is not None:
-            cluster.close()
 
 
 @dataclass(frozen=True)
@@ -84,3 +122,4 @@ def _bar(iterable, label: str, enabled: bool, total: int | None = None):
         return iterable
     from tqdm import tqdm
     return tqdm(iterable, total=total, desc=label, unit="run", file=sys.stderr, leave=False)
+

@@ -1,34 +1,22 @@
-"""Several days of a dated scenario (in parallel workers) and the parallel runner itself."""
+"""Several days of a dated scenario, serially and in worker processes."""
 
 from __future__ import annotations
 
 import pandas as pd
 import pytest
 
-from rpbench.exceptions import ParameterError
 from rpbench.harness.multiday import run_days
-from rpbench.harness.parallel import run_tasks
 from rpbench.scenarios import ScenarioRequest
 
 
-def square(x: int) -> int:
-    return x * x
-
-
 @pytest.mark.slow
-def test_run_tasks_serial_and_on_a_local_dask_cluster():
-    assert run_tasks(square, [1, 2, 3], workers=1) == [1, 4, 9]
-    assert run_tasks(square, [3, 1, 2, 5], workers=2, progress=False) == [9, 1, 4, 25]
-    with pytest.raises(ParameterError, match="--workers 0"):
-        run_tasks(square, [1], workers=0)
-
-
-@pytest.mark.slow
-def test_multi_day_folder(two_day_data, tmp_path):
+@pytest.mark.parametrize("workers", [1, 2])
+def test_multi_day_folder(two_day_data, tmp_path, workers):
+    """In-process and in two spawned workers (the day tasks must pickle): the same folder."""
     data = two_day_data
     request = ScenarioRequest("haikou-peak", sample=1.0, data_dir=str(data))
     folder = run_days(request, ["2017-05-01", "2017-05-02"], strategies=["mb", "rtv"], preset="highs",
-                      run_options={}, out=str(tmp_path / "days"), workers=1, scheduler=None, command="test")
+                      run_options={}, out=str(tmp_path / "days"), workers=workers, scheduler=None, command="test")
     by_day = pd.read_csv(folder / "by_day.csv")
     assert set(by_day["date"]) == {"2017-05-01", "2017-05-02"} and set(by_day["run"]) == {"mb", "rtv"}
     summary = pd.read_csv(folder / "summary.csv")

@@ -1,0 +1,79 @@
+"""The parallel task runner: serial, a local pool of spawned worker processes, an existing Dask cluster."""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from rpbench.exceptions import ParameterError
+from rpbench.harness.parallel import run_tasks
+from rpbench.harness.strict import is_strict, strict_mode
+
+
+def square(x: int) -> int:
+    return x * x
+
+
+def strictness(_: int) -> bool:
+    return is_strict()
+
+
+def sleep_or_fail(task: tuple[str, str]) -> None:
+    """``("sleep", dir)`` records its pid and sleeps; ``("fail", dir)`` waits for that record, then raises."""
+    kind, folder = task
+    pid_file = Path(folder) / "sleeper.pid"
+    if kind == "sleep":
+        pid_file.write_text(str(os.getpid()))
+        time.sleep(120)
+        return
+    while not pid_file.exists():
+        time.sleep(0.05)
+    raise ValueError("task failed on purpose")
+
+
+@pytest.mark.slow
+def test_results_come_back_in_task_order():
+    assert run_tasks(square, [1, 2, 3], workers=1) == [1, 4, 9]
+    assert run_tasks(square, [3, 1, 2, 5], workers=2, progress=False) == [9, 1, 4, 25]
+    assert run_tasks(square, []) == []
+
+
+def test_bad_worker_count_is_a_parameter_error():
+    with pytest.raises(ParameterError, match="--workers 0"):
+        run_tasks(square, [1], workers=0)
+
+
+@pytest.mark.slow
+def test_workers_run_under_the_callers_strict_policy():
+    with strict_mode(True):
+        assert run_tasks(strictness, [0, 1], workers=2, progress=False) == [True, True]
+    assert run_tasks(strictness, [0, 1], workers=2, progress=False) == [False, False]
+
+
+@pytest.mark.slow
+def test_a_failing_task_stops_the_other_workers(tmp_path):
+    """The failure propagates while another task still runs, and that task's worker is gone by then
+    (a caller may delete the results folder the workers write into)."""
+    with pytest.raises(ValueError, match="on purpose"):
+        run_tasks(sleep_or_fail, [("sleep", str(tmp_path)), ("fail", str(tmp_path))], workers=2, progress=False)
+    pid = int((tmp_path / "sleeper.pid").read_text())
+    with pytest.raises(ProcessLookupError):
+        os.kill(pid, 0)                              # terminated and reaped
+
+
+def test_scheduler_without_dask_is_one_clear_error(monkeypatch):
+    monkeypatch.setitem(sys.modules, "dask.distributed", None)       # import fails as if not installed
+    with pytest.raises(ParameterError, match=r"--scheduler needs Dask.*rpbench\[dask\]"):
+        run_tasks(square, [1, 2], scheduler="tcp://127.0.0.1:1")
+
+
+@pytest.mark.slow
+def test_on_an_existing_dask_cluster():
+    distributed = pytest.importorskip("dask.distributed")
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
+                                  dashboard_address=None) as cluster:
+        assert run_tasks(square, [3, 1, 2], scheduler=cluster.scheduler_address, progress=False) == [9, 1, 4]
