@@ -105,10 +105,11 @@ class Localizer:
         self.limit = int(limit)
         self.out = out
         self.dtype = np.dtype("<u2") if self.limit <= NARROW_LIMIT else np.dtype("<i4")
-        self.stamp = np.full(max(n_classes, 1), -1, dtype=np.int64)
-        self.local_id = np.zeros(max(n_classes, 1), dtype=np.int64)
-        self.class_size = (np.ones(max(n_classes, 1), dtype=np.int64) if class_size is None
-                           else np.asarray(class_size, dtype=np.int64))
+        # Per class, in one row (one cache line per lookup): the block that last named it, its local
+        # number there, and its size.
+        self.per_class = np.zeros((max(n_classes, 1), 4), dtype=np.int32)
+        self.per_class[:, 0] = -1
+        self.per_class[:n_classes, 2] = 1 if class_size is None else class_size
         # open block, its classes, seekers, block classes, Σ class_size over the pairs
         self.state = np.zeros(5, dtype=np.int64)
         self.block_seeker, self.block_pos, self.block_cls = [np.zeros(1, np.int64)], [np.zeros(1, np.int64)], []
@@ -127,8 +128,8 @@ class Localizer:
         new_seeker = np.empty(len(lens) + 1, dtype=np.int64)
         new_pos = np.empty(len(lens) + 1, dtype=np.int64)
         block_cls = np.empty(len(cls), dtype=np.int32)
-        n_new, n_cls = kernels.localize(lens, cls, self.limit, self.stamp, self.local_id, self.class_size,
-                                        self.state, local, new_seeker, new_pos, block_cls)
+        n_new, n_cls = kernels.localize(lens, cls, self.limit, self.per_class, self.state, local, new_seeker,
+                                        new_pos, block_cls)
         self.block_seeker.append(new_seeker[:n_new].copy())
         self.block_pos.append(new_pos[:n_new].copy())
         self.block_cls.append(block_cls[:n_cls].copy())

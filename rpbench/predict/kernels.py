@@ -150,20 +150,20 @@ def savings_blocks(off, local, saving, shared, detour, lam, q, log_q, one_minus_
 
 
 @njit(cache=True, nogil=True)
-def localize(lens, cls, limit, stamp, local_id, class_size, state, local_out, new_block_seeker, new_block_pos,
+def localize(lens, cls, limit, per_class, state, local_out, new_block_seeker, new_block_pos,
              block_cls_out):  # pragma: no cover - compiled
     """Cut the seekers of ``lens`` (pairs ``cls``) into blocks of at most ``limit`` classes, continuing
     the open block of ``state`` = [block number, its class count, seekers so far, block classes so far,
-    Σ class_size over the pairs so far].
+    Σ class size over the pairs so far].
 
     A seeker starts a new block when its classes would overflow the open one
     (a seeker with more than ``limit`` classes gets a block of its own).
     Within a block classes are numbered in order of first use, written to
     ``local_out``; each block's classes are appended to ``block_cls_out``, and
     every new block's first seeker and first class position to
-    ``new_block_seeker`` / ``new_block_pos``.  ``stamp`` and ``local_id`` (one
-    entry per class) carry the open block's numbering between calls.
-    Returns (new blocks, block classes written).
+    ``new_block_seeker`` / ``new_block_pos``.  ``per_class[c]`` = (the block
+    that last named c, c's number there, c's size) carries the open block's
+    numbering between calls.  Returns (new blocks, block classes written).
     """
     block, width, seen, written, members = state[0], state[1], state[2], state[3], state[4]
     n_new = 0
@@ -174,7 +174,7 @@ def localize(lens, cls, limit, stamp, local_id, class_size, state, local_out, ne
         if width > 0:
             fresh = 0
             for e in range(i, i + n):
-                if stamp[cls[e]] != block:
+                if per_class[cls[e], 0] != block:
                     fresh += 1
             if width + fresh > limit:
                 block += 1
@@ -184,14 +184,14 @@ def localize(lens, cls, limit, stamp, local_id, class_size, state, local_out, ne
                 n_new += 1
         for e in range(i, i + n):
             c = cls[e]
-            if stamp[c] != block:
-                stamp[c] = block
-                local_id[c] = width
+            if per_class[c, 0] != block:
+                per_class[c, 0] = block
+                per_class[c, 1] = width
                 block_cls_out[pos] = c
                 pos += 1
                 width += 1
-            local_out[e] = local_id[c]
-            members += class_size[c]
+            local_out[e] = per_class[c, 1]
+            members += per_class[c, 2]
         i += n
     state[0], state[1], state[2], state[3], state[4] = block, width, seen + len(lens), written + pos, members
     return n_new, pos
