@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 from rpbench.data.road import NetworkTables
 from rpbench.network import RoadNetwork
 from rpbench.predict import OdRates, PredictConfig, build_model, solve_model
-from rpbench.predict.fixed_point import PairSums, evaluate
+from rpbench.predict.fixed_point import PairSums, _cut, evaluate
 from rpbench.scenarios.base import Params
 
 from .conftest import make_instance
@@ -56,6 +56,39 @@ def test_vectorised_map_equals_reference(seed, rate, tau0):
     np.testing.assert_allclose(ev.p_taker, p_t, rtol=1e-10, atol=1e-13)
     np.testing.assert_allclose(ev.lam_taker, lam_t, rtol=1e-10, atol=1e-15)
     np.testing.assert_allclose(ev.rho_next, ref_next, rtol=1e-9, atol=1e-13)
+
+
+def test_evaluation_does_not_depend_on_the_thread_count():
+    """The per-class and per-state passes run on one range of classes / ODs per thread."""
+    from numba import get_num_threads, set_num_threads
+    model = make_instance(seed=5, size=5, n_od=30, rate_per_h=60.0, tau0_s=60.0).model()
+    rho = np.random.default_rng(5).uniform(0, 0.6, model.space.n_states)
+    before = get_num_threads()
+    try:
+        runs = []
+        for threads in (1, before):
+            set_num_threads(threads)
+            runs.append(evaluate(model.system, rho))
+    finally:
+        set_num_threads(before)
+    for name in ("rho_next", "eta", "p_taker", "lam_taker", "log_not_taker", "class_log_q", "member_log_r"):
+        np.testing.assert_array_equal(getattr(runs[0], name), getattr(runs[1], name))
+
+
+@pytest.mark.parametrize("sizes", [[], [0], [5], [3, 0, 0, 4, 1], [1] * 7, [0, 0, 9]])
+@pytest.mark.parametrize("threads", [1, 2, 3, 8])
+def test_cut_covers_every_group_once_in_order(sizes, threads):
+    from numba import get_num_threads, set_num_threads
+    offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+    before = get_num_threads()
+    try:
+        set_num_threads(min(threads, before))
+        cut = _cut(offsets)
+    finally:
+        set_num_threads(before)
+    assert cut[0] == 0 and cut[-1] == len(sizes)
+    assert np.all(np.diff(cut) > 0) or len(sizes) == 0
+    assert len(cut) - 1 <= max(1, min(threads, before))
 
 
 # ---------------------------------------------------------------- invariants
