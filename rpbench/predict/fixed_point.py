@@ -142,19 +142,17 @@ def sweep(system: System, class_log_q: np.ndarray, sums: PairSums | None = None,
     # threads), and their pages (every column) are given back once summed; small chunks keep the three
     # distance columns' share of memory small.
     chunk_block = blocks.chunks(m.seeker_off, min(chunk_pairs, SAVINGS_CHUNK_PAIRS))
-    first_pair = m.seeker_off[blocks.seeker_off]
     parts = np.zeros((SAVINGS_PARTS, len(class_log_q), 4))
     for k0 in range(0, len(chunk_block) - 1, SAVINGS_PARTS):
         batch = chunk_block[k0:k0 + SAVINGS_PARTS + 1]
 
         def savings_chunk(k: int) -> None:
-            savings_blocks(m.seeker_off, m.local, m.saving_m, m.shared_m, m.seeker_detour_m, lam, q, class_log_q,
-                           one_minus_q, *block_args, batch[k], batch[k + 1], parts[k], sums.by_seeker,
-                           log_not_paired, np.empty((width, 7)))
+            savings_blocks(m.seeker_off, m.local, m.saving_m, m.piece, m.piece_off, m.piece_shared_m, m.piece_detour_m,
+                           lam, q, class_log_q, one_minus_q, *block_args, batch[k], batch[k + 1], parts[k],
+                           sums.by_seeker, log_not_paired, np.empty((width, 7)))
 
         _in_threads(savings_chunk, len(batch) - 1)
-        m.release(int(first_pair[batch[0]]), int(first_pair[batch[-1]]),
-                  ("local", "saving_m", "shared_m", "seeker_detour_m"))
+        m.release_seekers(int(blocks.seeker_off[batch[0]]), int(blocks.seeker_off[batch[-1]]))
     for part in parts:
         np.add(sums.by_class, part, out=sums.by_class)
     return sums.by_class[:, 0].copy(), log_not_paired

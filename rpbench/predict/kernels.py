@@ -100,14 +100,16 @@ def _walk(i, end, cls, weight, total, loc):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
-def savings_blocks(off, local, saving, shared, detour, lam, q, log_q, one_minus_q, block_seeker, block_cls,
-                   block_cls_off, b0, b1, by_class, by_seeker, log_not_paired, loc):  # pragma: no cover
+def savings_blocks(off, local, saving, piece, piece_off, piece_shared, piece_detour, lam, q, log_q, one_minus_q,
+                   block_seeker, block_cls, block_cls_off, b0, b1, by_class, by_seeker, log_not_paired,
+                   loc):  # pragma: no cover
     """:func:`sweep_blocks` that also sums the pair quantities of the savings pass (§2.7).
 
     Per class c: ``by_class[c, 0..3] += w · (1, E, shared, detour)`` (column 0
     is H_c); per seeker s: ``by_seeker[s, 0..3] += w (1 - Q_c) · (1, E, shared,
     detour)``, with ``w = λ_s Π_{c' ≻_s c} Q_c'`` (so ``w (1 - Q_c)`` is the
-    pairing rate of s with class c, telescoped).  ``loc`` (width x 7) holds a
+    pairing rate of s with class c, telescoped).  A pair's shared distance and
+    detour are its piece's: ``piece_*[piece_off[s] + piece[i]]``.  ``loc`` (width x 7) holds a
     block's ``Q``, ``log Q``, ``1 - Q`` and its four class sums in one row per
     class, so one cache line serves a pair.
     """
@@ -124,9 +126,11 @@ def savings_blocks(off, local, saving, shared, detour, lam, q, log_q, one_minus_
             weight = lam[s]
             total = 0.0
             rate = rate_e = rate_sh = rate_det = 0.0
+            first = piece_off[s]
             for i in range(off[s], off[s + 1]):
                 c = local[i]
-                e, sh, det = saving[i], shared[i], detour[i]
+                p = first + piece[i]
+                e, sh, det = saving[i], piece_shared[p], piece_detour[p]
                 loc[c, 3] += weight
                 loc[c, 4] += weight * e
                 loc[c, 5] += weight * sh
@@ -224,9 +228,9 @@ def net_saving_keys(rows, start, n, piece_g, kappa, tie_rank, tie_bits, q_bits, 
 
 
 @njit(cache=True, nogil=True)
-def decode_entries(keys, tie_bits, rows, start, n, piece_g, piece_shared, piece_detour, tie_rank, by_rank,
-                   cls_out, saving_out, shared_out, detour_out):  # pragma: no cover - compiled
-    """Write the sorted entries' columns from their keys.
+def decode_entries(keys, tie_bits, rows, start, n, piece_g, tie_rank, by_rank, cls_out, saving_out,
+                   piece_out):  # pragma: no cover - compiled
+    """Write the sorted entries' columns from their keys: class, E and the piece within its row.
 
     A key's low ``tie_bits`` bits are its survivor's tie rank r; ``by_rank[r]``
     holds that survivor's ``(a, class)`` and, as scratch, the piece it lies in
@@ -252,8 +256,7 @@ def decode_entries(keys, tie_bits, rows, start, n, piece_g, piece_shared, piece_
             p = np.int64(by_rank[r, 2])
             cls_out[i] = np.int32(by_rank[r, 1])
             saving_out[i] = piece_g[p] - by_rank[r, 0]
-            shared_out[i] = piece_shared[p]
-            detour_out[i] = piece_detour[p]
+            piece_out[i] = p - j
         e += count
         j = j1
 

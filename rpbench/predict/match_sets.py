@@ -42,11 +42,14 @@ ascending ``pk`` (same grid), then by class index (classes are numbered by
 head node, entry link, destination), and within a class by ``(w, k)``.
 
 **Storage.**  Per pair: the class, as a block-local number (uint16, see
-:mod:`.blocks`), the saving ``E``, the shared distance and the seeker's
-detour (float32: sub-millimetre rounding at urban distances; the fixed point
-only uses the order of the classes), 14 bytes a pair, appended origin by
-origin to one raw file per column (see :mod:`.structure`, which keeps them in
-the cache) and read back as read-only memory maps.  The taker's detour is
+:mod:`.blocks`), the saving ``E`` (float32: sub-millimetre rounding at urban
+distances; the fixed point only uses the order of the classes) and the
+pair's *piece* within its seeker (uint16), 8 bytes a pair, appended origin
+by origin to one raw file per column (see :mod:`.structure`, which keeps them
+in the cache) and read back as read-only memory maps.  The shared distance
+and the seeker's detour are the same along a piece (one seeker, one
+destination group, one service order: about 25 pairs on the month table), so
+they are stored once per piece, in float32, in per-piece columns.  The taker's detour is
 ``shared - E - detour_seeker`` and its ride from ``h`` is
 ``l(h,d_A) - E - detour_seeker + shared``.
 
@@ -87,8 +90,15 @@ SORT_ENTRIES = 1 << 21         # entries expanded and sorted at once (bounds tem
 CHUNK_PAIRS = 1 << 24          # pairs per chunk when the sweeps stream the columns
 
 #: The per-pair distance columns (name, dtype), each stored as one raw little-endian file ``<name>.bin``;
-#: the classes are stored as ``local.bin`` (block-local numbers, uint16 or int32) and ``blocks.npz``.
-COLUMNS = (("saving_m", "<f4"), ("shared_m", "<f4"), ("seeker_detour_m", "<f4"))
+#: the classes are stored as ``local.bin`` (block-local numbers, uint16 or int32) and ``blocks.npz``, the
+#: pairs' pieces as ``piece.bin``, and the per-piece columns as ``piece_<name>.bin`` with ``piece_off.npy``.
+COLUMNS = (("saving_m", "<f4"),)
+PIECE_COLUMNS = (("shared_m", "<f4"), ("detour_m", "<f4"))      # the seeker's detour
+
+
+def piece_dtype(n_nodes: int) -> np.dtype:
+    """Piece numbers within a seeker: at most two pieces (FOFO, FOLO) per destination node."""
+    return np.dtype("<u2") if 2 * n_nodes <= (1 << 16) else np.dtype("<u4")
 
 
 @dataclass(frozen=True, eq=False)
@@ -104,26 +114,50 @@ class Matching:
     seeker_off: np.ndarray        # int64 (W+1)
     local: np.ndarray             # uint16 (or int32) taker class per pair, numbered within its block
     saving_m: np.ndarray          # float32 E(s, t)
-    shared_m: np.ndarray          # float32 shared distance
-    seeker_detour_m: np.ndarray   # float32 detour of the seeker
+    piece: np.ndarray             # uint16 (or uint32) the pair's piece, numbered within its seeker
+    piece_off: np.ndarray         # int64 (W+1): seeker s's pieces are piece_off[s] .. piece_off[s+1]-1
+    piece_shared_m: np.ndarray    # float32 shared distance, per piece
+    piece_detour_m: np.ndarray    # float32 detour of the seeker, per piece
     blocks: ClassBlocks           # the seekers' blocks and the global class of each local number
     stats: dict = field(default_factory=dict)
 
     @classmethod
     def from_lists(cls, seeker_off, classes, saving_m, shared_m, seeker_detour_m, *, n_classes: int | None = None,
                    limit: int = BLOCK_CLASSES) -> "Matching":
-        """A matching held in memory, from global class lists (tests and small models)."""
+        """A matching held in memory, from global class lists and per-pair distances, one piece per pair
+        (tests and small models)."""
+        seeker_off = np.asarray(seeker_off, dtype=np.int64)
         classes = np.asarray(classes, dtype=np.int32)
         if n_classes is None:
             n_classes = int(classes.max()) + 1 if len(classes) else 0
-        local, blocks = localize_lists(np.asarray(seeker_off, dtype=np.int64), classes, n_classes, limit)
-        return cls(seeker_off=np.asarray(seeker_off, dtype=np.int64), local=local, saving_m=saving_m,
-                   shared_m=shared_m, seeker_detour_m=seeker_detour_m, blocks=blocks)
+        local, blocks = localize_lists(seeker_off, classes, n_classes, limit)
+        lens = np.diff(seeker_off)
+        wide = len(lens) and int(lens.max()) > (1 << 16)
+        piece = (np.arange(len(classes)) - np.repeat(seeker_off[:-1], lens)).astype("<u4" if wide else "<u2")
+        return cls(seeker_off=seeker_off, local=local, saving_m=np.asarray(saving_m, dtype=np.float32),
+                   piece=piece, piece_off=seeker_off.copy(), piece_shared_m=np.asarray(shared_m, dtype=np.float32),
+                   piece_detour_m=np.asarray(seeker_detour_m, dtype=np.float32), blocks=blocks)
 
     @property
     def cls(self) -> np.ndarray:
         """The taker class of every pair (int32, computed in memory: for tests and small models)."""
         return self.blocks.classes(self.local, self.seeker_off, 0, len(self.seeker_off) - 1)
+
+    @property
+    def shared_m(self) -> np.ndarray:
+        """The shared distance of every pair (float32, expanded in memory: tests and small models)."""
+        return self.piece_shared_m[self._global_piece(0, len(self.seeker_off) - 1)]
+
+    @property
+    def seeker_detour_m(self) -> np.ndarray:
+        """The seeker's detour of every pair (float32, expanded in memory: tests and small models)."""
+        return self.piece_detour_m[self._global_piece(0, len(self.seeker_off) - 1)]
+
+    def _global_piece(self, s0: int, s1: int) -> np.ndarray:
+        """Index into the piece table of every pair of seekers ``s0..s1-1``."""
+        off = self.seeker_off
+        i0, i1 = int(off[s0]), int(off[s1])
+        return np.repeat(self.piece_off[s0:s1], np.diff(off[s0:s1 + 1])) + self.piece[i0:i1]
 
     @property
     def n_pairs(self) -> int:
@@ -148,7 +182,8 @@ class Matching:
 
     @property
     def nbytes(self) -> int:
-        return int(self.seeker_off.nbytes + self.local.nbytes
+        return int(self.seeker_off.nbytes + self.local.nbytes + self.piece.nbytes + self.piece_off.nbytes
+                   + self.piece_shared_m.nbytes + self.piece_detour_m.nbytes
                    + sum(getattr(self, name).nbytes for name, _ in COLUMNS))
 
     def chunks(self, max_pairs: int = CHUNK_PAIRS):
@@ -161,11 +196,16 @@ class Matching:
             yield s0, s1, int(off[s0]), int(off[s1])
             s0 = s1
 
+    def release_seekers(self, s0: int, s1: int) -> None:
+        """Give back this process's pages of the pairs and pieces of seekers ``s0..s1-1`` (every column)."""
+        self.release(int(self.seeker_off[s0]), int(self.seeker_off[s1]), ("local", "saving_m", "piece"))
+        self.release(int(self.piece_off[s0]), int(self.piece_off[s1]), ("piece_shared_m", "piece_detour_m"))
+
     def release(self, i0: int, i1: int, names: tuple[str, ...]) -> None:
-        """Give back this process's pages of pairs ``[i0, i1)`` of the named memory-mapped columns.
+        """Give back this process's pages of entries ``[i0, i1)`` of the named memory-mapped columns.
 
         The data stays in the page cache (a later read maps it again), but a
-        pass over 3.4 GB of distance columns no longer leaves them all resident.
+        pass over 2.3 GB of columns no longer leaves them all resident.
         Columns that are not memory maps are left alone.
         """
         for name in names:
@@ -179,25 +219,36 @@ class Matching:
                 mapped.madvise(mmap.MADV_DONTNEED, start, end - start)
 
     def seeker(self, w: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """(classes, E, shared, seeker detour) of seeker ``s(w)``, in priority order (views)."""
+        """(classes, E, shared, seeker detour) of seeker ``s(w)``, in priority order."""
         i0, i1 = self.seeker_off[w], self.seeker_off[w + 1]
         classes = self.blocks.classes(self.local, self.seeker_off, w, w + 1)
-        return classes, self.saving_m[i0:i1], self.shared_m[i0:i1], self.seeker_detour_m[i0:i1]
+        pieces = self._global_piece(w, w + 1)
+        return classes, self.saving_m[i0:i1], self.piece_shared_m[pieces], self.piece_detour_m[pieces]
 
     def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """All pairs in OD order as in-memory arrays: classes, E, shared, seeker detour (tests, small models)."""
-        return (self.cls,) + tuple(np.array(getattr(self, name)) for name, _ in COLUMNS)
+        return self.cls, np.array(self.saving_m), self.shared_m, self.seeker_detour_m
 
     @classmethod
-    def open(cls, directory: Path, seeker_off: np.ndarray, stats: dict, local_dtype: str) -> "Matching":
-        """The matching whose columns lie in ``directory`` (read-only memory maps)."""
-        n = int(seeker_off[-1])
-        if np.dtype(local_dtype) not in (np.dtype("<u2"), np.dtype("<i4")):
-            raise ValueError(f"local class numbers of type {local_dtype!r} are not supported")
+    def open(cls, directory: Path, seeker_off: np.ndarray, stats: dict, dtypes: dict) -> "Matching":
+        """The matching whose columns lie in ``directory`` (read-only memory maps); ``dtypes`` names the
+        dtypes of the ``local`` and ``piece`` numbers."""
+        n, n_od = int(seeker_off[-1]), len(seeker_off) - 1
+        if np.dtype(dtypes["local"]) not in (np.dtype("<u2"), np.dtype("<i4")):
+            raise ValueError(f"local class numbers of type {dtypes['local']!r} are not supported")
+        if np.dtype(dtypes["piece"]) not in (np.dtype("<u2"), np.dtype("<u4")):
+            raise ValueError(f"piece numbers of type {dtypes['piece']!r} are not supported")
         columns = {name: _open_column(directory / f"{name}.bin", dtype, n) for name, dtype in COLUMNS}
-        local = _open_column(directory / "local.bin", local_dtype, n)
-        blocks = ClassBlocks.load(directory, len(seeker_off) - 1)
-        return cls(seeker_off=seeker_off, stats=stats, local=local, blocks=blocks, **columns)
+        local = _open_column(directory / "local.bin", dtypes["local"], n)
+        piece = _open_column(directory / "piece.bin", dtypes["piece"], n)
+        piece_off = np.load(directory / "piece_off.npy", allow_pickle=False)
+        if len(piece_off) != n_od + 1 or piece_off[0] != 0 or np.any(np.diff(piece_off) < 0):
+            raise ValueError("its piece offsets are inconsistent")
+        table = {f"piece_{name}": _open_column(directory / f"piece_{name}.bin", dtype, int(piece_off[-1]))
+                 for name, dtype in PIECE_COLUMNS}
+        blocks = ClassBlocks.load(directory, n_od)
+        return cls(seeker_off=seeker_off, stats=stats, local=local, piece=piece, piece_off=piece_off, blocks=blocks,
+                   **columns, **table)
 
 
 def _open_column(path: Path, dtype: str, n: int) -> np.ndarray:
@@ -217,7 +268,7 @@ def build_matching(space: StateSpace, rates: OdRates, dist: np.ndarray, params: 
     the files do not depend on the number of threads.
     """
     t0 = time.perf_counter()
-    writer = _ColumnWriter(directory, len(rates), space.class_size)
+    writer = _ColumnWriter(directory, len(rates), space.class_size, piece_dtype(dist.shape[0]))
     origin = rates.origin
     stats = {"stage1_candidates": 0, "stage1_kept": 0, "group_queries": 0}
     try:
@@ -231,15 +282,15 @@ def build_matching(space: StateSpace, rates: OdRates, dist: np.ndarray, params: 
                        disable=None)                             # off when stderr is not a terminal
             with bar, ThreadPoolExecutor(max(1, get_num_threads())) as pool:
                 for (_, w0, w1), lists in zip(tasks, _in_order(pool, builder.origin_lists, tasks)):
-                    writer.append(w0, lists.lens, lists.columns)
+                    writer.append(w0, lists.lens, lists.columns, lists.pieces)
                     for key, value in lists.stats.items():
                         stats[key] += value
                     bar.update(w1 - w0)
-        seeker_off, local_dtype = writer.finish()
+        seeker_off, dtypes = writer.finish()
     finally:
         writer.close()
     stats["state_pairs"] = writer.localizer.state_pairs                  # Σ_s |T_s|, for reports
-    matching = Matching.open(directory, seeker_off, stats, local_dtype)
+    matching = Matching.open(directory, seeker_off, stats, dtypes)
     matching.stats["build_s"] = time.perf_counter() - t0
     return matching
 
@@ -257,10 +308,12 @@ def _in_order(pool: ThreadPoolExecutor, fn, tasks, ahead: int = 4):
 
 @dataclass(frozen=True, eq=False)
 class _OriginLists:
-    """The sorted lists of the seekers of one origin: pairs per seeker and the pair columns."""
+    """The sorted lists of the seekers of one origin: pairs per seeker, the pair columns (class, E, piece)
+    and the piece table (pieces per seeker, shared distance, seeker detour)."""
 
     lens: np.ndarray
     columns: tuple[np.ndarray, ...]
+    pieces: tuple[np.ndarray, ...]
     stats: dict
 
 
@@ -268,36 +321,47 @@ class _ColumnWriter:
     """Appends the per-seeker lists, in OD order, to one raw file per column; the classes go through
     a :class:`~.blocks.Localizer` into ``local.bin`` and ``blocks.npz``."""
 
-    def __init__(self, directory: Path, n_od: int, class_size: np.ndarray) -> None:
+    def __init__(self, directory: Path, n_od: int, class_size: np.ndarray, piece_dtype: np.dtype) -> None:
         self.n_od = n_od
         self.directory = directory
+        self.piece_dtype = np.dtype(piece_dtype)
         self.files = {name: open(directory / f"{name}.bin", "wb") for name, _ in COLUMNS}
+        self.files["piece"] = open(directory / "piece.bin", "wb")
+        self.files.update({f"piece_{name}": open(directory / f"piece_{name}.bin", "wb") for name, _ in PIECE_COLUMNS})
         self.files["local"] = open(directory / "local.bin", "w+b")
         self.localizer = Localizer(len(class_size), self.files["local"], class_size=class_size)
         self.next = 0            # next seeker expected
         self.lens: list[np.ndarray] = []
+        self.piece_counts: list[np.ndarray] = []
 
-    def append(self, w0: int, lens: np.ndarray, columns: tuple[np.ndarray, ...] = ()) -> None:
-        """Seekers ``w0 .. w0+len(lens)-1`` with ``lens`` pairs each, and their pairs' columns
-        (global classes, E, shared, seeker detour)."""
+    def append(self, w0: int, lens: np.ndarray, columns: tuple[np.ndarray, ...] = (),
+               pieces: tuple[np.ndarray, ...] = ()) -> None:
+        """Seekers ``w0 .. w0+len(lens)-1`` with ``lens`` pairs each, their pairs' columns (global
+        classes, E, piece) and their piece table (pieces per seeker, shared distance, seeker detour)."""
         assert w0 == self.next, "seekers must be written in OD order"
         lens = np.asarray(lens, dtype=np.int64)
         self.lens.append(lens)
         self.next = w0 + len(lens)
-        classes, *distances = columns or (np.zeros(0, dtype=np.int32),)
+        classes, saving, piece = columns or (np.zeros(0, dtype=np.int32), np.zeros(0), np.zeros(0))
         self.localizer.append(lens, classes)
-        for (name, dtype), values in zip(COLUMNS, distances):
-            self.files[name].write(memoryview(np.ascontiguousarray(values, dtype=dtype)))
+        self.files["saving_m"].write(memoryview(np.ascontiguousarray(saving, dtype=COLUMNS[0][1])))
+        self.files["piece"].write(memoryview(np.ascontiguousarray(piece, dtype=self.piece_dtype)))
+        counts, *table = pieces or (np.zeros(len(lens), dtype=np.int64), np.zeros(0), np.zeros(0))
+        self.piece_counts.append(np.asarray(counts, dtype=np.int64))
+        for (name, dtype), values in zip(PIECE_COLUMNS, table):
+            self.files[f"piece_{name}"].write(memoryview(np.ascontiguousarray(values, dtype=dtype)))
 
-    def finish(self) -> tuple[np.ndarray, str]:
-        """The seekers' offsets (int64, W+1) and the local numbers' dtype, once every seeker is
-        written (the rest get empty lists)."""
+    def finish(self) -> tuple[np.ndarray, dict]:
+        """The seekers' offsets (int64, W+1) and the dtypes of the local and piece numbers, once every
+        seeker is written (the rest get empty lists)."""
         if self.next < self.n_od:
             self.append(self.next, np.zeros(self.n_od - self.next, dtype=np.int64))
         self.localizer.finish().save(self.directory)
+        counts = np.concatenate(self.piece_counts) if self.piece_counts else np.zeros(0, dtype=np.int64)
+        np.save(self.directory / "piece_off.npy", offsets_from_counts(counts))
         self.close()
         seeker_off = offsets_from_counts(np.concatenate(self.lens) if self.lens else np.zeros(0, dtype=np.int64))
-        return seeker_off, self.localizer.dtype.str
+        return seeker_off, {"local": self.localizer.dtype.str, "piece": self.piece_dtype.str}
 
     def close(self) -> None:
         for fh in self.files.values():
@@ -314,6 +378,7 @@ class _Builder:
         self.r_lim = params.max_pickup_m + TOLERANCE_M
         self.d_lim = params.max_detour_m + TOLERANCE_M
         self.dest = rates.destination.astype(np.int64)
+        self.piece_dtype = piece_dtype(dist.shape[0])
         self.solo = space.solo_m
         if np.any(np.diff(space.class_head) < 0):
             raise ValueError("taker classes must be numbered by head node")
@@ -337,13 +402,14 @@ class _Builder:
         if not cfg.keep_nonpositive:
             keep &= a < 0                                                   # E <= l(h,d_A) - p
         if not keep.any():
-            return _OriginLists(np.zeros(w1 - w0, dtype=np.int64), (), stats)
+            return _OriginLists(np.zeros(w1 - w0, dtype=np.int64), (), (), stats)
         g = _Group(cand[keep], a[keep], pk[keep], rest[keep], d_a[keep], row_o)
         stats["stage1_kept"] = g.n
         pieces = self._pieces(g, w0, w1)
         stats["group_queries"] = g.queries
         lens, columns = self._emit(g, w0, w1, pieces)
-        return _OriginLists(lens, columns, stats)
+        table = (np.bincount(pieces.row, minlength=w1 - w0), pieces.shared, pieces.det)   # pieces are by row
+        return _OriginLists(lens, columns, table, stats)
 
     # ------------------------------------------------------------------ stage 2
     def _pieces(self, g: "_Group", w0: int, w1: int) -> "_Pieces":
@@ -392,7 +458,7 @@ class _Builder:
         per_row = np.bincount(pc.row, weights=pc.n, minlength=m).astype(np.int64)
         cum = np.cumsum(per_row)
         n = int(cum[-1]) if m else 0
-        columns = (np.empty(n, dtype=np.int32),) + tuple(np.empty(n, dtype=dtype) for _, dtype in COLUMNS)
+        columns = (np.empty(n, dtype=np.int32), np.empty(n, dtype=COLUMNS[0][1]), np.empty(n, dtype=self.piece_dtype))
         r0 = 0
         while r0 < m:
             base = cum[r0 - 1] if r0 else 0
@@ -426,11 +492,11 @@ class _Builder:
             prio = _priority(self.config.priority, pc.g[piece] - g.a[col], g.pk[col], pc.shared[piece],
                              pc.det[piece], g.rest[col], self.solo[w0 + pc.row[piece]])
             packable = packable and _pack_keys(rows, n, prio, g.tie_rank[col], g.tie_bits, keys)
-        cls, saving, shared, detour = out
+        cls, saving, piece_out = out
         if packable:
             keys.sort()
-            kernels.decode_entries(keys, g.tie_bits, rows, start, n, pc.g[i0:i1], pc.shared[i0:i1], pc.det[i0:i1],
-                                   g.tie_rank, g.by_rank, cls, saving, shared, detour)
+            kernels.decode_entries(keys, g.tie_bits, rows, start, n, pc.g[i0:i1], g.tie_rank, g.by_rank, cls, saving,
+                                   piece_out)
             return
         # Huge distances (beyond 2^18 m) or huge groups: the same order through a slower lexsort.
         if piece is None:
@@ -441,8 +507,8 @@ class _Builder:
         col, piece = col[perm], piece[perm]
         np.take(g.cls, col, out=cls)
         np.subtract(pc.g[piece], g.a[col], out=saving, casting="same_kind")
-        np.take(pc.shared, piece, out=shared)
-        np.take(pc.det, piece, out=detour)
+        first_of_row = np.searchsorted(pc.row, pc.row[piece], side="left")        # pieces are sorted by row
+        piece_out[:] = piece - first_of_row
 
 
 @dataclass(eq=False)

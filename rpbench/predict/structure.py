@@ -4,15 +4,17 @@ The taker states (:mod:`.states`) and the seekers' sorted matching lists
 (:mod:`.match_sets`) depend on the network, the OD set, R̄, D̄, v and the
 priority rule, but not on the demand level λ_w nor on τ_0: those enter the
 fixed point only.  For the 21-day month table the lists hold 282 M pairs
-(3.9 GB), so they are built once and kept in the cache folder as raw column
+(2.3 GB), so they are built once and kept in the cache folder as raw column
 files that every later run, τ_0, day of a multi-day run, sweep point and
 worker process maps read-only (one copy in the page cache for all of them).
 
 Layout of ``<cache>/predict-structure-<key>/``: ``states.npz`` (the
 :class:`~.states.StateSpace` with τ_0 = 0 in the origin states),
 ``seeker_off.npy``, one ``<column>.bin`` per pair column (the classes as
-block-local numbers in ``local.bin``, with ``blocks.npz``: see :mod:`.blocks`)
-and ``manifest.json`` (sizes, the local numbers' dtype and build facts).  An
+block-local numbers in ``local.bin``, with ``blocks.npz``: see :mod:`.blocks`;
+each pair's piece in ``piece.bin``, with the per-piece distances in
+``piece_*.bin`` and ``piece_off.npy``: see :mod:`.match_sets`) and ``manifest.json`` (sizes, the
+local and piece numbers' dtypes and build facts).  An
 entry is built in a temporary folder beside it and renamed into place, so it
 is complete or absent; concurrent builders take an exclusive lock on
 ``predict-structure-<key>.lock``, and the losers wait and then reuse the
@@ -49,7 +51,7 @@ from rpbench.predict.states import StateSpace, build_states
 from rpbench.scenarios.base import Params
 
 #: Bump when the states or the lists change for the same inputs.
-STRUCTURE_VERSION = "2"        # 2: classes stored as block-local numbers
+STRUCTURE_VERSION = "3"        # 2: classes stored as block-local numbers; 3: per-piece distances
 #: The network-side parameters and the configuration fields the structure depends on.
 STRUCTURE_PARAMS = ("max_pickup_m", "max_detour_m", "speed_mps")
 STRUCTURE_CONFIG = ("include_origin_state", "priority", "keep_nonpositive", "order_rule")
@@ -163,7 +165,8 @@ def _build_into(directory: Path, network: RoadNetwork, rates: OdRates, params: P
     np.savez(directory / "states.npz", **{f.name: getattr(space, f.name) for f in dataclasses.fields(space)})
     np.save(directory / "seeker_off.npy", matching.seeker_off)
     manifest = {"version": STRUCTURE_VERSION, "n_od": len(rates), "n_pairs": matching.n_pairs,
-                "columns": dict(COLUMNS, local=matching.local.dtype.str), "stats": matching.stats,
+                "columns": dict(COLUMNS, local=matching.local.dtype.str, piece=matching.piece.dtype.str),
+                "stats": matching.stats,
                 "build_s": build_s}
     (directory / "manifest.json").write_text(json.dumps(manifest, default=float, indent=1))
     _release_free_heap()
@@ -192,7 +195,7 @@ def _open_entry(directory: Path, n_od: int) -> Structure | None:
         seeker_off = np.load(directory / "seeker_off.npy", allow_pickle=False)
         if len(seeker_off) != n_od + 1 or int(seeker_off[-1]) != manifest.get("n_pairs"):
             raise ValueError("its offsets do not match the manifest")
-        matching = Matching.open(directory, seeker_off, manifest.get("stats", {}), manifest["columns"]["local"])
+        matching = Matching.open(directory, seeker_off, manifest.get("stats", {}), manifest["columns"])
     except (OSError, ValueError, KeyError, TypeError, EOFError, zipfile.BadZipFile) as exc:   # npz: a zip
         print(f"rpbench: note: the cached prediction structure {directory.name} is unusable "
               f"({type(exc).__name__}: {one_line(exc)}); rebuilding it", file=sys.stderr)

@@ -71,11 +71,13 @@ def test_built_once_then_mapped_from_the_cache(cache):
     np.testing.assert_array_equal(sp.tau_s[sp.k > 0], first.space.tau_s[first.space.k > 0])
 
 
-def test_a_damaged_entry_is_rebuilt_with_a_note(cache, capsys):
+@pytest.mark.parametrize("name", ["local.bin", "piece.bin", "saving_m.bin", "piece_shared_m.bin",
+                                  "piece_detour_m.bin"])
+def test_a_damaged_entry_is_rebuilt_with_a_note(cache, capsys, name):
     inst = make_instance(seed=3, size=6, n_od=40, max_pickup_m=3000, max_detour_m=3000)
     good = load(inst).matching.arrays()
     entry = entries(cache)[0]
-    with open(entry / "local.bin", "r+b") as fh:
+    with open(entry / name, "r+b") as fh:
         fh.truncate(8)
     structure._RECENT.clear()
     rebuilt = load(inst)
@@ -85,7 +87,7 @@ def test_a_damaged_entry_is_rebuilt_with_a_note(cache, capsys):
         np.testing.assert_array_equal(a, b)
 
 
-@pytest.mark.parametrize("name", ["blocks.npz", "states.npz"])
+@pytest.mark.parametrize("name", ["blocks.npz", "states.npz", "piece_off.npy"])
 def test_a_truncated_array_file_is_rebuilt_with_a_note(cache, capsys, name):
     inst = make_instance(seed=3, size=6, n_od=40, max_pickup_m=3000, max_detour_m=3000)
     good = load(inst).matching.arrays()
