@@ -117,7 +117,7 @@ def sweep(system: System, class_log_q: np.ndarray, sums: PairSums | None = None,
     at a time, the chunks in parallel threads (the pair columns are usually
     memory maps).  With ``sums`` the pass also adds the
     savings pass's pair sums (:mod:`.savings`) and gives the chunks' pages of
-    the distance columns back at once, so they never all sit in memory.
+    the pair and piece columns back at once, so they never all sit in memory.
     """
     log_not_paired = np.zeros(len(system.rate_per_s))
     q = np.exp(class_log_q)
@@ -139,8 +139,8 @@ def sweep(system: System, class_log_q: np.ndarray, sums: PairSums | None = None,
     one_minus_q = -np.expm1(class_log_q)
     # The savings pass is the last over the lists: SAVINGS_PARTS chunks at a time run in parallel, each
     # summing its classes into its own part (added in order: the result does not depend on the
-    # threads), and their pages (every column) are given back once summed; small chunks keep the three
-    # distance columns' share of memory small.
+    # threads), and their pages (every column) are given back once summed; small chunks keep the
+    # columns' share of memory small.
     chunk_block = blocks.chunks(m.seeker_off, min(chunk_pairs, SAVINGS_CHUNK_PAIRS))
     parts = np.zeros((SAVINGS_PARTS, len(class_log_q), 4))
     for k0 in range(0, len(chunk_block) - 1, SAVINGS_PARTS):
