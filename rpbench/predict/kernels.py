@@ -49,14 +49,22 @@ def sweep_blocks(off, local, lam, q, log_q, block_seeker, block_cls, block_cls_o
     for b in range(b0, b1):
         k0 = block_cls_off[b]
         k = block_cls_off[b + 1] - k0
-        for j in range(k):
-            c = block_cls[k0 + j]
-            loc[j, 0] = q[c]
-            loc[j, 1] = log_q[c]
-            loc[j, 2] = 0.0
+        _gather_block(block_cls[k0:k0 + k], (q, log_q), loc)
         _sweep_seekers(off, local, lam, loc, log_not_paired, block_seeker[b], block_seeker[b + 1])
         for j in range(k):
             h[block_cls[k0 + j]] += loc[j, 2]
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _gather_block(classes, values, loc):  # pragma: no cover - compiled
+    """Row j of ``loc``: ``values[0][classes[j]], values[1][classes[j]], ...``, then zeros (the block's sums)."""
+    n = len(values)
+    for j in range(len(classes)):
+        c = classes[j]
+        for col in range(n):
+            loc[j, col] = values[col][c]
+        for col in range(n, loc.shape[1]):
+            loc[j, col] = 0.0
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -116,12 +124,7 @@ def savings_blocks(off, local, saving, piece, piece_off, piece_shared, piece_det
     for b in range(b0, b1):
         k0 = block_cls_off[b]
         k = block_cls_off[b + 1] - k0
-        for j in range(k):
-            c = block_cls[k0 + j]
-            loc[j, 0] = q[c]
-            loc[j, 1] = log_q[c]
-            loc[j, 2] = one_minus_q[c]
-            loc[j, 3] = loc[j, 4] = loc[j, 5] = loc[j, 6] = 0.0
+        _gather_block(block_cls[k0:k0 + k], (q, log_q, one_minus_q), loc)
         for s in range(block_seeker[b], block_seeker[b + 1]):
             weight = lam[s]
             total = 0.0

@@ -227,7 +227,8 @@ class Matching:
 
     def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """All pairs in OD order as in-memory arrays: classes, E, shared, seeker detour (tests, small models)."""
-        return self.cls, np.array(self.saving_m), self.shared_m, self.seeker_detour_m
+        pieces = self._global_piece(0, len(self.seeker_off) - 1)
+        return self.cls, np.array(self.saving_m), self.piece_shared_m[pieces], self.piece_detour_m[pieces]
 
     @classmethod
     def open(cls, directory: Path, seeker_off: np.ndarray, stats: dict, dtypes: dict) -> "Matching":
@@ -319,7 +320,8 @@ class _OriginLists:
 
 class _ColumnWriter:
     """Appends the per-seeker lists, in OD order, to one raw file per column; the classes go through
-    a :class:`~.blocks.Localizer` into ``local.bin`` and ``blocks.npz``."""
+    a :class:`~.blocks.Localizer` into ``local.bin`` and ``blocks.npz``, the pieces' distances into
+    ``piece_<name>.bin`` and their counts into ``piece_off.npy``."""
 
     def __init__(self, directory: Path, n_od: int, class_size: np.ndarray, piece_dtype: np.dtype) -> None:
         self.n_od = n_od
