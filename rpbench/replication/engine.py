@@ -418,17 +418,10 @@ class AuthorsEngine:
             veh.picked = True
 
     def _rtv_first_move(self, vi: int, veh: Vehicle, t: float) -> None:
-        """The authors' RTV moves a vehicle in the round it is assigned.
-
-        It notes the vehicle's node as its "origin" before moving; a vehicle
-        already standing at the passenger's origin therefore counts as having
-        picked the passenger up, and its activity time is left as it was (it
-        is not reset to this round, as a pick-up found in a later round is).
-        """
-        if veh.node == int(self.o[veh.p0]):
-            veh.picked = True
-            return
-        self._move_taker(vi, veh, t)
+        """The authors' RTV moves a vehicle in the round it is assigned, unless it already stood at the
+        passenger's origin (:meth:`_take_first` counted that as the pick-up, activity time kept)."""
+        if not veh.picked:
+            self._move_taker(vi, veh, t)
 
     def d_node(self, b: int) -> int:
         return int(self.d[b])
