@@ -43,7 +43,7 @@ from rpbench.exceptions import ResultsError, RpbenchError, one_line
 from rpbench.network import RoadNetwork
 from rpbench.paths import source_root
 
-VERSIONED_PACKAGES = ("numpy", "scipy", "pandas", "networkx", "highspy", "ortools", "pyomo", "cvxpy", "pymatching",
+VERSIONED_PACKAGES = ("numpy", "scipy", "pandas", "numba", "highspy", "ortools", "pyomo", "cvxpy", "pymatching",
                       "lap")
 
 
