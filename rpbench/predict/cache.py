@@ -32,7 +32,7 @@ from rpbench.predict.config import PredictConfig
 from rpbench.predict.rates import OdRates
 from rpbench.scenarios.base import Params
 
-MODEL_VERSION = "1"
+MODEL_VERSION = "2"        # 2: Anderson mixing solves on an updated QR factorisation (last bits differ)
 PARAM_FIELDS = ("max_pickup_m", "max_detour_m", "speed_mps")
 
 

@@ -38,6 +38,7 @@ from typing import Callable
 import numpy as np
 from numba import get_num_threads
 
+from rpbench.predict.anderson import AndersonMixing
 from rpbench.predict.config import PredictConfig
 from rpbench.predict.kernels import class_products, savings_blocks, sweep_blocks, taker_map
 from rpbench.predict.match_sets import CHUNK_PAIRS, Matching
@@ -243,7 +244,7 @@ def solve(system: System, *, progress: Callable[[int, float], None] | None = Non
     history: list[float] = []
     growing = 0
     converged = False
-    accel = _Anderson(cfg.anderson_depth) if cfg.accel == "anderson" else None
+    accel = AndersonMixing(cfg.anderson_depth) if cfg.accel == "anderson" else None
     for it in range(1, cfg.max_iter + 1):
         ev = evaluate(system, rho)
         res = ev.residual
@@ -270,33 +271,3 @@ def solve(system: System, *, progress: Callable[[int, float], None] | None = Non
     info = SolveInfo(converged=converged, residual=ev.residual, iterations=len(history), clip_count=ev.clip_count,
                      beta=beta, time_s=time.perf_counter() - t0, history=tuple(history))
     return ev, info
-
-
-class _Anderson:
-    """Type-II Anderson mixing over the last ``depth`` iterates (Walker & Ni 2011)."""
-
-    def __init__(self, depth: int) -> None:
-        self.depth = depth
-        self.restart()
-
-    def restart(self) -> None:
-        self.x_prev = self.f_prev = None
-        self.dx: list[np.ndarray] = []
-        self.df: list[np.ndarray] = []
-
-    def step(self, x: np.ndarray, f: np.ndarray, damped: np.ndarray, beta: float) -> np.ndarray:
-        if self.x_prev is not None:
-            self.dx.append(x - self.x_prev)
-            self.df.append(f - self.f_prev)
-            if len(self.dx) > self.depth:
-                self.dx.pop(0)
-                self.df.pop(0)
-        self.x_prev, self.f_prev = x, f
-        if not self.df:
-            return damped
-        df = np.stack(self.df, axis=1)
-        gamma, *_ = np.linalg.lstsq(df, f, rcond=None)
-        if not np.all(np.isfinite(gamma)):
-            self.restart()
-            return damped
-        return damped - (np.stack(self.dx, axis=1) + beta * df) @ gamma
