@@ -88,7 +88,6 @@ def test_savings_bounded_by_solo_distances():          # I9 / G2
 
 
 def state_pairs(model):
-    sp = model.space
     out = set()
     for w in range(len(model.rates)):
         states, _ = model_list(model, w)

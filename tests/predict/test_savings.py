@@ -9,7 +9,6 @@ from rpbench.predict.fixed_point import evaluate
 from rpbench.scenarios.base import Params
 
 from .conftest import make_instance
-from .test_match_sets import model_list
 
 
 @pytest.fixture(scope="module")

@@ -14,9 +14,7 @@ import numpy as np
 import pytest
 
 import rpbench.predict.structure as structure
-from rpbench.predict import PredictConfig
 from rpbench.predict.rates import OdRates
-from rpbench.scenarios.base import Params
 
 from .conftest import make_instance
 
