@@ -8,12 +8,15 @@ SVD after a Householder QR, plus stacking the columns) took 0.18 s a step,
 3 s of a prediction.  Here ``ΔF = Q R`` is kept up to date instead, as Walker
 and Ni do: a new column is orthogonalised against Q twice (classical
 Gram-Schmidt with one re-orthogonalisation, orthogonal to working precision),
-the oldest is dropped with Givens rotations on R and Q, and the small
+the oldest is dropped with Givens rotations on R (applied to Q as one
+small matrix product), and the small
 problem ``min ||R γ - Qᵀ f||`` is solved with the same SVD cut-off numpy's
 ``lstsq`` applies to ΔF (singular values below ``eps · rows`` times the
 largest count as zero, so a history whose differences have become
 collinear gives the minimum-norm γ, not an exploding one).  R has ΔF's
 singular values, so the cut-off is the same; only the rounding differs.
+The differences are written straight into preallocated column buffers: a
+step is about 20 passes over a vector, 0.03-0.06 s on the month table.
 """
 
 from __future__ import annotations
@@ -26,8 +29,9 @@ class AndersonMixing:
 
     def __init__(self, depth: int) -> None:
         self.depth = depth
-        self._q: np.ndarray | None = None        # (n, depth), Fortran order: column j is q_j
-        self._dx: np.ndarray | None = None       # (n, depth) ring of ΔX columns
+        self._dx: np.ndarray | None = None       # (n, depth), Fortran order: a ring of ΔX columns
+        self._q: np.ndarray | None = None        # (n, depth), Fortran order: q_0 .. q_{size-1}
+        self._q_spare: np.ndarray | None = None  # where the next drop writes Q (then the two swap)
         self._r = np.zeros((depth, depth))
         self.restart()
 
@@ -40,7 +44,7 @@ class AndersonMixing:
     def step(self, x: np.ndarray, f: np.ndarray, damped: np.ndarray, beta: float) -> np.ndarray:
         """The step from iterate ``x`` with residual ``f = g(x) - x`` (``damped = β f``)."""
         if self.x_prev is not None:
-            self._append(x - self.x_prev, f - self.f_prev)
+            self._append(x, f)
         self.x_prev, self.f_prev = x, f
         if self.size == 0:
             return damped
@@ -52,10 +56,11 @@ class AndersonMixing:
             self.restart()
             return damped
         m = self.size
-        df_gamma = self._q[:, :m] @ (self._r[:m, :m] @ gamma)
         weights = np.zeros(self.depth)
         weights[self._slots] = gamma
-        return damped - self._dx @ weights - beta * df_gamma
+        out = damped - self._dx @ weights                                   # - ΔX γ
+        out -= self._q[:, :m] @ (beta * (self._r[:m, :m] @ gamma))          # - β ΔF γ, ΔF = QR
+        return out
 
     def coefficients(self, f: np.ndarray) -> np.ndarray:
         """``γ = argmin ||ΔF γ - f||`` (minimum norm, numpy's default ``lstsq`` cut-off on ΔF)."""
@@ -64,57 +69,61 @@ class AndersonMixing:
         gamma, *_ = np.linalg.lstsq(self._r[:m, :m], self._q[:, :m].T @ f, rcond=rcond)
         return gamma
 
-    def _append(self, dx: np.ndarray, df: np.ndarray) -> None:
-        if self._q is None or self._q.shape[0] != len(df):
-            self._q = np.zeros((len(df), self.depth), order="F")
-            self._dx = np.zeros((len(df), self.depth), order="F")
+    def _append(self, x: np.ndarray, f: np.ndarray) -> None:
+        n = len(f)
+        if self._q is None or self._q.shape[0] != n:
+            self._dx, self._q, self._q_spare = (np.zeros((n, self.depth), order="F") for _ in range(3))
         if self.size == self.depth:
             self._drop_oldest()
         slot = next(k for k in range(self.depth) if k not in self._slots)
-        self._dx[:, slot] = dx
+        np.subtract(x, self.x_prev, out=self._dx[:, slot])
         self._slots.append(slot)
-        self._add_column(df)
+        np.subtract(f, self.f_prev, out=self._q[:, self.size])
+        self._orthogonalise_last()
 
-    def _add_column(self, v: np.ndarray) -> None:
-        """Append ``v`` to ΔF = QR: two rounds of Gram-Schmidt against Q, then normalise."""
+    def _orthogonalise_last(self) -> None:
+        """Column ``size`` of Q holds a new ΔF column: two rounds of Gram-Schmidt against Q, then normalise."""
         m = self.size
-        q = self._q[:, :m]
+        q, v = self._q[:, :m], self._q[:, m]
         r = np.zeros(m)
-        v = np.array(v, dtype=np.float64)
-        for _ in range(2):
-            if m:
+        if m:
+            for _ in range(2):
                 h = q.T @ v
                 v -= q @ h
                 r += h
         norm = float(np.linalg.norm(v))
+        if norm > 0.0:
+            v /= norm
+        else:
+            v[:] = 0.0
         self._r[:m, m] = r
         self._r[m, m] = norm
         self._r[m + 1:, m] = 0.0
-        self._q[:, m] = v / norm if norm > 0.0 else 0.0
         self.size = m + 1
 
     def _drop_oldest(self) -> None:
-        """Remove ΔF's first column: R without it is upper Hessenberg; Givens rotations restore it."""
+        """Remove ΔF's first column: R without it is upper Hessenberg; Givens rotations restore it.
+
+        The rotations are collected in one m x m orthogonal matrix G (R <- G R), and
+        Q <- Q Gᵀ is one matrix product instead of two vector updates per rotation.
+        """
         m = self.size
         r = self._r
         r[:m, :m - 1] = r[:m, 1:m].copy()
         r[:, m - 1] = 0.0
-        q = self._q
+        g = np.eye(m)
         for k in range(m - 1):
             a, b = r[k, k], r[k + 1, k]
             h = float(np.hypot(a, b))
             if h == 0.0:
                 continue
             c, s = a / h, b / h
-            rk, rk1 = r[k, k:m - 1].copy(), r[k + 1, k:m - 1].copy()
-            r[k, k:m - 1] = c * rk + s * rk1
-            r[k + 1, k:m - 1] = c * rk1 - s * rk
+            rotation = np.array([[c, s], [-s, c]])
+            r[k:k + 2, k:m - 1] = rotation @ r[k:k + 2, k:m - 1]
             r[k + 1, k] = 0.0
-            qk = q[:, k].copy()
-            q[:, k] *= c
-            q[:, k] += s * q[:, k + 1]
-            q[:, k + 1] *= c
-            q[:, k + 1] -= s * qk
+            g[k:k + 2, :] = rotation @ g[k:k + 2, :]
         r[m - 1, :] = 0.0
+        np.matmul(self._q[:, :m], g[:m - 1, :].T, out=self._q_spare[:, :m - 1])
+        self._q, self._q_spare = self._q_spare, self._q
         self._slots.pop(0)                      # its ΔX slot is reused by the next column
         self.size = m - 1
