@@ -16,7 +16,6 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from scipy import stats
 
 from rpbench.data import read_authors_predictions, read_day_od_shares
 from rpbench.predict.prediction import Prediction
@@ -38,6 +37,9 @@ def joined(prediction: Prediction, data_dir: Path) -> pd.DataFrame:
 
 def compare(prediction: Prediction, data_dir: Path) -> tuple[dict, pd.DataFrame]:
     """Per-column agreement statistics and the joined per-OD frame."""
+    # scipy.stats takes 0.3-0.4 s to import; only this comparison needs it, not every rpbench command.
+    from scipy import stats
+
     frame = joined(prediction, data_dir)
     rows = []
     for col in COLUMNS:
