@@ -377,6 +377,9 @@ class _Builder:
                  config: PredictConfig) -> None:
         self.space, self.config = space, config
         self.dist = dist
+        # l(h, o) by destination: rows of the transpose are what the column reads of ``dist`` would be,
+        # contiguous (one copy of the matrix, 122 MB for Haikou, instead of strided gathers per origin).
+        self.dist_to = np.ascontiguousarray(dist.T)
         self.r_lim = params.max_pickup_m + TOLERANCE_M
         self.d_lim = params.max_detour_m + TOLERANCE_M
         self.dest = rates.destination.astype(np.int64)
@@ -390,7 +393,7 @@ class _Builder:
     def origin_lists(self, o: int, w0: int, w1: int) -> _OriginLists:
         """Sorted lists of the seekers ``w0..w1-1`` (all with origin ``o``); safe to call from threads."""
         sp, cfg = self.space, self.config
-        to_o = np.ascontiguousarray(self.dist[:, o])                          # l(h, o) for every node h
+        to_o = self.dist_to[o]                                               # l(h, o) for every node h
         near = np.flatnonzero(to_o <= self.r_lim)                            # within R̄ of the seekers
         cand = expand_ranges(self.head_off[near], self.head_off[near + 1])   # sorted by class index
         stats = {"stage1_candidates": len(cand), "stage1_kept": 0, "group_queries": 0}
@@ -419,8 +422,9 @@ class _Builder:
         cfg = self.config
         d_b = self.dest[w0:w1]
         l_b = self.solo[w0:w1][:, None]
-        d_ba = self.dist[np.ix_(d_b, g.dest)]                    # l(d_B, d_A)   (m x U)
-        d_ab = self.dist[np.ix_(g.dest, d_b)].T                  # l(d_A, d_B)
+        # Rows first, then columns: two plain takes are 2.5x faster than one np.ix_ gather here.
+        d_ba = self.dist.take(d_b, axis=0).take(g.dest, axis=1)       # l(d_B, d_A)   (m x U)
+        d_ab = self.dist_to.take(d_b, axis=0).take(g.dest, axis=1)    # l(d_A, d_B)   (m x U)
         f_ok = (g.d_oa + d_ab - l_b <= self.d_lim).ravel()       # FOFO detour of B
         g_f = (l_b - g.d_oa - d_ab).ravel()                      # E_FOFO = g_f - a
         g_l = (-d_ba).ravel()                                    # E_FOLO = g_l - a
