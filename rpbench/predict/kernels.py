@@ -205,6 +205,37 @@ def localize(lens, cls, limit, per_class, state, local_out, new_block_seeker, ne
 
 
 @njit(cache=True, nogil=True)
+def count_at_most(a, start, size, u, threshold, out):  # pragma: no cover - compiled
+    """``out[k]`` = how many values of group ``u[k]`` are ``<= threshold[k]``; returns how many needed a search.
+
+    Group g's values are ``a[start[g]:start[g] + size[g]]``, ascending.  A
+    threshold at or above the group's largest value counts the whole group,
+    one below its smallest (or NaN) counts none, and only the rest take a
+    binary search (an exact count: the values are compared, never rounded).
+    """
+    searched = 0
+    for k in range(len(u)):
+        g = u[k]
+        t = threshold[k]
+        lo = start[g]
+        hi = lo + size[g]
+        if t >= a[hi - 1]:
+            out[k] = size[g]
+        elif t >= a[lo]:
+            searched += 1
+            while lo < hi:                  # first value > t
+                mid = (lo + hi) >> 1
+                if a[mid] <= t:
+                    lo = mid + 1
+                else:
+                    hi = mid
+            out[k] = lo - start[g]
+        else:
+            out[k] = 0
+    return searched
+
+
+@njit(cache=True, nogil=True)
 def net_saving_keys(rows, start, n, piece_g, kappa, tie_rank, tie_bits, q_bits, grid, q_limit,
                     keys):  # pragma: no cover - compiled
     """Sort keys ``row | quantised descending (E - pk) | tie rank`` of the pieces' entries (see ``match_sets``).

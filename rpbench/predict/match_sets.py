@@ -556,19 +556,14 @@ class _Pieces:
 
 
 class _Group:
-    """Stage-1 survivors of one origin, sorted by (d_A, a), with exact per-group counting."""
+    """Stage-1 survivors of one origin, sorted by (d_A, a) (so each group's a ascend), with exact per-group
+    counting."""
 
     def __init__(self, cls, a, pk, rest, dest, row_o):
         n = len(a)
-        by_a = np.argsort(a)                                 # one quicksort serves order and ranks
-        sorted_a = a[by_a]
-        # Left rank of each value (ties share the rank of their first occurrence).
-        run_start = np.ones(n, dtype=bool)
-        run_start[1:] = sorted_a[1:] != sorted_a[:-1]
-        left = np.flatnonzero(run_start)[np.cumsum(run_start) - 1]
-        rank = np.empty(n, dtype=np.int64)
-        rank[by_a] = left
-        # Exact (d_A, a) order: a stable radix pass on the destination over the a-sorted order.
+        # (d_A, a) order: a quicksort on a, then a stable radix pass on the destination.  (The quicksort's
+        # order among equal a is part of the stored lists' order: keep this exact sequence of sorts.)
+        by_a = np.argsort(a)
         dkey = dest[by_a]
         order = by_a[np.argsort(dkey.astype(np.uint16) if dkey.max() < 65536 else dkey, kind="stable")]
         self.n = n
@@ -581,14 +576,7 @@ class _Group:
         self.start = np.flatnonzero(new).astype(np.int64)
         self.size = np.diff(np.append(self.start, n))
         self.dest = dest[self.start].astype(np.int64)
-        self.u_of = np.cumsum(new) - 1
         self.d_oa = row_o[self.dest]                         # l(o, d_A) per group
-        self.a_min = self.a[self.start]
-        self.a_max = self.a[self.start + self.size - 1]
-        # Integer ranks make (group, a) one exactly comparable int64 key.
-        self.sorted_a = sorted_a
-        self.stride = n + 1
-        self.key = self.u_of * self.stride + rank[order]
         # Tie ranks: ascending pk on the priority grid, then class index (the survivors arrive in class
         # order, so the pre-sort position breaks ties).
         pk_q = np.floor(pk * GRID).astype(np.int64)
@@ -609,14 +597,9 @@ class _Group:
         self.queries = 0
 
     def count(self, u: np.ndarray, threshold: np.ndarray) -> np.ndarray:
-        """Number of classes of group ``u`` with ``a <= threshold`` (vectorised, exact)."""
-        out = np.where(threshold >= self.a_max[u], self.size[u], 0)
-        mid = np.flatnonzero((threshold >= self.a_min[u]) & (threshold < self.a_max[u]))
-        if len(mid):
-            um = u[mid]
-            r = np.searchsorted(self.sorted_a, threshold[mid], side="right")
-            out[mid] = np.searchsorted(self.key, um * self.stride + r, side="left") - self.start[um]
-            self.queries += len(mid)
+        """Number of classes of group ``u`` with ``a <= threshold`` (exact; compiled)."""
+        out = np.empty(len(u), dtype=np.int64)
+        self.queries += kernels.count_at_most(self.a, self.start, self.size, u, threshold, out)
         return out
 
 

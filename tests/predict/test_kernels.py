@@ -83,3 +83,26 @@ def test_model_sweep_on_a_real_matching_equals_the_reference():
     h, lnp = sweep(model.system, log_q)
     np.testing.assert_allclose(h, h_ref, rtol=1e-13, atol=1e-18)
     np.testing.assert_allclose(lnp, lnp_ref, rtol=1e-13, atol=1e-15)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_group_counts_equal_a_brute_force_count(seed):
+    """``count_at_most``: per (group, threshold) the number of the group's values <= threshold, with ties,
+    thresholds on, between and outside the values, infinities and NaN; and how many needed a search."""
+    from rpbench.predict.kernels import count_at_most
+
+    rng = np.random.default_rng(seed)
+    sizes = rng.integers(1, 9, 12)
+    start = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64)
+    a = np.concatenate([np.sort(rng.integers(-5, 6, k).astype(np.float64)) for k in sizes])   # many ties
+    u = rng.integers(0, len(sizes), 400).astype(np.int64)
+    threshold = rng.integers(-7, 8, 400) + rng.choice([0.0, 0.5], 400)
+    threshold[::37] = np.inf
+    threshold[5::37] = -np.inf
+    threshold[9::37] = np.nan
+    out = np.empty(len(u), dtype=np.int64)
+    searched = count_at_most(a, start, sizes.astype(np.int64), u, threshold, out)
+    values = [a[start[g]:start[g] + sizes[g]] for g in u]
+    want = [int(np.sum(v <= t)) for v, t in zip(values, threshold)]
+    assert out.tolist() == want
+    assert searched == sum(bool(v[0] <= t < v[-1]) for v, t in zip(values, threshold))
