@@ -406,9 +406,10 @@ class _Builder:
         keep = (pk <= self.r_lim) & (a + row_o[d_a] <= self.d_lim)         # pick-up; FOFO detour of A
         if not cfg.keep_nonpositive:
             keep &= a < 0                                                   # E <= l(h,d_A) - p
-        if not keep.any():
+        kept = np.flatnonzero(keep)                  # one pass over the mask serves the five gathers
+        if not len(kept):
             return _OriginLists(np.zeros(w1 - w0, dtype=np.int64), (), (), stats)
-        g = _Group(cand[keep], a[keep], pk[keep], rest[keep], d_a[keep], row_o)
+        g = _Group(cand[kept], a[kept], pk[kept], rest[kept], d_a[kept], row_o)
         stats["stage1_kept"] = g.n
         pieces = self._pieces(g, w0, w1)
         stats["group_queries"] = g.queries
