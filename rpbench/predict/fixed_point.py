@@ -138,22 +138,26 @@ def sweep(system: System, class_log_q: np.ndarray, sums: PairSums | None = None,
         _in_threads(sweep_chunk, len(chunk_block) - 1)
         return chunk_h.sum(axis=0), log_not_paired
     one_minus_q = -np.expm1(class_log_q)
-    # The savings pass is the last over the lists: SAVINGS_PARTS chunks at a time run in parallel, each
-    # summing its classes into its own part (added in order: the result does not depend on the
-    # threads), and their pages (every column) are given back once summed; small chunks keep the
-    # columns' share of memory small.
+    # The savings pass is the last over the lists.  Its chunks are cut into SAVINGS_PARTS runs of about
+    # equal pairs; each run is walked in order by one task that sums its classes into its own part
+    # (the parts are added in order: the result does not depend on the threads) and gives every
+    # column's pages of a chunk back once it is summed, so the columns never all sit in memory.
     chunk_block = blocks.chunks(m.seeker_off, min(chunk_pairs, SAVINGS_CHUNK_PAIRS))
+    chunk_pairs_end = m.seeker_off[blocks.seeker_off[chunk_block[1:]]]
+    runs = np.searchsorted(chunk_pairs_end, m.n_pairs * np.arange(1, SAVINGS_PARTS) / SAVINGS_PARTS)
+    runs = np.concatenate([[0], runs, [len(chunk_block) - 1]])
     parts = np.zeros((SAVINGS_PARTS, len(class_log_q), 4))
-    for k0 in range(0, len(chunk_block) - 1, SAVINGS_PARTS):
-        batch = chunk_block[k0:k0 + SAVINGS_PARTS + 1]
 
-        def savings_chunk(k: int) -> None:
+    def savings_run(k: int) -> None:
+        loc = np.empty((width, 7))
+        for c in range(runs[k], runs[k + 1]):
+            b0, b1 = chunk_block[c], chunk_block[c + 1]
             savings_blocks(m.seeker_off, m.local, m.saving_m, m.piece, m.piece_off, m.piece_shared_m, m.piece_detour_m,
-                           lam, q, class_log_q, one_minus_q, *block_args, batch[k], batch[k + 1], parts[k],
-                           sums.by_seeker, log_not_paired, np.empty((width, 7)))
+                           lam, q, class_log_q, one_minus_q, *block_args, b0, b1, parts[k], sums.by_seeker,
+                           log_not_paired, loc)
+            m.release_seekers(int(blocks.seeker_off[b0]), int(blocks.seeker_off[b1]))
 
-        _in_threads(savings_chunk, len(batch) - 1)
-        m.release_seekers(int(blocks.seeker_off[batch[0]]), int(blocks.seeker_off[batch[-1]]))
+    _in_threads(savings_run, SAVINGS_PARTS)
     for part in parts:
         np.add(sums.by_class, part, out=sums.by_class)
     return sums.by_class[:, 0].copy(), log_not_paired

@@ -59,7 +59,9 @@ def test_sweep_equals_the_log_space_reference(seed, chunk_pairs, block_classes):
     np.testing.assert_allclose(sums.by_seeker, seek_ref, rtol=1e-12, atol=1e-15)
 
 
-def test_sweep_does_not_depend_on_the_thread_count():
+@pytest.mark.parametrize("savings", [False, True])
+def test_sweep_does_not_depend_on_the_thread_count(savings):
+    """The plain sweep and the savings pass (whose chunks run in parts) give the same bits on 1 and n threads."""
     from numba import get_num_threads, set_num_threads
     matching, lam, log_q = random_lists(7, n_od=400, n_classes=200)
     system = System.build(None, matching, lam, PredictConfig())
@@ -68,7 +70,9 @@ def test_sweep_does_not_depend_on_the_thread_count():
         results = []
         for threads in (1, before):
             set_num_threads(threads)
-            results.append(sweep(system, log_q, chunk_pairs=50))
+            sums = PairSums.zeros(200, 400) if savings else None
+            out = sweep(system, log_q, sums, chunk_pairs=50)
+            results.append(out + ((sums.by_class, sums.by_seeker) if savings else ()))
     finally:
         set_num_threads(before)
     for a, b in zip(*results):
