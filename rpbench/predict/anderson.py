@@ -23,6 +23,9 @@ from __future__ import annotations
 
 import numpy as np
 
+#: A new column whose part outside the others' span is below this share of its norm is treated as dependent.
+DEPENDENT = 1e-3
+
 
 class AndersonMixing:
     """Anderson mixing over the last ``depth`` iterates; :meth:`step` returns the accelerated step."""
@@ -82,24 +85,44 @@ class AndersonMixing:
         self._orthogonalise_last()
 
     def _orthogonalise_last(self) -> None:
-        """Column ``size`` of Q holds a new ΔF column: two rounds of Gram-Schmidt against Q, then normalise."""
+        """Column ``size`` of Q holds a new ΔF column: two rounds of Gram-Schmidt against Q, then normalise.
+
+        A column (almost) in the span of the others leaves only rounding noise,
+        which two rounds do not make orthogonal to Q: normalised, it would break
+        QᵀQ = I (by 3e-7 in a test).  Such a remainder, or an exact zero, is
+        replaced by a unit vector orthogonalised afresh, with the remainder's
+        norm (tiny or 0) as its R entry: ΔF = QR still holds to rounding, Q
+        stays orthonormal, and the SVD cut-off drops that direction.
+        """
         m = self.size
         q, v = self._q[:, :m], self._q[:, m]
-        r = np.zeros(m)
-        if m:
-            for _ in range(2):
-                h = q.T @ v
-                v -= q @ h
-                r += h
+        scale = float(np.linalg.norm(v))
+        r = self._gram_schmidt(q, v)
         norm = float(np.linalg.norm(v))
-        if norm > 0.0:
+        if norm > DEPENDENT * scale:
             v /= norm
         else:
-            v[:] = 0.0
+            if norm > 0.0:
+                v /= norm
+            else:                                # an exact repeat: any direction outside Q will do
+                v[:] = np.random.default_rng(m).standard_normal(len(v))
+            self._gram_schmidt(q, v)
+            v /= np.linalg.norm(v)
         self._r[:m, m] = r
         self._r[m, m] = norm
         self._r[m + 1:, m] = 0.0
         self.size = m + 1
+
+    @staticmethod
+    def _gram_schmidt(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """Two rounds of classical Gram-Schmidt of ``v`` against the columns of ``q``, in place; the coefficients."""
+        r = np.zeros(q.shape[1])
+        if q.shape[1]:
+            for _ in range(2):
+                h = q.T @ v
+                v -= q @ h
+                r += h
+        return r
 
     def _drop_oldest(self) -> None:
         """Remove ΔF's first column: R without it is upper Hessenberg; Givens rotations restore it.
