@@ -143,9 +143,7 @@ def sweep(system: System, class_log_q: np.ndarray, sums: PairSums | None = None,
     # (the parts are added in order: the result does not depend on the threads) and gives every
     # column's pages of a chunk back once it is summed, so the columns never all sit in memory.
     chunk_block = blocks.chunks(m.seeker_off, min(chunk_pairs, SAVINGS_CHUNK_PAIRS))
-    chunk_pairs_end = m.seeker_off[blocks.seeker_off[chunk_block[1:]]]
-    runs = np.searchsorted(chunk_pairs_end, m.n_pairs * np.arange(1, SAVINGS_PARTS) / SAVINGS_PARTS)
-    runs = np.concatenate([[0], runs, [len(chunk_block) - 1]])
+    runs = _cut(m.seeker_off[blocks.seeker_off[chunk_block]], SAVINGS_PARTS)
     parts = np.zeros((SAVINGS_PARTS, len(class_log_q), 4))
 
     def savings_run(k: int) -> None:
@@ -157,7 +155,7 @@ def sweep(system: System, class_log_q: np.ndarray, sums: PairSums | None = None,
                            log_not_paired, loc)
             m.release_seekers(int(blocks.seeker_off[b0]), int(blocks.seeker_off[b1]))
 
-    _in_threads(savings_run, SAVINGS_PARTS)
+    _in_threads(savings_run, len(runs) - 1)
     for part in parts:
         np.add(sums.by_class, part, out=sums.by_class)
     return sums.by_class[:, 0].copy(), log_not_paired
@@ -176,11 +174,12 @@ def _in_threads(task: Callable[[int], None], n: int) -> None:
             pass
 
 
-def _cut(offsets: np.ndarray) -> np.ndarray:
-    """Boundaries cutting the groups of CSR ``offsets`` into one range per thread, of about equal members."""
-    parts = max(1, get_num_threads())
-    targets = np.linspace(0, offsets[-1], parts + 1)[1:-1]
-    inner = np.searchsorted(offsets, targets)
+def _cut(offsets: np.ndarray, parts: int | None = None) -> np.ndarray:
+    """Boundaries cutting the groups of CSR ``offsets`` into ``parts`` ranges (default: one per thread) of
+    about equal members; a group across a cut point goes to the later range, empty ranges are dropped."""
+    parts = max(1, get_num_threads()) if parts is None else parts
+    targets = offsets[-1] * np.arange(1, parts) / parts
+    inner = np.searchsorted(offsets[1:], targets)
     return np.unique(np.concatenate([[0], inner, [len(offsets) - 1]])).astype(np.int64)
 
 
