@@ -40,7 +40,7 @@ from numba import get_num_threads
 
 from rpbench.predict.anderson import AndersonMixing
 from rpbench.predict.config import PredictConfig
-from rpbench.predict.kernels import class_products, savings_blocks, sweep_blocks, taker_map
+from rpbench.predict.kernels import SAVINGS_ROW, SWEEP_ROW, class_products, savings_blocks, sweep_blocks, taker_map
 from rpbench.predict.match_sets import CHUNK_PAIRS, Matching
 from rpbench.predict.states import StateSpace
 
@@ -133,7 +133,7 @@ def sweep(system: System, class_log_q: np.ndarray, sums: PairSums | None = None,
         def sweep_chunk(k: int) -> None:
             chunk_h[k].fill(0.0)
             sweep_blocks(m.seeker_off, m.local, lam, q, class_log_q, *block_args, chunk_block[k], chunk_block[k + 1],
-                         chunk_h[k], log_not_paired, np.empty((width, 4)))
+                         chunk_h[k], log_not_paired, np.empty(width * int(SWEEP_ROW)))
 
         _in_threads(sweep_chunk, len(chunk_block) - 1)
         return chunk_h.sum(axis=0), log_not_paired
@@ -147,7 +147,7 @@ def sweep(system: System, class_log_q: np.ndarray, sums: PairSums | None = None,
     parts = np.zeros((SAVINGS_PARTS, len(class_log_q), 4))
 
     def savings_run(k: int) -> None:
-        loc = np.empty((width, 7))
+        loc = np.empty(width * int(SAVINGS_ROW))
         for c in range(runs[k], runs[k + 1]):
             b0, b1 = chunk_block[c], chunk_block[c + 1]
             savings_blocks(m.seeker_off, m.local, m.saving_m, m.piece, m.piece_off, m.piece_shared_m, m.piece_detour_m,

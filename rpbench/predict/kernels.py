@@ -32,6 +32,12 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+#: Row widths of the block tables (``loc``), flat arrays of ``width x ROW`` float64: a constant power of two
+#: makes a row's address a shift of the class number, where a 2-D array's stride would cost a multiply.
+SWEEP_ROW = np.uint64(4)        # Q, log Q, the block's H sum, padding: two rows per 64-byte cache line
+SAVINGS_ROW = np.uint64(8)      # Q, log Q, 1 - Q, four class sums, padding: one row per cache line
+_ONE = np.uint64(1)
+
 
 @njit(cache=True, nogil=True)
 def sweep_blocks(off, local, lam, q, log_q, block_seeker, block_cls, block_cls_off, b0, b1, h, log_not_paired,
@@ -42,68 +48,70 @@ def sweep_blocks(off, local, lam, q, log_q, block_seeker, block_cls, block_cls_o
     classes ``block_cls[block_cls_off[b]:block_cls_off[b+1]]`` their lists
     name; ``local`` indexes a pair's class within its block (see
     :mod:`.blocks`).  A block's ``Q`` and ``log Q`` are gathered into the rows
-    of ``loc`` (width x 4: Q, log Q, the block's H sum, padding), so a pair's
-    three values share one cache line of a table that fits the core's cache,
-    and ``H`` is scattered back per block.
+    of ``loc`` (flat, :data:`SWEEP_ROW` per class: Q, log Q, the block's H sum,
+    padding), so a pair's three values share one cache line of a table that
+    fits the core's cache, and ``H`` is scattered back per block.
     """
     for b in range(b0, b1):
         k0 = block_cls_off[b]
         k = block_cls_off[b + 1] - k0
-        _gather_block(block_cls[k0:k0 + k], (q, log_q), loc)
+        _gather_block(block_cls[k0:k0 + k], (q, log_q), loc, SWEEP_ROW)
         _sweep_seekers(off, local, lam, loc, log_not_paired, block_seeker[b], block_seeker[b + 1])
         for j in range(k):
-            h[block_cls[k0 + j]] += loc[j, 2]
+            h[block_cls[k0 + j]] += loc[np.uint64(j) * SWEEP_ROW + np.uint64(2)]
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _gather_block(classes, values, loc):  # pragma: no cover - compiled
-    """Row j of ``loc``: ``values[0][classes[j]], values[1][classes[j]], ...``, then zeros (the block's sums)."""
+def _gather_block(classes, values, loc, row):  # pragma: no cover - compiled
+    """Row j of flat ``loc`` (``row`` entries): ``values[0][classes[j]], values[1][classes[j]], ...``, then
+    zeros (the block's sums)."""
     n = len(values)
     for j in range(len(classes)):
         c = classes[j]
+        base = np.uint64(j) * row
         for col in range(n):
-            loc[j, col] = values[col][c]
-        for col in range(n, loc.shape[1]):
-            loc[j, col] = 0.0
+            loc[base + np.uint64(col)] = values[col][c]
+        for col in range(n, row):
+            loc[base + np.uint64(col)] = 0.0
 
 
 @njit(cache=True, nogil=True, inline="always")
 def _sweep_seekers(off, cls, lam, loc, log_not_paired, s0, s1):  # pragma: no cover - compiled
     """Seekers ``s0..s1-1``, walked two at a time, interleaved: their running products are two
-    independent multiplication chains, which the processor overlaps with the class lookups."""
+    independent multiplication chains, which the processor overlaps with the class lookups.  Pair
+    positions are unsigned, so the compiled loop needs no negative-index check."""
     s = s0
     while s + 1 < s1:
-        weight_a, weight_b = lam[s], lam[s + 1]
-        total_a = total_b = 0.0
-        i, end_a = off[s], off[s + 1]
-        j, end_b = off[s + 1], off[s + 2]
-        while i < end_a and j < end_b:
-            c = cls[i]
-            d = cls[j]
-            loc[c, 2] += weight_a
-            weight_a *= loc[c, 0]
-            total_a += loc[c, 1]
-            loc[d, 2] += weight_b
-            weight_b *= loc[d, 0]
-            total_b += loc[d, 1]
-            i += 1
-            j += 1
-        log_not_paired[s] = _walk(i, end_a, cls, weight_a, total_a, loc)       # the longer list's rest
-        log_not_paired[s + 1] = _walk(j, end_b, cls, weight_b, total_b, loc)
+        i, end_a = np.uint64(off[s]), np.uint64(off[s + 1])
+        j, end_b = np.uint64(off[s + 1]), np.uint64(off[s + 2])
+        n = min(end_a - i, end_b - j)
+        weight_a, total_a, weight_b, total_b = lam[s], 0.0, lam[s + 1], 0.0
+        for step in range(n):
+            c = np.uint64(cls[i + step]) * SWEEP_ROW
+            d = np.uint64(cls[j + step]) * SWEEP_ROW
+            loc[c + np.uint64(2)] += weight_a
+            weight_a *= loc[c]
+            total_a += loc[c + _ONE]
+            loc[d + np.uint64(2)] += weight_b
+            weight_b *= loc[d]
+            total_b += loc[d + _ONE]
+        log_not_paired[s] = _walk(i + n, end_a, cls, weight_a, total_a, loc)      # the longer list's rest
+        log_not_paired[s + 1] = _walk(j + n, end_b, cls, weight_b, total_b, loc)
         s += 2
     if s < s1:
-        log_not_paired[s] = _walk(off[s], off[s + 1], cls, lam[s], 0.0, loc)
+        log_not_paired[s] = _walk(np.uint64(off[s]), np.uint64(off[s + 1]), cls, lam[s], 0.0, loc)
 
 
 @njit(cache=True, nogil=True, inline="always")
 def _walk(i, end, cls, weight, total, loc):  # pragma: no cover - compiled
-    """One seeker's pairs ``i..end-1`` from running product ``weight`` and log sum ``total``; the final sum."""
+    """One seeker's pairs ``i..end-1`` (unsigned) from running product ``weight`` and log sum ``total``;
+    the final sum."""
     while i < end:
-        c = cls[i]
-        loc[c, 2] += weight
-        weight *= loc[c, 0]
-        total += loc[c, 1]
-        i += 1
+        c = np.uint64(cls[i]) * SWEEP_ROW
+        loc[c + np.uint64(2)] += weight
+        weight *= loc[c]
+        total += loc[c + _ONE]
+        i += _ONE
     return total
 
 
@@ -117,34 +125,36 @@ def savings_blocks(off, local, saving, piece, piece_off, piece_shared, piece_det
     is H_c); per seeker s: ``by_seeker[s, 0..3] += w (1 - Q_c) · (1, E, shared,
     detour)``, with ``w = λ_s Π_{c' ≻_s c} Q_c'`` (so ``w (1 - Q_c)`` is the
     pairing rate of s with class c, telescoped).  A pair's shared distance and
-    detour are its piece's: ``piece_*[piece_off[s] + piece[i]]``.  ``loc`` (width x 7) holds a
-    block's ``Q``, ``log Q``, ``1 - Q`` and its four class sums in one row per
-    class, so one cache line serves a pair.
+    detour are its piece's: ``piece_*[piece_off[s] + piece[i]]``.  ``loc`` (flat,
+    :data:`SAVINGS_ROW` per class) holds a block's ``Q``, ``log Q``, ``1 - Q`` and
+    its four class sums in one cache-line row per class.
     """
     for b in range(b0, b1):
         k0 = block_cls_off[b]
         k = block_cls_off[b + 1] - k0
-        _gather_block(block_cls[k0:k0 + k], (q, log_q, one_minus_q), loc)
+        _gather_block(block_cls[k0:k0 + k], (q, log_q, one_minus_q), loc, SAVINGS_ROW)
         for s in range(block_seeker[b], block_seeker[b + 1]):
             weight = lam[s]
             total = 0.0
             rate = rate_e = rate_sh = rate_det = 0.0
             first = piece_off[s]
-            for i in range(off[s], off[s + 1]):
-                c = local[i]
+            i, end = np.uint64(off[s]), np.uint64(off[s + 1])
+            while i < end:
+                c = np.uint64(local[i]) * SAVINGS_ROW
                 p = first + piece[i]
                 e, sh, det = saving[i], piece_shared[p], piece_detour[p]
-                loc[c, 3] += weight
-                loc[c, 4] += weight * e
-                loc[c, 5] += weight * sh
-                loc[c, 6] += weight * det
-                pair = weight * loc[c, 2]
+                loc[c + np.uint64(3)] += weight
+                loc[c + np.uint64(4)] += weight * e
+                loc[c + np.uint64(5)] += weight * sh
+                loc[c + np.uint64(6)] += weight * det
+                pair = weight * loc[c + np.uint64(2)]
                 rate += pair
                 rate_e += pair * e
                 rate_sh += pair * sh
                 rate_det += pair * det
-                weight *= loc[c, 0]
-                total += loc[c, 1]
+                weight *= loc[c]
+                total += loc[c + _ONE]
+                i += _ONE
             log_not_paired[s] = total
             by_seeker[s, 0] += rate
             by_seeker[s, 1] += rate_e
@@ -152,8 +162,9 @@ def savings_blocks(off, local, saving, piece, piece_off, piece_shared, piece_det
             by_seeker[s, 3] += rate_det
         for j in range(k):
             c = block_cls[k0 + j]
+            base = np.uint64(j) * SAVINGS_ROW
             for col in range(4):
-                by_class[c, col] += loc[j, 3 + col]
+                by_class[c, col] += loc[base + np.uint64(3 + col)]
 
 
 @njit(cache=True, nogil=True)
