@@ -216,34 +216,119 @@ def localize(lens, cls, limit, per_class, state, local_out, new_block_seeker, ne
 
 
 @njit(cache=True, nogil=True)
-def count_at_most(a, start, size, u, threshold, out):  # pragma: no cover - compiled
-    """``out[k]`` = how many values of group ``u[k]`` are ``<= threshold[k]``; returns how many needed a search.
+def count_at_most(a, lo, size, t):  # pragma: no cover - compiled
+    """``(k, searched)``: k = how many of the ascending ``a[lo:lo + size]`` are ``<= t`` (size >= 1).
 
-    Group g's values are ``a[start[g]:start[g] + size[g]]``, ascending.  A
-    threshold at or above the group's largest value counts the whole group,
-    one below its smallest (or NaN) counts none, and only the rest take a
-    binary search (an exact count: the values are compared, never rounded).
+    A threshold at or above the largest value counts them all, one below the
+    smallest (or NaN) counts none, and only the rest take a binary search
+    (``searched`` = 1; an exact count: the values are compared, never rounded).
     """
-    searched = 0
-    for k in range(len(u)):
-        g = u[k]
-        t = threshold[k]
-        lo = start[g]
-        hi = lo + size[g]
-        if t >= a[hi - 1]:
-            out[k] = size[g]
-        elif t >= a[lo]:
-            searched += 1
-            while lo < hi:                  # first value > t
-                mid = (lo + hi) >> 1
-                if a[mid] <= t:
-                    lo = mid + 1
-                else:
-                    hi = mid
-            out[k] = lo - start[g]
+    hi = lo + size
+    if t >= a[hi - 1]:
+        return size, 0
+    if not t >= a[lo]:
+        return 0, 0
+    first = lo
+    while lo < hi:                  # first value > t
+        mid = (lo + hi) >> 1
+        if a[mid] <= t:
+            lo = mid + 1
         else:
-            out[k] = 0
-    return searched
+            hi = mid
+    return lo - first, 1
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _minimum(x, y):  # pragma: no cover - compiled
+    """``np.minimum`` of two floats: NaN if either is NaN."""
+    if x != x:
+        return x
+    if y != y:
+        return y
+    return x if x <= y else y
+
+
+@njit(cache=True, nogil=True)
+def feasible_runs(from_b, to_b, solo_b, group_dest, group_d_oa, a, start, size, d_lim, keep_nonpositive,
+                  min_feasible, row, first, length, piece_g, shared, detour):  # pragma: no cover - compiled
+    """The pieces of one origin's seekers (``match_sets`` stage 2): ``(pieces written, searches)``.
+
+    For seeker row r (destination ``dest_b[r]``, solo length ``solo_b[r]``)
+    and destination group u (``group_dest[u]``, ``l(o, d_A) = group_d_oa[u]``,
+    ascending ``a`` values ``a[start[u]:start[u] + size[u]]``), with
+    ``l(d_B, d_A)`` and ``l(d_A, d_B)`` read from row d_B of ``dist`` and of its transpose ``dist_to``::
+
+        FOFO feasible for B  <=>  l(o,d_A) + l(d_A,d_B) - l_B <= D̄
+        E_FOFO = g_f - a,  g_f = l_B - l(o,d_A) - l(d_A,d_B)
+        E_FOLO = g_l - a,  g_l = -l(d_B,d_A);   FOLO feasible <=> a <= D̄ - l_B - l(d_B,d_A)
+
+    and E > 0 (unless ``keep_nonpositive``) <=> ``a <= nextafter(g, -inf)``.
+    With ``min_feasible`` a class takes FOLO where FOLO is shorter (g_l >
+    g_f) and feasible, FOFO otherwise; else the shorter order is chosen first
+    and then tested.  Each (row, group, order) run ``[lo, hi)`` of the group
+    is found by exact counts (:func:`count_at_most`).  The nonempty runs are
+    written in row order, within a row the FOLO runs then the FOFO runs, each
+    by ascending group: run start ``first`` (index into ``a``), ``length``, its
+    ``g`` (float64) and the shared distance and B's detour on it (float32;
+    FOLO: l_B and 0, FOFO: l(o,d_A) and -g_f).  Returns ``(-1, 0)`` when the
+    outputs are too short (the caller retries with longer ones).
+    """
+    capacity = len(row)
+    n_u = len(group_dest)
+    fofo_u = np.empty(n_u, dtype=np.int64)          # a row's FOFO runs, written after its FOLO runs
+    fofo_lo = np.empty(n_u, dtype=np.int64)
+    fofo_hi = np.empty(n_u, dtype=np.int64)
+    fofo_g = np.empty(n_u)
+    k = 0
+    searches = 0
+    for r in range(len(solo_b)):
+        l_b = solo_b[r]
+        n_fofo = 0
+        for u in range(n_u):
+            d_a = group_dest[u]
+            d_ba = from_b[r, d_a]
+            d_ab = to_b[r, d_a]
+            f_ok = group_d_oa[u] + d_ab - l_b <= d_lim
+            g_f = l_b - group_d_oa[u] - d_ab
+            g_l = -d_ba
+            thr_l = d_lim - l_b - d_ba
+            if min_feasible:
+                folo_pref = g_l > g_f                     # L_FOLO < L_FOFO (tie -> FOFO)
+                take_l = not f_ok or folo_pref
+                take_f = f_ok
+            else:
+                take_l = not g_f >= g_l
+                take_f = not take_l and f_ok
+                folo_pref = False
+            if take_l:
+                cut_l = np.inf if keep_nonpositive else np.nextafter(g_l, -np.inf)
+                hi, s = count_at_most(a, start[u], size[u], _minimum(thr_l, cut_l))
+                searches += s
+                if hi > 0:
+                    if k == capacity:
+                        return -1, 0
+                    row[k], first[k], length[k], piece_g[k] = r, start[u], hi, g_l
+                    shared[k], detour[k] = np.float32(l_b), np.float32(0.0)
+                    k += 1
+            if take_f:
+                lo = 0
+                if folo_pref:                             # FOLO's feasible classes are taken by FOLO
+                    lo, s = count_at_most(a, start[u], size[u], thr_l)
+                    searches += s
+                cut_f = np.inf if keep_nonpositive else np.nextafter(g_f, -np.inf)
+                hi, s = count_at_most(a, start[u], size[u], cut_f)
+                searches += s
+                if hi > lo:
+                    fofo_u[n_fofo], fofo_lo[n_fofo], fofo_hi[n_fofo], fofo_g[n_fofo] = u, lo, hi, g_f
+                    n_fofo += 1
+        if k + n_fofo > capacity:
+            return -1, 0
+        for j in range(n_fofo):
+            u = fofo_u[j]
+            row[k], first[k], length[k], piece_g[k] = r, start[u] + fofo_lo[j], fofo_hi[j] - fofo_lo[j], fofo_g[j]
+            shared[k], detour[k] = np.float32(group_d_oa[u]), np.float32(-fofo_g[j])
+            k += 1
+    return k, searches
 
 
 @njit(cache=True, nogil=True)

@@ -15,7 +15,7 @@ The chosen order is the feasible one with the smaller L (tie FOFO), or
 ``keep_nonpositive`` (A11).  Thresholds are inclusive with the 1e-9 m
 tolerance of :mod:`rpbench.geometry`.
 
-**Vectorisation** (never a loop per pair).  Seekers are processed per
+**Vectorisation** (never a loop per pair in Python).  Seekers are processed per
 origin node ``o``:
 
 1. *Spatial pruning* (independent of ``d_B``): the classes whose head lies
@@ -29,8 +29,9 @@ origin node ``o``:
    depend only on ``(d_A, d_B)``; FOLO is feasible iff ``a <= threshold`` and
    E > 0 iff ``a < g``.  A seeker's feasible pairs in a group are therefore
    at most two runs of the ``a``-sorted group, found by exact binary search
-   on integer ranks.  The work is O(seekers x groups x log), not
-   O(seekers x classes).
+   (the values are compared, never rounded) in one compiled pass over the
+   (seeker, group) cells, :func:`.kernels.feasible_runs`.  The work is
+   O(seekers x groups x log), not O(seekers x classes).
 3. The runs are expanded, their priorities computed, and the seekers'
    lists sorted together with one ``np.sort`` of packed 64-bit keys
    ``(seeker, priority, tie rank, FOLO flag)``.
@@ -412,52 +413,30 @@ class _Builder:
         g = _Group(cand[kept], a[kept], pk[kept], rest[kept], d_a[kept], row_o)
         stats["stage1_kept"] = g.n
         pieces = self._pieces(g, w0, w1)
-        stats["group_queries"] = g.queries
+        stats["group_queries"] = pieces.searches
         lens, columns = self._emit(g, w0, w1, pieces)
         table = (np.bincount(pieces.row, minlength=w1 - w0), pieces.shared, pieces.det)   # pieces are by row
         return _OriginLists(lens, columns, table, stats)
 
     # ------------------------------------------------------------------ stage 2
     def _pieces(self, g: "_Group", w0: int, w1: int) -> "_Pieces":
-        """Runs of feasible classes per (seeker, d_A group), grouped by seeker."""
-        cfg = self.config
+        """Runs of feasible classes per (seeker, d_A group, service order), grouped by seeker (compiled:
+        :func:`.kernels.feasible_runs`)."""
+        m, n_u = w1 - w0, len(g.dest)
         d_b = self.dest[w0:w1]
-        l_b = self.solo[w0:w1][:, None]
-        # Rows first, then columns: two plain takes are 2.5x faster than one np.ix_ gather here.
-        d_ba = self.dist.take(d_b, axis=0).take(g.dest, axis=1)       # l(d_B, d_A)   (m x U)
-        d_ab = self.dist_to.take(d_b, axis=0).take(g.dest, axis=1)    # l(d_A, d_B)   (m x U)
-        f_ok = (g.d_oa + d_ab - l_b <= self.d_lim).ravel()       # FOFO detour of B
-        g_f = (l_b - g.d_oa - d_ab).ravel()                      # E_FOFO = g_f - a
-        g_l = (-d_ba).ravel()                                    # E_FOLO = g_l - a
-        thr_l = (self.d_lim - l_b - d_ba).ravel()                # FOLO feasible <=> a <= thr_l
-        if cfg.keep_nonpositive:
-            cut_f = cut_l = np.full(len(g_f), np.inf)
-        else:                                                    # E > 0 <=> a < g <=> a <= nextafter(g, -inf)
-            cut_f, cut_l = np.nextafter(g_f, -np.inf), np.nextafter(g_l, -np.inf)
-        m, n_u = len(d_b), len(g.dest)
-        us = np.tile(np.arange(n_u, dtype=np.int64), m)
-        if cfg.order_rule == "min_feasible":
-            folo_pref = g_l > g_f                                # L_FOLO < L_FOFO (tie -> FOFO)
-            sel_l = np.flatnonzero(~f_ok | folo_pref)
-            sel_f = np.flatnonzero(f_ok)
-            # Where FOLO is preferred, its feasible classes (a <= thr_l) take FOLO; FOFO gets the rest.
-            lo_f = np.zeros(len(sel_f), dtype=np.int64)
-            both = sel_f[folo_pref[sel_f]]
-            lo_f[folo_pref[sel_f]] = g.count(us[both], thr_l[both])
-        else:                                                    # min_then_check: order first, then test it
-            fofo_first = g_f >= g_l
-            sel_l = np.flatnonzero(~fofo_first)
-            sel_f = np.flatnonzero(fofo_first & f_ok)
-            lo_f = np.zeros(len(sel_f), dtype=np.int64)
-        hi_l = g.count(us[sel_l], np.minimum(thr_l[sel_l], cut_l[sel_l]))
-        hi_f = g.count(us[sel_f], cut_f[sel_f])
-        pieces = _Pieces(
-            flat=np.concatenate([sel_l, sel_f]),
-            lo=np.concatenate([np.zeros(len(sel_l), dtype=np.int64), lo_f]),
-            hi=np.concatenate([hi_l, hi_f]),
-            folo=np.concatenate([np.ones(len(sel_l), dtype=np.int64), np.zeros(len(sel_f), dtype=np.int64)]),
-            n_u=n_u, g_f=g_f, g_l=g_l)
-        return pieces.nonempty(g, self.solo[w0:w1])
+        # The seekers' rows of l(d_B, .) and l(., d_B), copied once: contiguous reads, where gathers from
+        # the whole 122 MB matrices would miss the cache on nearly every cell.
+        from_b, to_b = self.dist.take(d_b, axis=0), self.dist_to.take(d_b, axis=0)
+        capacity = m * n_u + 64                 # about a third of the (seeker, group) cells hold a run here
+        while True:
+            out = _Pieces.empty(capacity)
+            k, searches = kernels.feasible_runs(
+                from_b, to_b, self.solo[w0:w1], g.dest, g.d_oa, g.a, g.start, g.size,
+                self.d_lim, self.config.keep_nonpositive, self.config.order_rule == "min_feasible",
+                out.row, out.start, out.n, out.g, out.shared, out.det)
+            if k >= 0:
+                return out.head(k, searches)
+            capacity = 2 * m * n_u                # at most two runs (FOLO, FOFO) per cell
 
     def _emit(self, g: "_Group", w0: int, w1: int, pc: "_Pieces") -> tuple[np.ndarray, tuple[np.ndarray, ...]]:
         """Pairs per seeker and the sorted columns: pieces expanded, prioritised and sorted a batch at a time."""
@@ -518,47 +497,33 @@ class _Builder:
         piece_out[:] = piece - first_of_row
 
 
-@dataclass(eq=False)
+@dataclass(frozen=True, eq=False)
 class _Pieces:
-    """Runs ``[start, start + n)`` of survivors, one per (seeker row, group, service order)."""
+    """Runs ``[start, start + n)`` of survivors, one per (seeker row, group, service order), sorted by row."""
 
-    flat: np.ndarray     # row * n_u + group
-    lo: np.ndarray       # run start within the group
-    hi: np.ndarray       # run end within the group
-    folo: np.ndarray     # 1 = FOLO, 0 = FOFO
-    n_u: int
-    g_f: np.ndarray      # per (row, group): E_FOFO + a
-    g_l: np.ndarray      # per (row, group): E_FOLO + a
-    row: np.ndarray = None       # seeker row of each run (runs sorted by row)
-    start: np.ndarray = None     # first survivor of the run
-    n: np.ndarray = None         # run length
-    g: np.ndarray = None         # E + a on the run (float64)
-    shared: np.ndarray = None    # shared distance on the run (float32)
-    det: np.ndarray = None       # seeker detour on the run (float32)
+    row: np.ndarray      # seeker row of each run
+    start: np.ndarray    # first survivor of the run
+    n: np.ndarray        # run length
+    g: np.ndarray        # E + a on the run (float64)
+    shared: np.ndarray   # shared distance on the run (float32)
+    det: np.ndarray      # seeker detour on the run (float32)
+    searches: int = 0    # binary searches the runs took
 
-    def nonempty(self, grp: "_Group", solo: np.ndarray) -> "_Pieces":
-        keep = np.flatnonzero(self.hi > self.lo)
-        flat, folo = self.flat[keep], self.folo[keep]
-        row = flat // self.n_u
-        # Group the runs by seeker row (radix sort on small ints is linear).
-        order = np.argsort(row.astype(np.int32 if row.size and row.max() > 32767 else np.int16), kind="stable")
-        keep, flat, folo, row = keep[order], flat[order], folo[order], row[order]
-        self.flat, self.folo, self.row = flat, folo, row
-        u = flat % self.n_u
-        self.start = grp.start[u] + self.lo[keep]
-        self.n = self.hi[keep] - self.lo[keep]
-        is_folo = folo.astype(bool)
-        g_f = self.g_f[flat]
-        self.g = np.where(is_folo, self.g_l[flat], g_f)
-        # FOLO: B rides alone to d_B, shared = l_B, detour_B = 0; FOFO: shared = l(o,d_A), detour_B = -g_f.
-        self.shared = np.where(is_folo, solo[row], grp.d_oa[u]).astype(np.float32)
-        self.det = np.where(is_folo, 0.0, -g_f).astype(np.float32)
-        return self
+    @classmethod
+    def empty(cls, capacity: int) -> "_Pieces":
+        return cls(row=np.empty(capacity, dtype=np.int64), start=np.empty(capacity, dtype=np.int64),
+                   n=np.empty(capacity, dtype=np.int64), g=np.empty(capacity),
+                   shared=np.empty(capacity, dtype=np.float32), det=np.empty(capacity, dtype=np.float32))
+
+    def head(self, k: int, searches: int) -> "_Pieces":
+        """The first ``k`` runs (copies: the rest of the buffers is freed)."""
+        return _Pieces(row=self.row[:k].copy(), start=self.start[:k].copy(), n=self.n[:k].copy(),
+                       g=self.g[:k].copy(), shared=self.shared[:k].copy(), det=self.det[:k].copy(), searches=searches)
 
 
 class _Group:
-    """Stage-1 survivors of one origin, sorted by (d_A, a) (so each group's a ascend), with exact per-group
-    counting."""
+    """Stage-1 survivors of one origin, sorted by (d_A, a): each destination group's ``a`` ascend, so
+    :func:`.kernels.feasible_runs` counts a group's feasible classes exactly by binary search."""
 
     def __init__(self, cls, a, pk, rest, dest, row_o):
         n = len(a)
@@ -595,13 +560,6 @@ class _Group:
         self.tie_bits = max(1, int(n).bit_length())
         row_bits = 64 - Q_BITS - self.tie_bits
         self.rows_per_sort = 1 << row_bits if row_bits >= 1 else 1   # 1: _priority_order uses lexsort
-        self.queries = 0
-
-    def count(self, u: np.ndarray, threshold: np.ndarray) -> np.ndarray:
-        """Number of classes of group ``u`` with ``a <= threshold`` (exact; compiled)."""
-        out = np.empty(len(u), dtype=np.int64)
-        self.queries += kernels.count_at_most(self.a, self.start, self.size, u, threshold, out)
-        return out
 
 
 def _priority(kind: str, e, pk, shared, seeker_detour, rest, l_b) -> np.ndarray:

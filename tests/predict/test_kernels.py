@@ -92,7 +92,7 @@ def test_model_sweep_on_a_real_matching_equals_the_reference():
 @pytest.mark.parametrize("seed", range(6))
 def test_group_counts_equal_a_brute_force_count(seed):
     """``count_at_most``: per (group, threshold) the number of the group's values <= threshold, with ties,
-    thresholds on, between and outside the values, infinities and NaN; and how many needed a search."""
+    thresholds on, between and outside the values, infinities and NaN; and whether it needed a search."""
     from rpbench.predict.kernels import count_at_most
 
     rng = np.random.default_rng(seed)
@@ -104,9 +104,75 @@ def test_group_counts_equal_a_brute_force_count(seed):
     threshold[::37] = np.inf
     threshold[5::37] = -np.inf
     threshold[9::37] = np.nan
-    out = np.empty(len(u), dtype=np.int64)
-    searched = count_at_most(a, start, sizes.astype(np.int64), u, threshold, out)
+    got = [count_at_most(a, start[g], sizes[g], t) for g, t in zip(u, threshold)]
     values = [a[start[g]:start[g] + sizes[g]] for g in u]
-    want = [int(np.sum(v <= t)) for v, t in zip(values, threshold)]
-    assert out.tolist() == want
-    assert searched == sum(bool(v[0] <= t < v[-1]) for v, t in zip(values, threshold))
+    assert [k for k, _ in got] == [int(np.sum(v <= t)) for v, t in zip(values, threshold)]
+    assert [s for _, s in got] == [int(v[0] <= t < v[-1]) for v, t in zip(values, threshold)]
+
+
+def reference_runs(from_b, to_b, solo_b, group_dest, group_d_oa, a, start, size, d_lim, keep_nonpositive,
+                   min_feasible):
+    """The runs of :func:`feasible_runs` cell by cell, counting by comparison (no binary search)."""
+    runs = []
+    for r, l_b in enumerate(solo_b):
+        fofo = []
+        for u, d_a in enumerate(group_dest):
+            values = a[start[u]:start[u] + size[u]]
+            d_ba, d_ab, d_oa = from_b[r, d_a], to_b[r, d_a], group_d_oa[u]
+            f_ok = d_oa + d_ab - l_b <= d_lim
+            g_f, g_l, thr_l = l_b - d_oa - d_ab, -d_ba, d_lim - l_b - d_ba
+            if min_feasible:
+                take_l, take_f, folo_pref = (not f_ok) or g_l > g_f, f_ok, g_l > g_f
+            else:
+                take_l = not g_f >= g_l
+                take_f, folo_pref = (not take_l) and f_ok, False
+
+            def count(t):
+                return int(np.sum(values <= t))
+
+            if take_l:
+                hi = count(np.minimum(thr_l, np.inf if keep_nonpositive else np.nextafter(g_l, -np.inf)))
+                if hi:
+                    runs.append((r, start[u], hi, g_l, np.float32(l_b), np.float32(0.0)))
+            if take_f:
+                lo = count(thr_l) if folo_pref else 0
+                hi = count(np.inf if keep_nonpositive else np.nextafter(g_f, -np.inf))
+                if hi > lo:
+                    fofo.append((r, start[u] + lo, hi - lo, g_f, np.float32(d_oa), np.float32(-g_f)))
+        runs += fofo
+    return runs
+
+
+@pytest.mark.parametrize("seed", range(8))
+@pytest.mark.parametrize("keep_nonpositive", [False, True])
+@pytest.mark.parametrize("min_feasible", [True, False])
+def test_feasible_runs_equal_a_cell_by_cell_reference(seed, keep_nonpositive, min_feasible):
+    """``feasible_runs`` against the cell-by-cell reference: the same runs in the same order (row; FOLO
+    then FOFO; group), on coarse distances with ties, thresholds exactly met and unreachable nodes (inf),
+    and outputs too short (it asks for longer ones)."""
+    from rpbench.predict.kernels import feasible_runs
+
+    rng = np.random.default_rng(seed)
+    n_nodes, m, n_u = 9, 5, 6
+    dist = rng.integers(0, 8, (n_nodes, n_nodes)).astype(np.float64)
+    dist[rng.random(dist.shape) < 0.05] = np.inf
+    d_b = rng.integers(0, n_nodes, m)
+    from_b, to_b = dist[d_b], np.ascontiguousarray(dist.T)[d_b]
+    solo_b = rng.integers(1, 9, m).astype(np.float64)
+    group_dest = np.sort(rng.choice(n_nodes, n_u, replace=False)).astype(np.int64)
+    group_d_oa = rng.integers(0, 8, n_u).astype(np.float64)
+    size = rng.integers(1, 7, n_u).astype(np.int64)
+    start = np.concatenate([[0], np.cumsum(size)[:-1]]).astype(np.int64)
+    a = np.concatenate([np.sort(rng.integers(-9, 3, k).astype(np.float64)) for k in size])
+    d_lim = 4.0
+    args = (from_b, to_b, solo_b, group_dest, group_d_oa, a, start, size, d_lim, keep_nonpositive, min_feasible)
+    want = reference_runs(*args)
+    assert want, "the instance should have runs"
+    short = [np.empty(len(want) - 1, dtype=t) for t in (np.int64, np.int64, np.int64, np.float64, np.float32,
+                                                         np.float32)]
+    assert feasible_runs(*args, *short) == (-1, 0)
+    out = [np.empty(2 * m * n_u, dtype=t) for t in (np.int64, np.int64, np.int64, np.float64, np.float32,
+                                                    np.float32)]
+    k, _ = feasible_runs(*args, *out)
+    got = list(zip(*(col[:k].tolist() for col in out)))
+    assert got == [tuple(float(x) if i >= 3 else int(x) for i, x in enumerate(run)) for run in want]
