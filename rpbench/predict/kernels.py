@@ -36,6 +36,7 @@ from numba import njit
 #: makes a row's address a shift of the class number, where a 2-D array's stride would cost a multiply.
 SWEEP_ROW = np.uint64(4)        # Q, log Q, the block's H sum, padding: two rows per 64-byte cache line
 SAVINGS_ROW = np.uint64(8)      # Q, log Q, 1 - Q, four class sums, padding: one row per cache line
+RANK_ROW = np.uint64(4)         # a survivor's a, class, piece scratch, padding (``match_sets._Group.by_rank``)
 _ONE = np.uint64(1)
 
 
@@ -363,13 +364,14 @@ def decode_entries(keys, tie_bits, rows, start, n, piece_g, tie_rank, by_rank, c
     """Write the sorted entries' columns from their keys: class, E and the piece within its row.
 
     A key's low ``tie_bits`` bits are its survivor's tie rank r; ``by_rank[r]``
-    holds that survivor's ``(a, class)`` and, as scratch, the piece it lies in
+    (C-contiguous, :data:`RANK_ROW` columns) holds that survivor's ``(a, class)`` and, as scratch, the piece it lies in
     for the row being decoded (the pieces come grouped by row, and the sorted
     keys of row r occupy the same span as r's pieces' entries; within a row
     each survivor belongs to one piece).  One table indexed by rank means one
     random access per entry, to a line the row's scratch pass just touched.
     """
     mask = (np.uint64(1) << np.uint64(tie_bits)) - np.uint64(1)
+    table = by_rank.reshape(-1)      # a view, flat: a row's address is a shift of its rank
     e = 0
     j = 0
     m = len(n)
@@ -378,14 +380,14 @@ def decode_entries(keys, tie_bits, rows, start, n, piece_g, tie_rank, by_rank, c
         count = 0
         while j1 < m and rows[j1] == rows[j]:
             for col in range(start[j1], start[j1] + n[j1]):
-                by_rank[tie_rank[col], 2] = j1
+                table[np.uint64(tie_rank[col]) * RANK_ROW + np.uint64(2)] = j1
             count += n[j1]
             j1 += 1
         for i in range(e, e + count):
-            r = np.int64(keys[i] & mask)
-            p = np.int64(by_rank[r, 2])
-            cls_out[i] = np.int32(by_rank[r, 1])
-            saving_out[i] = piece_g[p] - by_rank[r, 0]
+            r = (keys[i] & mask) * RANK_ROW
+            p = np.int64(table[r + np.uint64(2)])
+            cls_out[i] = np.int32(table[r + _ONE])
+            saving_out[i] = piece_g[p] - table[r]
             piece_out[i] = p - j
         e += count
         j = j1

@@ -554,7 +554,7 @@ class _Group:
         self.tie_rank[tie] = np.arange(n)
         # Per tie rank: the survivor's (a, class, piece scratch) in one row, for decoding sorted keys
         # (classes < 2^31 and pieces are exact in float64).
-        self.by_rank = np.empty((n, 3))
+        self.by_rank = np.empty((n, int(kernels.RANK_ROW)))
         self.by_rank[:, 0] = self.a[tie]
         self.by_rank[:, 1] = self.cls[tie]
         self.tie_bits = max(1, int(n).bit_length())
