@@ -254,10 +254,11 @@ def feasible_runs(from_b, to_b, solo_b, group_dest, group_d_oa, a, start, size, 
                   min_feasible, row, first, length, piece_g, shared, detour):  # pragma: no cover - compiled
     """The pieces of one origin's seekers (``match_sets`` stage 2): ``(pieces written, searches)``.
 
-    For seeker row r (destination ``dest_b[r]``, solo length ``solo_b[r]``)
-    and destination group u (``group_dest[u]``, ``l(o, d_A) = group_d_oa[u]``,
-    ascending ``a`` values ``a[start[u]:start[u] + size[u]]``), with
-    ``l(d_B, d_A)`` and ``l(d_A, d_B)`` read from row d_B of ``dist`` and of its transpose ``dist_to``::
+    For seeker row r (solo length ``solo_b[r]``; ``from_b[r]`` and ``to_b[r]``
+    are the distances from and to its destination d_B, rows of the all-pairs
+    matrix and of its transpose) and destination group u (``group_dest[u]``,
+    ``l(o, d_A) = group_d_oa[u]``, ascending ``a`` values
+    ``a[start[u]:start[u] + size[u]]``)::
 
         FOFO feasible for B  <=>  l(o,d_A) + l(d_A,d_B) - l_B <= D̄
         E_FOFO = g_f - a,  g_f = l_B - l(o,d_A) - l(d_A,d_B)

@@ -34,7 +34,7 @@ origin node ``o``:
    O(seekers x groups x log), not O(seekers x classes).
 3. The runs are expanded, their priorities computed, and the seekers'
    lists sorted together with one ``np.sort`` of packed 64-bit keys
-   ``(seeker, priority, tie rank, FOLO flag)``.
+   ``(seeker, priority, tie rank)``.
 
 **Priority and ties** (§2.4, A7).  Default ``net_saving``: descending
 ``E - pk`` (the seed's myopic V1 utility, Eq. 7).  Priorities are compared on
@@ -559,7 +559,7 @@ class _Group:
         self.by_rank[:, 1] = self.cls[tie]
         self.tie_bits = max(1, int(n).bit_length())
         row_bits = 64 - Q_BITS - self.tie_bits
-        self.rows_per_sort = 1 << row_bits if row_bits >= 1 else 1   # 1: _priority_order uses lexsort
+        self.rows_per_sort = 1 << row_bits if row_bits >= 1 else 1   # 1: _sorted_entries falls back to lexsort
 
 
 def _priority(kind: str, e, pk, shared, seeker_detour, rest, l_b) -> np.ndarray:
