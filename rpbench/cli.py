@@ -24,14 +24,27 @@ from rpbench import __version__
 from rpbench.exceptions import RpbenchError
 
 #: Subcommand modules, in the order ``rpbench --help`` lists them.
-COMMANDS = ("run", "check", "oracle", "predict", "snapshot", "bench", "sweep", "report", "publish", "scenario",
-            "list", "data", "replicate")
+COMMANDS = (
+    "run",
+    "check",
+    "oracle",
+    "predict",
+    "snapshot",
+    "bench",
+    "sweep",
+    "report",
+    "publish",
+    "scenario",
+    "list",
+    "data",
+    "replicate",
+)
 
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
-        prog="rpbench",
-        description="Benchmark suite for dynamic ride-pooling dispatch on the Haikou road network.")
+        prog="rpbench", description="Benchmark suite for dynamic ride-pooling dispatch on the Haikou road network."
+    )
     parser.add_argument("--version", action="version", version=f"rpbench {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in COMMANDS:
@@ -92,7 +105,7 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_TERMINATED
     except BrokenPipeError:
         return 0
-    except OSError as exc:     # a file-system error no command turned into an RpbenchError: still one line
+    except OSError as exc:  # a file-system error no command turned into an RpbenchError: still one line
         print(f"rpbench: error: {os_error_line(exc)}", file=sys.stderr)
         return 2
 

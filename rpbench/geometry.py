@@ -36,13 +36,13 @@ ORDER_RULES = ("min_feasible", "min_then_check")
 class PairGeometry:
     """Both service orders of a batch of (A, B) pairs; every field is an array."""
 
-    p: np.ndarray          # l(h, o_B)
-    pk: np.ndarray         # pre + p, the pick-up distance of B
+    p: np.ndarray  # l(h, o_B)
+    pk: np.ndarray  # pre + p, the pick-up distance of B
     fofo_length: np.ndarray
     folo_length: np.ndarray
-    fofo_ok: np.ndarray    # both detours within D̄ in FOFO
+    fofo_ok: np.ndarray  # both detours within D̄ in FOFO
     folo_ok: np.ndarray
-    l_oB_dA: np.ndarray    # shared distance of FOFO
+    l_oB_dA: np.ndarray  # shared distance of FOFO
     l_dA_dB: np.ndarray
     delta: np.ndarray
     l_a: np.ndarray
@@ -53,20 +53,19 @@ class PairGeometry:
 class PoolResult:
     """The chosen service order of each pair (arrays; undefined where not ``feasible``)."""
 
-    feasible: np.ndarray   # bool
-    fofo: np.ndarray       # bool: True = A dropped first
-    length: np.ndarray     # L of the chosen order (from A's origin)
+    feasible: np.ndarray  # bool
+    fofo: np.ndarray  # bool: True = A dropped first
+    length: np.ndarray  # L of the chosen order (from A's origin)
     ride_a: np.ndarray
     ride_b: np.ndarray
     shared: np.ndarray
     detour_a: np.ndarray
     detour_b: np.ndarray
     pk: np.ndarray
-    saving: np.ndarray     # e(A, B) = l_A + l_B - L
+    saving: np.ndarray  # e(A, B) = l_A + l_B - L
 
 
-def pair_geometry(dist: np.ndarray, o_a, d_a, l_a, o_b, d_b, l_b, h, delta, pre,
-                  max_detour_m: float) -> PairGeometry:
+def pair_geometry(dist: np.ndarray, o_a, d_a, l_a, o_b, d_b, l_b, h, delta, pre, max_detour_m: float) -> PairGeometry:
     """Distances and detour feasibility of both service orders."""
     o_a, d_a, o_b, d_b, h = (np.asarray(x, dtype=np.intp) for x in (o_a, d_a, o_b, d_b, h))
     l_a, l_b, delta, pre = (np.asarray(x, dtype=np.float64) for x in (l_a, l_b, delta, pre))
@@ -79,9 +78,20 @@ def pair_geometry(dist: np.ndarray, o_a, d_a, l_a, o_b, d_b, l_b, h, delta, pre,
     folo_length = head + l_b + l_dB_dA
     lim = max_detour_m + TOLERANCE_M
     fofo_ok = (head + l_oB_dA - l_a <= lim) & (l_oB_dA + l_dA_dB - l_b <= lim)
-    folo_ok = folo_length - l_a <= lim          # B rides solo in FOLO: detour_B = 0
-    return PairGeometry(p=p, pk=pre + p, fofo_length=fofo_length, folo_length=folo_length, fofo_ok=fofo_ok,
-                        folo_ok=folo_ok, l_oB_dA=l_oB_dA, l_dA_dB=l_dA_dB, delta=delta, l_a=l_a, l_b=l_b)
+    folo_ok = folo_length - l_a <= lim  # B rides solo in FOLO: detour_B = 0
+    return PairGeometry(
+        p=p,
+        pk=pre + p,
+        fofo_length=fofo_length,
+        folo_length=folo_length,
+        fofo_ok=fofo_ok,
+        folo_ok=folo_ok,
+        l_oB_dA=l_oB_dA,
+        l_dA_dB=l_dA_dB,
+        delta=delta,
+        l_a=l_a,
+        l_b=l_b,
+    )
 
 
 def choose_order(g: PairGeometry, max_pickup_m: float, order_rule: str = "min_feasible") -> PoolResult:
@@ -99,13 +109,34 @@ def choose_order(g: PairGeometry, max_pickup_m: float, order_rule: str = "min_fe
     ride_a = np.where(fofo, g.delta + g.p + g.l_oB_dA, length)
     ride_b = np.where(fofo, g.l_oB_dA + g.l_dA_dB, g.l_b)
     shared = np.where(fofo, g.l_oB_dA, g.l_b)
-    return PoolResult(feasible=feasible, fofo=fofo, length=length, ride_a=ride_a, ride_b=ride_b, shared=shared,
-                      detour_a=ride_a - g.l_a, detour_b=ride_b - g.l_b, pk=g.pk,
-                      saving=g.l_a + g.l_b - length)
+    return PoolResult(
+        feasible=feasible,
+        fofo=fofo,
+        length=length,
+        ride_a=ride_a,
+        ride_b=ride_b,
+        shared=shared,
+        detour_a=ride_a - g.l_a,
+        detour_b=ride_b - g.l_b,
+        pk=g.pk,
+        saving=g.l_a + g.l_b - length,
+    )
 
 
-def pool(dist: np.ndarray, o_a, d_a, o_b, d_b, *, h=None, delta=0.0, pre=0.0, max_pickup_m: float,
-         max_detour_m: float, order_rule: str = "min_feasible") -> PoolResult:
+def pool(
+    dist: np.ndarray,
+    o_a,
+    d_a,
+    o_b,
+    d_b,
+    *,
+    h=None,
+    delta=0.0,
+    pre=0.0,
+    max_pickup_m: float,
+    max_detour_m: float,
+    order_rule: str = "min_feasible",
+) -> PoolResult:
     """POOL(A, B, h, δ, pre) for arrays of pairs; ``h`` defaults to ``o_A`` (δ = 0)."""
     o_a = np.asarray(o_a, dtype=np.intp)
     d_a = np.asarray(d_a, dtype=np.intp)

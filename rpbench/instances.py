@@ -40,8 +40,17 @@ MAX_ROWS = 10_000_000
 #: Largest total of (uncompressed) array bytes in one instance file.
 MAX_ARRAY_BYTES = 4 << 30
 #: What reading a truncated, corrupt or foreign file raises (zip, zlib, .npy header, pickle, short data).
-_READ_ERRORS = (OSError, EOFError, ValueError, KeyError, TypeError, zipfile.BadZipFile, zlib.error,
-                pickle.UnpicklingError, NotImplementedError)
+_READ_ERRORS = (
+    OSError,
+    EOFError,
+    ValueError,
+    KeyError,
+    TypeError,
+    zipfile.BadZipFile,
+    zlib.error,
+    pickle.UnpicklingError,
+    NotImplementedError,
+)
 _HEADER_READERS = {(1, 0): np.lib.format.read_array_header_1_0, (2, 0): np.lib.format.read_array_header_2_0}
 _FIELDS = {
     Structure.ASSIGNMENT: ("n_passengers", "n_vehicles", "col_passenger", "col_vehicle"),
@@ -55,9 +64,14 @@ def save_instance(path: str | Path, model, meta: dict[str, Any] | None = None) -
     path = Path(path)
     if path.suffix != ".npz":
         path = path.with_suffix(path.suffix + ".npz") if path.suffix else path.with_suffix(".npz")
-    arrays: dict[str, Any] = {"format": np.array(FORMAT), "structure": np.array(model.structure.value),
-                              "values": model.values, "unit_m": np.array(model.unit_m),
-                              "name": np.array(model.name), "meta_json": np.array(json.dumps(meta or {}))}
+    arrays: dict[str, Any] = {
+        "format": np.array(FORMAT),
+        "structure": np.array(model.structure.value),
+        "values": model.values,
+        "unit_m": np.array(model.unit_m),
+        "name": np.array(model.name),
+        "meta_json": np.array(json.dumps(meta or {})),
+    }
     for f in _FIELDS[model.structure]:
         arrays[f] = np.asarray(getattr(model, f))
     if model.structure == Structure.PAIRING:
@@ -82,8 +96,10 @@ def load_instance(path: str | Path):
         raise ResultsError(f"snapshot file {str(path)!r} does not exist")
     data = _read_arrays(path)
     if str(data.get("format", "")) != FORMAT:
-        raise ResultsError(f"snapshot file {str(path)!r} is not an rpbench instance (format "
-                           f"{str(data.get('format', 'missing'))!r}, expected {FORMAT!r})")
+        raise ResultsError(
+            f"snapshot file {str(path)!r} is not an rpbench instance (format "
+            f"{str(data.get('format', 'missing'))!r}, expected {FORMAT!r})"
+        )
     try:
         structure = Structure(str(data["structure"]))
         missing = [f for f in ("values", "unit_m", "name", *_FIELDS[structure]) if f not in data]
@@ -92,14 +108,33 @@ def load_instance(path: str | Path):
         _check_declared_sizes(data, structure)
         common = dict(unit_m=float(data["unit_m"]), name=str(data["name"]))
         if structure == Structure.ASSIGNMENT:
-            model = AssignmentModel(int(data["n_passengers"]), int(data["n_vehicles"]), data["col_passenger"],
-                                    data["col_vehicle"], data["values"], **common)
+            model = AssignmentModel(
+                int(data["n_passengers"]),
+                int(data["n_vehicles"]),
+                data["col_passenger"],
+                data["col_vehicle"],
+                data["values"],
+                **common,
+            )
         elif structure == Structure.TRIP_PACKING:
-            model = TripPackingModel(int(data["n_requests"]), int(data["n_vehicles"]), data["col_vehicle"],
-                                     data["col_request1"], data["col_request2"], data["values"], **common)
+            model = TripPackingModel(
+                int(data["n_requests"]),
+                int(data["n_vehicles"]),
+                data["col_vehicle"],
+                data["col_request1"],
+                data["col_request2"],
+                data["values"],
+                **common,
+            )
         else:
-            model = PairingModel(int(data["n_orders"]), data["col_a"], data["col_b"], data["values"],
-                                 objective=str(data.get("objective", "weight")), **common)
+            model = PairingModel(
+                int(data["n_orders"]),
+                data["col_a"],
+                data["col_b"],
+                data["values"],
+                objective=str(data.get("objective", "weight")),
+                **common,
+            )
         meta = json.loads(str(data.get("meta_json", "{}")))
         if not isinstance(meta, dict):
             raise ValueError("meta_json is not a JSON object")
@@ -118,8 +153,9 @@ def _read_arrays(path: Path) -> dict[str, np.ndarray]:
     except ResultsError:
         raise
     except _READ_ERRORS as exc:
-        raise ResultsError(f"snapshot file {str(path)!r} is corrupt or not an rpbench instance: "
-                           f"{one_line(exc)}") from None
+        raise ResultsError(
+            f"snapshot file {str(path)!r} is corrupt or not an rpbench instance: {one_line(exc)}"
+        ) from None
 
 
 def _check_members(path: Path) -> None:
@@ -134,8 +170,10 @@ def _check_members(path: Path) -> None:
         for info in zf.infolist():
             total += info.file_size
             if total > MAX_ARRAY_BYTES:
-                raise ResultsError(f"snapshot file {str(path)!r} declares more than {MAX_ARRAY_BYTES:,} bytes "
-                                   "of arrays; not an instance rpbench wrote")
+                raise ResultsError(
+                    f"snapshot file {str(path)!r} declares more than {MAX_ARRAY_BYTES:,} bytes "
+                    "of arrays; not an instance rpbench wrote"
+                )
             with zf.open(info) as fh:
                 version = np.lib.format.read_magic(fh)
                 if version not in _HEADER_READERS:
@@ -145,8 +183,10 @@ def _check_members(path: Path) -> None:
                     raise ValueError(f"array {info.filename!r} holds Python objects")
                 declared = fh.tell() + math.prod(shape) * dtype.itemsize
             if declared != info.file_size:
-                raise ValueError(f"array {info.filename!r} declares shape {shape} of {dtype} "
-                                 f"({declared:,} bytes) but holds {info.file_size:,} bytes")
+                raise ValueError(
+                    f"array {info.filename!r} declares shape {shape} of {dtype} "
+                    f"({declared:,} bytes) but holds {info.file_size:,} bytes"
+                )
 
 
 def _check_declared_sizes(data: dict[str, np.ndarray], structure: Structure) -> None:
@@ -162,8 +202,10 @@ def _check_declared_sizes(data: dict[str, np.ndarray], structure: Structure) -> 
             _check_column(name, data[name], n_cols)
     # Every passenger needs at least its keep-waiting column: more passengers than columns is a lie.
     if structure == Structure.ASSIGNMENT and int(data["n_passengers"]) > n_cols:
-        raise ValueError(f"n_passengers = {int(data['n_passengers'])} exceeds the {n_cols} columns; "
-                         "every passenger has at least one column")
+        raise ValueError(
+            f"n_passengers = {int(data['n_passengers'])} exceeds the {n_cols} columns; "
+            "every passenger has at least one column"
+        )
 
 
 def _check_count(name: str, arr: np.ndarray) -> None:
@@ -203,7 +245,7 @@ def load_instances(paths: list[str | Path]) -> tuple[list, dict[str, float]]:
     tells them apart.  The second value maps a model name to the objective
     recorded in its metadata when the run's solver proved it optimal.
     """
-    files = list(dict.fromkeys(find_instances(paths)))          # a file named twice is solved once
+    files = list(dict.fromkeys(find_instances(paths)))  # a file named twice is solved once
     stems = [f.stem for f in files]
     models, recorded, used = [], {}, set()
     for f, stem in zip(files, stems):

@@ -41,7 +41,7 @@ import scipy.sparse as sp
 from rpbench.exceptions import ModelError
 
 #: Sums of |values| must stay exactly representable in float64 (2**53).
-MAX_EXACT_TOTAL = float(2 ** 53)
+MAX_EXACT_TOTAL = float(2**53)
 
 
 class Structure(str, enum.Enum):
@@ -51,9 +51,9 @@ class Structure(str, enum.Enum):
 
 
 class Status(str, enum.Enum):
-    OPTIMAL = "optimal"            # proven optimal
-    FEASIBLE = "feasible"          # feasible, stopped with a gap (gap/bound say how far)
-    TIME_LIMIT = "time_limit"      # stopped by the time limit; the incumbent is returned
+    OPTIMAL = "optimal"  # proven optimal
+    FEASIBLE = "feasible"  # feasible, stopped with a gap (gap/bound say how far)
+    TIME_LIMIT = "time_limit"  # stopped by the time limit; the incumbent is returned
     INFEASIBLE = "infeasible"
     ERROR = "error"
 
@@ -71,7 +71,7 @@ def _distinct_rows(table: np.ndarray) -> bool:
     could overflow int64 are compared row-wise.
     """
     radix = table.max(axis=0, initial=-1) + 2
-    if np.prod(radix.astype(np.float64)) >= 2.0 ** 62:
+    if np.prod(radix.astype(np.float64)) >= 2.0**62:
         return len(np.unique(table, axis=0)) == len(table)
     key = np.zeros(len(table), dtype=np.int64)
     for col, base in zip(table.T, radix):
@@ -146,8 +146,10 @@ class _Model:
             raise ModelError(f"model {self.name!r}: value of column {bad} is {float(v[bad])!r}; values must be finite")
         if not np.all(v == np.round(v)):
             bad = int(np.flatnonzero(v != np.round(v))[0])
-            raise ModelError(f"model {self.name!r}: value of column {bad} is {float(v[bad])!r}; values must be whole "
-                             f"multiples of unit_m={self.unit_m} (use rpbench.model.quantize)")
+            raise ModelError(
+                f"model {self.name!r}: value of column {bad} is {float(v[bad])!r}; values must be whole "
+                f"multiples of unit_m={self.unit_m} (use rpbench.model.quantize)"
+            )
         if np.abs(v).sum() > MAX_EXACT_TOTAL:
             raise ModelError(f"model {self.name!r}: values too large for exact float64 sums; use a coarser unit_m")
         if not (self.unit_m > 0 and np.isfinite(self.unit_m)):
@@ -160,8 +162,7 @@ class _Model:
         bad = (arr < lo) | (arr >= upper)
         if bad.any():
             c = int(np.flatnonzero(bad)[0])
-            raise ModelError(f"model {self.name!r}: column {c} has {what} {int(arr[c])}, outside "
-                             f"[{lo}, {upper - 1}]")
+            raise ModelError(f"model {self.name!r}: column {c} has {what} {int(arr[c])}, outside [{lo}, {upper - 1}]")
 
     def _check_unique(self, *keys: np.ndarray) -> None:
         if self.n_cols < 2:
@@ -216,8 +217,17 @@ class AssignmentModel(_Model):
     col_passenger: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int32))
     col_vehicle: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int32))
 
-    def __init__(self, n_passengers: int, n_vehicles: int, col_passenger, col_vehicle, values, *,
-                 unit_m: float = 1e-3, name: str = "assignment"):
+    def __init__(
+        self,
+        n_passengers: int,
+        n_vehicles: int,
+        col_passenger,
+        col_vehicle,
+        values,
+        *,
+        unit_m: float = 1e-3,
+        name: str = "assignment",
+    ):
         object.__setattr__(self, "n_passengers", int(n_passengers))
         object.__setattr__(self, "n_vehicles", int(n_vehicles))
         object.__setattr__(self, "col_passenger", np.asarray(col_passenger, dtype=np.int32))
@@ -238,8 +248,10 @@ class AssignmentModel(_Model):
         has_option[self.col_passenger] = True
         if not has_option.all():
             p = int(np.flatnonzero(~has_option)[0])
-            raise ModelError(f"model {self.name!r}: passenger {p} has no option at all; every passenger needs "
-                             "at least a keep-waiting column")
+            raise ModelError(
+                f"model {self.name!r}: passenger {p} has no option at all; every passenger needs "
+                "at least a keep-waiting column"
+            )
 
     @property
     def n_rows(self) -> int:
@@ -278,8 +290,18 @@ class TripPackingModel(_Model):
     col_request1: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int32))
     col_request2: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int32))
 
-    def __init__(self, n_requests: int, n_vehicles: int, col_vehicle, col_request1, col_request2, values, *,
-                 unit_m: float = 1e-3, name: str = "trip_packing"):
+    def __init__(
+        self,
+        n_requests: int,
+        n_vehicles: int,
+        col_vehicle,
+        col_request1,
+        col_request2,
+        values,
+        *,
+        unit_m: float = 1e-3,
+        name: str = "trip_packing",
+    ):
         object.__setattr__(self, "n_requests", int(n_requests))
         object.__setattr__(self, "n_vehicles", int(n_vehicles))
         object.__setattr__(self, "col_vehicle", np.asarray(col_vehicle, dtype=np.int32))
@@ -300,8 +322,10 @@ class TripPackingModel(_Model):
         pair = self.col_request2 >= 0
         if np.any(self.col_request1[pair] >= self.col_request2[pair]):
             c = int(np.flatnonzero(pair & (self.col_request1 >= self.col_request2))[0])
-            raise ModelError(f"model {self.name!r}: column {c} must list its requests in increasing order "
-                             f"(got {int(self.col_request1[c])}, {int(self.col_request2[c])})")
+            raise ModelError(
+                f"model {self.name!r}: column {c} must list its requests in increasing order "
+                f"(got {int(self.col_request1[c])}, {int(self.col_request2[c])})"
+            )
         self._check_unique(self.col_vehicle, self.col_request1, self.col_request2)
 
     @property
@@ -340,8 +364,17 @@ class PairingModel(_Model):
     col_b: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int32))
     objective: str = "weight"
 
-    def __init__(self, n_orders: int, col_a, col_b, values, *, objective: str = "weight",
-                 unit_m: float = 1e-3, name: str = "pairing"):
+    def __init__(
+        self,
+        n_orders: int,
+        col_a,
+        col_b,
+        values,
+        *,
+        objective: str = "weight",
+        unit_m: float = 1e-3,
+        name: str = "pairing",
+    ):
         object.__setattr__(self, "n_orders", int(n_orders))
         object.__setattr__(self, "col_a", np.asarray(col_a, dtype=np.int32))
         object.__setattr__(self, "col_b", np.asarray(col_b, dtype=np.int32))
@@ -355,15 +388,18 @@ class PairingModel(_Model):
         if self.n_orders < 0:
             raise ModelError(f"model {self.name!r}: negative number of orders")
         if self.objective not in OBJECTIVES:
-            raise ModelError(f"model {self.name!r}: objective {self.objective!r} unknown; expected one of "
-                             f"{', '.join(OBJECTIVES)}")
+            raise ModelError(
+                f"model {self.name!r}: objective {self.objective!r} unknown; expected one of {', '.join(OBJECTIVES)}"
+            )
         self._check_values()
         self._check_index(self.col_a, "first order", self.n_orders)
         self._check_index(self.col_b, "second order", self.n_orders)
         if np.any(self.col_a >= self.col_b):
             c = int(np.flatnonzero(self.col_a >= self.col_b)[0])
-            raise ModelError(f"model {self.name!r}: pair column {c} must satisfy a < b "
-                             f"(got {int(self.col_a[c])}, {int(self.col_b[c])})")
+            raise ModelError(
+                f"model {self.name!r}: pair column {c} must satisfy a < b "
+                f"(got {int(self.col_a[c])}, {int(self.col_b[c])})"
+            )
         self._check_unique(self.col_a, self.col_b)
 
     @property

@@ -51,13 +51,13 @@ class RoadNetwork:
     """
 
     name: str
-    node_id: np.ndarray          # int64 file ids; position = internal index
+    node_id: np.ndarray  # int64 file ids; position = internal index
     lon: np.ndarray
     lat: np.ndarray
-    arc_tail: np.ndarray         # int32 internal indices
+    arc_tail: np.ndarray  # int32 internal indices
     arc_head: np.ndarray
-    arc_length_m: np.ndarray     # float64
-    arc_link_id: np.ndarray      # int64 file link ids
+    arc_length_m: np.ndarray  # float64
+    arc_link_id: np.ndarray  # int64 file link ids
     source: str = ""
     _index: dict = field(default_factory=dict, repr=False, compare=False)
 
@@ -79,10 +79,17 @@ class RoadNetwork:
         first = np.ones(len(srt), dtype=bool)
         first[1:] = key[srt][1:] != key[srt][:-1]
         pick = srt[first]
-        net = cls(name=tables.name, node_id=node_id, lon=tables.lon[order].astype(float),
-                  lat=tables.lat[order].astype(float), arc_tail=tail[pick].astype(np.int32),
-                  arc_head=head[pick].astype(np.int32), arc_length_m=length[pick], arc_link_id=link[pick],
-                  source=tables.source)
+        net = cls(
+            name=tables.name,
+            node_id=node_id,
+            lon=tables.lon[order].astype(float),
+            lat=tables.lat[order].astype(float),
+            arc_tail=tail[pick].astype(np.int32),
+            arc_head=head[pick].astype(np.int32),
+            arc_length_m=length[pick],
+            arc_link_id=link[pick],
+            source=tables.source,
+        )
         net.check_strongly_connected()
         return net
 
@@ -90,9 +97,11 @@ class RoadNetwork:
         n_comp, labels = connected_components(self.csr, directed=True, connection="strong")
         if n_comp != 1:
             largest = int(np.bincount(labels).max())
-            raise DataError(f"road network {self.name!r} ({self.source}) is not strongly connected: "
-                            f"{n_comp} strong components, the largest holds {largest} of {self.n_nodes} nodes; "
-                            "every node must be reachable from every other")
+            raise DataError(
+                f"road network {self.name!r} ({self.source}) is not strongly connected: "
+                f"{n_comp} strong components, the largest holds {largest} of {self.n_nodes} nodes; "
+                "every node must be reachable from every other"
+            )
 
     # ------------------------------------------------------------ structure
     @property
@@ -139,8 +148,9 @@ class RoadNetwork:
         bad = self.node_id[pos] != ids
         if bad.any():
             first = int(ids[np.flatnonzero(bad)[0]])
-            raise DataError(f"{what} {first} is not a node of the {self.name!r} network "
-                            f"({int(bad.sum())} unknown id(s) in all)")
+            raise DataError(
+                f"{what} {first} is not a node of the {self.name!r} network ({int(bad.sum())} unknown id(s) in all)"
+            )
         return pos.astype(np.int32)
 
     @cached_property
@@ -167,8 +177,8 @@ class DistanceOracle:
     """All-pairs shortest distances ``dist[o, d]`` (m) and predecessors ``pred[o, d]``."""
 
     network: RoadNetwork
-    dist: np.ndarray     # float64 (n, n)
-    pred: np.ndarray     # int32 (n, n); pred[o, o] = -1
+    dist: np.ndarray  # float64 (n, n)
+    pred: np.ndarray  # int32 (n, n); pred[o, o] = -1
     build_s: float = 0.0
     from_cache: bool = False
 
@@ -200,8 +210,10 @@ class DistanceOracle:
         if arrays is not None:
             return cls(network, *arrays, build_s=time.perf_counter() - t0, from_cache=True)
         if problem:
-            print(f"rpbench: note: the cached all-pairs distances {files.stem.name}-* {problem}; rebuilding them",
-                  file=sys.stderr)
+            print(
+                f"rpbench: note: the cached all-pairs distances {files.stem.name}-* {problem}; rebuilding them",
+                file=sys.stderr,
+            )
         oracle = cls.build(network)
         files.save(oracle.dist, oracle.pred)
         return oracle
@@ -247,7 +259,7 @@ class DistanceOracle:
             steps.append(np.where(active, nxt, -1))
             cur = nxt
             active = cur != o
-        walk = np.stack(steps, axis=1)               # reversed paths, -1 padded
+        walk = np.stack(steps, axis=1)  # reversed paths, -1 padded
         lengths = (walk >= 0).sum(axis=1)
         offsets = np.concatenate([[0], np.cumsum(lengths)]).astype(np.int64)
         # Reverse each row's valid prefix: position j of row i holds walk[i, len_i-1-j].
@@ -316,16 +328,21 @@ class _ApspFiles:
             return None, f"are unreadable ({one_line(exc)})"
         want = (n_nodes, n_nodes)
         if dist.shape != want or pred.shape != want or dist.dtype != np.float64 or pred.dtype != np.int32:
-            return None, (f"hold {dist.dtype}{dist.shape} and {pred.dtype}{pred.shape} arrays, expected "
-                          f"float64{want} and int32{want}")
+            return None, (
+                f"hold {dist.dtype}{dist.shape} and {pred.dtype}{pred.shape} arrays, expected "
+                f"float64{want} and int32{want}"
+            )
         if apsp_digest(dist, pred) != expected:
             return None, f"do not match their SHA-256 digest {self.digest.name} (changed on disk)"
         return (dist, pred), ""
 
     def save(self, dist: np.ndarray, pred: np.ndarray) -> None:
         """Write both arrays, then their digest (so a digest always describes complete arrays)."""
-        for path, write in ((self.dist, lambda fh: np.save(fh, dist)), (self.pred, lambda fh: np.save(fh, pred)),
-                            (self.digest, lambda fh: fh.write(apsp_digest(dist, pred).encode() + b"\n"))):
+        for path, write in (
+            (self.dist, lambda fh: np.save(fh, dist)),
+            (self.pred, lambda fh: np.save(fh, pred)),
+            (self.digest, lambda fh: fh.write(apsp_digest(dist, pred).encode() + b"\n")),
+        ):
             try:
                 _atomic_write(path, write)
             except OSError as exc:
@@ -362,9 +379,10 @@ def snap(network: RoadNetwork, lon, lat, *, rule: str = "l1_degrees") -> tuple[n
         idx = np.empty(len(lon), dtype=np.int32)
         chunk = max(1, 2_000_000 // max(network.n_nodes, 1))
         for s in range(0, len(lon), chunk):
-            cost = (np.abs(lon[s:s + chunk, None] - network.lon[None, :])
-                    + np.abs(lat[s:s + chunk, None] - network.lat[None, :]))
-            idx[s:s + chunk] = np.argmin(cost, axis=1)
+            cost = np.abs(lon[s : s + chunk, None] - network.lon[None, :]) + np.abs(
+                lat[s : s + chunk, None] - network.lat[None, :]
+            )
+            idx[s : s + chunk] = np.argmin(cost, axis=1)
     elif rule == "nearest":
         _, idx = _unit_vector_tree(network).query(_unit_vectors(lon, lat))
         idx = np.asarray(idx, dtype=np.int32)

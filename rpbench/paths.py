@@ -80,15 +80,18 @@ def locate_data_dir(explicit: str | os.PathLike | None = None) -> tuple[Path | N
     if explicit is not None:
         path = Path(explicit).expanduser()
         if not path.is_dir():
-            raise DataNotFoundError(f"data folder {str(path)!r} (from --data) does not exist; "
-                                    "point --data at the Haikou data folder")
+            raise DataNotFoundError(
+                f"data folder {str(path)!r} (from --data) does not exist; point --data at the Haikou data folder"
+            )
         return path.resolve(), "--data"
     env = os.environ.get(DATA_ENV)
     if env:
         path = Path(env).expanduser()
         if not path.is_dir():
-            raise DataNotFoundError(f"data folder {env!r} (from ${DATA_ENV}) does not exist; "
-                                    f"unset {DATA_ENV} or point it at the Haikou data folder")
+            raise DataNotFoundError(
+                f"data folder {env!r} (from ${DATA_ENV}) does not exist; "
+                f"unset {DATA_ENV} or point it at the Haikou data folder"
+            )
         return path.resolve(), f"${DATA_ENV}"
     # Looked up through the module so tests can replace the candidate list.
     for candidate in default_data_candidates():
@@ -107,8 +110,10 @@ def require_data_dir(explicit: str | os.PathLike | None = None, *, what: str = "
     found = find_data_dir(explicit)
     if found is None:
         tried = ", ".join(str(c) for c in default_data_candidates())
-        raise DataNotFoundError(f"no Haikou data folder found for {what} (tried {tried}); "
-                                f"pass --data DIR, set ${DATA_ENV}, or download it with `rpbench data fetch`")
+        raise DataNotFoundError(
+            f"no Haikou data folder found for {what} (tried {tried}); "
+            f"pass --data DIR, set ${DATA_ENV}, or download it with `rpbench data fetch`"
+        )
     return found
 
 
@@ -126,16 +131,21 @@ def cache_dir() -> Path:
     origin = f"from ${CACHE_ENV}" if env else f"the user cache directory; set ${CACHE_ENV} to move it"
     try:
         path.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:      # FileExistsError (a file sits there), NotADirectoryError, PermissionError, ...
-        raise CacheError(f"cache folder {str(path)!r} ({origin}) cannot be created: {one_line(exc)}; "
-                         f"point ${CACHE_ENV} at a writable folder") from None
+    except OSError as exc:  # FileExistsError (a file sits there), NotADirectoryError, PermissionError, ...
+        raise CacheError(
+            f"cache folder {str(path)!r} ({origin}) cannot be created: {one_line(exc)}; "
+            f"point ${CACHE_ENV} at a writable folder"
+        ) from None
     if not os.access(path, os.W_OK | os.X_OK):
-        raise CacheError(f"cache folder {str(path)!r} ({origin}) is not writable; "
-                         f"point ${CACHE_ENV} at a writable folder")
+        raise CacheError(
+            f"cache folder {str(path)!r} ({origin}) is not writable; point ${CACHE_ENV} at a writable folder"
+        )
     return path
 
 
 def cache_write_error(path: Path, exc: OSError) -> CacheError:
     """The one-line error for a cache file that cannot be written (disk full, permissions...)."""
-    return CacheError(f"cannot write the cache file {str(path)!r}: {one_line(exc)}; free some space or "
-                      f"point ${CACHE_ENV} at another writable folder")
+    return CacheError(
+        f"cannot write the cache file {str(path)!r}: {one_line(exc)}; free some space or "
+        f"point ${CACHE_ENV} at another writable folder"
+    )

@@ -53,8 +53,17 @@ def plugin_names(group: str, builtin: Mapping[str, str]) -> list[str]:
     return sorted(name for name in entry_points(group) if name not in builtin)
 
 
-def resolve(name: str, *, builtin: Mapping[str, str], package: str, group: str, base: type, what: str,
-            required: tuple[str, ...], error: type[Exception]) -> type:
+def resolve(
+    name: str,
+    *,
+    builtin: Mapping[str, str],
+    package: str,
+    group: str,
+    base: type,
+    what: str,
+    required: tuple[str, ...],
+    error: type[Exception],
+) -> type:
     """The class ``name`` stands for (see the module docstring), or one ``error`` line.
 
     ``builtin`` maps built-in names to ``"module:Class"`` under ``package``;
@@ -68,10 +77,13 @@ def resolve(name: str, *, builtin: Mapping[str, str], package: str, group: str, 
     if is_spec(name):
         module_name, _, attr = name.partition(":")
         if not (all(part.isidentifier() for part in module_name.split(".")) and attr.isidentifier()):
-            raise error(f"{what} {name!r} is not MODULE:CLASS (a dotted module path, a colon, a class name), "
-                        "e.g. mypkg.rules:Greedy")
-        return load_class(module_name, attr, label=f"{what} {name!r}", base=base, what=what, required=required,
-                          error=error)
+            raise error(
+                f"{what} {name!r} is not MODULE:CLASS (a dotted module path, a colon, a class name), "
+                "e.g. mypkg.rules:Greedy"
+            )
+        return load_class(
+            module_name, attr, label=f"{what} {name!r}", base=base, what=what, required=required, error=error
+        )
     key = name.lower()
     if (group, key) in _LOADED:
         return _LOADED[(group, key)]
@@ -79,30 +91,40 @@ def resolve(name: str, *, builtin: Mapping[str, str], package: str, group: str, 
     if not found:
         plugins = plugin_names(group, builtin)
         known = ", ".join(builtin) + (f"; installed plug-ins: {', '.join(plugins)}" if plugins else "")
-        raise error(f"unknown {what} {name!r}; known {what}s: {known}; or give MODULE:CLASS "
-                    "(e.g. mypkg.rules:MyClass)")
+        raise error(f"unknown {what} {name!r}; known {what}s: {known}; or give MODULE:CLASS (e.g. mypkg.rules:MyClass)")
     values = sorted({ep.value for ep in found})
     if len(values) > 1:
-        raise error(f"{what} {name!r} is ambiguous: installed distributions declare it in entry point group "
-                    f"{group} as {' and '.join(values)}; uninstall one, or name the class as MODULE:CLASS")
+        raise error(
+            f"{what} {name!r} is ambiguous: installed distributions declare it in entry point group "
+            f"{group} as {' and '.join(values)}; uninstall one, or name the class as MODULE:CLASS"
+        )
     ep = found[0]
     dist = getattr(ep, "dist", None)
     origin = f" of {dist.name}" if dist is not None else ""
-    cls = load_class(ep.module, ep.attr, label=f"{what} {name!r} (entry point {ep.name} = {ep.value}{origin})",
-                     base=base, what=what, required=required, error=error)
+    cls = load_class(
+        ep.module,
+        ep.attr,
+        label=f"{what} {name!r} (entry point {ep.name} = {ep.value}{origin})",
+        base=base,
+        what=what,
+        required=required,
+        error=error,
+    )
     _LOADED[(group, key)] = cls
     return cls
 
 
-def load_class(module_name: str, attr: str, *, label: str, base: type, what: str, required: tuple[str, ...],
-               error: type[Exception]) -> type:
+def load_class(
+    module_name: str, attr: str, *, label: str, base: type, what: str, required: tuple[str, ...], error: type[Exception]
+) -> type:
     """``module_name``'s attribute ``attr`` (dotted for nested classes), checked to be a usable ``base`` class."""
     try:
         obj = importlib.import_module(module_name)
     except ImportError as exc:
-        reason = " ".join(str(exc).split())      # one line, whatever the module raised
-        raise error(f"{label}: cannot import module {module_name!r} ({reason}); install it or put its folder "
-                    "on PYTHONPATH") from None
+        reason = " ".join(str(exc).split())  # one line, whatever the module raised
+        raise error(
+            f"{label}: cannot import module {module_name!r} ({reason}); install it or put its folder on PYTHONPATH"
+        ) from None
     for part in attr.split("."):
         try:
             obj = getattr(obj, part)

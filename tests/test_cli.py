@@ -34,14 +34,17 @@ def test_scenario_text(capsys):
     assert code == 0 and "orders" in out and "200" in out
 
 
-@pytest.mark.parametrize("argv, message", [
-    (["scenario", "toy", "--sample", "0"], "--sample 0.0 must lie in (0, 1]"),
-    (["scenario", "toy", "--param", "dt_s=0"], "dt_s = 0.0 must be > 0"),
-    (["scenario", "toy", "--param", "speed_mps=-8"], "speed_mps = -8.0 must be > 0"),
-    (["scenario", "toy", "--param", "foo=1"], "expected NAME=VALUE"),
-    (["scenario", "nowhere"], "unknown scenario 'nowhere'"),
-    (["scenario", "haikou-peak", "--data", "/no/such/dir"], "does not exist"),
-])
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["scenario", "toy", "--sample", "0"], "--sample 0.0 must lie in (0, 1]"),
+        (["scenario", "toy", "--param", "dt_s=0"], "dt_s = 0.0 must be > 0"),
+        (["scenario", "toy", "--param", "speed_mps=-8"], "speed_mps = -8.0 must be > 0"),
+        (["scenario", "toy", "--param", "foo=1"], "expected NAME=VALUE"),
+        (["scenario", "nowhere"], "unknown scenario 'nowhere'"),
+        (["scenario", "haikou-peak", "--data", "/no/such/dir"], "does not exist"),
+    ],
+)
 def test_bad_input_is_one_line_and_exit_2(capsys, argv, message):
     code, out, err = run_cli(capsys, *argv)
     assert code == 2

@@ -26,24 +26,30 @@ import pytest
 from rpbench.exceptions import ParameterError
 from rpbench.geometry import ORDER_RULES, TOLERANCE_M, choose_order, pair_geometry, pool
 
-LINE = np.array([
-    #  0     1     2     3     4        (to)
-    [0000, 1000, 2000, 3000, 4000],   # from 0
-    [1000, 0000, 1000, 2000, 3000],   # from 1
-    [2000, 1000, 0000, 1000, 2000],   # from 2
-    [3000, 2000, 1000, 0000, 1000],   # from 3
-    [4000, 3000, 2000, 1000, 0000],   # from 4
-], dtype=float)
+LINE = np.array(
+    [
+        #  0     1     2     3     4        (to)
+        [0000, 1000, 2000, 3000, 4000],  # from 0
+        [1000, 0000, 1000, 2000, 3000],  # from 1
+        [2000, 1000, 0000, 1000, 2000],  # from 2
+        [3000, 2000, 1000, 0000, 1000],  # from 3
+        [4000, 3000, 2000, 1000, 0000],  # from 4
+    ],
+    dtype=float,
+)
 
-SQUARE = np.array([
-    #  0     1     2     3              (to)
-    [0000, 1000, 2000, 1000],         # from 0: 0->1, 0->1->2 (or 0->3->2), 0->3
-    [3000, 0000, 1000, 2000],         # from 1: 1->2->3->0 (no 1->0), 1->2, 1->2->3
-    [2000, 1000, 0000, 1000],         # from 2: 2->3->0, 2->1, 2->3
-    [1000, 2000, 1000, 0000],         # from 3: 3->0, 3->0->1 (or 3->2->1), 3->2
-], dtype=float)
+SQUARE = np.array(
+    [
+        #  0     1     2     3              (to)
+        [0000, 1000, 2000, 1000],  # from 0: 0->1, 0->1->2 (or 0->3->2), 0->3
+        [3000, 0000, 1000, 2000],  # from 1: 1->2->3->0 (no 1->0), 1->2, 1->2->3
+        [2000, 1000, 0000, 1000],  # from 2: 2->3->0, 2->1, 2->3
+        [1000, 2000, 1000, 0000],  # from 3: 3->0, 3->0->1 (or 3->2->1), 3->2
+    ],
+    dtype=float,
+)
 
-BIG = 1e9     # a threshold that never binds
+BIG = 1e9  # a threshold that never binds
 
 
 def scalar(result, name):
@@ -116,13 +122,16 @@ def test_negative_saving_pair():
     assert scalar(r, "saving") == -1000
 
 
-@pytest.mark.parametrize("max_detour, fofo_ok, folo_ok", [
-    (1999.999, False, False),             # A's FOFO detour 2000 > D̄
-    (2000.0 - TOLERANCE_M / 2, True, False),  # inside the 1e-9 m tolerance
-    (2000.0, True, False),                # inclusive
-    (3999.0, True, False),                # FOLO detour of A is 4000
-    (4000.0, True, True),
-])
+@pytest.mark.parametrize(
+    "max_detour, fofo_ok, folo_ok",
+    [
+        (1999.999, False, False),  # A's FOFO detour 2000 > D̄
+        (2000.0 - TOLERANCE_M / 2, True, False),  # inside the 1e-9 m tolerance
+        (2000.0, True, False),  # inclusive
+        (3999.0, True, False),  # FOLO detour of A is 4000
+        (4000.0, True, True),
+    ],
+)
 def test_detour_threshold_is_inclusive(max_detour, fofo_ok, folo_ok):
     # Same pair as test_negative_saving_pair: detour_A = 2000 (FOFO) and 4000 (FOLO), detour_B = 0 in both.
     g = pair_geometry(LINE, 0, 1, 1000.0, 2, 0, 2000.0, 0, 0.0, 0.0, max_detour_m=max_detour)
@@ -131,15 +140,18 @@ def test_detour_threshold_is_inclusive(max_detour, fofo_ok, folo_ok):
     r = pool(LINE, 0, 1, 2, 0, max_pickup_m=BIG, max_detour_m=max_detour)
     assert bool(r.feasible) is (fofo_ok or folo_ok)
     if fofo_ok:
-        assert bool(r.fofo)                # 4000 < 5000 whenever FOFO is allowed
+        assert bool(r.fofo)  # 4000 < 5000 whenever FOFO is allowed
 
 
-@pytest.mark.parametrize("max_pickup, feasible", [
-    (999.999, False),
-    (1000.0 - TOLERANCE_M / 2, True),
-    (1000.0, True),
-    (1000.001, True),
-])
+@pytest.mark.parametrize(
+    "max_pickup, feasible",
+    [
+        (999.999, False),
+        (1000.0 - TOLERANCE_M / 2, True),
+        (1000.0, True),
+        (1000.001, True),
+    ],
+)
 def test_pickup_threshold_is_inclusive(max_pickup, feasible):
     # A: 0 -> 3, B: 1 -> 4 (test_fofo_pair_on_a_line): pk = pre + p = 0 + 1000.
     r = pool(LINE, 0, 3, 1, 4, max_pickup_m=max_pickup, max_detour_m=3000.0)
@@ -151,7 +163,7 @@ def test_pickup_threshold_counts_pre():
     # Same pair, but the vehicle is still pre = 600 m before o_A: pk = 600 + 1000 = 1600.
     r = pool(LINE, 0, 3, 1, 4, h=0, delta=0.0, pre=600.0, max_pickup_m=1600.0, max_detour_m=3000.0)
     assert bool(r.feasible) and scalar(r, "pk") == 1600
-    assert scalar(r, "length") == 4000                    # pre is not part of L
+    assert scalar(r, "length") == 4000  # pre is not part of L
     r = pool(LINE, 0, 3, 1, 4, h=0, delta=0.0, pre=600.0, max_pickup_m=1599.0, max_detour_m=3000.0)
     assert not bool(r.feasible)
 
@@ -172,7 +184,7 @@ def test_order_rules_differ_on_a_one_way_street():
     assert bool(mf.feasible) and bool(mf.fofo)
     assert scalar(mf, "length") == 6000
     assert scalar(mf, "detour_a") == 2000 and scalar(mf, "detour_b") == 2000
-    assert scalar(mf, "shared") == 1000                   # l(o_B, d_A) = l(2, 1)
+    assert scalar(mf, "shared") == 1000  # l(o_B, d_A) = l(2, 1)
     assert scalar(mf, "saving") == -3000
 
     mc = choose_order(g, max_pickup_m=3000.0, order_rule="min_then_check")
@@ -181,8 +193,9 @@ def test_order_rules_differ_on_a_one_way_street():
 
     # pool() forwards the rule.
     assert bool(pool(SQUARE, 0, 1, 2, 0, max_pickup_m=3000.0, max_detour_m=2000.0).feasible)
-    assert not bool(pool(SQUARE, 0, 1, 2, 0, max_pickup_m=3000.0, max_detour_m=2000.0,
-                         order_rule="min_then_check").feasible)
+    assert not bool(
+        pool(SQUARE, 0, 1, 2, 0, max_pickup_m=3000.0, max_detour_m=2000.0, order_rule="min_then_check").feasible
+    )
     # With D̄ = 4000 both orders are feasible and both rules agree on FOLO (e = 3000 - 5000 = -2000).
     for rule in ORDER_RULES:
         r = pool(SQUARE, 0, 1, 2, 0, max_pickup_m=3000.0, max_detour_m=4000.0, order_rule=rule)
@@ -204,7 +217,7 @@ def test_tie_goes_to_fofo():
         assert bool(r.feasible) and bool(r.fofo)
         assert scalar(r, "length") == 4000
         assert scalar(r, "detour_a") == 0 and scalar(r, "detour_b") == 2000
-        assert scalar(r, "saving") == -1000                # 2000 + 1000 - 4000
+        assert scalar(r, "saving") == -1000  # 2000 + 1000 - 4000
 
 
 def test_en_route_ahead():
@@ -227,10 +240,10 @@ def test_en_route_ahead():
     assert scalar(r, "shared") == 1000
     assert scalar(r, "saving") == 1000
     # R̄ binds on pre + p = 1400, not on p alone.
-    assert bool(pool(LINE, 0, 4, 2, 3, h=1, delta=1000.0, pre=400.0, max_pickup_m=1400.0,
-                     max_detour_m=3000.0).feasible)
-    assert not bool(pool(LINE, 0, 4, 2, 3, h=1, delta=1000.0, pre=400.0, max_pickup_m=1399.0,
-                         max_detour_m=3000.0).feasible)
+    assert bool(pool(LINE, 0, 4, 2, 3, h=1, delta=1000.0, pre=400.0, max_pickup_m=1400.0, max_detour_m=3000.0).feasible)
+    assert not bool(
+        pool(LINE, 0, 4, 2, 3, h=1, delta=1000.0, pre=400.0, max_pickup_m=1399.0, max_detour_m=3000.0).feasible
+    )
 
 
 def test_en_route_turning_back():
@@ -249,8 +262,9 @@ def test_en_route_turning_back():
     assert scalar(r, "shared") == 2000
     assert scalar(r, "saving") == 0
     # Both orders detour A by 2000 m: at D̄ = 1999 neither is feasible.
-    assert not bool(pool(LINE, 0, 4, 1, 3, h=2, delta=2000.0, pre=300.0, max_pickup_m=3000.0,
-                         max_detour_m=1999.0).feasible)
+    assert not bool(
+        pool(LINE, 0, 4, 1, 3, h=2, delta=2000.0, pre=300.0, max_pickup_m=3000.0, max_detour_m=1999.0).feasible
+    )
 
 
 def test_vectorised_matches_single_pairs():

@@ -22,8 +22,9 @@ def installed():
 @pytest.fixture(scope="module")
 def snapshots(tmp_path_factory):
     scenario = build_scenario("toy", sample=0.25, seed=4)
-    folder, entries = take_snapshots(scenario, ["mb", "rtv"], "highs", tmp_path_factory.mktemp("s") / "snaps",
-                                     largest=2)
+    folder, entries = take_snapshots(
+        scenario, ["mb", "rtv"], "highs", tmp_path_factory.mktemp("s") / "snaps", largest=2
+    )
     return folder, entries
 
 
@@ -43,11 +44,14 @@ def test_snapshot_round_trip_same_optimum_on_every_preset(snapshots):
             assert solution.objective == meta["objective"], f"{name} on {entry['file']}"
 
 
-@pytest.mark.parametrize("model", [
-    AssignmentModel(2, 2, [0, 0, 1, 1], [0, -1, 1, -1], [5, 0, 7, 0], name="a"),
-    TripPackingModel(3, 2, [0, 1, 1], [0, 1, 0], [2, -1, 1], [9, 4, 6], name="t"),
-    PairingModel(4, [0, 1, 0], [1, 2, 3], [3, 4, 5], objective="cardinality_then_weight", name="p"),
-])
+@pytest.mark.parametrize(
+    "model",
+    [
+        AssignmentModel(2, 2, [0, 0, 1, 1], [0, -1, 1, -1], [5, 0, 7, 0], name="a"),
+        TripPackingModel(3, 2, [0, 1, 1], [0, 1, 0], [2, -1, 1], [9, 4, 6], name="t"),
+        PairingModel(4, [0, 1, 0], [1, 2, 3], [3, 4, 5], objective="cardinality_then_weight", name="p"),
+    ],
+)
 def test_save_load_is_exact(tmp_path, model):
     path = save_instance(tmp_path / model.name, model, {"note": "x"})
     back, meta = load_instance(path)
@@ -64,14 +68,29 @@ def test_corrupt_snapshot_files(tmp_path):
     with pytest.raises(ResultsError, match="corrupt"):
         load_instance(garbage)
     partial = tmp_path / "partial.npz"
-    np.savez(partial, format=np.array("rpbench-instance-1"), structure=np.array("assignment"),
-             values=np.array([1.0]), unit_m=np.array(1e-3), name=np.array("x"))
+    np.savez(
+        partial,
+        format=np.array("rpbench-instance-1"),
+        structure=np.array("assignment"),
+        values=np.array([1.0]),
+        unit_m=np.array(1e-3),
+        name=np.array("x"),
+    )
     with pytest.raises(ResultsError, match="corrupt"):
         load_instance(partial)
     bad_index = tmp_path / "bad.npz"
-    np.savez(bad_index, format=np.array("rpbench-instance-1"), structure=np.array("pairing"),
-             values=np.array([1.0]), unit_m=np.array(1e-3), name=np.array("x"), n_orders=np.array(2),
-             col_a=np.array([0]), col_b=np.array([7]), meta_json=np.array(json.dumps({})))
+    np.savez(
+        bad_index,
+        format=np.array("rpbench-instance-1"),
+        structure=np.array("pairing"),
+        values=np.array([1.0]),
+        unit_m=np.array(1e-3),
+        name=np.array("x"),
+        n_orders=np.array(2),
+        col_a=np.array([0]),
+        col_b=np.array([7]),
+        meta_json=np.array(json.dumps({})),
+    )
     with pytest.raises(ResultsError, match="outside"):
         load_instance(bad_index)
     other = tmp_path / "other.npz"

@@ -20,50 +20,66 @@ from rpbench.model import (
 
 
 def assignment(**kw):
-    args = dict(n_passengers=2, n_vehicles=2, col_passenger=[0, 0, 1, 1], col_vehicle=[0, -1, 1, -1],
-                values=[-3, -5, -4, -6])
+    args = dict(
+        n_passengers=2, n_vehicles=2, col_passenger=[0, 0, 1, 1], col_vehicle=[0, -1, 1, -1], values=[-3, -5, -4, -6]
+    )
     args.update(kw)
-    return AssignmentModel(args.pop("n_passengers"), args.pop("n_vehicles"), args.pop("col_passenger"),
-                           args.pop("col_vehicle"), args.pop("values"), **args)
+    return AssignmentModel(
+        args.pop("n_passengers"),
+        args.pop("n_vehicles"),
+        args.pop("col_passenger"),
+        args.pop("col_vehicle"),
+        args.pop("values"),
+        **args,
+    )
 
 
-@pytest.mark.parametrize("kw, match", [
-    (dict(values=[-3, float("nan"), -4, -6]), "value of column 1 is nan; values must be finite"),
-    (dict(values=[-3, float("inf"), -4, -6]), "must be finite"),
-    (dict(values=[-3, -5.5, -4, -6]), "whole multiples of unit_m"),
-    (dict(col_vehicle=[0, -1, 2, -1]), "column 2 has vehicle 2, outside \\[-1, 1\\]"),
-    (dict(col_passenger=[0, 0, 1, 3]), "column 3 has passenger 3, outside"),
-    (dict(col_vehicle=[0, -1, 1]), "vehicle has 3 entries for 4 columns"),
-    (dict(col_passenger=[0, 0, 0, 0], col_vehicle=[0, -1, 0, 1]), "columns 0 and 2 are duplicates"),
-    (dict(n_passengers=3), "passenger 2 has no option at all"),
-    (dict(n_vehicles=-1), "negative number"),
-    (dict(unit_m=0.0), "unit_m=0.0 must be a positive number"),
-    (dict(values=[MAX_EXACT_TOTAL, MAX_EXACT_TOTAL, 0, 0]), "too large for exact float64 sums"),
-])
+@pytest.mark.parametrize(
+    "kw, match",
+    [
+        (dict(values=[-3, float("nan"), -4, -6]), "value of column 1 is nan; values must be finite"),
+        (dict(values=[-3, float("inf"), -4, -6]), "must be finite"),
+        (dict(values=[-3, -5.5, -4, -6]), "whole multiples of unit_m"),
+        (dict(col_vehicle=[0, -1, 2, -1]), "column 2 has vehicle 2, outside \\[-1, 1\\]"),
+        (dict(col_passenger=[0, 0, 1, 3]), "column 3 has passenger 3, outside"),
+        (dict(col_vehicle=[0, -1, 1]), "vehicle has 3 entries for 4 columns"),
+        (dict(col_passenger=[0, 0, 0, 0], col_vehicle=[0, -1, 0, 1]), "columns 0 and 2 are duplicates"),
+        (dict(n_passengers=3), "passenger 2 has no option at all"),
+        (dict(n_vehicles=-1), "negative number"),
+        (dict(unit_m=0.0), "unit_m=0.0 must be a positive number"),
+        (dict(values=[MAX_EXACT_TOTAL, MAX_EXACT_TOTAL, 0, 0]), "too large for exact float64 sums"),
+    ],
+)
 def test_assignment_validation(kw, match):
     with pytest.raises(ModelError, match=match):
         assignment(**kw)
 
 
-@pytest.mark.parametrize("args, kw, match", [
-    ((3, [0, 1], [1, 3], [1, 2]), {}, "second order 3, outside"),
-    ((3, [0, 2], [1, 1], [1, 2]), {}, "must satisfy a < b"),
-    ((3, [0, 0], [1, 1], [1, 2]), {}, "duplicates"),
-    ((3, [0], [1], [float("nan")]), {}, "must be finite"),
-    ((3, [0], [1], [1]), {"objective": "pairs"}, "objective 'pairs' unknown"),
-    ((-1, [], [], []), {}, "negative number of orders"),
-])
+@pytest.mark.parametrize(
+    "args, kw, match",
+    [
+        ((3, [0, 1], [1, 3], [1, 2]), {}, "second order 3, outside"),
+        ((3, [0, 2], [1, 1], [1, 2]), {}, "must satisfy a < b"),
+        ((3, [0, 0], [1, 1], [1, 2]), {}, "duplicates"),
+        ((3, [0], [1], [float("nan")]), {}, "must be finite"),
+        ((3, [0], [1], [1]), {"objective": "pairs"}, "objective 'pairs' unknown"),
+        ((-1, [], [], []), {}, "negative number of orders"),
+    ],
+)
 def test_pairing_validation(args, kw, match):
     with pytest.raises(ModelError, match=match):
         PairingModel(*args, **kw)
 
 
-@pytest.mark.parametrize("args, match", [
-    ((2, 1, [0], [1], [0], [1]), "must list its requests in increasing order"),
-    ((2, 1, [1], [0], [-1], [1]), "vehicle 1, outside"),
-    ((2, 1, [0, 0], [0, 0], [-1, -1], [1, 2]), "duplicates"),
-    ((2, 1, [0], [0], [-2], [1]), "second request -2"),
-])
+@pytest.mark.parametrize(
+    "args, match",
+    [
+        ((2, 1, [0], [1], [0], [1]), "must list its requests in increasing order"),
+        ((2, 1, [1], [0], [-1], [1]), "vehicle 1, outside"),
+        ((2, 1, [0, 0], [0, 0], [-1, -1], [1, 2]), "duplicates"),
+        ((2, 1, [0], [0], [-2], [1]), "second request -2"),
+    ],
+)
 def test_trip_packing_validation(args, match):
     with pytest.raises(ModelError, match=match):
         TripPackingModel(*args)
@@ -108,7 +124,7 @@ def test_violations_match_a_loop_on_random_choices():
         chosen = rng.choice(p.n_cols, rng.integers(0, 6), replace=False)
         counts = np.zeros(8, int)
         for c in chosen:
-            counts[rows[start[c]:start[c + 1]]] += 1
+            counts[rows[start[c] : start[c + 1]]] += 1
         assert (p.violations(chosen) == []) == (counts.max(initial=0) <= 1)
 
 
@@ -146,6 +162,6 @@ def test_distinct_rows_matches_numpy_unique(seed):
 def test_distinct_rows_with_huge_entries_falls_back_to_row_comparison():
     from rpbench.model import _distinct_rows
 
-    big = 2 ** 40
+    big = 2**40
     assert _distinct_rows(np.array([[big, 1, big], [big, 2, big]], dtype=np.int64))
     assert not _distinct_rows(np.array([[big, 1, big], [big, 1, big]], dtype=np.int64))

@@ -50,7 +50,7 @@ def test_paths_match_distances(haikou, sample_pairs):
     a, b, _ = sample_pairs[:, :200]
     offsets, nodes = oracle.paths_batch(a, b)
     for i in range(200):
-        path = nodes[offsets[i]:offsets[i + 1]]
+        path = nodes[offsets[i] : offsets[i + 1]]
         assert (path == oracle.path_nodes(a[i], b[i])).all()
         assert path[0] == a[i] and path[-1] == b[i]
         arcs = oracle.path_arcs(a[i], b[i])
@@ -82,7 +82,7 @@ def test_authors_snapping_rule_reproduces_their_nodes(data_dir, haikou):
     same = haikou.node_id[idx] == snapped.loc[raw["order_id"], "origin_id"].to_numpy()
     assert same.mean() > 0.99
     near, near_m = snap(haikou, raw["origin_lon"], raw["origin_lat"], rule="nearest")
-    assert (near_m <= dist_m + 1e-6).all()          # the true nearest node is never farther
+    assert (near_m <= dist_m + 1e-6).all()  # the true nearest node is never farther
     assert np.median(dist_m) < 400
 
 
@@ -96,7 +96,7 @@ def test_arc_index_finds_each_arc_and_only_arcs(seed):
     net = grid_network(4)
     rng = np.random.default_rng(seed)
     tail, head = rng.integers(0, net.n_nodes, 40), rng.integers(0, net.n_nodes, 40)
-    tail[:10], head[:10] = net.arc_tail[:10], net.arc_head[:10]            # some real arcs among them
+    tail[:10], head[:10] = net.arc_tail[:10], net.arc_head[:10]  # some real arcs among them
     arcs = {(int(a), int(b)): i for i, (a, b) in enumerate(zip(net.arc_tail, net.arc_head))}
     expected = [arcs.get((int(a), int(b)), -1) for a, b in zip(tail, head)]
     assert net.arc_index(tail, head).tolist() == expected

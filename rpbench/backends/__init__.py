@@ -18,5 +18,14 @@ from rpbench.backends.presets import Preset, load_preset, preset_names
 from rpbench.backends.registry import REGISTRY, backend_class, get_backend
 from rpbench.backends.solve import solve
 
-__all__ = ["REGISTRY", "Backend", "Preset", "SolveOptions", "backend_class", "get_backend", "load_preset",
-           "preset_names", "solve"]
+__all__ = [
+    "REGISTRY",
+    "Backend",
+    "Preset",
+    "SolveOptions",
+    "backend_class",
+    "get_backend",
+    "load_preset",
+    "preset_names",
+    "solve",
+]

@@ -70,8 +70,8 @@ class Program:
     """
 
     c: np.ndarray
-    indptr: np.ndarray     # column starts, n + 1 entries
-    indices: np.ndarray    # row of each nonzero
+    indptr: np.ndarray  # column starts, n + 1 entries
+    indices: np.ndarray  # row of each nonzero
     lo: np.ndarray
     hi: np.ndarray
 
@@ -102,8 +102,9 @@ def program(model: Model, c: np.ndarray | None = None, min_count: int | None = N
             lo, hi = np.append(lo, float(min_count)), np.append(hi, np.inf)
         A.sort_indices()
         start, rows = A.indptr, A.indices
-    return Program(c=np.asarray(model.values if c is None else c, dtype=np.float64), indptr=start, indices=rows,
-                   lo=lo, hi=hi)
+    return Program(
+        c=np.asarray(model.values if c is None else c, dtype=np.float64), indptr=start, indices=rows, lo=lo, hi=hi
+    )
 
 
 def _sorted_within_columns(start: np.ndarray, rows: np.ndarray) -> bool:
@@ -111,7 +112,7 @@ def _sorted_within_columns(start: np.ndarray, rows: np.ndarray) -> bool:
     if len(rows) < 2:
         return True
     rising = rows[1:] > rows[:-1]
-    rising[start[1:-1][(start[1:-1] > 0) & (start[1:-1] < len(rows))] - 1] = True    # column boundaries
+    rising[start[1:-1][(start[1:-1] > 0) & (start[1:-1] < len(rows))] - 1] = True  # column boundaries
     return bool(rising.all())
 
 
@@ -168,14 +169,17 @@ def finish(model: Model, raw: Raw, backend: str, clock: Clock, rel_gap: float = 
     if raw.state == INFEASIBLE:
         if model.structure is not Structure.ASSIGNMENT:
             raise SolverError(f"backend {backend!r} reports {model.name!r} infeasible, but x = 0 is feasible")
-        return make_solution(model, np.zeros(0, np.int64), Status.INFEASIBLE, backend, message=note or "infeasible",
-                             **clock.times)
+        return make_solution(
+            model, np.zeros(0, np.int64), Status.INFEASIBLE, backend, message=note or "infeasible", **clock.times
+        )
     if raw.x is None:
         if raw.state == OPTIMAL:
             raise SolverError(f"backend {backend!r} reports an optimum of {model.name!r} but returned no solution")
         if model.structure is Structure.ASSIGNMENT:
-            raise SolverError(f"backend {backend!r} stopped on {model.name!r} (time limit) before finding any "
-                              "feasible assignment; raise time_limit_s or use a faster preset (matching, ortools)")
+            raise SolverError(
+                f"backend {backend!r} stopped on {model.name!r} (time limit) before finding any "
+                "feasible assignment; raise time_limit_s or use a faster preset (matching, ortools)"
+            )
         chosen = np.zeros(0, np.int64)
         note = note or "time limit before any incumbent: returning x = 0"
     else:
@@ -183,10 +187,9 @@ def finish(model: Model, raw: Raw, backend: str, clock: Clock, rel_gap: float = 
     objective = model.objective_of(chosen)
     bound = integral_bound(raw.bound)
     if bound is not None and bound < objective:
-        bound = None                          # inconsistent with the incumbent: proves nothing, report nothing
+        bound = None  # inconsistent with the incumbent: proves nothing, report nothing
     status = classify(raw.state, objective, bound, rel_gap)
     if status is Status.OPTIMAL:
         bound = objective
     gap = None if bound is None else (bound - objective) / max(1.0, abs(objective))
     return make_solution(model, chosen, status, backend, bound=bound, gap=gap, message=note, **clock.times)
-

@@ -56,7 +56,7 @@ def run_in_child(fn, args, deadline: float | None, *, solver: str):
 def _child_main(conn, fn, args) -> None:
     try:
         conn.send((True, fn(*args)))
-    except BaseException as exc:                      # report, never hang the parent
+    except BaseException as exc:  # report, never hang the parent
         conn.send((False, f"{type(exc).__name__}: {exc}"))
     finally:
         conn.close()

@@ -35,8 +35,16 @@ class ProgramBackend(Backend):
     can_relax = True
 
     @abstractmethod
-    def run(self, prog: Program, options: SolveOptions, clock: Clock, *, relax: bool = False,
-            time_limit: float | None = None, hint: np.ndarray | None = None) -> Raw:
+    def run(
+        self,
+        prog: Program,
+        options: SolveOptions,
+        clock: Clock,
+        *,
+        relax: bool = False,
+        time_limit: float | None = None,
+        hint: np.ndarray | None = None,
+    ) -> Raw:
         """Solve ``prog`` once (``relax``: x in [0, 1]); times go to ``clock``."""
 
     def solve(self, model: Model, options: SolveOptions, hint: np.ndarray | None = None) -> Solution:
@@ -51,7 +59,7 @@ class ProgramBackend(Backend):
             return self.solve_lexicographic(model, options, clock, hint)
         raw = self.run(program(model), options, clock, time_limit=options.time_limit_s, hint=hint)
         if raw.x is None and hint is not None and raw.state == LIMIT:
-            raw.x = np.round(hint)             # stopped before adopting the (feasible) warm start
+            raw.x = np.round(hint)  # stopped before adopting the (feasible) warm start
         return finish(model, raw, self.name, clock, options.mip_rel_gap)
 
     def solve_assignment(self, model: Model, options: SolveOptions, clock: Clock) -> Solution:
@@ -77,8 +85,9 @@ class ProgramBackend(Backend):
         raw = self.run(prog, options, clock, time_limit=options.time_limit_s)
         return finish(model, raw, self.name, clock, options.mip_rel_gap)
 
-    def solve_lexicographic(self, model: Model, options: SolveOptions, clock: Clock,
-                            hint: np.ndarray | None = None) -> Solution:
+    def solve_lexicographic(
+        self, model: Model, options: SolveOptions, clock: Clock, hint: np.ndarray | None = None
+    ) -> Solution:
         """Oracle-2: ``k*`` exactly by Edmonds' algorithm (certified, :mod:`.cardinality`), then the MIP.
 
         A MIP for the cardinality stage is massively degenerate (every
@@ -94,12 +103,11 @@ class ProgramBackend(Backend):
             start = np.zeros(model.n_cols)
             start[columns_of_mate(n, a, b, top.mate)] = 1.0
             if hint is not None and np.round(hint).sum() >= k:
-                start = np.round(hint)         # the caller's start has k* pairs and, likely, more weight
+                start = np.round(hint)  # the caller's start has k* pairs and, likely, more weight
         remaining = clock.remaining(options.time_limit_s)
         if remaining is not None and remaining <= 0:
             return finish(model, Raw(x=start, state=LIMIT, message="time limit after stage 1"), self.name, clock)
         stage2 = self.run(program(model, min_count=k), options, clock, time_limit=remaining, hint=start)
         if stage2.x is None:
-            stage2.x = start                   # a maximum-cardinality matching is feasible for stage 2
+            stage2.x = start  # a maximum-cardinality matching is feasible for stage 2
         return finish(model, stage2, self.name, clock, options.mip_rel_gap)
-

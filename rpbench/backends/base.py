@@ -65,7 +65,8 @@ class Backend(ABC):
         if missing:
             raise SolverNotInstalledError(
                 f"backend {cls.name!r} needs the Python package(s) {', '.join(missing)}, which are not "
-                f"installed; install them (pip install {' '.join(missing)}) or choose another --solver")
+                f"installed; install them (pip install {' '.join(missing)}) or choose another --solver"
+            )
 
     def supports(self, structure: Structure) -> bool:
         return structure in self.exact

@@ -39,7 +39,7 @@ from rpbench.exceptions import SolverError, SolverNotInstalledError
 from rpbench.model import Model, PairingModel, Solution, Status, Structure, empty_solution, make_solution
 
 #: OGDF multiplies integral costs by 4 internally; sums of costs must stay in int64.
-INT64_SAFE = 2 ** 60
+INT64_SAFE = 2**60
 
 _SHIM = r"""
 #include <ogdf/graphalg/MatchingBlossomV.h>
@@ -71,8 +71,10 @@ class BlossomBackend(Backend):
     name = "blossom"
     requires = ("cppyy", "ogdf_python", "ogdf_wheel", "lap", "highspy")
     exact = frozenset(Structure)
-    description = ("OGDF's Blossom V (exact weighted matching, C++) for pairing at any scale; lap.lapmod for "
-                   "the assignment, HiGHS MIP for trip packing")
+    description = (
+        "OGDF's Blossom V (exact weighted matching, C++) for pairing at any scale; lap.lapmod for "
+        "the assignment, HiGHS MIP for trip packing"
+    )
 
     def solve(self, model: Model, options: SolveOptions) -> Solution:
         self.ensure_installed()
@@ -95,10 +97,12 @@ def _shim():
     try:
         import cppyy
         from ogdf_python import ogdf  # noqa: F401  (loads libOGDF and its include paths)
-    except Exception as exc:                      # a broken install: one clear line, not a cling dump
-        raise SolverNotInstalledError(f"backend 'blossom': OGDF could not be loaded through cppyy "
-                                      f"({type(exc).__name__}: {exc}); reinstall with pip install "
-                                      "'rpbench[blossom]' or choose another --solver") from None
+    except Exception as exc:  # a broken install: one clear line, not a cling dump
+        raise SolverNotInstalledError(
+            f"backend 'blossom': OGDF could not be loaded through cppyy "
+            f"({type(exc).__name__}: {exc}); reinstall with pip install "
+            "'rpbench[blossom]' or choose another --solver"
+        ) from None
     cppyy.cppdef(_SHIM)
     return cppyy.gbl.rpbench_blossom_v
 
@@ -110,8 +114,14 @@ def min_cost_perfect_matching(n: int, a: np.ndarray, b: np.ndarray, cost: np.nda
     """
     fn = _shim()
     mate = np.empty(n, np.int32)
-    ok = fn(int(n), int(len(a)), np.ascontiguousarray(a, np.int32), np.ascontiguousarray(b, np.int32),
-            np.ascontiguousarray(cost, np.int64), mate)
+    ok = fn(
+        int(n),
+        int(len(a)),
+        np.ascontiguousarray(a, np.int32),
+        np.ascontiguousarray(b, np.int32),
+        np.ascontiguousarray(cost, np.int64),
+        mate,
+    )
     if not ok:
         raise SolverError("Blossom V found no perfect matching")
     return mate
@@ -130,12 +140,17 @@ def max_weight_matching(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, bon
     la, lb = np.searchsorted(used, a), np.searchsorted(used, b)
     cost = -(np.asarray(w, np.int64))
     if 4 * (2 * int(np.abs(cost).sum()) + k * int(bonus)) >= INT64_SAFE:
-        raise SolverError(f"Blossom V: costs up to {int(np.abs(cost).max())} plus a pair bonus of {bonus} "
-                          "overflow 64-bit integers; build the model with a coarser unit_m")
+        raise SolverError(
+            f"Blossom V: costs up to {int(np.abs(cost).max())} plus a pair bonus of {bonus} "
+            "overflow 64-bit integers; build the model with a coarser unit_m"
+        )
     own = np.arange(k)
     mate = min_cost_perfect_matching(
-        2 * k, np.concatenate([la, la + k, own]), np.concatenate([lb, lb + k, own + k]),
-        np.concatenate([cost, cost, np.full(k, int(bonus), np.int64)]))
+        2 * k,
+        np.concatenate([la, la + k, own]),
+        np.concatenate([lb, lb + k, own + k]),
+        np.concatenate([cost, cost, np.full(k, int(bonus), np.int64)]),
+    )
     first = mate[:k]
     v = np.flatnonzero((first >= 0) & (first < k) & (own < first))
     return edge_indices(n, a, b, used[v], used[first[v]])
@@ -145,25 +160,38 @@ def solve_pairing(model: PairingModel, options: SolveOptions, clock: Clock, back
     """Oracle-1 or Oracle-2 by one Blossom V solve; ``TIME_LIMIT`` with the best known matching at the deadline."""
     lexi = model.objective == "cardinality_then_weight"
     with clock("build_s"):
-        w = model.values.astype(np.int64)          # integral: the model validates it
+        w = model.values.astype(np.int64)  # integral: the model validates it
         a, b = model.col_a.astype(np.int64), model.col_b.astype(np.int64)
         if lexi:
             top = maximum_cardinality_matching(model.n_orders, a, b)
-            start, use, bonus = columns_of_mate(model.n_orders, a, b, top.mate), np.arange(len(a)), int(np.abs(w).sum()) + 1
+            start, use, bonus = (
+                columns_of_mate(model.n_orders, a, b, top.mate),
+                np.arange(len(a)),
+                int(np.abs(w).sum()) + 1,
+            )
         else:
             start, use, bonus = np.zeros(0, np.int64), np.flatnonzero(w > 0), 0
-        _shim()                                    # load OGDF before any fork: children inherit it
+        _shim()  # load OGDF before any fork: children inherit it
     limit = options.time_limit_s
     deadline = None if limit is None else clock.start + limit
     try:
         with clock("solve_s"):
-            sel = use[run_in_child(max_weight_matching, (model.n_orders, a[use], b[use], w[use], bonus),
-                                   deadline, solver="Blossom V")]
+            sel = use[
+                run_in_child(
+                    max_weight_matching, (model.n_orders, a[use], b[use], w[use], bonus), deadline, solver="Blossom V"
+                )
+            ]
     except Timeout:
         chosen = start
         what = "Edmonds' maximum-cardinality matching" if lexi else "no pairs"
-        return make_solution(model, chosen, Status.TIME_LIMIT, backend,
-                             message=f"Blossom V ran past the time limit; returning {what}", **clock.times)
+        return make_solution(
+            model,
+            chosen,
+            Status.TIME_LIMIT,
+            backend,
+            message=f"Blossom V ran past the time limit; returning {what}",
+            **clock.times,
+        )
     if lexi and len(sel) != top.size:
         raise SolverError(f"Blossom V returned {len(sel)} pairs but the proven maximum is {top.size}")
     chosen = np.sort(sel)

@@ -45,8 +45,7 @@ class CardinalityMatching:
 
 def adjacency(n: int, a: np.ndarray, b: np.ndarray) -> sp.csr_matrix:
     """Symmetric 0/1 CSR adjacency of the edges ``(a_i, b_i)`` (duplicates merged)."""
-    g = sp.csr_matrix((np.ones(2 * len(a), np.int8), (np.concatenate([a, b]), np.concatenate([b, a]))),
-                      shape=(n, n))
+    g = sp.csr_matrix((np.ones(2 * len(a), np.int8), (np.concatenate([a, b]), np.concatenate([b, a]))), shape=(n, n))
     g.sum_duplicates()
     return g
 
@@ -71,8 +70,9 @@ def greedy_matching(g: sp.csr_matrix) -> np.ndarray:
     return np.asarray(mate, np.int64)
 
 
-def maximum_cardinality_matching(n: int, a: np.ndarray, b: np.ndarray,
-                                 start: np.ndarray | None = None) -> CardinalityMatching:
+def maximum_cardinality_matching(
+    n: int, a: np.ndarray, b: np.ndarray, start: np.ndarray | None = None
+) -> CardinalityMatching:
     """A maximum-cardinality matching of the graph ``(range(n), zip(a, b))``, certified.
 
     ``start`` (optional) is a matching to augment, as a ``mate`` array.  The
@@ -96,9 +96,8 @@ def maximum_cardinality_matching(n: int, a: np.ndarray, b: np.ndarray,
                 inner.extend(search.hungarian_inner())
     result = CardinalityMatching(np.asarray(mate, np.int64), np.asarray(sorted(inner), np.int64))
     bound = tutte_berge_bound(n, a, b, result.tutte_set)
-    if bound != result.size:               # cannot happen unless the search above is wrong: never pass it on
-        raise SolverError(f"maximum-cardinality matching not certified: {result.size} pairs, "
-                          f"Tutte-Berge bound {bound}")
+    if bound != result.size:  # cannot happen unless the search above is wrong: never pass it on
+        raise SolverError(f"maximum-cardinality matching not certified: {result.size} pairs, Tutte-Berge bound {bound}")
     return result
 
 
@@ -171,9 +170,9 @@ class _BlossomSearch:
         self.deleted = [False] * n
         self.parent = [-1] * n
         self.outer = [False] * n
-        self.uf = list(range(n))           # union-find over blossoms
-        self.base = list(range(n))         # base vertex of a union-find root's blossom
-        self.stamp = [0] * n               # lowest-common-ancestor marks
+        self.uf = list(range(n))  # union-find over blossoms
+        self.base = list(range(n))  # base vertex of a union-find root's blossom
+        self.stamp = [0] * n  # lowest-common-ancestor marks
         self.clock = 0
         self.touched: list[int] = []
 
@@ -182,7 +181,7 @@ class _BlossomSearch:
         r = v
         while uf[r] != r:
             r = uf[r]
-        while uf[v] != r:                  # path compression
+        while uf[v] != r:  # path compression
             uf[v], v = r, uf[v]
         return r
 
@@ -212,7 +211,7 @@ class _BlossomSearch:
                     # both ends outer: an odd cycle, to contract unless already inside one blossom
                     if self._find(v) != self._find(to):
                         self._contract(v, to, queue)
-                elif parent[to] < 0:                   # unreached (inner vertices need nothing)
+                elif parent[to] < 0:  # unreached (inner vertices need nothing)
                     parent[to] = v
                     touched.append(to)
                     if mate[to] < 0:
@@ -266,7 +265,7 @@ class _BlossomSearch:
                 merged.append(r)
             parent[v] = child
             child = m
-            if not outer[m]:               # an inner vertex joins an outer blossom: scan it
+            if not outer[m]:  # an inner vertex joins an outer blossom: scan it
                 outer[m] = True
                 queue.append(m)
             v = parent[m]

@@ -21,8 +21,13 @@ from rpbench.backends.highs import highs_settings
 from rpbench.exceptions import SolverError, SolverNotInstalledError
 
 #: CVXPY problem status -> raw state (CVXPY's status names are plain strings).
-STATUS = {"optimal": OPTIMAL, "infeasible": INFEASIBLE, "infeasible_inaccurate": INFEASIBLE,
-          "user_limit": LIMIT, "optimal_inaccurate": LIMIT}
+STATUS = {
+    "optimal": OPTIMAL,
+    "infeasible": INFEASIBLE,
+    "infeasible_inaccurate": INFEASIBLE,
+    "user_limit": LIMIT,
+    "optimal_inaccurate": LIMIT,
+}
 
 
 class CvxpyBackend(ProgramBackend):
@@ -30,14 +35,23 @@ class CvxpyBackend(ProgramBackend):
     requires = ("cvxpy", "highspy")
     description = "A CVXPY problem with boolean variables and sparse constraints, solved by HiGHS"
 
-    def run(self, prog: Program, options: SolveOptions, clock: Clock, *, relax: bool = False,
-            time_limit: float | None = None, hint: np.ndarray | None = None) -> Raw:
+    def run(
+        self,
+        prog: Program,
+        options: SolveOptions,
+        clock: Clock,
+        *,
+        relax: bool = False,
+        time_limit: float | None = None,
+        hint: np.ndarray | None = None,
+    ) -> Raw:
         import cvxpy as cp
 
         solver = (options.solver or "HIGHS").upper()
         if solver not in cp.installed_solvers():
-            raise SolverNotInstalledError(f"CVXPY solver {solver!r} is not installed; installed: "
-                                          f"{', '.join(cp.installed_solvers())}")
+            raise SolverNotInstalledError(
+                f"CVXPY solver {solver!r} is not installed; installed: {', '.join(cp.installed_solvers())}"
+            )
         with clock("build_s"):
             x = cp.Variable(prog.n, bounds=[0, 1]) if relax else cp.Variable(prog.n, boolean=True)
             eq = prog.lo == prog.hi
@@ -56,11 +70,11 @@ class CvxpyBackend(ProgramBackend):
             except cp.error.SolverError as exc:
                 raise SolverError(f"CVXPY solver {solver} failed: {exc}") from None
         with clock("extract_s"):
-            with warnings.catch_warnings():           # "may be inaccurate" on a time limit: the status says so
+            with warnings.catch_warnings():  # "may be inaccurate" on a time limit: the status says so
                 warnings.simplefilter("ignore", UserWarning)
                 try:
                     problem.unpack_results(result, chain, inverse)
-                except ValueError as exc:            # CVXPY refuses a solution without a status
+                except ValueError as exc:  # CVXPY refuses a solution without a status
                     raise SolverError(f"CVXPY solver {solver} returned no usable solution: {exc}") from None
             status = problem.status
             state = raw_state(STATUS, status, f"CVXPY solver {solver}")
@@ -72,5 +86,5 @@ class CvxpyBackend(ProgramBackend):
             if relax:
                 bound = float(problem.value) if state == OPTIMAL else None
             elif info is not None and hasattr(info, "mip_dual_bound"):
-                bound = -float(info.mip_dual_bound)      # CVXPY hands HiGHS "minimise -c·x"
+                bound = -float(info.mip_dual_bound)  # CVXPY hands HiGHS "minimise -c·x"
         return Raw(x=xs, state=state, bound=bound, message="" if state == OPTIMAL else f"CVXPY status {status}")

@@ -24,9 +24,24 @@ from rpbench.exceptions import SolverError
 from rpbench.model import Model, Solution, Status, Structure, make_solution
 
 #: HiGHS model status name -> raw state (x in [0, 1]: "unbounded or infeasible" is infeasible).
-STATUS = {"kOptimal": OPTIMAL, "kInfeasible": INFEASIBLE, "kUnboundedOrInfeasible": INFEASIBLE,
-          **{name: LIMIT for name in ("kTimeLimit", "kIterationLimit", "kSolutionLimit", "kObjectiveBound",
-                                      "kObjectiveTarget", "kInterrupt", "kHighsInterrupt", "kMemoryLimit")}}
+STATUS = {
+    "kOptimal": OPTIMAL,
+    "kInfeasible": INFEASIBLE,
+    "kUnboundedOrInfeasible": INFEASIBLE,
+    **{
+        name: LIMIT
+        for name in (
+            "kTimeLimit",
+            "kIterationLimit",
+            "kSolutionLimit",
+            "kObjectiveBound",
+            "kObjectiveTarget",
+            "kInterrupt",
+            "kHighsInterrupt",
+            "kMemoryLimit",
+        )
+    },
+}
 
 
 def highs_settings(options: SolveOptions, time_limit: float | None, *, relax: bool) -> dict:
@@ -41,7 +56,7 @@ def highs_settings(options: SolveOptions, time_limit: float | None, *, relax: bo
     if time_limit is not None:
         settings["time_limit"] = max(float(time_limit), 1e-3)
     if relax:
-        settings["solver"] = "simplex"      # a vertex, hence integral for the assignment
+        settings["solver"] = "simplex"  # a vertex, hence integral for the assignment
         # HiGHS 1.14's presolve finds nothing to remove in this LP (0/1 columns, one row per passenger
         # and per vehicle) yet dominates its time: 2,000 x 5,000 (1.27 M columns) 32 s vs 1.6 s without,
         # 100 x 500 45 ms vs 5 ms; the presolved simplex also ended "kUnknown" on a full-day FL-nd round.
@@ -93,7 +108,7 @@ def kept_instance(settings: dict, role: str = "solve"):
         h.clearModel()
     if _kept.settings.get(role) != settings:
         h.resetOptions()
-        _kept.settings[role] = None            # unknown until every option is accepted
+        _kept.settings[role] = None  # unknown until every option is accepted
         _apply(h, settings)
         _kept.settings[role] = dict(settings)
     return h
@@ -113,8 +128,12 @@ class HighsBackend(ProgramBackend):
         ``method = "mip"`` or a positive ``mip_rel_gap`` (which may stop short of the
         optimum) skip the attempt.
         """
-        if not (model.structure is Structure.TRIP_PACKING and model.n_cols and options.method in (None, "lp")
-                and options.mip_rel_gap == 0):
+        if not (
+            model.structure is Structure.TRIP_PACKING
+            and model.n_cols
+            and options.method in (None, "lp")
+            and options.mip_rel_gap == 0
+        ):
             return super().solve(model, options, hint)
         self.ensure_installed()
         clock = Clock()
@@ -127,8 +146,16 @@ class HighsBackend(ProgramBackend):
         sol = make_solution(model, chosen, Status.OPTIMAL, self.name, unique=True, **clock.times)
         return replace(sol, bound=sol.objective, gap=0.0)
 
-    def run(self, prog: Program, options: SolveOptions, clock: Clock, *, relax: bool = False,
-            time_limit: float | None = None, hint: np.ndarray | None = None) -> Raw:
+    def run(
+        self,
+        prog: Program,
+        options: SolveOptions,
+        clock: Clock,
+        *,
+        relax: bool = False,
+        time_limit: float | None = None,
+        hint: np.ndarray | None = None,
+    ) -> Raw:
         import highspy
 
         with clock("build_s"):
@@ -136,13 +163,23 @@ class HighsBackend(ProgramBackend):
             n, m = prog.n, prog.n_rows
             inf = highspy.kHighsInf
             integrality = np.full(n, 0 if relax else int(highspy.HighsVarType.kInteger), dtype=np.int32)
-            status = h.passModel(n, m, len(prog.indices), int(highspy.MatrixFormat.kColwise),
-                                 int(highspy.ObjSense.kMaximize), 0.0, prog.c, np.zeros(n), np.ones(n),
-                                 np.where(np.isfinite(prog.lo), prog.lo, -inf),
-                                 np.where(np.isfinite(prog.hi), prog.hi, inf),
-                                 prog.indptr.astype(np.int32), prog.indices.astype(np.int32),
-                                 np.ones(len(prog.indices), dtype=np.float64),
-                                 integrality)
+            status = h.passModel(
+                n,
+                m,
+                len(prog.indices),
+                int(highspy.MatrixFormat.kColwise),
+                int(highspy.ObjSense.kMaximize),
+                0.0,
+                prog.c,
+                np.zeros(n),
+                np.ones(n),
+                np.where(np.isfinite(prog.lo), prog.lo, -inf),
+                np.where(np.isfinite(prog.hi), prog.hi, inf),
+                prog.indptr.astype(np.int32),
+                prog.indices.astype(np.int32),
+                np.ones(len(prog.indices), dtype=np.float64),
+                integrality,
+            )
             if status.name == "kError":
                 raise SolverError("HiGHS rejected the model passed by rpbench (passModel returned kError)")
             if hint is not None and not relax:
@@ -153,7 +190,7 @@ class HighsBackend(ProgramBackend):
             status = h.getModelStatus().name
             state = raw_state(STATUS, status, "HiGHS")
             # single info values: h.getInfo() copies every field (~30 µs, a tenth of a typical round's solve)
-            has_x = _info(h, "primal_solution_status") == 2         # kSolutionStatusFeasible
+            has_x = _info(h, "primal_solution_status") == 2  # kSolutionStatusFeasible
             x = np.asarray(h.getSolution().col_value, dtype=np.float64) if has_x else None
             if relax:
                 bound = _info(h, "objective_function_value") if state == OPTIMAL else None
@@ -165,6 +202,6 @@ class HighsBackend(ProgramBackend):
 def _info(h, name: str):
     """One value of HiGHS's info record."""
     status, value = h.getInfoValue(name)
-    if status.name == "kError":                                    # pragma: no cover - names are HiGHS's own
+    if status.name == "kError":  # pragma: no cover - names are HiGHS's own
         raise SolverError(f"HiGHS has no info value {name!r}")
     return value

@@ -18,7 +18,7 @@ from rpbench.model import AssignmentModel, Solution, Status, make_solution
 
 #: lap's "infinity"; costs are scaled so path lengths stay below LAP_SAFE.
 LAP_LARGE = 1e6
-LAP_SAFE = 2.0 ** 18
+LAP_SAFE = 2.0**18
 
 
 def lapmod_solution(model: AssignmentModel, backend: str) -> Solution:
@@ -26,8 +26,14 @@ def lapmod_solution(model: AssignmentModel, backend: str) -> Solution:
     clock = Clock()
     chosen = lapmod_assignment(model, clock)
     if chosen is None:
-        return make_solution(model, np.zeros(0, np.int64), Status.INFEASIBLE, backend,
-                             message="no assignment serves every passenger without a wait option", **clock.times)
+        return make_solution(
+            model,
+            np.zeros(0, np.int64),
+            Status.INFEASIBLE,
+            backend,
+            message="no assignment serves every passenger without a wait option",
+            **clock.times,
+        )
     obj = model.objective_of(chosen)
     return make_solution(model, chosen, Status.OPTIMAL, backend, bound=obj, gap=0.0, **clock.times)
 

@@ -55,7 +55,7 @@ from rpbench.exceptions import SolverError
 from rpbench.model import Model, PairingModel, Solution, Status, Structure, empty_solution, make_solution
 
 #: Largest edge weight PyMatching accepts and keeps unscaled when all weights are integral.
-PM_MAX_WEIGHT = 2 ** 24 - 1
+PM_MAX_WEIGHT = 2**24 - 1
 #: Pairings with fewer candidate pairs are solved in-process even under a time limit.
 SMALL_GRAPH = 5_000
 #: Oracle-2 pairings with this many candidate pairs go straight to Blossom V when it is installed:
@@ -68,8 +68,10 @@ class MatchingBackend(Backend):
     name = "matching"
     requires = ("lap", "pymatching", "highspy")
     exact = frozenset(Structure)
-    description = ("lap.lapmod (sparse Jonker-Volgenant) for the assignment, PyMatching sparse blossom for "
-                   "pairing; trip packing delegated to the HiGHS MIP")
+    description = (
+        "lap.lapmod (sparse Jonker-Volgenant) for the assignment, PyMatching sparse blossom for "
+        "pairing; trip packing delegated to the HiGHS MIP"
+    )
 
     def solve(self, model: Model, options: SolveOptions) -> Solution:
         self.ensure_installed()
@@ -117,8 +119,9 @@ def reduction_costs(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray) -> tupl
     return beta[a] + beta[b] - w, beta
 
 
-def max_weight_matching(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, clock: Clock,
-                        deadline: float | None = None) -> np.ndarray:
+def max_weight_matching(
+    n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, clock: Clock, deadline: float | None = None
+) -> np.ndarray:
     """Indices of a maximum-weight matching for integral weights ``w >= 1``, by PyMatching.
 
     Every vertex is a detection event; see :func:`reduction_costs` for why
@@ -141,7 +144,7 @@ def max_weight_matching(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, clo
     guard = deadline if E >= SMALL_GRAPH else None
     pairs, build_s, _ = _in_child(_pymatching_pairs, (n, a, b, pair_cost, beta), guard)
     clock.times["build_s"] += build_s
-    clock.times["solve_s"] += time.perf_counter() - t0 - build_s       # includes the fork, if any
+    clock.times["solve_s"] += time.perf_counter() - t0 - build_s  # includes the fork, if any
     with clock("extract_s"):
         pairs = pairs[pairs[:, 1] >= 0]
         return edge_indices(n, a, b, pairs[:, 0], pairs[:, 1])
@@ -157,9 +160,12 @@ def _pymatching_pairs(n, a, b, pair_cost, beta) -> tuple[np.ndarray, float, floa
     indices = np.concatenate([np.column_stack([a, b]).ravel(), np.arange(n)])
     H = sp.csc_matrix((np.ones(len(indices), np.uint8), indices, indptr), shape=(n, E + n))
     matching = pymatching.Matching()
-    matching.load_from_check_matrix(H, weights=np.concatenate([pair_cost, beta]).astype(np.float64),
-                                    faults_matrix=sp.csc_matrix((0, E + n), dtype=np.uint8),
-                                    use_virtual_boundary_node=True)
+    matching.load_from_check_matrix(
+        H,
+        weights=np.concatenate([pair_cost, beta]).astype(np.float64),
+        faults_matrix=sp.csc_matrix((0, E + n), dtype=np.uint8),
+        use_virtual_boundary_node=True,
+    )
     t1 = time.perf_counter()
     pairs = matching.decode_to_matched_dets_array(np.ones(n, dtype=np.uint8))
     return np.asarray(pairs, dtype=np.int64).reshape(-1, 2), t1 - t0, time.perf_counter() - t1
@@ -172,8 +178,9 @@ def _in_child(fn, args, deadline: float | None):
     return run_in_child(fn, args, deadline, solver="PyMatching")
 
 
-def max_weight_max_cardinality(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, clock: Clock,
-                               deadline: float | None = None) -> tuple[np.ndarray, bool, int | None]:
+def max_weight_max_cardinality(
+    n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, clock: Clock, deadline: float | None = None
+) -> tuple[np.ndarray, bool, int | None]:
     """A maximum-weight matching among the maximum-cardinality ones (Oracle-2), whether it is proven, and a bound.
 
     ``k*`` comes first, exactly, from Edmonds' algorithm with its Tutte-Berge
@@ -199,7 +206,7 @@ def max_weight_max_cardinality(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarr
     lam = max(1, spread // 4)
     while lam <= 4 * spread:
         wl = w + lam
-        keep = np.flatnonzero(wl > 0)      # a pair worth <= 0 never helps a maximum-weight matching
+        keep = np.flatnonzero(wl > 0)  # a pair worth <= 0 never helps a maximum-weight matching
         try:
             sel = keep[max_weight_matching(n, a[keep], b[keep], wl[keep], clock, deadline)]
         except Timeout as exc:
@@ -209,8 +216,10 @@ def max_weight_max_cardinality(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarr
             return sel, True, int(w[sel].sum())
         lagrangian = int(w[sel].sum()) + lam * (len(sel) - top.size)
         bound = lagrangian if bound is None else min(bound, lagrangian)
-        with clock("build_s"):             # the heaviest start so far, completed to k* pairs
-            best = columns_of_mate(n, a, b, maximum_cardinality_matching(n, a, b, start=mate_of(n, a[sel], b[sel])).mate)
+        with clock("build_s"):  # the heaviest start so far, completed to k* pairs
+            best = columns_of_mate(
+                n, a, b, maximum_cardinality_matching(n, a, b, start=mate_of(n, a[sel], b[sel])).mate
+            )
         lam *= 2
     return best, False, bound
 
@@ -223,8 +232,7 @@ def solve_pairing(model: PairingModel, options: SolveOptions, clock: Clock, back
     """
     overflow = options.extra.get("overflow", "fallback")
     if overflow not in ("fallback", "error"):
-        raise SolverError(f"backend {backend!r}: [options.extra] overflow = {overflow!r}; "
-                          "use \"fallback\" or \"error\"")
+        raise SolverError(f'backend {backend!r}: [options.extra] overflow = {overflow!r}; use "fallback" or "error"')
     lexi = model.objective == "cardinality_then_weight"
     if lexi and model.n_cols >= BLOSSOM_V_FIRST and _blossom_installed():
         return _blossom_v(model, options, clock, backend, f"{model.n_cols} candidate pairs")
@@ -234,22 +242,22 @@ def solve_pairing(model: PairingModel, options: SolveOptions, clock: Clock, back
         v = model.values.astype(np.int64)
         a, b = model.col_a.astype(np.int64), model.col_b.astype(np.int64)
         g = int(np.gcd.reduce(np.abs(v))) if np.any(v) else 1
-        w = v // g                          # exact: every value is a multiple of g
+        w = v // g  # exact: every value is a multiple of g
     step, why, sel, proven, bound = 1, "", np.zeros(0, np.int64), False, None
-    while True:                             # step > 1: coarsened, only to warm-start the fallback
+    while True:  # step > 1: coarsened, only to warm-start the fallback
         wc = w if step == 1 else np.round(w / step).astype(np.int64)
         try:
             if lexi:
                 sel, proven, bound = max_weight_max_cardinality(model.n_orders, a, b, wc, clock, deadline)
             else:
-                use = np.flatnonzero(wc > 0)     # Oracle-1: a pair worth <= 0 never helps
+                use = np.flatnonzero(wc > 0)  # Oracle-1: a pair worth <= 0 never helps
                 sel, proven = use[max_weight_matching(model.n_orders, a[use], b[use], wc[use], clock, deadline)], True
             break
         except RangeExceeded as exc:
             if overflow == "error":
                 raise SolverError(_overflow_message(model, backend, g, exc.needed, lexi)) from None
             why = why or f"values exceed PyMatching's exact range (reduction costs up to {exc.needed})"
-            if _blossom_installed():          # exact in int64: no coarsened warm start needed
+            if _blossom_installed():  # exact in int64: no coarsened warm start needed
                 return _blossom_v(model, options, clock, backend, why)
             step *= 2
         except Timeout as exc:
@@ -280,8 +288,15 @@ def _blossom_v(model: PairingModel, options: SolveOptions, clock: Clock, backend
     return replace(sol, message=note)
 
 
-def _highs_fallback(model: PairingModel, options: SolveOptions, clock: Clock, backend: str,
-                    start: np.ndarray, why: str, lagrangian: int | None = None) -> Solution:
+def _highs_fallback(
+    model: PairingModel,
+    options: SolveOptions,
+    clock: Clock,
+    backend: str,
+    start: np.ndarray,
+    why: str,
+    lagrangian: int | None = None,
+) -> Solution:
     """The exact HiGHS MIP (two stages for Oracle-2), warm-started with ``start``; honest status on a time limit.
 
     ``lagrangian`` (Oracle-2) is a proven bound from the pair-bonus runs; the
@@ -298,16 +313,24 @@ def _highs_fallback(model: PairingModel, options: SolveOptions, clock: Clock, ba
     if sol.status is Status.OPTIMAL or lagrangian is None or (sol.bound is not None and sol.bound <= lagrangian):
         return sol
     obj = sol.objective
-    if lagrangian < obj + 1:                  # integral values: nothing better exists
-        return replace(sol, status=Status.OPTIMAL, bound=obj, gap=0.0, message=f"{note}; proven by the Lagrangian bound")
-    return replace(sol, bound=float(lagrangian), gap=(lagrangian - obj) / max(1.0, abs(obj)),
-                   message=f"{note}; bound from the pair-bonus (Lagrangian) relaxation")
+    if lagrangian < obj + 1:  # integral values: nothing better exists
+        return replace(
+            sol, status=Status.OPTIMAL, bound=obj, gap=0.0, message=f"{note}; proven by the Lagrangian bound"
+        )
+    return replace(
+        sol,
+        bound=float(lagrangian),
+        gap=(lagrangian - obj) / max(1.0, abs(obj)),
+        message=f"{note}; bound from the pair-bonus (Lagrangian) relaxation",
+    )
 
 
 def _overflow_message(model: PairingModel, backend: str, g: int, needed: int, lexi: bool) -> str:
     factor = 2 ** math.ceil(math.log2(needed / PM_MAX_WEIGHT))
     what = "values plus the cardinality bonus" if lexi else "values"
-    return (f"backend {backend!r}: the {what} of {model.name!r} (up to {int(np.abs(model.values).max())} x "
-            f"{model.unit_m:g} m) need reduction costs up to {needed} > {PM_MAX_WEIGHT}, PyMatching's exact integer "
-            f"range; build the model with unit_m >= {model.unit_m * g * factor:g} m, or drop [options.extra] "
-            "overflow = \"error\" to fall back to the HiGHS MIP")
+    return (
+        f"backend {backend!r}: the {what} of {model.name!r} (up to {int(np.abs(model.values).max())} x "
+        f"{model.unit_m:g} m) need reduction costs up to {needed} > {PM_MAX_WEIGHT}, PyMatching's exact integer "
+        f"range; build the model with unit_m >= {model.unit_m * g * factor:g} m, or drop [options.extra] "
+        'overflow = "error" to fall back to the HiGHS MIP'
+    )

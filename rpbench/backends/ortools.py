@@ -35,8 +35,9 @@ class OrtoolsBackend(ProgramBackend):
         if options.method in ("cp", "mip"):
             return super().solve_assignment(model, SolveOptions(**{**options.__dict__, "method": "mip"}), clock)
         if options.method not in (None, "flow"):
-            raise SolverError(f"backend {self.name!r}: method {options.method!r} unknown for the assignment; "
-                              "use flow or cp")
+            raise SolverError(
+                f"backend {self.name!r}: method {options.method!r} unknown for the assignment; use flow or cp"
+            )
         from ortools.graph.python import min_cost_flow
 
         with clock("build_s"):
@@ -56,19 +57,34 @@ class OrtoolsBackend(ProgramBackend):
             status = flow.solve()
         with clock("extract_s"):
             if status in (flow.INFEASIBLE, flow.UNBALANCED):
-                return make_solution(model, np.zeros(0, np.int64), Status.INFEASIBLE, self.name,
-                                     message="no assignment serves every passenger without a wait option",
-                                     **clock.times)
+                return make_solution(
+                    model,
+                    np.zeros(0, np.int64),
+                    Status.INFEASIBLE,
+                    self.name,
+                    message="no assignment serves every passenger without a wait option",
+                    **clock.times,
+                )
             if status != flow.OPTIMAL:
-                raise SolverError(f"OR-Tools min-cost flow failed with status {status!r} "
-                                  "(BAD_COST_RANGE: values too large for int64 path costs)")
-            used = np.asarray(flow.flows(arcs[:model.n_cols])) > 0
+                raise SolverError(
+                    f"OR-Tools min-cost flow failed with status {status!r} "
+                    "(BAD_COST_RANGE: values too large for int64 path costs)"
+                )
+            used = np.asarray(flow.flows(arcs[: model.n_cols])) > 0
             chosen = np.sort(col_of_arc[used])
         obj = model.objective_of(chosen)
         return make_solution(model, chosen, Status.OPTIMAL, self.name, bound=obj, gap=0.0, **clock.times)
 
-    def run(self, prog: Program, options: SolveOptions, clock: Clock, *, relax: bool = False,
-            time_limit: float | None = None, hint: np.ndarray | None = None) -> Raw:
+    def run(
+        self,
+        prog: Program,
+        options: SolveOptions,
+        clock: Clock,
+        *,
+        relax: bool = False,
+        time_limit: float | None = None,
+        hint: np.ndarray | None = None,
+    ) -> Raw:
         from ortools.sat.python import cp_model
 
         with clock("build_s"):
@@ -80,13 +96,13 @@ class OrtoolsBackend(ProgramBackend):
             A = prog.A.tocsr()
             starts, cols = A.indptr, A.indices
             for r in range(A.shape[0]):
-                members = [x[j] for j in cols[starts[r]:starts[r + 1]]]
+                members = [x[j] for j in cols[starts[r] : starts[r + 1]]]
                 lo, hi = prog.lo[r], prog.hi[r]
                 if lo == 1 and hi == 1:
                     model.add_exactly_one(members)
                 elif hi == 1 and not np.isfinite(lo):
                     model.add_at_most_one(members)
-                else:                          # the cardinality row Σx >= k of Oracle-2's second stage
+                else:  # the cardinality row Σx >= k of Oracle-2's second stage
                     model.add(cp_model.LinearExpr.sum(members) >= int(lo))
             model.maximize(cp_model.LinearExpr.weighted_sum(x, coeffs.tolist()))
             if hint is not None:
@@ -108,7 +124,11 @@ class OrtoolsBackend(ProgramBackend):
             if state == INFEASIBLE:
                 return Raw(x=None, state=INFEASIBLE)
             has_x = status in (cp_model.OPTIMAL, cp_model.FEASIBLE)
-            xs = np.asarray(solver.response_proto.solution, dtype=np.float64)[:prog.n] if has_x else None
-            bound = float(solver.best_objective_bound) if has_x else None   # without a solution it may be 0
-        return Raw(x=xs, state=state, bound=bound,
-                   message="" if state == OPTIMAL else f"CP-SAT status {solver.status_name(status)}")
+            xs = np.asarray(solver.response_proto.solution, dtype=np.float64)[: prog.n] if has_x else None
+            bound = float(solver.best_objective_bound) if has_x else None  # without a solution it may be 0
+        return Raw(
+            x=xs,
+            state=state,
+            bound=bound,
+            message="" if state == OPTIMAL else f"CP-SAT status {solver.status_name(status)}",
+        )

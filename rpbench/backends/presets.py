@@ -46,7 +46,7 @@ _TOP_KEYS = {"backend", "description", "options"}
 _OPTION_KEYS = {"threads", "time_limit_s", "mip_rel_gap", "method", "solver", "extra"}
 # Sanity bounds: beyond them a value is a typo, and a huge time limit overflows the timeouts derived from it.
 MAX_THREADS = 1024
-MAX_TIME_LIMIT_S = 1e6          # 11.6 days
+MAX_TIME_LIMIT_S = 1e6  # 11.6 days
 # mip_rel_gap lies in [0, 1]: a relative gap of 1 already accepts any feasible solution.
 
 
@@ -65,8 +65,14 @@ class Preset:
     @classmethod
     def of(cls, backend: Backend, options: SolveOptions | None = None) -> "Preset":
         """An unnamed preset around a backend object (e.g. one that is not registered)."""
-        return cls(name=backend.name, backend=backend.name, description=type(backend).__doc__ or "",
-                   options=options or SolveOptions(), path="<in code>", instance=backend)
+        return cls(
+            name=backend.name,
+            backend=backend.name,
+            description=type(backend).__doc__ or "",
+            options=options or SolveOptions(),
+            path="<in code>",
+            instance=backend,
+        )
 
     def backend_class(self) -> type[Backend]:
         return type(self.instance) if self.instance is not None else backend_class(self.backend)
@@ -79,9 +85,20 @@ class Preset:
 
     def as_dict(self) -> dict:
         o = self.options
-        return {"name": self.name, "backend": self.backend, "description": self.description, "path": self.path,
-                "options": {"threads": o.threads, "time_limit_s": o.time_limit_s, "mip_rel_gap": o.mip_rel_gap,
-                            "method": o.method, "solver": o.solver, "extra": dict(o.extra)}}
+        return {
+            "name": self.name,
+            "backend": self.backend,
+            "description": self.description,
+            "path": self.path,
+            "options": {
+                "threads": o.threads,
+                "time_limit_s": o.time_limit_s,
+                "mip_rel_gap": o.mip_rel_gap,
+                "method": o.method,
+                "solver": o.solver,
+                "extra": dict(o.extra),
+            },
+        }
 
 
 def _preset_files() -> dict[str, Path | resources.abc.Traversable]:
@@ -114,8 +131,10 @@ def load_preset(name: str) -> Preset:
         return parse_preset(path.stem, _read_text(path, str(path)), str(path))
     files = _preset_files()
     if name not in files:
-        raise PresetError(f"unknown solver preset {name!r}; available: {', '.join(files) or 'none'} "
-                          "(presets live in solvers/NAME.toml)")
+        raise PresetError(
+            f"unknown solver preset {name!r}; available: {', '.join(files) or 'none'} "
+            "(presets live in solvers/NAME.toml)"
+        )
     entry = files[name]
     return parse_preset(name, _read_text(entry, str(entry)), str(entry))
 
@@ -125,8 +144,7 @@ def _read_text(entry: Path | resources.abc.Traversable, where: str) -> str:
     try:
         return entry.read_bytes().decode("utf-8")
     except UnicodeDecodeError as exc:
-        raise PresetError(f"solver preset {where!r} is not UTF-8 text (byte {exc.start}); "
-                          "save it as UTF-8") from None
+        raise PresetError(f"solver preset {where!r} is not UTF-8 text (byte {exc.start}); save it as UTF-8") from None
     except OSError as exc:
         raise PresetError(f"solver preset {where!r} cannot be read: {one_line(exc)}") from None
 
@@ -138,14 +156,19 @@ def parse_preset(name: str, text: str, where: str) -> Preset:
         raise PresetError(f"solver preset {where!r} is not valid TOML: {one_line(exc)}") from None
     unknown = set(data) - _TOP_KEYS
     if unknown:
-        raise PresetError(f"solver preset {where!r}: unknown key(s) {', '.join(sorted(unknown))}; "
-                          f"allowed: {', '.join(sorted(_TOP_KEYS))}")
+        raise PresetError(
+            f"solver preset {where!r}: unknown key(s) {', '.join(sorted(unknown))}; "
+            f"allowed: {', '.join(sorted(_TOP_KEYS))}"
+        )
     backend = data.get("backend")
-    if not isinstance(backend, str) or not (backend in REGISTRY or is_spec(backend)
-                                            or backend.lower() in plugin_names()):
-        raise PresetError(f"solver preset {where!r}: backend = {backend!r} is not one of "
-                          f"{', '.join([*REGISTRY, *plugin_names()])} (installed plug-ins included) nor a "
-                          "\"module:Class\" spec")
+    if not isinstance(backend, str) or not (
+        backend in REGISTRY or is_spec(backend) or backend.lower() in plugin_names()
+    ):
+        raise PresetError(
+            f"solver preset {where!r}: backend = {backend!r} is not one of "
+            f"{', '.join([*REGISTRY, *plugin_names()])} (installed plug-ins included) nor a "
+            '"module:Class" spec'
+        )
     if backend not in REGISTRY:
         try:
             backend_class(backend)
@@ -154,8 +177,13 @@ def parse_preset(name: str, text: str, where: str) -> Preset:
     description = data.get("description", "")
     if not isinstance(description, str):
         raise PresetError(f"solver preset {where!r}: description = {description!r} must be a string")
-    return Preset(name=name, backend=backend, description=description,
-                  options=_parse_options(data.get("options", {}), where), path=where)
+    return Preset(
+        name=name,
+        backend=backend,
+        description=description,
+        options=_parse_options(data.get("options", {}), where),
+        path=where,
+    )
 
 
 def _parse_options(opts, where: str) -> SolveOptions:
@@ -164,8 +192,10 @@ def _parse_options(opts, where: str) -> SolveOptions:
         raise PresetError(f"solver preset {where!r}: [options] must be a table")
     unknown = set(opts) - _OPTION_KEYS
     if unknown:
-        raise PresetError(f"solver preset {where!r}: unknown option(s) {', '.join(sorted(unknown))}; "
-                          f"allowed: {', '.join(sorted(_OPTION_KEYS))}")
+        raise PresetError(
+            f"solver preset {where!r}: unknown option(s) {', '.join(sorted(unknown))}; "
+            f"allowed: {', '.join(sorted(_OPTION_KEYS))}"
+        )
     return SolveOptions(
         threads=_opt(opts, "threads", int, 1, where, low=1, high=MAX_THREADS),
         time_limit_s=_opt(opts, "time_limit_s", float, None, where, low=0.0, low_open=True, high=MAX_TIME_LIMIT_S),
@@ -189,8 +219,7 @@ def _opt(opts: dict, key: str, kind: type, default, where: str, *, low=None, hig
     if kind is float and not math.isfinite(value):
         raise PresetError(f"solver preset {where!r}: option {key} = {value!r} must be a finite number")
     if low is not None and (value <= low if low_open else value < low):
-        raise PresetError(f"solver preset {where!r}: {key} must be {'>' if low_open else '>='} {low:g} "
-                          f"(got {value!r})")
+        raise PresetError(f"solver preset {where!r}: {key} must be {'>' if low_open else '>='} {low:g} (got {value!r})")
     if high is not None and value > high:
         raise PresetError(f"solver preset {where!r}: {key} must be <= {high:g} (got {value!r})")
     return value
@@ -199,14 +228,18 @@ def _opt(opts: dict, key: str, kind: type, default, where: str, *, low=None, hig
 def _extra(extra, where: str) -> dict[str, str | int | float | bool]:
     """``[options.extra]``: a table of scalar settings, passed to the backend verbatim."""
     if not isinstance(extra, dict):
-        raise PresetError(f"solver preset {where!r}: [options.extra] must be a table of NAME = value settings, "
-                          f"not {type(extra).__name__} {extra!r}")
+        raise PresetError(
+            f"solver preset {where!r}: [options.extra] must be a table of NAME = value settings, "
+            f"not {type(extra).__name__} {extra!r}"
+        )
     for key, value in extra.items():
         # Lists, tables and TOML dates would reach the solver as odd options: only scalars are settings.
         if isinstance(value, bool) or isinstance(value, (str, int)):
             continue
         if isinstance(value, float) and math.isfinite(value):
             continue
-        raise PresetError(f"solver preset {where!r}: [options.extra] {key} = {value!r} must be a string, "
-                          "integer, finite number or boolean")
+        raise PresetError(
+            f"solver preset {where!r}: [options.extra] {key} = {value!r} must be a string, "
+            "integer, finite number or boolean"
+        )
     return dict(extra)

@@ -23,11 +23,24 @@ from rpbench.backends.highs import highs_settings
 from rpbench.exceptions import SolverNotInstalledError
 
 #: Pyomo termination condition name -> raw state (appsi and legacy interfaces).
-STATUS = {"optimal": OPTIMAL,
-          **{name: INFEASIBLE for name in ("infeasible", "infeasibleOrUnbounded", "invalidProblem")},
-          **{name: LIMIT for name in ("maxTimeLimit", "maxIterations", "objectiveLimit", "interrupted",
-                                      "maxEvaluations", "minStepLength", "iterationLimit", "userInterrupt",
-                                      "other")}}
+STATUS = {
+    "optimal": OPTIMAL,
+    **{name: INFEASIBLE for name in ("infeasible", "infeasibleOrUnbounded", "invalidProblem")},
+    **{
+        name: LIMIT
+        for name in (
+            "maxTimeLimit",
+            "maxIterations",
+            "objectiveLimit",
+            "interrupted",
+            "maxEvaluations",
+            "minStepLength",
+            "iterationLimit",
+            "userInterrupt",
+            "other",
+        )
+    },
+}
 
 
 def _state(condition, solver: str) -> str:
@@ -47,13 +60,14 @@ def build_model(prog: Program, relax: bool):
     def row(m, r):
         lo, hi = prog.lo[r], prog.hi[r]
         if starts[r] == starts[r + 1]:
-            return pyo.Constraint.Skip        # an idle vehicle or request: nothing covers it
-        body = pyo.quicksum(x[j] for j in cols[starts[r]:starts[r + 1]])
+            return pyo.Constraint.Skip  # an idle vehicle or request: nothing covers it
+        body = pyo.quicksum(x[j] for j in cols[starts[r] : starts[r + 1]])
         return (float(lo) if np.isfinite(lo) else None, body, float(hi) if np.isfinite(hi) else None)
 
     m.row = pyo.Constraint(range(A.shape[0]), rule=row)
-    m.objective = pyo.Objective(expr=pyo.quicksum(float(c) * xj for c, xj in zip(prog.c, x) if c != 0),
-                                sense=pyo.maximize)
+    m.objective = pyo.Objective(
+        expr=pyo.quicksum(float(c) * xj for c, xj in zip(prog.c, x) if c != 0), sense=pyo.maximize
+    )
     return m, x
 
 
@@ -62,8 +76,16 @@ class PyomoBackend(ProgramBackend):
     requires = ("pyomo", "highspy")
     description = "A Pyomo model solved by HiGHS through Pyomo's appsi interface (or another installed solver)"
 
-    def run(self, prog: Program, options: SolveOptions, clock: Clock, *, relax: bool = False,
-            time_limit: float | None = None, hint: np.ndarray | None = None) -> Raw:
+    def run(
+        self,
+        prog: Program,
+        options: SolveOptions,
+        clock: Clock,
+        *,
+        relax: bool = False,
+        time_limit: float | None = None,
+        hint: np.ndarray | None = None,
+    ) -> Raw:
         solver = options.solver or "appsi_highs"
         if solver == "appsi_highs":
             return self._run_appsi(prog, options, clock, relax, time_limit, hint)
@@ -77,13 +99,21 @@ class PyomoBackend(ProgramBackend):
             opt = Highs()
             opt.config.load_solution = False
             settings = highs_settings(options, time_limit, relax=relax)
-            opt.config.time_limit = settings.pop("time_limit", None)   # appsi passes these two itself
+            opt.config.time_limit = settings.pop("time_limit", None)  # appsi passes these two itself
             opt.config.mip_gap = settings.pop("mip_rel_gap")
             opt.highs_options = settings
-            uc = opt.update_config            # the model is final: skip appsi's change detection in solve()
-            for flag in ("check_for_new_or_removed_constraints", "check_for_new_or_removed_vars",
-                         "check_for_new_or_removed_params", "check_for_new_objective", "update_constraints",
-                         "update_vars", "update_params", "update_named_expressions", "update_objective"):
+            uc = opt.update_config  # the model is final: skip appsi's change detection in solve()
+            for flag in (
+                "check_for_new_or_removed_constraints",
+                "check_for_new_or_removed_vars",
+                "check_for_new_or_removed_params",
+                "check_for_new_objective",
+                "update_constraints",
+                "update_vars",
+                "update_params",
+                "update_named_expressions",
+                "update_objective",
+            ):
                 setattr(uc, flag, False)
             if hint is not None and not relax:
                 for var, value in zip(x, np.round(hint).tolist()):
@@ -99,8 +129,12 @@ class PyomoBackend(ProgramBackend):
                 values = results.solution_loader.get_primals(x)
                 xs = np.array([values[v] for v in x], dtype=np.float64)
             bound = results.best_objective_bound
-        return Raw(x=xs, state=state, bound=None if bound is None else float(bound),
-                   message="" if state == OPTIMAL else f"Pyomo termination {results.termination_condition}")
+        return Raw(
+            x=xs,
+            state=state,
+            bound=None if bound is None else float(bound),
+            message="" if state == OPTIMAL else f"Pyomo termination {results.termination_condition}",
+        )
 
     def _run_legacy(self, solver, prog, options, clock, relax, time_limit) -> Raw:
         import pyomo.environ as pyo
@@ -108,8 +142,9 @@ class PyomoBackend(ProgramBackend):
 
         opt = pyo.SolverFactory(solver)
         if not opt.available(exception_flag=False):
-            raise SolverNotInstalledError(f"Pyomo solver {solver!r} is not available; install it or use the "
-                                          "default appsi_highs")
+            raise SolverNotInstalledError(
+                f"Pyomo solver {solver!r} is not available; install it or use the default appsi_highs"
+            )
         with clock("build_s"):
             m, x = build_model(prog, relax)
         with clock("solve_s"):
@@ -121,10 +156,14 @@ class PyomoBackend(ProgramBackend):
             state = _state(results.solver.termination_condition, f"Pyomo solver {solver}")
             xs = None
             if state != INFEASIBLE and len(results.solution) > 0:
-                with LoggingIntercept(level=logging.WARNING):    # "loading an 'aborted' result": the status says so
+                with LoggingIntercept(level=logging.WARNING):  # "loading an 'aborted' result": the status says so
                     m.solutions.load_from(results)
                 xs = np.array([v.value if v.value is not None else 0.0 for v in x], dtype=np.float64)
             bound = results.problem.upper_bound
             bound = float(bound) if bound is not None and np.isfinite(float(bound)) else None
-        return Raw(x=xs, state=state, bound=bound,
-                   message="" if state == OPTIMAL else f"Pyomo termination {results.solver.termination_condition}")
+        return Raw(
+            x=xs,
+            state=state,
+            bound=bound,
+            message="" if state == OPTIMAL else f"Pyomo termination {results.solver.termination_condition}",
+        )

@@ -40,8 +40,16 @@ def backend_class(name: str) -> type[Backend]:
     :class:`Backend`, implement ``solve`` and declare ``name``, ``requires``
     and ``exact``.
     """
-    return plugins.resolve(name, builtin=REGISTRY, package="rpbench.backends", group=ENTRY_POINT_GROUP,
-                           base=Backend, what="backend", required=("name", "requires", "exact"), error=PresetError)
+    return plugins.resolve(
+        name,
+        builtin=REGISTRY,
+        package="rpbench.backends",
+        group=ENTRY_POINT_GROUP,
+        base=Backend,
+        what="backend",
+        required=("name", "requires", "exact"),
+        error=PresetError,
+    )
 
 
 def plugin_names() -> list[str]:

@@ -46,18 +46,31 @@ class ScipyBackend(ProgramBackend):
         with clock("solve_s"):
             try:
                 rows, match = min_weight_full_bipartite_matching(g)
-            except ValueError:                       # no full matching: some passenger cannot be served
-                return make_solution(model, np.zeros(0, np.int64), Status.INFEASIBLE, self.name,
-                                     message="no assignment serves every passenger without a wait option",
-                                     **clock.times)
+            except ValueError:  # no full matching: some passenger cannot be served
+                return make_solution(
+                    model,
+                    np.zeros(0, np.int64),
+                    Status.INFEASIBLE,
+                    self.name,
+                    message="no assignment serves every passenger without a wait option",
+                    **clock.times,
+                )
         with clock("extract_s"):
             chosen = order[np.searchsorted(key[order], rows.astype(np.int64) * (V + P) + match)]
             chosen = np.sort(chosen)
         obj = model.objective_of(chosen)
         return make_solution(model, chosen, Status.OPTIMAL, self.name, bound=obj, gap=0.0, **clock.times)
 
-    def run(self, prog: Program, options: SolveOptions, clock: Clock, *, relax: bool = False,
-            time_limit: float | None = None, hint: np.ndarray | None = None) -> Raw:
+    def run(
+        self,
+        prog: Program,
+        options: SolveOptions,
+        clock: Clock,
+        *,
+        relax: bool = False,
+        time_limit: float | None = None,
+        hint: np.ndarray | None = None,
+    ) -> Raw:
         from scipy.optimize import Bounds, LinearConstraint, milp
 
         with clock("build_s"):
@@ -67,8 +80,7 @@ class ScipyBackend(ProgramBackend):
             constraint = LinearConstraint(prog.A, prog.lo, prog.hi)
             integrality = np.zeros(prog.n) if relax else np.ones(prog.n)
         with clock("solve_s"):
-            res = milp(-prog.c, integrality=integrality, bounds=Bounds(0.0, 1.0), constraints=constraint,
-                       options=opts)
+            res = milp(-prog.c, integrality=integrality, bounds=Bounds(0.0, 1.0), constraints=constraint, options=opts)
         with clock("extract_s"):
             state = raw_state(STATUS, res.status, f"scipy.optimize.milp ({res.message})")
             bound = getattr(res, "mip_dual_bound", None)

@@ -21,12 +21,13 @@ def solve(model: Model, preset: Preset, *, hint: np.ndarray | None = None) -> So
     backend = preset.make_backend()
     backend.ensure_installed()
     if not backend.supports(model.structure):
-        raise PresetError(f"solver preset {preset.name!r} (backend {backend.name!r}) does not solve "
-                          f"{model.structure.value} models exactly; choose another --solver")
+        raise PresetError(
+            f"solver preset {preset.name!r} (backend {backend.name!r}) does not solve "
+            f"{model.structure.value} models exactly; choose another --solver"
+        )
     if model.n_cols == 0:
         return empty_solution(model, backend.name)
-    solution = backend.solve(model, preset.options) if hint is None else \
-        backend.solve(model, preset.options, hint=hint)
+    solution = backend.solve(model, preset.options) if hint is None else backend.solve(model, preset.options, hint=hint)
     verify(model, solution, preset.name)
     return solution
 
@@ -36,7 +37,7 @@ def verify(model: Model, solution: Solution, solver: str) -> None:
     if solution.status is Status.ERROR:
         raise SolverError(f"solver {solver!r} failed on {model.name!r}: {solution.message or 'no message'}")
     if solution.status is Status.INFEASIBLE:
-        if model.structure is not Structure.ASSIGNMENT:       # x = 0 is feasible for packing and pairing
+        if model.structure is not Structure.ASSIGNMENT:  # x = 0 is feasible for packing and pairing
             raise SolverError(f"solver {solver!r} reports {model.name!r} infeasible, but x = 0 is feasible")
         return
     problems = model.violations(solution.chosen)

@@ -43,9 +43,9 @@ def unique_optimum(model, highs) -> np.ndarray | None:
     col_start, col_rows = model.column_rows()
     keep = np.flatnonzero(c >= 0)
     if len(keep) == 0:
-        return keep                                   # x = 0 is the only optimum
+        return keep  # x = 0 is the only optimum
     count = np.diff(col_start)
-    if len(keep) < len(c):                            # rare: most rounds have no negative column
+    if len(keep) < len(c):  # rare: most rounds have no negative column
         count = count[keep]
         entries = np.repeat(col_start[keep] - np.cumsum(count) + count, count) + np.arange(count.sum())
         col_rows, c = col_rows[entries], c[keep]
@@ -53,16 +53,30 @@ def unique_optimum(model, highs) -> np.ndarray | None:
         np.cumsum(count, out=col_start[1:])
     used = np.zeros(model.n_rows, dtype=bool)
     used[col_rows] = True
-    index = np.cumsum(used, dtype=np.int32) - 1       # rows no column uses are dropped
+    index = np.cumsum(used, dtype=np.int32) - 1  # rows no column uses are dropped
     col_rows = index[col_rows]
     n, m = len(keep), int(index[-1]) + 1
-    if m == len(col_rows):                            # disjoint trips: take every one that has value
+    if m == len(col_rows):  # disjoint trips: take every one that has value
         return keep if (c > 0).all() else None
 
     inf = highspy.kHighsInf
-    highs.passModel(n, m, len(col_rows), int(highspy.MatrixFormat.kColwise), int(highspy.ObjSense.kMaximize), 0.0,
-                    c, np.zeros(n), np.ones(n), np.full(m, -inf), np.ones(m), col_start.astype(np.int32), col_rows,
-                    np.ones(len(col_rows)), np.zeros(n, dtype=np.int32))
+    highs.passModel(
+        n,
+        m,
+        len(col_rows),
+        int(highspy.MatrixFormat.kColwise),
+        int(highspy.ObjSense.kMaximize),
+        0.0,
+        c,
+        np.zeros(n),
+        np.ones(n),
+        np.full(m, -inf),
+        np.ones(m),
+        col_start.astype(np.int32),
+        col_rows,
+        np.ones(len(col_rows)),
+        np.zeros(n, dtype=np.int32),
+    )
     highs.run()
     if highs.getModelStatus().name != "kOptimal":
         return None
@@ -70,7 +84,7 @@ def unique_optimum(model, highs) -> np.ndarray | None:
     x = np.asarray(solution.col_value)
     chosen = x > 0.5
     if np.abs(x - chosen).max() > 1e-6 or not chosen.any():
-        return None                                   # fractional vertex, or only zero values (a tie)
+        return None  # fractional vertex, or only zero values (a tie)
     covered = np.bincount(col_rows[np.repeat(chosen, count)], minlength=m)
     if covered.max() > 1:
         return None

@@ -29,13 +29,21 @@ def write_examples(folder: str | Path) -> list[Path]:
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     written = []
-    for model in (synthetic.assignment(20, 100, seed=1), synthetic.trip_packing(12, 20, seed=1),
-                  synthetic.pairing(300, seed=1), synthetic.pairing(300, seed=1, objective="cardinality_then_weight")):
-        written.append(save_instance(folder / f"synthetic_{model.name}.npz", model,
-                                     {"source": "rpbench.bench.synthetic", "seed": 1}))
+    for model in (
+        synthetic.assignment(20, 100, seed=1),
+        synthetic.trip_packing(12, 20, seed=1),
+        synthetic.pairing(300, seed=1),
+        synthetic.pairing(300, seed=1, objective="cardinality_then_weight"),
+    ):
+        written.append(
+            save_instance(
+                folder / f"synthetic_{model.name}.npz", model, {"source": "rpbench.bench.synthetic", "seed": 1}
+            )
+        )
     with tempfile.TemporaryDirectory() as tmp:
-        snaps, entries = take_snapshots(build_scenario("toy", sample=0.3, seed=1), ["mb", "rtv", "fl"], "highs",
-                                        Path(tmp) / "toy", largest=1)
+        snaps, entries = take_snapshots(
+            build_scenario("toy", sample=0.3, seed=1), ["mb", "rtv", "fl"], "highs", Path(tmp) / "toy", largest=1
+        )
         for e in entries:
             target = folder / e["file"]
             shutil.copy(snaps / e["file"], target)

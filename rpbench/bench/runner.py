@@ -40,8 +40,29 @@ from rpbench.bench.synthetic import assignment, pairing, trip_packing
 from rpbench.exceptions import ParameterError, RpbenchError
 from rpbench.model import Model, Status
 
-COLUMNS = ["model", "structure", "rows", "cols", "nonzeros", "preset", "backend", "status", "objective", "bound",
-           "gap", "pairs", "recorded", "agrees", "build_s", "solve_s", "extract_s", "total_s", "wall_s", "repeats", "message"]
+COLUMNS = [
+    "model",
+    "structure",
+    "rows",
+    "cols",
+    "nonzeros",
+    "preset",
+    "backend",
+    "status",
+    "objective",
+    "bound",
+    "gap",
+    "pairs",
+    "recorded",
+    "agrees",
+    "build_s",
+    "solve_s",
+    "extract_s",
+    "total_s",
+    "wall_s",
+    "repeats",
+    "message",
+]
 
 
 def installed_presets(names: Iterable[str] | None = None) -> list[Preset]:
@@ -50,11 +71,18 @@ def installed_presets(names: Iterable[str] | None = None) -> list[Preset]:
     return [p for p in presets if p.is_installed()]
 
 
-def run_benchmark(models: Sequence[Model], presets: Sequence[str | Preset] | None = None, *,
-                  time_limit_s: float | None = None, time_limits: dict[str, float] | None = None,
-                  repeat: int = 1, isolate: bool = False, hard_timeout_s: float | None = None,
-                  progress: Callable[[str], None] | None = None,
-                  recorded: dict[str, float] | None = None) -> pd.DataFrame:
+def run_benchmark(
+    models: Sequence[Model],
+    presets: Sequence[str | Preset] | None = None,
+    *,
+    time_limit_s: float | None = None,
+    time_limits: dict[str, float] | None = None,
+    repeat: int = 1,
+    isolate: bool = False,
+    hard_timeout_s: float | None = None,
+    progress: Callable[[str], None] | None = None,
+    recorded: dict[str, float] | None = None,
+) -> pd.DataFrame:
     """Solve every model with every preset; one row per pair (see the module docstring).
 
     ``time_limit_s`` overrides every preset's limit, ``time_limits`` single
@@ -64,12 +92,16 @@ def run_benchmark(models: Sequence[Model], presets: Sequence[str | Preset] | Non
     """
     if not isinstance(repeat, int) or repeat < 1:
         raise ParameterError(f"repeat = {repeat!r} must be an integer >= 1")
-    chosen = installed_presets(None) if presets is None else [
-        p if isinstance(p, Preset) else load_preset(p) for p in presets]
+    chosen = (
+        installed_presets(None)
+        if presets is None
+        else [p if isinstance(p, Preset) else load_preset(p) for p in presets]
+    )
     rows = []
     for preset in chosen:
-        limit = (time_limits or {}).get(preset.name, time_limit_s if time_limit_s is not None
-                                        else preset.options.time_limit_s)
+        limit = (time_limits or {}).get(
+            preset.name, time_limit_s if time_limit_s is not None else preset.options.time_limit_s
+        )
         preset = replace(preset, options=replace(preset.options, time_limit_s=limit))
         hard = hard_timeout_s if hard_timeout_s is not None else (2 * limit + 30 if limit else None)
         runner = _Worker(preset, hard) if isolate else _Inline(preset)
@@ -100,7 +132,7 @@ def cross_check(table: pd.DataFrame) -> pd.DataFrame:
         if r["status"] in ("error", "killed") or not optima:
             agrees.append(None)
         elif len(optima) > 1:
-            agrees.append(False)                                    # two "optimal" answers differ
+            agrees.append(False)  # two "optimal" answers differ
         elif r["status"] == Status.OPTIMAL.value:
             agrees.append(True)
         else:
@@ -111,9 +143,17 @@ def cross_check(table: pd.DataFrame) -> pd.DataFrame:
 
 def _row(model: Model, preset: Preset, result: dict) -> dict:
     size = model.size
-    return {"model": model.name, "structure": model.structure.value, "rows": size["rows"], "cols": size["cols"],
-            "nonzeros": size["nonzeros"], "preset": preset.name, "backend": preset.backend, "agrees": None,
-            **result}
+    return {
+        "model": model.name,
+        "structure": model.structure.value,
+        "rows": size["rows"],
+        "cols": size["cols"],
+        "nonzeros": size["nonzeros"],
+        "preset": preset.name,
+        "backend": preset.backend,
+        "agrees": None,
+        **result,
+    }
 
 
 def _solve_once(preset: Preset, model: Model, repeat: int) -> dict:
@@ -123,25 +163,47 @@ def _solve_once(preset: Preset, model: Model, repeat: int) -> dict:
     for _ in range(repeat):
         t0 = time.perf_counter()
         try:
-            sol = solve(model, preset)           # verified there
+            sol = solve(model, preset)  # verified there
         except RpbenchError as exc:
             return _failure("error", str(exc))
         wall = time.perf_counter() - t0
-        row = {"status": sol.status.value, "objective": sol.objective, "bound": sol.bound, "gap": sol.gap,
-               "pairs": sol.cardinality, "build_s": sol.build_s, "solve_s": sol.solve_s,
-               "extract_s": sol.extract_s, "total_s": sol.total_s, "wall_s": wall, "message": sol.message}
+        row = {
+            "status": sol.status.value,
+            "objective": sol.objective,
+            "bound": sol.bound,
+            "gap": sol.gap,
+            "pairs": sol.cardinality,
+            "build_s": sol.build_s,
+            "solve_s": sol.solve_s,
+            "extract_s": sol.extract_s,
+            "total_s": sol.total_s,
+            "wall_s": wall,
+            "message": sol.message,
+        }
         if best is None or row["total_s"] < best["total_s"]:
             best = row
         if sol.status is not Status.OPTIMAL:
-            break                   # a time-limited run is not repeated
+            break  # a time-limited run is not repeated
     best["repeats"] = repeat if best["status"] == Status.OPTIMAL.value else 1
     return best
 
 
 def _failure(status: str, message: str) -> dict:
     nan = math.nan
-    return {"status": status, "objective": nan, "bound": nan, "gap": nan, "pairs": 0, "build_s": nan,
-            "solve_s": nan, "extract_s": nan, "total_s": nan, "wall_s": nan, "repeats": 0, "message": message}
+    return {
+        "status": status,
+        "objective": nan,
+        "bound": nan,
+        "gap": nan,
+        "pairs": 0,
+        "build_s": nan,
+        "solve_s": nan,
+        "extract_s": nan,
+        "total_s": nan,
+        "wall_s": nan,
+        "repeats": 0,
+        "message": message,
+    }
 
 
 def _warm_up(preset: Preset) -> None:
@@ -192,13 +254,13 @@ class _Worker:
         self.proc = None
 
     def _start(self) -> None:
-        ctx = multiprocessing.get_context("spawn")        # a clean process: no solver threads inherited
+        ctx = multiprocessing.get_context("spawn")  # a clean process: no solver threads inherited
         self.conn, child = ctx.Pipe()
         # not a daemon: the matching backend forks its own child to enforce time limits
         self.proc = ctx.Process(target=_worker_main, args=(child, self.preset))
         self.proc.start()
         child.close()
-        self.conn.recv()                                   # warmed up
+        self.conn.recv()  # warmed up
 
     def run(self, model: Model, repeat: int) -> dict:
         try:
@@ -239,15 +301,21 @@ def format_table(table: pd.DataFrame) -> str:
     w = max([len("model"), *map(len, table["model"])])
     sizes = [f"{r:,} x {c:,}" for r, c in zip(table["rows"], table["cols"])]
     sw = max([len("rows x cols"), *map(len, sizes)])
-    head = f"{'model':<{w}} {'rows x cols':>{sw}} {'preset':<12} {'status':<10} {'objective':>16} {'gap':>8} " \
-           f"{'build ms':>10} {'solve ms':>10} {'total ms':>10}  agrees"
+    head = (
+        f"{'model':<{w}} {'rows x cols':>{sw}} {'preset':<12} {'status':<10} {'objective':>16} {'gap':>8} "
+        f"{'build ms':>10} {'solve ms':>10} {'total ms':>10}  agrees"
+    )
     lines = [head, "-" * len(head)]
     for size, (_, r) in zip(sizes, table.iterrows()):
+
         def ms(x):
             return "-" if x is None or (isinstance(x, float) and np.isnan(x)) else f"{1000 * x:,.1f}"
+
         gap = "-" if r["gap"] is None or pd.isna(r["gap"]) else f"{r['gap']:.1e}"
         obj = "-" if pd.isna(r["objective"]) else f"{r['objective']:,.0f}"
         agree = {True: "yes", False: "NO"}.get(None if pd.isna(r["agrees"]) else bool(r["agrees"]), "-")
-        lines.append(f"{r['model']:<{w}} {size:>{sw}} {r['preset']:<12} {r['status']:<10} {obj:>16} {gap:>8} "
-                     f"{ms(r['build_s']):>10} {ms(r['solve_s']):>10} {ms(r['total_s']):>10}  {agree}")
+        lines.append(
+            f"{r['model']:<{w}} {size:>{sw}} {r['preset']:<12} {r['status']:<10} {obj:>16} {gap:>8} "
+            f"{ms(r['build_s']):>10} {ms(r['solve_s']):>10} {ms(r['total_s']):>10}  {agree}"
+        )
     return "\n".join(lines)

@@ -18,9 +18,16 @@ from rpbench.strategies import strategy_class
 from rpbench.strategies.options import RunOptions
 
 
-def take_snapshots(scenario: Scenario, strategies: list[str], preset_name: str, out: str | Path, *,
-                   rounds: list[int] | None = None, largest: int = 3,
-                   run_options: dict[str, RunOptions] | None = None) -> tuple[Path, list[dict]]:
+def take_snapshots(
+    scenario: Scenario,
+    strategies: list[str],
+    preset_name: str,
+    out: str | Path,
+    *,
+    rounds: list[int] | None = None,
+    largest: int = 3,
+    run_options: dict[str, RunOptions] | None = None,
+) -> tuple[Path, list[dict]]:
     """Simulate each strategy and save the chosen rounds' models under ``out`` (a new folder)."""
     preset = load_preset(preset_name)
     run_options = run_options or {}
@@ -36,16 +43,26 @@ def take_snapshots(scenario: Scenario, strategies: list[str], preset_name: str, 
                     seen.append((k, t, rm.model, solution.objective, solution.status.value))
 
             options = run_options.get(name) or strategy_class(name).Options()
-            options = calibrated(scenario, name, options, preset, done, progress=False)   # as in a comparison
+            options = calibrated(scenario, name, options, preset, done, progress=False)  # as in a comparison
             simulate_strategy(scenario, name, preset, options=options, progress=False, capture=capture)
             picked = seen if rounds is not None else sorted(seen, key=lambda s: (-s[2].n_cols, s[0]))[:largest]
             for k, t, model, objective, status in sorted(picked, key=lambda s: s[0]):
                 stem = f"{scenario.name}_{name}_round{k:05d}"
-                meta = {"scenario": scenario.label, "scenario_name": scenario.name, "seed": scenario.seed,
-                        "strategy": name, "round": k, "t_s": t, "preset": preset.name,
-                        "objective": objective, "status": status, "size": model.size}
+                meta = {
+                    "scenario": scenario.label,
+                    "scenario_name": scenario.name,
+                    "seed": scenario.seed,
+                    "strategy": name,
+                    "round": k,
+                    "t_s": t,
+                    "preset": preset.name,
+                    "objective": objective,
+                    "status": status,
+                    "size": model.size,
+                }
                 save_instance(tmp / f"{stem}.npz", model, meta)
                 entries.append({"file": f"{stem}.npz", **meta})
-        results.write_json(tmp / "manifest.json", {"format": "rpbench-instance-1", "instances": entries,
-                                                   **results.environment()})
+        results.write_json(
+            tmp / "manifest.json", {"format": "rpbench-instance-1", "instances": entries, **results.environment()}
+        )
     return final, entries

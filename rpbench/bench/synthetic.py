@@ -50,7 +50,7 @@ def _check_count(name: str, value, low: int = 0) -> int:
 def city_points(rng: np.random.Generator, n: int) -> np.ndarray:
     """``n`` points (metres): 60 % near five hot spots, 40 % uniform over the city."""
     size = np.asarray(CITY_M)
-    centres = np.random.default_rng(12345).uniform(0.2, 0.8, (5, 2)) * size   # the same city for every seed
+    centres = np.random.default_rng(12345).uniform(0.2, 0.8, (5, 2)) * size  # the same city for every seed
     hot = rng.random(n) < 0.6
     pts = rng.uniform(0.0, 1.0, (n, 2)) * size
     pts[hot] = centres[rng.integers(0, 5, hot.sum())] + rng.normal(0.0, 1_500.0, (hot.sum(), 2))
@@ -63,9 +63,17 @@ def road_m(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 # ------------------------------------------------------------------ assignment
-def assignment(n_passengers: int, n_vehicles: int, *, seed: int = 0, density: tuple[float, float] = (0.05, 0.20),
-               occupied_share: float = 0.3, wait: bool = True, unit_m: float = 1e-3,
-               name: str | None = None) -> AssignmentModel:
+def assignment(
+    n_passengers: int,
+    n_vehicles: int,
+    *,
+    seed: int = 0,
+    density: tuple[float, float] = (0.05, 0.20),
+    occupied_share: float = 0.3,
+    wait: bool = True,
+    unit_m: float = 1e-3,
+    name: str | None = None,
+) -> AssignmentModel:
     """A batch-round model: each passenger sees its nearest ``U(density)`` share of vehicles."""
     from scipy.spatial import cKDTree
 
@@ -88,14 +96,13 @@ def assignment(n_passengers: int, n_vehicles: int, *, seed: int = 0, density: tu
         col_p = col_v = np.zeros(0, np.int64)
     pickup = road_m(pax[col_p], veh[col_v])
     occupied = rng.random(V) < occupied_share
-    saving = np.where(occupied, rng.uniform(0.0, 4_000.0, V), 0.0)      # Eq. 7: e - l^pk on a V1 vehicle
+    saving = np.where(occupied, rng.uniform(0.0, 4_000.0, V), 0.0)  # Eq. 7: e - l^pk on a V1 vehicle
     values = quantize(saving[col_v] - pickup, unit_m)
     if wait:
         col_p = np.concatenate([col_p, np.arange(P)])
         col_v = np.concatenate([col_v, np.full(P, -1)])
         values = np.concatenate([values, quantize(-rng.uniform(1_500.0, 4_000.0, P), unit_m)])
-    return AssignmentModel(P, V, col_p, col_v, values, unit_m=unit_m,
-                           name=name or f"assignment-{P}x{V}-s{seed}")
+    return AssignmentModel(P, V, col_p, col_v, values, unit_m=unit_m, name=name or f"assignment-{P}x{V}-s{seed}")
 
 
 # --------------------------------------------------------------------- pairing
@@ -108,9 +115,9 @@ def _pool_saving(oa, da, ob, db):
     """
     la, lb = road_m(oa, da), road_m(ob, db)
     head, ob_da, ob_db, da_db = road_m(oa, ob), road_m(ob, da), road_m(ob, db), road_m(da, db)
-    total_a = head + ob_da + da_db                                          # drop a first
+    total_a = head + ob_da + da_db  # drop a first
     det_a = np.maximum(head + ob_da - la, ob_da + da_db - lb)
-    total_b = head + ob_db + da_db                                          # drop b first
+    total_b = head + ob_db + da_db  # drop b first
     det_b = np.maximum(head + ob_db + da_db - la, ob_db - lb)
     ok_a, ok_b = det_a <= MAX_DETOUR_M, det_b <= MAX_DETOUR_M
     use_a = ok_a & (~ok_b | (total_a <= total_b))
@@ -119,8 +126,15 @@ def _pool_saving(oa, da, ob, db):
     return la + lb - total, detour
 
 
-def pairing(n_orders: int, *, partners: int = 30, seed: int = 0, objective: str = "weight",
-            unit_m: float = 1.0, name: str | None = None) -> PairingModel:
+def pairing(
+    n_orders: int,
+    *,
+    partners: int = 30,
+    seed: int = 0,
+    objective: str = "weight",
+    unit_m: float = 1.0,
+    name: str | None = None,
+) -> PairingModel:
     """An oracle-shaped pairing model with about ``partners`` candidate partners per order.
 
     Values default to whole metres (``unit_m=1``): savings of long shared
@@ -133,9 +147,9 @@ def pairing(n_orders: int, *, partners: int = 30, seed: int = 0, objective: str 
         raise ParameterError(f"objective {objective!r} unknown; expected one of {', '.join(OBJECTIVES)}")
     rng = _rng(seed, 2)
     o, d = city_points(rng, n), city_points(rng, n)
-    window = 32 * half                  # later orders considered per order (a few % are kept)
+    window = 32 * half  # later orders considered per order (a few % are kept)
     parts = []
-    for start in range(0, n, 4096):     # blocks bound memory to a few tens of MB
+    for start in range(0, n, 4096):  # blocks bound memory to a few tens of MB
         i = np.repeat(np.arange(start, min(start + 4096, n)), window)
         j = i + np.tile(np.arange(1, window + 1), len(i) // window)
         ok = j < n
@@ -151,14 +165,29 @@ def pairing(n_orders: int, *, partners: int = 30, seed: int = 0, objective: str 
         keep = (np.arange(len(i)) - np.searchsorted(i, i)) < half
         parts.append((i[keep], j[keep], saving[keep]))
     i, j, saving = (np.concatenate(p) for p in zip(*parts)) if parts else (np.zeros(0),) * 3
-    return PairingModel(n, i, j, quantize(saving, unit_m), objective=objective, unit_m=unit_m,
-                        name=name or f"pairing-{n}-{objective}-s{seed}")
+    return PairingModel(
+        n,
+        i,
+        j,
+        quantize(saving, unit_m),
+        objective=objective,
+        unit_m=unit_m,
+        name=name or f"pairing-{n}-{objective}-s{seed}",
+    )
 
 
 # ---------------------------------------------------------------- trip packing
-def trip_packing(n_requests: int, n_vehicles: int, *, seed: int = 0, vehicles_per_request: int = 10,
-                 partners: int = 6, occupied_share: float = 0.3, unit_m: float = 1e-3,
-                 name: str | None = None) -> TripPackingModel:
+def trip_packing(
+    n_requests: int,
+    n_vehicles: int,
+    *,
+    seed: int = 0,
+    vehicles_per_request: int = 10,
+    partners: int = 6,
+    occupied_share: float = 0.3,
+    unit_m: float = 1e-3,
+    name: str | None = None,
+) -> TripPackingModel:
     """An RTV-2 trip-packing model (one- and two-request trips on nearby vehicles)."""
     from scipy.spatial import cKDTree
 
@@ -187,7 +216,7 @@ def trip_packing(n_requests: int, n_vehicles: int, *, seed: int = 0, vehicles_pe
     saving, detour = _pool_saving(o[a], d[a], o[b], d[b])
     good = (detour <= MAX_DETOUR_M) & (saving > 0)
     a, b, saving = a[good], b[good], saving[good]
-    common = near[a][:, :, None] == near[b][:, None, :]                 # (pairs, k, k): vehicle near both
+    common = near[a][:, :, None] == near[b][:, None, :]  # (pairs, k, k): vehicle near both
     pair_idx, slot, _ = np.nonzero(common)
     v2 = near[a[pair_idx], slot]
     vacant = ~occupied[v2]
@@ -198,19 +227,31 @@ def trip_packing(n_requests: int, n_vehicles: int, *, seed: int = 0, vehicles_pe
     col_r1 = np.concatenate([r1, a2])
     col_r2 = np.concatenate([np.full(len(r1), -1), b2])
     values = quantize(np.concatenate([val1, val2]), unit_m)
-    return TripPackingModel(R, V, col_v, col_r1, col_r2, values, unit_m=unit_m,
-                            name=name or f"trip-packing-{R}x{V}-s{seed}")
+    return TripPackingModel(
+        R, V, col_v, col_r1, col_r2, values, unit_m=unit_m, name=name or f"trip-packing-{R}x{V}-s{seed}"
+    )
 
 
 # ---------------------------------------------------------------- benchmark sets
 #: Named model sets for ``rpbench bench --synthetic --sizes NAME`` (structure, size arguments).
 SUITES: dict[str, list[tuple[str, tuple[int, ...]]]] = {
     "tiny": [("assignment", (5, 12)), ("pairing", (30,)), ("trip_packing", (8, 5))],
-    "small": [("assignment", (20, 100)), ("assignment", (100, 500)), ("pairing", (2_000,)),
-              ("trip_packing", (200, 100))],
-    "default": [("assignment", (20, 100)), ("assignment", (100, 500)), ("assignment", (500, 2_000)),
-                ("assignment", (2_000, 5_000)), ("pairing", (2_000,)), ("pairing", (50_000,)),
-                ("trip_packing", (200, 100)), ("trip_packing", (1_000, 500))],
+    "small": [
+        ("assignment", (20, 100)),
+        ("assignment", (100, 500)),
+        ("pairing", (2_000,)),
+        ("trip_packing", (200, 100)),
+    ],
+    "default": [
+        ("assignment", (20, 100)),
+        ("assignment", (100, 500)),
+        ("assignment", (500, 2_000)),
+        ("assignment", (2_000, 5_000)),
+        ("pairing", (2_000,)),
+        ("pairing", (50_000,)),
+        ("trip_packing", (200, 100)),
+        ("trip_packing", (1_000, 500)),
+    ],
 }
 
 

@@ -21,9 +21,13 @@ from rpbench.scenarios.base import Params
 
 
 def add_data_arg(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--data", metavar="DIR", default=None,
-                        help="Haikou data folder (default: $RPBENCH_DATA, else ../shared/data/haikou, else the folder "
-                             "`rpbench data fetch` fills; `rpbench list` says which)")
+    parser.add_argument(
+        "--data",
+        metavar="DIR",
+        default=None,
+        help="Haikou data folder (default: $RPBENCH_DATA, else ../shared/data/haikou, else the folder "
+        "`rpbench data fetch` fills; `rpbench list` says which)",
+    )
 
 
 def add_scenario_args(parser: argparse.ArgumentParser, *, positional: bool = False) -> None:
@@ -31,16 +35,28 @@ def add_scenario_args(parser: argparse.ArgumentParser, *, positional: bool = Fal
     if positional:
         parser.add_argument("scenario", metavar="NAME", help="scenario name (see `rpbench list`)")
     else:
-        parser.add_argument("--scenario", default=None,
-                            help="scenario name (default: haikou-peak, or toy when no data folder exists)")
+        parser.add_argument(
+            "--scenario", default=None, help="scenario name (default: haikou-peak, or toy when no data folder exists)"
+        )
     parser.add_argument("--date", default=None, help="date YYYY-MM-DD (default 2017-05-01)")
-    parser.add_argument("--sample", type=float, default=None,
-                        help="fraction of orders kept, in (0, 1] (haikou-peak default 0.3)")
+    parser.add_argument(
+        "--sample", type=float, default=None, help="fraction of orders kept, in (0, 1] (haikou-peak default 0.3)"
+    )
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    parser.add_argument("--fleet-at", dest="fleet_placement", default="order_origins",
-                        choices=("order_origins", "random_nodes"), help="initial vehicle positions")
-    parser.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
-                        help="override a parameter, e.g. --param dt_s=30 (repeatable; see `rpbench list`)")
+    parser.add_argument(
+        "--fleet-at",
+        dest="fleet_placement",
+        default="order_origins",
+        choices=("order_origins", "random_nodes"),
+        help="initial vehicle positions",
+    )
+    parser.add_argument(
+        "--param",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="override a parameter, e.g. --param dt_s=30 (repeatable; see `rpbench list`)",
+    )
     add_data_arg(parser)
 
 
@@ -64,9 +80,15 @@ def scenario_request(args: argparse.Namespace) -> ScenarioRequest:
     name = args.scenario or default_scenario_name(args.data)
     if args.scenario is None and name == "toy":
         note("no Haikou data folder found: running the built-in SYNTHETIC toy city (pass --data DIR for Haikou)")
-    return ScenarioRequest(name=name, date=args.date, sample=args.sample, seed=args.seed,
-                           params=tuple(parse_param_overrides(args.param).items()),
-                           fleet_placement=args.fleet_placement, data_dir=args.data)
+    return ScenarioRequest(
+        name=name,
+        date=args.date,
+        sample=args.sample,
+        seed=args.seed,
+        params=tuple(parse_param_overrides(args.param).items()),
+        fleet_placement=args.fleet_placement,
+        data_dir=args.data,
+    )
 
 
 def command_line() -> str | None:
@@ -86,9 +108,12 @@ def note(message: str) -> None:
 
 # ------------------------------------------------------------ unproven solves
 def add_strict_arg(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--strict", action="store_true",
-                        help="fail (exit 2, nothing written) when the solver stops any round or oracle before "
-                             "proving optimality (time limit, gap) instead of noting and marking it")
+    parser.add_argument(
+        "--strict",
+        action="store_true",
+        help="fail (exit 2, nothing written) when the solver stops any round or oracle before "
+        "proving optimality (time limit, gap) instead of noting and marking it",
+    )
 
 
 def note_unproven(folder: Path) -> dict[str, str]:
@@ -98,8 +123,10 @@ def note_unproven(folder: Path) -> dict[str, str]:
     for sub in run_folders(folder):
         where = "" if sub == folder else f"{sub.name}: "
         for run, why in unproven_runs(sub).items():
-            note(f"rpbench: note: {where}{run_label(run)} {why}; its numbers are not proven optimal "
-                 "(--strict makes this an error)")
+            note(
+                f"rpbench: note: {where}{run_label(run)} {why}; its numbers are not proven optimal "
+                "(--strict makes this an error)"
+            )
             marked.setdefault(run, why)
     return marked
 
@@ -116,11 +143,12 @@ def check_out_file(path: str, option: str) -> Path:
     if not folder.is_dir():
         state = "is not a folder" if os.path.lexists(folder) else "does not exist"
         raise ParameterError(f"{option} {path!r}: folder {str(folder)!r} {state}; create it or choose another path")
-    try:   # try it: permission bits say nothing about root, read-only mounts or /proc
+    try:  # try it: permission bits say nothing about root, read-only mounts or /proc
         fd, probe = tempfile.mkstemp(prefix=".rpbench-probe-", dir=folder)
     except OSError as exc:
-        raise ParameterError(f"{option} {path!r}: cannot create files in {str(folder)!r} "
-                             f"({exc.strerror or exc})") from None
+        raise ParameterError(
+            f"{option} {path!r}: cannot create files in {str(folder)!r} ({exc.strerror or exc})"
+        ) from None
     os.close(fd)
     os.unlink(probe)
     return out

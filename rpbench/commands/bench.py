@@ -26,33 +26,71 @@ from rpbench.results.plots import bench_figure
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("bench", help="time every solver preset on the same models",
-                       description="Time every installed solver preset on the same decision models, build and "
-                                   "solve apart, and cross-check their objectives.")
-    p.add_argument("paths", nargs="*", metavar="PATH",
-                   help="instance files (.npz) or folders holding them, e.g. instances/examples")
-    p.add_argument("--synthetic", action="store_true",
-                   help="benchmark seeded synthetic models shaped like rpbench's (see --sizes)")
-    p.add_argument("--sizes", default="default", choices=sorted(SUITES),
-                   help="synthetic model set (default: default = assignment 20x100 .. 2000x5000, "
-                        "pairing 2,000 and 50,000 orders, two trip packings)")
-    p.add_argument("--objectives", default="weight",
-                   help="pairing objectives, comma-separated: weight (Oracle-1), cardinality_then_weight "
-                        "(Oracle-2) (default: weight)")
-    p.add_argument("--structures", default=None, metavar="LIST",
-                   help="only models of these structures, comma-separated: assignment, trip_packing, pairing")
+    p = sub.add_parser(
+        "bench",
+        help="time every solver preset on the same models",
+        description="Time every installed solver preset on the same decision models, build and "
+        "solve apart, and cross-check their objectives.",
+    )
+    p.add_argument(
+        "paths",
+        nargs="*",
+        metavar="PATH",
+        help="instance files (.npz) or folders holding them, e.g. instances/examples",
+    )
+    p.add_argument(
+        "--synthetic", action="store_true", help="benchmark seeded synthetic models shaped like rpbench's (see --sizes)"
+    )
+    p.add_argument(
+        "--sizes",
+        default="default",
+        choices=sorted(SUITES),
+        help="synthetic model set (default: default = assignment 20x100 .. 2000x5000, "
+        "pairing 2,000 and 50,000 orders, two trip packings)",
+    )
+    p.add_argument(
+        "--objectives",
+        default="weight",
+        help="pairing objectives, comma-separated: weight (Oracle-1), cardinality_then_weight "
+        "(Oracle-2) (default: weight)",
+    )
+    p.add_argument(
+        "--structures",
+        default=None,
+        metavar="LIST",
+        help="only models of these structures, comma-separated: assignment, trip_packing, pairing",
+    )
     p.add_argument("--seed", type=int, default=0, help="seed of the synthetic models (default 0)")
-    p.add_argument("--solver", action="append", default=None, metavar="NAME",
-                   help="preset to run (repeatable; default: every installed preset)")
-    p.add_argument("--time-limit", type=float, default=None, metavar="S",
-                   help="per-solve time limit for every preset (default: each preset's own)")
-    p.add_argument("--preset-time-limit", action="append", default=[], metavar="NAME=S",
-                   help="per-solve time limit of one preset, e.g. pyomo-highs=30 (repeatable)")
-    p.add_argument("--hard-timeout", type=float, default=None, metavar="S",
-                   help="kill a solve after S seconds (default: 2 x its time limit + 30)")
+    p.add_argument(
+        "--solver",
+        action="append",
+        default=None,
+        metavar="NAME",
+        help="preset to run (repeatable; default: every installed preset)",
+    )
+    p.add_argument(
+        "--time-limit",
+        type=float,
+        default=None,
+        metavar="S",
+        help="per-solve time limit for every preset (default: each preset's own)",
+    )
+    p.add_argument(
+        "--preset-time-limit",
+        action="append",
+        default=[],
+        metavar="NAME=S",
+        help="per-solve time limit of one preset, e.g. pyomo-highs=30 (repeatable)",
+    )
+    p.add_argument(
+        "--hard-timeout",
+        type=float,
+        default=None,
+        metavar="S",
+        help="kill a solve after S seconds (default: 2 x its time limit + 30)",
+    )
     p.add_argument("--repeat", type=int, default=3, help="runs per solve; the fastest is kept (default 3)")
-    p.add_argument("--no-isolate", dest="isolate", action="store_false",
-                   help="solve in this process (no hard timeout)")
+    p.add_argument("--no-isolate", dest="isolate", action="store_false", help="solve in this process (no hard timeout)")
     p.add_argument("--csv", metavar="FILE", default=None, help="also write the table as CSV")
     p.add_argument("--plot", metavar="PNG", default=None, help="also plot solver time against model size")
     p.add_argument("--json", action="store_true", help="print the table as JSON records")
@@ -74,13 +112,15 @@ def _limits(items: list[str]) -> dict[str, float]:
 
 def run(args: argparse.Namespace) -> int:
     if not args.synthetic and not args.paths:
-        raise ParameterError("nothing to benchmark: name instance files or folders (e.g. instances/examples) "
-                             "and/or pass --synthetic")
+        raise ParameterError(
+            "nothing to benchmark: name instance files or folders (e.g. instances/examples) and/or pass --synthetic"
+        )
     objectives = tuple(o.strip() for o in args.objectives.split(",") if o.strip())
     bad = [o for o in objectives if o not in OBJECTIVES]
     if bad or not objectives:
-        raise ParameterError(f"--objectives {args.objectives!r}: expected a comma-separated subset of "
-                             f"{', '.join(OBJECTIVES)}")
+        raise ParameterError(
+            f"--objectives {args.objectives!r}: expected a comma-separated subset of {', '.join(OBJECTIVES)}"
+        )
     if args.time_limit is not None and args.time_limit <= 0:
         raise ParameterError(f"--time-limit {args.time_limit!r} must be > 0")
     if args.repeat < 1:
@@ -89,14 +129,15 @@ def run(args: argparse.Namespace) -> int:
     # output files checked before benchmarking: a bad path must not cost the run
     csv_out = check_out_file(args.csv, "--csv") if args.csv else None
     plot_out = check_out_file(args.plot, "--plot") if args.plot else None
-    presets = None if args.solver is None else [load_preset(name) for name in args.solver]   # fail before building
+    presets = None if args.solver is None else [load_preset(name) for name in args.solver]  # fail before building
     wanted = None
-    if args.structures is not None:         # checked before the (slow) synthetic suite is built
+    if args.structures is not None:  # checked before the (slow) synthetic suite is built
         wanted = {x.strip() for x in args.structures.split(",") if x.strip()}
         known = {st.value for st in Structure}
         if not wanted or wanted - known:
-            raise ParameterError(f"--structures {args.structures!r}: expected a comma-separated subset of "
-                                 f"{', '.join(sorted(known))}")
+            raise ParameterError(
+                f"--structures {args.structures!r}: expected a comma-separated subset of {', '.join(sorted(known))}"
+            )
     models, recorded = load_instances(args.paths) if args.paths else ([], {})
     if args.synthetic:
         note(f"building the {args.sizes!r} synthetic models (seed {args.seed}) ...")
@@ -105,9 +146,17 @@ def run(args: argparse.Namespace) -> int:
         models = [m for m in models if m.structure.value in wanted]
         if not models:
             raise ParameterError(f"no model of structure {args.structures!r} to benchmark")
-    table = run_benchmark(models, presets, time_limit_s=args.time_limit, time_limits=limits, repeat=args.repeat,
-                          isolate=args.isolate, hard_timeout_s=args.hard_timeout,
-                          progress=None if args.json else note, recorded=recorded)
+    table = run_benchmark(
+        models,
+        presets,
+        time_limit_s=args.time_limit,
+        time_limits=limits,
+        repeat=args.repeat,
+        isolate=args.isolate,
+        hard_timeout_s=args.hard_timeout,
+        progress=None if args.json else note,
+        recorded=recorded,
+    )
     if csv_out is not None:
         write_out_file(csv_out, "--csv", lambda tmp: table.to_csv(tmp, index=False))
     if plot_out is not None:

@@ -13,22 +13,32 @@ STATUS = {EXIT_OK: "ok", EXIT_FAILED: "failed", EXIT_UNREADABLE: "unreadable"}
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("check", help="verify a results folder from its event logs",
-                       formatter_class=argparse.RawDescriptionHelpFormatter,
-                       description="Re-verify every run of results folders from their own files alone: the event "
-                                   "logs,\ntrajectories and oracle pairs against the rules, every reported number "
-                                   "recomputed,\nthe inputs against the digest recorded at run time "
-                                   "(docs/guarantees.md).",
-                       epilog="exit status:\n"
-                              "  0  every check passed (checks an older folder cannot support are listed as skipped)\n"
-                              "  1  a check failed: each failure is named, e.g. [max-detour] or [kpi]\n"
-                              "  2  bad usage, or a folder is unreadable (a file missing, truncated or unparseable):\n"
-                              "     one line on stderr; 2 wins over 1 when several folders are given")
-    p.add_argument("folders", nargs="+", metavar="RESULTS_DIR",
-                   help="results folders; a multi-day or sweep folder checks every run folder inside it")
-    p.add_argument("--json", action="store_true",
-                   help="print one JSON object: ok, status (ok/failed/unreadable), exit_status, folders (folder -> "
-                        "run -> ok, status, violations, checked, skipped) and unreadable (folder -> reason)")
+    p = sub.add_parser(
+        "check",
+        help="verify a results folder from its event logs",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="Re-verify every run of results folders from their own files alone: the event "
+        "logs,\ntrajectories and oracle pairs against the rules, every reported number "
+        "recomputed,\nthe inputs against the digest recorded at run time "
+        "(docs/guarantees.md).",
+        epilog="exit status:\n"
+        "  0  every check passed (checks an older folder cannot support are listed as skipped)\n"
+        "  1  a check failed: each failure is named, e.g. [max-detour] or [kpi]\n"
+        "  2  bad usage, or a folder is unreadable (a file missing, truncated or unparseable):\n"
+        "     one line on stderr; 2 wins over 1 when several folders are given",
+    )
+    p.add_argument(
+        "folders",
+        nargs="+",
+        metavar="RESULTS_DIR",
+        help="results folders; a multi-day or sweep folder checks every run folder inside it",
+    )
+    p.add_argument(
+        "--json",
+        action="store_true",
+        help="print one JSON object: ok, status (ok/failed/unreadable), exit_status, folders (folder -> "
+        "run -> ok, status, violations, checked, skipped) and unreadable (folder -> reason)",
+    )
     p.set_defaults(handler=run)
 
 
@@ -37,15 +47,31 @@ def run(args: argparse.Namespace) -> int:
     for result in found:
         if len(found) > 1 and not args.json:
             print(f"== {result.folder}", flush=True)
-        if result.error is not None:           # the CLI's convention for bad input: one line on stderr
+        if result.error is not None:  # the CLI's convention for bad input: one line on stderr
             print(f"rpbench: error: {result.error}", file=sys.stderr)
         elif not args.json:
             print(format_report(result.checks))
     code = exit_status(found)
     if args.json:
-        print_json({"ok": code == EXIT_OK, "status": STATUS[code], "exit_status": code,
-                    "folders": {r.folder: {c.run: {"ok": c.ok, "status": c.status, "violations": c.violations,
-                                                   "checked": c.checked, "skipped": c.skipped}
-                                           for c in r.checks} for r in found},
-                    "unreadable": {r.folder: r.error for r in found if r.error is not None}})
+        print_json(
+            {
+                "ok": code == EXIT_OK,
+                "status": STATUS[code],
+                "exit_status": code,
+                "folders": {
+                    r.folder: {
+                        c.run: {
+                            "ok": c.ok,
+                            "status": c.status,
+                            "violations": c.violations,
+                            "checked": c.checked,
+                            "skipped": c.skipped,
+                        }
+                        for c in r.checks
+                    }
+                    for r in found
+                },
+                "unreadable": {r.folder: r.error for r in found if r.error is not None},
+            }
+        )
     return code

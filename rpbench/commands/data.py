@@ -16,36 +16,57 @@ from rpbench.paths import DATA_HOME_ENV, fetched_data_dir, locate_data_dir, requ
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("data", help="download (fetch) or check (verify) the Haikou data folder",
-                       description="Download the Haikou data folder from its public sources at pinned commits "
-                                   "(fetch), or check a data folder against the pinned checksums (verify).")
+    p = sub.add_parser(
+        "data",
+        help="download (fetch) or check (verify) the Haikou data folder",
+        description="Download the Haikou data folder from its public sources at pinned commits "
+        "(fetch), or check a data folder against the pinned checksums (verify).",
+    )
     p.set_defaults(handler=lambda args: _usage(p))
     actions = p.add_subparsers(dest="data_action", metavar="ACTION")
 
-    f = actions.add_parser("fetch", help="download every pinned data file, verify and store it",
-                           description="Download every data file rpbench needs from its public source at a "
-                                       "pinned commit, check its SHA-256 and store it (gzipped where the data "
-                                       "folder keeps it gzipped).  Files already present with the right content "
-                                       "are skipped, so a second run downloads nothing and an interrupted one "
-                                       "resumes.  Without --dest, rpbench then finds the folder by itself "
-                                       "(see `rpbench list`).")
-    f.add_argument("--dest", metavar="DIR", default=None,
-                   help=f"folder to fill (default: {fetched_data_dir()}, i.e. haikou/ in ${DATA_HOME_ENV} "
-                        "or the user data directory)")
-    f.add_argument("--mirror", metavar="URL", default=None,
-                   help="fetch the stored file names from this copy of a data folder instead "
-                        "(http(s)://, file:// or a local folder); content is still checked")
+    f = actions.add_parser(
+        "fetch",
+        help="download every pinned data file, verify and store it",
+        description="Download every data file rpbench needs from its public source at a "
+        "pinned commit, check its SHA-256 and store it (gzipped where the data "
+        "folder keeps it gzipped).  Files already present with the right content "
+        "are skipped, so a second run downloads nothing and an interrupted one "
+        "resumes.  Without --dest, rpbench then finds the folder by itself "
+        "(see `rpbench list`).",
+    )
+    f.add_argument(
+        "--dest",
+        metavar="DIR",
+        default=None,
+        help=f"folder to fill (default: {fetched_data_dir()}, i.e. haikou/ in ${DATA_HOME_ENV} "
+        "or the user data directory)",
+    )
+    f.add_argument(
+        "--mirror",
+        metavar="URL",
+        default=None,
+        help="fetch the stored file names from this copy of a data folder instead "
+        "(http(s)://, file:// or a local folder); content is still checked",
+    )
     f.add_argument("--dry-run", action="store_true", help="print each file and the URL it comes from; download nothing")
     f.add_argument("--quiet", action="store_true", help="no progress bar")
     f.add_argument("--json", action="store_true", help="print one JSON object")
     f.set_defaults(handler=run_fetch)
 
-    v = actions.add_parser("verify", help="check a data folder against the pinned checksums",
-                           description="Check every pinned file present in the data folder against its SHA-256 "
-                                       "(exit 2 naming the bad files), report the missing ones and list files "
-                                       "the registry does not pin (e.g. other days' orders) without failing.")
-    v.add_argument("--data", metavar="DIR", default=None,
-                   help="data folder to check (default: the folder rpbench uses, see `rpbench list`)")
+    v = actions.add_parser(
+        "verify",
+        help="check a data folder against the pinned checksums",
+        description="Check every pinned file present in the data folder against its SHA-256 "
+        "(exit 2 naming the bad files), report the missing ones and list files "
+        "the registry does not pin (e.g. other days' orders) without failing.",
+    )
+    v.add_argument(
+        "--data",
+        metavar="DIR",
+        default=None,
+        help="data folder to check (default: the folder rpbench uses, see `rpbench list`)",
+    )
     v.add_argument("--json", action="store_true", help="print one JSON object")
     v.set_defaults(handler=run_verify)
 
@@ -70,13 +91,17 @@ def run_fetch(args: argparse.Namespace) -> int:
         return 0
     source = "pinned upstream sources" if report.source == "registry" else mirror_base(args.mirror)
     if report.downloaded:
-        print(f"fetched {len(report.downloaded)} file(s) ({report.content_bytes / 1e6:.1f} MB of content) "
-              f"from {source} into {report.dest}")
+        print(
+            f"fetched {len(report.downloaded)} file(s) ({report.content_bytes / 1e6:.1f} MB of content) "
+            f"from {source} into {report.dest}"
+        )
     if report.replaced:
         print(f"  replaced (their content was wrong): {', '.join(report.replaced)}")
     if report.already_present:
-        print(f"{'  ' if report.downloaded else ''}{len(report.already_present)} file(s) already present "
-              f"and verified in {report.dest}")
+        print(
+            f"{'  ' if report.downloaded else ''}{len(report.already_present)} file(s) already present "
+            f"and verified in {report.dest}"
+        )
     return 0
 
 

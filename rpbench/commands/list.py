@@ -18,9 +18,12 @@ from rpbench.strategies import plugin_names, strategy_class
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("list", help="list scenarios, data folder and solver presets",
-                       description="List scenarios, the data folder in use, and solver presets "
-                                   "with whether each preset's backend is installed.")
+    p = sub.add_parser(
+        "list",
+        help="list scenarios, data folder and solver presets",
+        description="List scenarios, the data folder in use, and solver presets "
+        "with whether each preset's backend is installed.",
+    )
     add_data_arg(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(handler=run)
@@ -33,9 +36,16 @@ def gather(data: str | None) -> dict:
         try:
             preset = load_preset(name)
             cls = preset.backend_class()
-            presets.append({"name": name, "backend": preset.backend, "installed": cls.is_installed(),
-                            "missing": cls.missing_libraries(), "exact": sorted(s.value for s in cls.exact),
-                            "description": preset.description})
+            presets.append(
+                {
+                    "name": name,
+                    "backend": preset.backend,
+                    "installed": cls.is_installed(),
+                    "missing": cls.missing_libraries(),
+                    "exact": sorted(s.value for s in cls.exact),
+                    "description": preset.description,
+                }
+            )
         except RpbenchError as exc:
             presets.append({"name": name, "backend": None, "installed": False, "error": str(exc)})
     return {
@@ -43,8 +53,15 @@ def gather(data: str | None) -> dict:
         "data_dir_source": origin,
         "data_dir_candidates": [str(c) for c in default_data_candidates()],
         "peak_dates": available_peak_dates(folder) if folder else [],
-        "scenarios": [{"name": s.name, "description": s.description, "needs_data": s.needs_data,
-                       "available": (not s.needs_data) or folder is not None} for s in SCENARIOS.values()],
+        "scenarios": [
+            {
+                "name": s.name,
+                "description": s.description,
+                "needs_data": s.needs_data,
+                "available": (not s.needs_data) or folder is not None,
+            }
+            for s in SCENARIOS.values()
+        ],
         "presets": presets,
         "strategies": [run_entry(name) for name in [*STRATEGY_REGISTRY, *plugin_names(), *ORACLE_RUNS]],
         "parameters": Params().as_dict(),
@@ -71,8 +88,10 @@ def run(args: argparse.Namespace) -> int:
     if folder:
         print(f"data folder: {folder} (from {info['data_dir_source']})")
     else:
-        print("data folder: none found (only the toy scenario runs); pass --data DIR, or download it once "
-              "with `rpbench data fetch`")
+        print(
+            "data folder: none found (only the toy scenario runs); pass --data DIR, or download it once "
+            "with `rpbench data fetch`"
+        )
     if info["peak_dates"]:
         dates = info["peak_dates"]
         print(f"  peak-hour dates: {len(dates)} ({dates[0]} .. {dates[-1]})")

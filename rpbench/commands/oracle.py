@@ -25,28 +25,57 @@ from rpbench.results.report import UNPROVEN_MARK
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("oracle", help="solve the offline oracle (Oracle-1 max saving, Oracle-2 max pairs)",
-                       description="Solve the offline oracle over all orders of a scenario: Oracle-1 maximises "
-                                   "the total distance saving, Oracle-2 the number of pairs (ties by saving). "
-                                   "Pair feasibility follows ALGORITHMS.md §4.2; the saving is counted once "
-                                   "per pair.")
+    p = sub.add_parser(
+        "oracle",
+        help="solve the offline oracle (Oracle-1 max saving, Oracle-2 max pairs)",
+        description="Solve the offline oracle over all orders of a scenario: Oracle-1 maximises "
+        "the total distance saving, Oracle-2 the number of pairs (ties by saving). "
+        "Pair feasibility follows ALGORITHMS.md §4.2; the saving is counted once "
+        "per pair.",
+    )
     add_scenario_args(p)
-    p.add_argument("--variant", default="both", choices=("1", "2", "both", "bound"),
-                   help="which oracle (default both); bound: the proven upper bound on any strategy's saving "
-                        "(docs/bound.md)")
-    p.add_argument("--solver", default="matching", metavar="PRESET",
-                   help="solver preset with an exact pairing backend (default matching)")
-    p.add_argument("--both-pickup-orders", action="store_true",
-                   help="also allow the later order to be picked up first (oracle_both_pickup_orders)")
-    p.add_argument("--pickup-check", action="store_true",
-                   help="require the pick-up distance to the second order <= R̄ (oracle_pickup_check)")
-    p.add_argument("--allow-enroute", action="store_true",
-                   help="also pair an order requested while the first one rides (oracle_allow_enroute)")
-    p.add_argument("--time-limit", type=float, default=None, metavar="S",
-                   help="override the preset's time limit in seconds (a stopped solve reports its gap)")
-    p.add_argument("--unit-m", type=float, default=UNIT_M, metavar="M",
-                   help=f"resolution of the savings in the model, in metres (default {UNIT_M:g}; coarser if an "
-                        "integer algorithm reports an overflow)")
+    p.add_argument(
+        "--variant",
+        default="both",
+        choices=("1", "2", "both", "bound"),
+        help="which oracle (default both); bound: the proven upper bound on any strategy's saving (docs/bound.md)",
+    )
+    p.add_argument(
+        "--solver",
+        default="matching",
+        metavar="PRESET",
+        help="solver preset with an exact pairing backend (default matching)",
+    )
+    p.add_argument(
+        "--both-pickup-orders",
+        action="store_true",
+        help="also allow the later order to be picked up first (oracle_both_pickup_orders)",
+    )
+    p.add_argument(
+        "--pickup-check",
+        action="store_true",
+        help="require the pick-up distance to the second order <= R̄ (oracle_pickup_check)",
+    )
+    p.add_argument(
+        "--allow-enroute",
+        action="store_true",
+        help="also pair an order requested while the first one rides (oracle_allow_enroute)",
+    )
+    p.add_argument(
+        "--time-limit",
+        type=float,
+        default=None,
+        metavar="S",
+        help="override the preset's time limit in seconds (a stopped solve reports its gap)",
+    )
+    p.add_argument(
+        "--unit-m",
+        type=float,
+        default=UNIT_M,
+        metavar="M",
+        help=f"resolution of the savings in the model, in metres (default {UNIT_M:g}; coarser if an "
+        "integer algorithm reports an overflow)",
+    )
     p.add_argument("--pairs", metavar="CSV", default=None, help="write the chosen pairs to this CSV file")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     add_strict_arg(p)
@@ -54,7 +83,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    pairs_csv = check_out_file(args.pairs, "--pairs") if args.pairs else None     # before solving anything
+    pairs_csv = check_out_file(args.pairs, "--pairs") if args.pairs else None  # before solving anything
     if args.time_limit is not None and not args.time_limit > 0:
         raise ParameterError(f"--time-limit {args.time_limit!r} must be > 0 seconds")
     if not (args.unit_m > 0 and math.isfinite(args.unit_m)):
@@ -66,66 +95,102 @@ def run(args: argparse.Namespace) -> int:
         variants, rules = (1,), bound_rules(scenario.params)
     else:
         variants = (1, 2) if args.variant == "both" else (check_variant(args.variant),)
-        rules = PairRules.from_params(scenario.params, both_pickup_orders=args.both_pickup_orders,
-                                      pickup_check=args.pickup_check, allow_enroute=args.allow_enroute)
+        rules = PairRules.from_params(
+            scenario.params,
+            both_pickup_orders=args.both_pickup_orders,
+            pickup_check=args.pickup_check,
+            allow_enroute=args.allow_enroute,
+        )
     candidates = find_candidates(scenario.network.distances(), scenario.orders, rules)
     preset = load_preset(args.solver)
     options = preset.options
     if args.time_limit is not None:
         options = dataclasses.replace(options, time_limit_s=args.time_limit)
-    results = {v: solve_oracle(scenario, v, preset, candidates=candidates, options=options, unit_m=args.unit_m)
-               for v in variants}
+    results = {
+        v: solve_oracle(scenario, v, preset, candidates=candidates, options=options, unit_m=args.unit_m)
+        for v in variants
+    }
     for v, r in results.items():
         require_proven(f"{_name(r)} (solver preset {r.solver!r})", r.status.value, strict=args.strict)
         if r.status.value != "optimal":
             gap = r.kpis()["gap"]
-            note(f"rpbench: note: {_name(r)} stopped with status {r.status.value} "
-                 f"(gap {'unknown' if math.isnan(gap) else f'{gap:.3g}'}); its value is not proven optimal "
-                 "(--strict makes this an error)")
+            note(
+                f"rpbench: note: {_name(r)} stopped with status {r.status.value} "
+                f"(gap {'unknown' if math.isnan(gap) else f'{gap:.3g}'}); its value is not proven optimal "
+                "(--strict makes this an error)"
+            )
     if pairs_csv is not None:
         _write_pairs(pairs_csv, results)
 
     if args.json:
-        print_json({"scenario": scenario.name, "label": scenario.label, "rules": rules.as_dict(),
-                    "candidates": {"evaluated": candidates.evaluated, "feasible": len(candidates),
-                                   **candidates.stats, "seconds": candidates.seconds},
-                    **{"bound" if r.is_upper_bound else f"oracle{v}": r.kpis() for v, r in results.items()}})
+        print_json(
+            {
+                "scenario": scenario.name,
+                "label": scenario.label,
+                "rules": rules.as_dict(),
+                "candidates": {
+                    "evaluated": candidates.evaluated,
+                    "feasible": len(candidates),
+                    **candidates.stats,
+                    "seconds": candidates.seconds,
+                },
+                **{"bound" if r.is_upper_bound else f"oracle{v}": r.kpis() for v, r in results.items()},
+            }
+        )
         return 0
     print(scenario.label)
     flags = [k for k in ("both_pickup_orders", "pickup_check", "allow_enroute") if getattr(rules, k)]
     if rules.window == "bound":
-        print(f"  pair rules of the upper bound (docs/bound.md): t_B - t_A in [-K_B, K_A + (R̄ + l_A)/v], "
-              f"D̄={rules.max_detour_m:g} m at A's origin, both pick-up orders, no R̄ test")
+        print(
+            f"  pair rules of the upper bound (docs/bound.md): t_B - t_A in [-K_B, K_A + (R̄ + l_A)/v], "
+            f"D̄={rules.max_detour_m:g} m at A's origin, both pick-up orders, no R̄ test"
+        )
     else:
-        print(f"  pair rules: K̄={rules.planner_patience_s:g} s, D̄={rules.max_detour_m:g} m"
-              + (f", R̄={rules.max_pickup_m:g} m" if rules.pickup_check else ", no R̄ test")
-              + (f"; flags: {', '.join(flags)}" if flags else "; default flags (ALGORITHMS.md A18)"))
-    print(f"  candidates: {len(candidates):,} feasible of {candidates.evaluated:,} pairs in the time windows "
-          f"({candidates.seconds:.3f} s)")
+        print(
+            f"  pair rules: K̄={rules.planner_patience_s:g} s, D̄={rules.max_detour_m:g} m"
+            + (f", R̄={rules.max_pickup_m:g} m" if rules.pickup_check else ", no R̄ test")
+            + (f"; flags: {', '.join(flags)}" if flags else "; default flags (ALGORITHMS.md A18)")
+        )
+    print(
+        f"  candidates: {len(candidates):,} feasible of {candidates.evaluated:,} pairs in the time windows "
+        f"({candidates.seconds:.3f} s)"
+    )
     print(_table(results))
     return 0
 
 
-_ROWS = (("orders", "orders", "{:,.0f}"), ("pairs", "pairs", "{:,.0f}"),
-         ("pooled_passengers", "pooled passengers", "{:,.0f}"), ("pairing_ratio", "pairing ratio", "{:.3f}"),
-         ("avg_detour_m", "avg detour (m)", "{:,.0f}"), ("avg_shared_m", "avg shared (m)", "{:,.0f}"),
-         ("total_saving_km", "total saving (km)", "{:,.1f}"), ("status", "status", "{}"),
-         ("bound_m", "proven bound (m)", "{:,.0f}"), ("gap", "gap", "{:.2g}"),
-         ("pairs_bound", "maximum pairs (proven)", "{:,.0f}"), ("edges", "model edges", "{:,.0f}"),
-         ("model_s", "model build (s)", "{:.3f}"), ("build_s", "solver build (s)", "{:.3f}"),
-         ("solve_s", "solve (s)", "{:.3f}"), ("total_s", "total incl. candidates (s)", "{:.3f}"))
+_ROWS = (
+    ("orders", "orders", "{:,.0f}"),
+    ("pairs", "pairs", "{:,.0f}"),
+    ("pooled_passengers", "pooled passengers", "{:,.0f}"),
+    ("pairing_ratio", "pairing ratio", "{:.3f}"),
+    ("avg_detour_m", "avg detour (m)", "{:,.0f}"),
+    ("avg_shared_m", "avg shared (m)", "{:,.0f}"),
+    ("total_saving_km", "total saving (km)", "{:,.1f}"),
+    ("status", "status", "{}"),
+    ("bound_m", "proven bound (m)", "{:,.0f}"),
+    ("gap", "gap", "{:.2g}"),
+    ("pairs_bound", "maximum pairs (proven)", "{:,.0f}"),
+    ("edges", "model edges", "{:,.0f}"),
+    ("model_s", "model build (s)", "{:.3f}"),
+    ("build_s", "solver build (s)", "{:.3f}"),
+    ("solve_s", "solve (s)", "{:.3f}"),
+    ("total_s", "total incl. candidates (s)", "{:.3f}"),
+)
 
 
 def _table(results: dict) -> str:
     kpis = {v: r.kpis() for v, r in results.items()}
     unproven = [v for v, r in results.items() if r.status.value != "optimal"]
-    header = ["metric"] + [f"{_name(results[v])} ({results[v].solver})" + (UNPROVEN_MARK if v in unproven else "")
-                           for v in results]
+    header = ["metric"] + [
+        f"{_name(results[v])} ({results[v].solver})" + (UNPROVEN_MARK if v in unproven else "") for v in results
+    ]
     rows = [[label] + [_fmt(fmt, kpis[v][key]) for v in results] for key, label, fmt in _ROWS]
     widths = [max(len(r[c]) for r in [header] + rows) for c in range(len(header))]
     lines = ["  " + "  ".join(h.ljust(widths[0]) if c == 0 else h.rjust(widths[c]) for c, h in enumerate(header))]
-    lines += ["  " + "  ".join(x.ljust(widths[0]) if c == 0 else x.rjust(widths[c]) for c, x in enumerate(r))
-              for r in rows]
+    lines += [
+        "  " + "  ".join(x.ljust(widths[0]) if c == 0 else x.rjust(widths[c]) for c, x in enumerate(r)) for r in rows
+    ]
     if unproven:
         lines.append(f"  {UNPROVEN_MARK} not proven optimal: the solver stopped early (see its status and gap)")
     return "\n".join(lines)
@@ -143,5 +208,6 @@ def _fmt(fmt: str, value) -> str:
 
 def _write_pairs(path: Path, results: dict) -> None:
     import pandas as pd
+
     table = pd.concat([r.pairs.assign(variant=v) for v, r in results.items()], ignore_index=True)
     write_out_file(path, "--pairs", lambda tmp: table.to_csv(tmp, index=False))

@@ -35,36 +35,69 @@ from rpbench.scenarios.common import haikou_network
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("predict", help="predict pairing probabilities and expected savings per OD",
-                       description="Solve the seeker/taker fixed point (TR-B 2021 model as used by the FL "
-                                   "strategy) for an OD rate table and write one CSV row per OD.")
-    p.add_argument("--rates", default="month", metavar="KIND",
-                   help="month (21-day table, default), day (a date's peak orders), day-table "
-                        "(the 2017-05-01 per-day OD table), or a path to an OD table CSV")
+    p = sub.add_parser(
+        "predict",
+        help="predict pairing probabilities and expected savings per OD",
+        description="Solve the seeker/taker fixed point (TR-B 2021 model as used by the FL "
+        "strategy) for an OD rate table and write one CSV row per OD.",
+    )
+    p.add_argument(
+        "--rates",
+        default="month",
+        metavar="KIND",
+        help="month (21-day table, default), day (a date's peak orders), day-table "
+        "(the 2017-05-01 per-day OD table), or a path to an OD table CSV",
+    )
     p.add_argument("--date", default=None, help=f"date for --rates day (default {DEFAULT_DATE})")
     add_data_arg(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
-    p.add_argument("--out", metavar="FILE.csv", default=None,
-                   help="per-OD CSV (default: prediction-<rates>[-<date>].csv in the current folder)")
-    p.add_argument("--tau0", type=float, default=None, metavar="S",
-                   help="sojourn of the origin taker state, e.g. a calibrated mean pick-up time (default 120)")
-    p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
-                   help="override a parameter (max_pickup_m, max_detour_m, speed_mps, ...)")
+    p.add_argument(
+        "--out",
+        metavar="FILE.csv",
+        default=None,
+        help="per-OD CSV (default: prediction-<rates>[-<date>].csv in the current folder)",
+    )
+    p.add_argument(
+        "--tau0",
+        type=float,
+        default=None,
+        metavar="S",
+        help="sojourn of the origin taker state, e.g. a calibrated mean pick-up time (default 120)",
+    )
+    p.add_argument(
+        "--param",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="override a parameter (max_pickup_m, max_detour_m, speed_mps, ...)",
+    )
     p.add_argument("--priority", choices=PRIORITIES, default=None, help="seeker priority order (default net_saving)")
-    p.add_argument("--accel", choices=ACCELERATIONS, default=None,
-                   help="fixed-point acceleration (default none: the spec's damped iteration, A9, 32 sweeps on the "
-                        "month table; anderson: FL's default, the same fixed point in about half the sweeps)")
-    p.add_argument("--no-cache", action="store_true",
-                   help="recompute the prediction and its seeker/taker structure even when cached "
-                        "(the structure is then built in a private temporary folder)")
-    p.add_argument("--validate-fcfs", action="store_true",
-                   help="also simulate an FCFS dispatcher on Poisson demand and report MAPE/RMSE")
+    p.add_argument(
+        "--accel",
+        choices=ACCELERATIONS,
+        default=None,
+        help="fixed-point acceleration (default none: the spec's damped iteration, A9, 32 sweeps on the "
+        "month table; anderson: FL's default, the same fixed point in about half the sweeps)",
+    )
+    p.add_argument(
+        "--no-cache",
+        action="store_true",
+        help="recompute the prediction and its seeker/taker structure even when cached "
+        "(the structure is then built in a private temporary folder)",
+    )
+    p.add_argument(
+        "--validate-fcfs",
+        action="store_true",
+        help="also simulate an FCFS dispatcher on Poisson demand and report MAPE/RMSE",
+    )
     p.add_argument("--hours", type=float, default=100.0, help="simulated hours for --validate-fcfs (default 100)")
-    p.add_argument("--min-samples", type=int, default=20,
-                   help="compare ODs with at least this many simulated orders (default 20)")
+    p.add_argument(
+        "--min-samples", type=int, default=20, help="compare ODs with at least this many simulated orders (default 20)"
+    )
     p.add_argument("--seed", type=int, default=0, help="random seed of the FCFS simulation (default 0)")
-    p.add_argument("--compare-authors", action="store_true",
-                   help="compare with the authors' published 2017-05-01 predictions")
+    p.add_argument(
+        "--compare-authors", action="store_true", help="compare with the authors' published 2017-05-01 predictions"
+    )
     p.set_defaults(handler=run)
 
 
@@ -83,8 +116,9 @@ def run(args: argparse.Namespace) -> int:
     csv_path = check_out_file(args.out or str(default_csv(args.rates, args.date)), "--out")
     data_dir = require_data_dir(args.data, what="rpbench predict")
     params = Params().replace(**parse_param_overrides(args.param))
-    changes = {k: v for k, v in (("tau0_s", args.tau0), ("priority", args.priority), ("accel", args.accel))
-               if v is not None}
+    changes = {
+        k: v for k, v in (("tau0_s", args.tau0), ("priority", args.priority), ("accel", args.accel)) if v is not None
+    }
     config = PredictConfig().replace(**changes)
     network = haikou_network(data_dir)
     rates = load_rates(args.rates, network, data_dir, args.date)
@@ -104,8 +138,14 @@ def run(args: argparse.Namespace) -> int:
     if args.compare_authors:
         out["authors"], _ = compare(prediction, data_dir)
     summary = {k: v for k, v in prediction.summary().items() if k not in ("config", "params")}
-    result = {**summary, "csv": str(csv_path), "wall_s": round(time.perf_counter() - t0, 3), **out,
-              "params": prediction.summary().get("params"), "config": prediction.summary().get("config")}
+    result = {
+        **summary,
+        "csv": str(csv_path),
+        "wall_s": round(time.perf_counter() - t0, 3),
+        **out,
+        "params": prediction.summary().get("params"),
+        "config": prediction.summary().get("config"),
+    }
     if args.json:
         print_json(result)
         return 0
@@ -114,25 +154,37 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _print_human(r: dict) -> None:
-    print(f"{r['ods']} ODs ({r['rates_source']}), {r['states']} taker states, "
-          f"{r['candidate_pairs']:,} candidate seeker-taker pairs")
+    print(
+        f"{r['ods']} ODs ({r['rates_source']}), {r['states']} taker states, "
+        f"{r['candidate_pairs']:,} candidate seeker-taker pairs"
+    )
     state = "converged" if r["converged"] else "NOT converged"
     took = "from cache" if r["from_cache"] else "%.1f s" % r.get("time_s", r["wall_s"])
-    print(f"fixed point: {state} in {r['iterations']} iterations, residual {r['residual']:.2e}, "
-          f"{r['clip_count']} clipped; {took}")
-    print(f"mean pairing probability {r['mean_pairing_prob']:.3f} (seeker {r['mean_p_seeker']:.3f}); "
-          f"per-OD table: {r['csv']}")
+    print(
+        f"fixed point: {state} in {r['iterations']} iterations, residual {r['residual']:.2e}, "
+        f"{r['clip_count']} clipped; {took}"
+    )
+    print(
+        f"mean pairing probability {r['mean_pairing_prob']:.3f} (seeker {r['mean_p_seeker']:.3f}); "
+        f"per-OD table: {r['csv']}"
+    )
     if "fcfs" in r:
         f = r["fcfs"]
-        print(f"FCFS validation ({f['hours']:g} h, {f['simulated_orders']:,} orders, {f['ods_compared']} ODs "
-              f"with >= {f['min_samples']} orders):")
+        print(
+            f"FCFS validation ({f['hours']:g} h, {f['simulated_orders']:,} orders, {f['ods_compared']} ODs "
+            f"with >= {f['min_samples']} orders):"
+        )
         for name in ("pairing_prob", "ride_m", "shared_m"):
             m = f[name]
-            print(f"  {name:<13} MAPE {m['mape_pct']:.2f} %  RMSE {m['rmse']:.4g}  "
-                  f"(mean predicted {m['mean_pred']:.4g}, simulated {m['mean_sim']:.4g})")
+            print(
+                f"  {name:<13} MAPE {m['mape_pct']:.2f} %  RMSE {m['rmse']:.4g}  "
+                f"(mean predicted {m['mean_pred']:.4g}, simulated {m['mean_sim']:.4g})"
+            )
     if "authors" in r:
         a = r["authors"]
         print(f"vs the authors' predictions ({a['ods_joined']} ODs joined):")
         for c in a["columns"]:
-            print(f"  {c['column']:<28} ours {c['mean_ours']:10.4g}  authors {c['mean_authors']:10.4g}  "
-                  f"pearson {c['pearson'] if c['pearson'] is None else round(c['pearson'], 3)}")
+            print(
+                f"  {c['column']:<28} ours {c['mean_ours']:10.4g}  authors {c['mean_authors']:10.4g}  "
+                f"pearson {c['pearson'] if c['pearson'] is None else round(c['pearson'], 3)}"
+            )

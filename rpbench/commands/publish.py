@@ -12,10 +12,13 @@ from rpbench.results.store import check_new_folder
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("publish", help="write a checked light copy of a results folder",
-                       description="Run rpbench check on a results folder (run, multi-day or sweep) and, if every "
-                                   f"check passes, copy it without {', '.join(HEAVY)} and with the checker's "
-                                   "verdict in check.txt.")
+    p = sub.add_parser(
+        "publish",
+        help="write a checked light copy of a results folder",
+        description="Run rpbench check on a results folder (run, multi-day or sweep) and, if every "
+        f"check passes, copy it without {', '.join(HEAVY)} and with the checker's "
+        "verdict in check.txt.",
+    )
     p.add_argument("source", metavar="RESULTS_DIR")
     p.add_argument("dest", metavar="DEST", help="folder to create (never overwritten)")
     p.set_defaults(handler=run)
@@ -31,8 +34,9 @@ def run(args: argparse.Namespace) -> int:
         _remove_staging(dest)
         if isinstance(exc, OSError) and not isinstance(exc, RpbenchError):
             where = f"{exc.filename}: " if exc.filename else ""
-            raise ResultsError(f"cannot publish to {str(dest)!r} ({where}{exc.strerror or exc}); "
-                               "nothing was written") from None
+            raise ResultsError(
+                f"cannot publish to {str(dest)!r} ({where}{exc.strerror or exc}); nothing was written"
+            ) from None
         raise
     return 0
 

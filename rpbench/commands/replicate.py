@@ -24,27 +24,39 @@ DEFAULT_STRATEGIES = "np,mb,rtv,fl-nd,fl"
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("replicate", help="the authors' simulator semantics, an ablation, beside their outputs",
-                       description="Run the authors' simulator semantics (rpbench.replication, every mechanism a "
-                                   "switch), the ablation (one mechanism off at a time, fixed order) and rpbench's "
-                                   "own engine on the authors' exact input, and print them beside the authors' "
-                                   "committed outputs and the paper's printed Table 2.")
+    p = sub.add_parser(
+        "replicate",
+        help="the authors' simulator semantics, an ablation, beside their outputs",
+        description="Run the authors' simulator semantics (rpbench.replication, every mechanism a "
+        "switch), the ablation (one mechanism off at a time, fixed order) and rpbench's "
+        "own engine on the authors' exact input, and print them beside the authors' "
+        "committed outputs and the paper's printed Table 2.",
+    )
     add_data_arg(p)
     p.add_argument("--date", default=None, help="one date (default 2017-05-01)")
     p.add_argument("--dates", default=None, metavar="A..B|A,B,...", help="several dates, e.g. 2017-05-01..2017-05-14")
-    p.add_argument("--strategies", default=DEFAULT_STRATEGIES,
-                   help=f"comma-separated subset of {DEFAULT_STRATEGIES} (default all; RTV runs under rpbench's "
-                        "engine only)")
+    p.add_argument(
+        "--strategies",
+        default=DEFAULT_STRATEGIES,
+        help=f"comma-separated subset of {DEFAULT_STRATEGIES} (default all; RTV runs under rpbench's engine only)",
+    )
     p.add_argument("--solver", default="highs", help="solver preset for every round (default highs)")
-    p.add_argument("--ablation", default="single", metavar="MODE",
-                   help="single (default): one mechanism off at a time; cumulative: mechanisms 1..k off, k = 1..8 "
-                        "(the steps add up to the whole difference); both; none")
+    p.add_argument(
+        "--ablation",
+        default="single",
+        metavar="MODE",
+        help="single (default): one mechanism off at a time; cumulative: mechanisms 1..k off, k = 1..8 "
+        "(the steps add up to the whole difference); both; none",
+    )
     p.add_argument("--no-ablation", action="store_true", help="same as --ablation none")
     p.add_argument("--no-rpbench", action="store_true", help="skip rpbench's own engine")
     p.add_argument("--out", default=None, help="results folder to create (default ./rpbench-runs/<stamp>_replicate)")
-    p.add_argument("--json", action="store_true",
-                   help='print {"runs": [{"engine", "strategy", "date", "pairing_ratio", "total_saving_km", '
-                        '"response_rate", ...}], "criterion": {...}}')
+    p.add_argument(
+        "--json",
+        action="store_true",
+        help='print {"runs": [{"engine", "strategy", "date", "pairing_ratio", "total_saving_km", '
+        '"response_rate", ...}], "criterion": {...}}',
+    )
     p.add_argument("--progress", action="store_true", help="one line on stderr per run")
     p.set_defaults(handler=run)
 
@@ -55,19 +67,29 @@ def run(args: argparse.Namespace) -> int:
     have = available_peak_dates(data_dir)
     if args.date and args.dates:
         from rpbench.exceptions import ParameterError
+
         raise ParameterError("give --date or --dates, not both")
     dates = parse_dates(args.dates or args.date or "2017-05-01", have)
     preset = load_preset(args.solver)
     check_new_folder(args.out)
     mode = "none" if args.no_ablation else args.ablation
-    steps_for(mode)                          # a bad --ablation is one line before anything runs
-    result = replicate(data_dir, dates, strategies, preset, ablation=mode,
-                       rpbench_engine=not args.no_rpbench, progress=args.progress)
+    steps_for(mode)  # a bad --ablation is one line before anything runs
+    result = replicate(
+        data_dir, dates, strategies, preset, ablation=mode, rpbench_engine=not args.no_rpbench, progress=args.progress
+    )
     frame = pd.DataFrame(result.rows)
-    meta = {"kind": "replication", "command": command_line(), "dates": dates,
-            "dates_text": f"{dates[0]} .. {dates[-1]}" if len(dates) > 1 else dates[0],
-            "strategies": strategies, "preset": preset.name, "data_dir": str(data_dir),
-            "ablation": mode, "version": None, **results.environment()}
+    meta = {
+        "kind": "replication",
+        "command": command_line(),
+        "dates": dates,
+        "dates_text": f"{dates[0]} .. {dates[-1]}" if len(dates) > 1 else dates[0],
+        "strategies": strategies,
+        "preset": preset.name,
+        "data_dir": str(data_dir),
+        "ablation": mode,
+        "version": None,
+        **results.environment(),
+    }
     meta["version"] = meta["versions"]["rpbench"]
     text = markdown(frame, meta)
     default = f"{results.timestamp()}_replicate"
@@ -78,7 +100,7 @@ def run(args: argparse.Namespace) -> int:
         (folder / audit.RECORDS_DIR).mkdir()
         for (date, strategy, engine), outcome in result.outcomes.items():
             if engine != "authors":
-                continue                      # records of the authors' full semantics only (size)
+                continue  # records of the authors' full semantics only (size)
             rec = outcome.passengers()
             orders = outcome.scenario_orders
             rec.insert(0, "order_id", orders.order_id[rec["order"].to_numpy()])

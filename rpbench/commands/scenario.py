@@ -9,8 +9,11 @@ from rpbench.commands._common import add_scenario_args, print_json, scenario_req
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("scenario", help="build a scenario and print its summary",
-                       description="Build a scenario and print its summary (orders, vehicles, nodes, ...).")
+    p = sub.add_parser(
+        "scenario",
+        help="build a scenario and print its summary",
+        description="Build a scenario and print its summary (orders, vehicles, nodes, ...).",
+    )
     add_scenario_args(p, positional=True)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(handler=run)

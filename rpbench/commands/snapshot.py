@@ -13,9 +13,12 @@ from rpbench.results.store import check_new_folder
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("snapshot", help="freeze per-round models into instance files",
-                       description="Simulate strategies and save the models of chosen rounds as instance files "
-                                   "(format: instances/README.md) for `rpbench bench`.")
+    p = sub.add_parser(
+        "snapshot",
+        help="freeze per-round models into instance files",
+        description="Simulate strategies and save the models of chosen rounds as instance files "
+        "(format: instances/README.md) for `rpbench bench`.",
+    )
     add_scenario_args(p)
     p.add_argument("--strategies", default="mb,rtv,fl", help="strategies to snapshot (default mb,rtv,fl)")
     p.add_argument("--solver", default="highs", help="solver preset used during the runs")
@@ -38,17 +41,20 @@ def run(args: argparse.Namespace) -> int:
             raise ParameterError(f"--rounds {args.rounds!r}: expected round indices like 10,100,200") from None
     if args.largest < 1:
         raise ParameterError(f"--largest {args.largest} must be >= 1")
-    check_new_folder(args.out)              # before simulating: a bad --out must not cost the runs
+    check_new_folder(args.out)  # before simulating: a bad --out must not cost the runs
     scenario = scenario_request(args).build()
     note(scenario.label)
-    folder, entries = take_snapshots(scenario, strategies, args.solver, args.out, rounds=rounds,
-                                     largest=args.largest, run_options=run_options)
+    folder, entries = take_snapshots(
+        scenario, strategies, args.solver, args.out, rounds=rounds, largest=args.largest, run_options=run_options
+    )
     if args.json:
         print_json({"folder": str(folder), "instances": entries})
         return 0
     for e in entries:
         size = e["size"]
-        print(f"{e['file']:<40} {e['strategy']:<6} round {e['round']:>5}  {size['rows']:>5} rows "
-              f"{size['cols']:>6} cols  objective {e['objective']:.0f}")
+        print(
+            f"{e['file']:<40} {e['strategy']:<6} round {e['round']:>5}  {size['rows']:>5} rows "
+            f"{size['cols']:>6} cols  objective {e['objective']:.0f}"
+        )
     print(f"\n{len(entries)} instance(s) written to {folder}; solve them with: rpbench bench {folder}")
     return 0

@@ -23,7 +23,7 @@ from rpbench.exceptions import DataError, DataNotFoundError, one_line
 #: Column kinds understood by :func:`read_table`.
 INT, FLOAT, TEXT, DATETIME = "int", "float", "text", "datetime"
 #: Integers written as floats (``1078.0``, ``1e3``) are exact only up to 2**53.
-_EXACT_FLOAT_INT = 2.0 ** 53
+_EXACT_FLOAT_INT = 2.0**53
 _INT64 = np.iinfo(np.int64)
 #: What a truncated or corrupt ``.gz`` raises while pandas streams it.
 _GZIP_ERRORS = (gzip.BadGzipFile, EOFError, zlib.error)
@@ -32,14 +32,20 @@ _GZIP_ERRORS = (gzip.BadGzipFile, EOFError, zlib.error)
 def require_file(path: Path, what: str) -> Path:
     """Return ``path`` if it is a file, else raise a :class:`DataNotFoundError`."""
     if not path.is_file():
-        raise DataNotFoundError(f"{what} file {str(path)!r} does not exist; "
-                                "check the data folder (--data) and its SOURCE.md layout")
+        raise DataNotFoundError(
+            f"{what} file {str(path)!r} does not exist; check the data folder (--data) and its SOURCE.md layout"
+        )
     return path
 
 
-def read_table(path: Path, what: str, columns: Mapping[str, str], *,
-               rename: Mapping[str, str] | None = None,
-               optional: Iterable[str] = ()) -> pd.DataFrame:
+def read_table(
+    path: Path,
+    what: str,
+    columns: Mapping[str, str],
+    *,
+    rename: Mapping[str, str] | None = None,
+    optional: Iterable[str] = (),
+) -> pd.DataFrame:
     """Read a CSV (plain or gzip) and validate the named columns.
 
     ``columns`` maps the column name in the file to its kind (``INT``,
@@ -52,15 +58,19 @@ def read_table(path: Path, what: str, columns: Mapping[str, str], *,
     try:
         frame = pd.read_csv(path, usecols=lambda c: c in columns, low_memory=False)
     except _GZIP_ERRORS as exc:
-        raise DataError(f"{what} file {str(path)!r} is not a valid gzip stream (truncated or corrupt: "
-                        f"{one_line(exc)}); fetch it again (`rpbench data fetch` replaces damaged files)") from None
+        raise DataError(
+            f"{what} file {str(path)!r} is not a valid gzip stream (truncated or corrupt: "
+            f"{one_line(exc)}); fetch it again (`rpbench data fetch` replaces damaged files)"
+        ) from None
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError, OSError) as exc:
         raise DataError(f"{what} file {str(path)!r} cannot be parsed as CSV: {one_line(exc)}") from None
     optional = set(optional)
     missing = [c for c in columns if c not in frame.columns and c not in optional]
     if missing:
-        raise DataError(f"{what} file {str(path)!r} lacks column(s) {', '.join(map(repr, missing))}; "
-                        f"expected columns {', '.join(columns)}")
+        raise DataError(
+            f"{what} file {str(path)!r} lacks column(s) {', '.join(map(repr, missing))}; "
+            f"expected columns {', '.join(columns)}"
+        )
     out = {}
     for name, kind in columns.items():
         if name not in frame.columns:
@@ -84,8 +94,14 @@ def _convert(series: pd.Series, kind: str, path: Path, what: str, name: str) -> 
         _fail_on_bad(converted.isna(), series, path, what, name, "a date-time (YYYY-MM-DD HH:MM:SS)")
         return converted
     numeric = pd.to_numeric(series, errors="coerce")
-    _fail_on_bad(numeric.isna() | ~np.isfinite(numeric.to_numpy(dtype=float, na_value=np.nan)),
-                 series, path, what, name, "a finite number")
+    _fail_on_bad(
+        numeric.isna() | ~np.isfinite(numeric.to_numpy(dtype=float, na_value=np.nan)),
+        series,
+        path,
+        what,
+        name,
+        "a finite number",
+    )
     if kind == INT:
         return _to_int64(numeric, series, path, what, name)
     if kind == FLOAT:
@@ -105,14 +121,26 @@ def _to_int64(numeric: pd.Series, raw: pd.Series, path: Path, what: str, name: s
         return numeric.astype(np.int64)
     if pd.api.types.is_unsigned_integer_dtype(numeric.dtype):
         too_big = numeric.to_numpy() > np.uint64(_INT64.max)
-        _fail_on_bad(pd.Series(too_big, index=raw.index), raw, path, what, name,
-                     f"an integer within the 64-bit range (at most {_INT64.max})")
+        _fail_on_bad(
+            pd.Series(too_big, index=raw.index),
+            raw,
+            path,
+            what,
+            name,
+            f"an integer within the 64-bit range (at most {_INT64.max})",
+        )
         return numeric.astype(np.int64)
     values = numeric.to_numpy(dtype=float)
     _fail_on_bad(pd.Series(values != np.round(values), index=raw.index), raw, path, what, name, "a whole number")
-    _fail_on_bad(pd.Series(np.abs(values) > _EXACT_FLOAT_INT, index=raw.index), raw, path, what, name,
-                 "an exact integer (beyond the 64-bit range, or written as a float beyond ±2^53; "
-                 "write integers in plain digits)")
+    _fail_on_bad(
+        pd.Series(np.abs(values) > _EXACT_FLOAT_INT, index=raw.index),
+        raw,
+        path,
+        what,
+        name,
+        "an exact integer (beyond the 64-bit range, or written as a float beyond ±2^53; "
+        "write integers in plain digits)",
+    )
     return pd.Series(values.astype(np.int64), index=raw.index)
 
 
@@ -120,6 +148,7 @@ def _fail_on_bad(bad: pd.Series, raw: pd.Series, path: Path, what: str, name: st
     if bool(bad.any()):
         row = int(np.flatnonzero(bad.to_numpy())[0])
         value = raw.iloc[row]
-        value = value.item() if isinstance(value, np.generic) else value    # 1e+30, not np.float64(1e+30)
-        raise DataError(f"{what} file {str(path)!r}, column {name!r}, data row {row + 1}: "
-                        f"value {value!r} is not {expected}")
+        value = value.item() if isinstance(value, np.generic) else value  # 1e+30, not np.float64(1e+30)
+        raise DataError(
+            f"{what} file {str(path)!r}, column {name!r}, data row {row + 1}: value {value!r} is not {expected}"
+        )

@@ -78,20 +78,20 @@ _PEAK_DAY_RE = re.compile(rf"^{re.escape(PEAK_DIR.as_posix())}/\d{{4}}-\d{{2}}-\
 class RegistryEntry:
     """One pinned file of the data folder."""
 
-    name: str           # posix path inside the data folder, as stored (``.gz`` when transform is gzip)
-    url: str            # the upstream file at a fixed commit
-    transform: str      # "gzip" or "none"
-    size: int           # bytes of the content (the upstream file)
-    sha256: str         # SHA-256 of the content
+    name: str  # posix path inside the data folder, as stored (``.gz`` when transform is gzip)
+    url: str  # the upstream file at a fixed commit
+    transform: str  # "gzip" or "none"
+    size: int  # bytes of the content (the upstream file)
+    sha256: str  # SHA-256 of the content
 
 
 @dataclass
 class FetchReport:
     dest: Path
-    source: str                                         # "registry" or the mirror's base URL
+    source: str  # "registry" or the mirror's base URL
     downloaded: list[str] = field(default_factory=list)
     already_present: list[str] = field(default_factory=list)
-    replaced: list[str] = field(default_factory=list)   # present with the wrong content, downloaded again
+    replaced: list[str] = field(default_factory=list)  # present with the wrong content, downloaded again
     content_bytes: int = 0
 
     def as_dict(self) -> dict:
@@ -102,7 +102,7 @@ class FetchReport:
 class VerifyReport:
     folder: Path
     ok: list[str] = field(default_factory=list)
-    bad: dict[str, str] = field(default_factory=dict)   # name -> what is wrong
+    bad: dict[str, str] = field(default_factory=dict)  # name -> what is wrong
     missing: list[str] = field(default_factory=list)
     extra: dict[str, str] = field(default_factory=dict)  # name -> what it looks like
 
@@ -121,16 +121,22 @@ def load_registry(text: str | None = None) -> list[RegistryEntry]:
     entries: list[RegistryEntry] = []
     for row in rows:
         try:
-            entry = RegistryEntry(name=str(row["name"]), url=str(row["url"]), transform=str(row["transform"]),
-                                  size=int(row["size"]), sha256=str(row["sha256"]).lower())
+            entry = RegistryEntry(
+                name=str(row["name"]),
+                url=str(row["url"]),
+                transform=str(row["transform"]),
+                size=int(row["size"]),
+                sha256=str(row["sha256"]).lower(),
+            )
         except (KeyError, TypeError, ValueError) as exc:
             raise DataError(f"data registry entry {row.get('name', row)!r} lacks or mangles {exc}") from None
         _check_entry(entry)
         entries.append(entry)
     names = [e.name for e in entries]
     if len(set(names)) != len(names):
-        raise DataError("the data registry names a file twice: "
-                        + ", ".join(sorted({n for n in names if names.count(n) > 1})))
+        raise DataError(
+            "the data registry names a file twice: " + ", ".join(sorted({n for n in names if names.count(n) > 1}))
+        )
     return entries
 
 
@@ -140,8 +146,9 @@ def _check_entry(entry: RegistryEntry) -> None:
     if path.is_absolute() or ".." in path.parts or not entry.name or "\\" in entry.name:
         raise DataError(f"data registry entry {entry.name!r}: the name must be a relative path inside the folder")
     if entry.transform not in TRANSFORMS:
-        raise DataError(f"data registry entry {entry.name!r}: transform {entry.transform!r} is not one of "
-                        + ", ".join(TRANSFORMS))
+        raise DataError(
+            f"data registry entry {entry.name!r}: transform {entry.transform!r} is not one of " + ", ".join(TRANSFORMS)
+        )
     if entry.transform == "gzip" and not entry.name.endswith(".gz"):
         raise DataError(f"data registry entry {entry.name!r}: a gzip transform needs a name ending in .gz")
     if not _SHA256_RE.match(entry.sha256):
@@ -159,7 +166,7 @@ def mirror_base(mirror: str | os.PathLike | None) -> str | None:
     if scheme in ("http", "https", "file"):
         return text.rstrip("/")
     folder = Path(text).expanduser()
-    if len(scheme) <= 1 and folder.is_dir():        # no scheme, or a Windows drive letter
+    if len(scheme) <= 1 and folder.is_dir():  # no scheme, or a Windows drive letter
         return folder.resolve().as_uri()
     raise ParameterError(f"--mirror {text!r} is neither an http(s):// or file:// URL nor an existing folder")
 
@@ -171,8 +178,9 @@ def source_url(entry: RegistryEntry, mirror: str | None = None) -> str:
     return f"{mirror.rstrip('/')}/{urllib.parse.quote(entry.name)}"
 
 
-def source_urls(mirror: str | os.PathLike | None = None,
-                entries: list[RegistryEntry] | None = None) -> list[tuple[str, str]]:
+def source_urls(
+    mirror: str | os.PathLike | None = None, entries: list[RegistryEntry] | None = None
+) -> list[tuple[str, str]]:
     """``(name, url)`` of every registry file, as :func:`fetch` would download them."""
     base = mirror_base(mirror)
     return [(e.name, source_url(e, base)) for e in (load_registry() if entries is None else entries)]
@@ -182,7 +190,7 @@ def content_problem(path: Path, entry: RegistryEntry) -> str | None:
     """What is wrong with the stored file ``path`` (``None`` when its content matches the registry)."""
     digest, size = hashlib.sha256(), 0
     try:
-        with (gzip.open(path, "rb") if entry.transform == "gzip" else open(path, "rb")) as fh:
+        with gzip.open(path, "rb") if entry.transform == "gzip" else open(path, "rb") as fh:
             while chunk := fh.read(CHUNK):
                 digest.update(chunk)
                 size += len(chunk)
@@ -196,12 +204,18 @@ def content_problem(path: Path, entry: RegistryEntry) -> str | None:
 def _mismatch(entry: RegistryEntry, sha256: str, size: int) -> str | None:
     if sha256 == entry.sha256:
         return None
-    return (f"content SHA-256 {sha256} ({size:,} bytes) differs from the registry's "
-            f"{entry.sha256} ({entry.size:,} bytes)")
+    return (
+        f"content SHA-256 {sha256} ({size:,} bytes) differs from the registry's {entry.sha256} ({entry.size:,} bytes)"
+    )
 
 
-def fetch(dest: str | os.PathLike | None = None, mirror: str | os.PathLike | None = None, *,
-          entries: list[RegistryEntry] | None = None, progress: bool = True) -> FetchReport:
+def fetch(
+    dest: str | os.PathLike | None = None,
+    mirror: str | os.PathLike | None = None,
+    *,
+    entries: list[RegistryEntry] | None = None,
+    progress: bool = True,
+) -> FetchReport:
     """Download every registry file missing from ``dest`` (default: :func:`rpbench.paths.fetched_data_dir`).
 
     Files already there with the right content are skipped; a file with the
@@ -226,9 +240,17 @@ def fetch(dest: str | os.PathLike | None = None, mirror: str | os.PathLike | Non
         todo.append(entry)
     created: list[Path] = []
     try:
-        with tqdm(total=sum(e.size for e in todo), unit="B", unit_scale=True, unit_divisor=1024,
-                  desc="rpbench data fetch", file=sys.stderr, disable=not (progress and todo),
-                  dynamic_ncols=True, leave=False) as bar:
+        with tqdm(
+            total=sum(e.size for e in todo),
+            unit="B",
+            unit_scale=True,
+            unit_divisor=1024,
+            desc="rpbench data fetch",
+            file=sys.stderr,
+            disable=not (progress and todo),
+            dynamic_ncols=True,
+            leave=False,
+        ) as bar:
             for entry in todo:
                 bar.set_postfix_str(entry.name)
                 target = folder / entry.name
@@ -253,9 +275,10 @@ def _make_dirs(path: Path, created: list[Path]) -> None:
     try:
         path.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise ParameterError(f"cannot create the folder {str(path)!r} ({_one_line(exc)}); "
-                             "pass --dest DIR with a writable folder") from None
-    created.extend(reversed(missing))               # outermost first, so reversed() removes innermost first
+        raise ParameterError(
+            f"cannot create the folder {str(path)!r} ({_one_line(exc)}); pass --dest DIR with a writable folder"
+        ) from None
+    created.extend(reversed(missing))  # outermost first, so reversed() removes innermost first
 
 
 def download(entry: RegistryEntry, url: str, target: Path, *, served_as_stored: bool, bar: tqdm | None = None) -> None:
@@ -268,8 +291,9 @@ def download(entry: RegistryEntry, url: str, target: Path, *, served_as_stored: 
     try:
         fd, tmp_name = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".part")
     except OSError as exc:
-        raise ParameterError(f"cannot write into {str(target.parent)!r} ({_one_line(exc)}); "
-                             "pass --dest DIR with a writable folder") from None
+        raise ParameterError(
+            f"cannot write into {str(target.parent)!r} ({_one_line(exc)}); pass --dest DIR with a writable folder"
+        ) from None
     tmp = Path(tmp_name)
     try:
         with os.fdopen(fd, "wb") as out:
@@ -278,16 +302,18 @@ def download(entry: RegistryEntry, url: str, target: Path, *, served_as_stored: 
             os.fsync(out.fileno())
         problem = _mismatch(entry, sha256, size)
         if problem:
-            raise ChecksumError(f"checksum mismatch for {entry.name} downloaded from {url}: {problem}; "
-                                "the file was not stored")
+            raise ChecksumError(
+                f"checksum mismatch for {entry.name} downloaded from {url}: {problem}; the file was not stored"
+            )
         os.replace(tmp, target)
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
 
 
-def _stream(entry: RegistryEntry, url: str, out: BinaryIO, *, served_as_stored: bool,
-            bar: tqdm | None) -> tuple[str, int]:
+def _stream(
+    entry: RegistryEntry, url: str, out: BinaryIO, *, served_as_stored: bool, bar: tqdm | None
+) -> tuple[str, int]:
     """Copy ``url`` into ``out`` as the folder stores it; return the content's SHA-256 and size."""
     digest, size = hashlib.sha256(), 0
     try:
@@ -301,8 +327,7 @@ def _stream(entry: RegistryEntry, url: str, out: BinaryIO, *, served_as_stored: 
             elif entry.transform == "gzip":
                 # filename="" and mtime=0: no temp-file name nor time in the header, as `gzip -9n`.
                 content = response
-                sink = stack.enter_context(gzip.GzipFile(filename="", mode="wb", fileobj=out, compresslevel=9,
-                                                         mtime=0))
+                sink = stack.enter_context(gzip.GzipFile(filename="", mode="wb", fileobj=out, compresslevel=9, mtime=0))
             else:
                 content, sink = response, out
             while chunk := content.read(CHUNK):
@@ -314,16 +339,19 @@ def _stream(entry: RegistryEntry, url: str, out: BinaryIO, *, served_as_stored: 
                     bar.update(len(chunk))
     except (gzip.BadGzipFile, EOFError, zlib.error) as exc:
         # Before OSError: BadGzipFile is one.
-        raise ChecksumError(f"{entry.name} downloaded from {url} is not a valid gzip file ({_one_line(exc)}); "
-                            "the file was not stored") from None
+        raise ChecksumError(
+            f"{entry.name} downloaded from {url} is not a valid gzip file ({_one_line(exc)}); the file was not stored"
+        ) from None
     except urllib.error.HTTPError as exc:
-        raise DownloadError(f"could not download {entry.name} from {url}: HTTP {exc.code} {_one_line(exc.reason)}"
-                            f"{_RERUN}") from None
+        raise DownloadError(
+            f"could not download {entry.name} from {url}: HTTP {exc.code} {_one_line(exc.reason)}{_RERUN}"
+        ) from None
     except urllib.error.URLError as exc:
         raise DownloadError(f"could not download {entry.name} from {url}: {_one_line(exc.reason)}{_RERUN}") from None
     except (http.client.HTTPException, OSError) as exc:
-        raise DownloadError(f"could not download {entry.name} from {url}: "
-                            f"{_one_line(exc) or type(exc).__name__}{_RERUN}") from None
+        raise DownloadError(
+            f"could not download {entry.name} from {url}: {_one_line(exc) or type(exc).__name__}{_RERUN}"
+        ) from None
     return digest.hexdigest(), size
 
 
@@ -347,7 +375,7 @@ class _Tee(io.RawIOBase):
 
     def readinto(self, buffer) -> int:
         data = self._source.read(len(buffer))
-        buffer[:len(data)] = data
+        buffer[: len(data)] = data
         if data:
             self._copy.write(data)
         return len(data)
@@ -392,5 +420,7 @@ def check_verified(report: VerifyReport) -> None:
     if not report.bad:
         return
     listed = "; ".join(f"{name}: {problem}" for name, problem in report.bad.items())
-    raise ChecksumError(f"{len(report.bad)} file(s) in {str(report.folder)!r} fail verification: {listed}; "
-                        f"run `rpbench data fetch --dest {report.folder}` to download them again")
+    raise ChecksumError(
+        f"{len(report.bad)} file(s) in {str(report.folder)!r} fail verification: {listed}; "
+        f"run `rpbench data fetch --dest {report.folder}` to download them again"
+    )

@@ -43,8 +43,10 @@ def read_hourly_counts(data_dir: Path) -> dict[str, np.ndarray]:
             raise DataError(f"{where}: hour_count must hold 24 non-negative integers, got {hours!r}")
         if (counts > MAX_ORDERS_PER_HOUR).any():
             # The day scenario draws that many orders: an absurd count would exhaust memory, not fail.
-            raise DataError(f"{where}: an hour_count above {MAX_ORDERS_PER_HOUR:,} orders is not plausible "
-                            f"(got {int(counts.max()):,})")
+            raise DataError(
+                f"{where}: an hour_count above {MAX_ORDERS_PER_HOUR:,} orders is not plausible "
+                f"(got {int(counts.max()):,})"
+            )
         if int(counts.sum()) != int(total):
             raise DataError(f"{where}: hour_count sums to {int(counts.sum())}, day_count says {int(total)}")
         out[key] = counts

@@ -41,8 +41,10 @@ def read_od_rates(path: Path) -> pd.DataFrame:
     if (frame["lambda"] > MAX_RATE_PER_MIN).any():
         # Finite but absurd rates overflow the table's sum to inf, and every drawn probability becomes NaN.
         row = int((frame["lambda"] > MAX_RATE_PER_MIN).to_numpy().nonzero()[0][0])
-        raise DataError(f"OD rate file {str(path)!r}, data row {row + 1}: rate {frame['lambda'][row]:g} per minute "
-                        f"exceeds {MAX_RATE_PER_MIN:g}; lambda is in orders per minute")
+        raise DataError(
+            f"OD rate file {str(path)!r}, data row {row + 1}: rate {frame['lambda'][row]:g} per minute "
+            f"exceeds {MAX_RATE_PER_MIN:g}; lambda is in orders per minute"
+        )
     frame["rate_per_s"] = frame.pop("lambda") / 60.0
     return frame
 
@@ -62,9 +64,20 @@ def read_day_od_shares(data_dir: Path) -> pd.DataFrame:
 def read_authors_predictions(data_dir: Path) -> pd.DataFrame:
     """The authors' per-OD predictions for 2017-05-01 (keyed by ``od_id`` of the per-day table)."""
     path = data_dir / AUTHORS_PREDICTION_FILE
-    columns = ["matching_prob", "ride_distance", "detour_distance", "shared_distance", "saved_distance",
-               "ride_distance_for_taker", "detour_distance_for_taker", "shared_distance_for_taker",
-               "saved_distance_for_taker", "ride_distance_for_seeker", "detour_distance_for_seeker",
-               "shared_distance_for_seeker", "saved_distance_for_seeker"]
+    columns = [
+        "matching_prob",
+        "ride_distance",
+        "detour_distance",
+        "shared_distance",
+        "saved_distance",
+        "ride_distance_for_taker",
+        "detour_distance_for_taker",
+        "shared_distance_for_taker",
+        "saved_distance_for_taker",
+        "ride_distance_for_seeker",
+        "detour_distance_for_seeker",
+        "shared_distance_for_seeker",
+        "saved_distance_for_seeker",
+    ]
     spec = {"OD_id": INT, **{c: FLOAT for c in columns}}
     return read_table(path, "authors' prediction", spec, rename={"OD_id": "od_id"})

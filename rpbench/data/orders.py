@@ -74,10 +74,17 @@ def read_peak_orders(data_dir: Path, date: str, *, start_hour: int = 8) -> pd.Da
     ``destination_id`` (network node ids), sorted by departure time then id.
     """
     path = peak_order_path(data_dir, date)
-    frame = read_table(path, "peak-hour orders", {
-        _PREFIX + "order_id": INT, _PREFIX + "departure_time": DATETIME,
-        "origin_id": INT, "destination_id": INT,
-    }, rename={_PREFIX + "order_id": "order_id", _PREFIX + "departure_time": "departure_time"})
+    frame = read_table(
+        path,
+        "peak-hour orders",
+        {
+            _PREFIX + "order_id": INT,
+            _PREFIX + "departure_time": DATETIME,
+            "origin_id": INT,
+            "destination_id": INT,
+        },
+        rename={_PREFIX + "order_id": "order_id", _PREFIX + "departure_time": "departure_time"},
+    )
     start = pd.Timestamp(parse_date(date)) + pd.Timedelta(hours=start_hour)
     inside = (frame["departure_time"] >= start) & (frame["departure_time"] < start + pd.Timedelta(hours=1))
     frame = frame[inside].sort_values(["departure_time", "order_id"], kind="stable")
@@ -98,10 +105,17 @@ def read_raw_peak_orders(data_dir: Path) -> pd.DataFrame:
     ``dest_lon``, ``dest_lat``.
     """
     path = data_dir / RAW_PEAK_FILE
-    names = {"order_id": INT, "departure_time": DATETIME, "starting_lng": FLOAT,
-             "starting_lat": FLOAT, "dest_lng": FLOAT, "dest_lat": FLOAT}
-    frame = read_table(path, "raw peak-hour orders", {_PREFIX + k: v for k, v in names.items()},
-                       rename={_PREFIX + k: k for k in names})
+    names = {
+        "order_id": INT,
+        "departure_time": DATETIME,
+        "starting_lng": FLOAT,
+        "starting_lat": FLOAT,
+        "dest_lng": FLOAT,
+        "dest_lat": FLOAT,
+    }
+    frame = read_table(
+        path, "raw peak-hour orders", {_PREFIX + k: v for k, v in names.items()}, rename={_PREFIX + k: k for k in names}
+    )
     return _rename_coordinates(frame)
 
 
@@ -111,15 +125,30 @@ def read_gaia_sample(data_dir: Path) -> pd.DataFrame:
     Same columns as :func:`read_raw_peak_orders`.
     """
     path = data_dir / GAIA_SAMPLE_FILE
-    frame = read_table(path, "GAIA sample orders", {
-        "order_id": INT, "departure_time": DATETIME, "starting_lng": FLOAT,
-        "starting_lat": FLOAT, "dest_lng": FLOAT, "dest_lat": FLOAT})
+    frame = read_table(
+        path,
+        "GAIA sample orders",
+        {
+            "order_id": INT,
+            "departure_time": DATETIME,
+            "starting_lng": FLOAT,
+            "starting_lat": FLOAT,
+            "dest_lng": FLOAT,
+            "dest_lat": FLOAT,
+        },
+    )
     return _rename_coordinates(frame)
 
 
 def _rename_coordinates(frame: pd.DataFrame) -> pd.DataFrame:
-    return frame.rename(columns={"starting_lng": "origin_lon", "starting_lat": "origin_lat",
-                                 "dest_lng": "dest_lon", "dest_lat": "dest_lat"})
+    return frame.rename(
+        columns={
+            "starting_lng": "origin_lon",
+            "starting_lat": "origin_lat",
+            "dest_lng": "dest_lon",
+            "dest_lat": "dest_lat",
+        }
+    )
 
 
 def read_trace_orders(data_dir: Path) -> pd.DataFrame:
@@ -129,10 +158,22 @@ def read_trace_orders(data_dir: Path) -> pd.DataFrame:
     ``origin_id``, ``destination_id`` (predecessor vertex ids).
     """
     path = data_dir / TRACE_FILE
-    frame = read_table(path, "2017-07-01 trace", {
-        "passenger_id": INT, "real_start_time": DATETIME, "start_ver": INT, "end_ver": INT,
-    }, rename={"passenger_id": "order_id", "real_start_time": "departure_time",
-               "start_ver": "origin_id", "end_ver": "destination_id"})
+    frame = read_table(
+        path,
+        "2017-07-01 trace",
+        {
+            "passenger_id": INT,
+            "real_start_time": DATETIME,
+            "start_ver": INT,
+            "end_ver": INT,
+        },
+        rename={
+            "passenger_id": "order_id",
+            "real_start_time": "departure_time",
+            "start_ver": "origin_id",
+            "end_ver": "destination_id",
+        },
+    )
     if not frame["order_id"].is_unique:
         raise DataError(f"2017-07-01 trace file {str(path)!r}: passenger_id is not unique")
     return frame.sort_values(["departure_time", "order_id"], kind="stable").reset_index(drop=True)

@@ -42,8 +42,13 @@ ARRIVE_TIME_DATE = "2017-05-01"
 
 _PREFIX = "dwv_order_make_haikou_1."
 #: Prediction columns FL reads (metres; the authors double the two saved distances when loading).
-PREDICTION_COLUMNS = ("matching_prob", "ride_distance", "shared_distance", "saved_distance_for_seeker",
-                      "saved_distance_for_taker")
+PREDICTION_COLUMNS = (
+    "matching_prob",
+    "ride_distance",
+    "shared_distance",
+    "saved_distance_for_seeker",
+    "saved_distance_for_taker",
+)
 COLUMNS = ("order_id", "departure_time", "origin_id", "destination_id") + PREDICTION_COLUMNS
 
 
@@ -86,9 +91,14 @@ def _require(raw: pd.DataFrame, columns: list[str], path: Path) -> None:
 def _merged_frame(raw: pd.DataFrame, path: Path) -> pd.DataFrame:
     need = [_PREFIX + "order_id", _PREFIX + "departure_time", "O_location", "D_location"]
     _require(raw, need, path)
-    frame = pd.DataFrame({"order_id": raw[need[0]].astype(np.int64), "departure_time": raw[need[1]],
-                          "origin_id": raw["O_location"].astype(np.int64),
-                          "destination_id": raw["D_location"].astype(np.int64)})
+    frame = pd.DataFrame(
+        {
+            "order_id": raw[need[0]].astype(np.int64),
+            "departure_time": raw[need[1]],
+            "origin_id": raw["O_location"].astype(np.int64),
+            "destination_id": raw["D_location"].astype(np.int64),
+        }
+    )
     for col in PREDICTION_COLUMNS:
         frame[col] = raw[col].astype(float) if col in raw.columns else np.nan
     return frame
@@ -97,9 +107,14 @@ def _merged_frame(raw: pd.DataFrame, path: Path) -> pd.DataFrame:
 def _arrive_time_frame(data_dir: Path, raw: pd.DataFrame, path: Path) -> pd.DataFrame:
     need = [_PREFIX + "order_id", _PREFIX + "departure_time", "O_loction", "D_loction"]
     _require(raw, need, path)
-    frame = pd.DataFrame({"order_id": raw[need[0]].astype(np.int64), "departure_time": raw[need[1]],
-                          "origin_id": raw["O_loction"].astype(np.int64),
-                          "destination_id": raw["D_loction"].astype(np.int64)})
+    frame = pd.DataFrame(
+        {
+            "order_id": raw[need[0]].astype(np.int64),
+            "departure_time": raw[need[1]],
+            "origin_id": raw["O_loction"].astype(np.int64),
+            "destination_id": raw["D_loction"].astype(np.int64),
+        }
+    )
     frame = group_by_first_appearance(frame, ["origin_id", "destination_id"])
     return frame.join(_od_predictions(data_dir), on=["origin_id", "destination_id"])
 
@@ -118,8 +133,10 @@ def _od_predictions(data_dir: Path) -> pd.DataFrame:
     """Per-OD predictions of 2017-05-01 indexed by (origin_id, destination_id); NaN columns when absent."""
     od_path, pred_path = data_dir / OD_FILE, data_dir / PREDICTION_FILE
     if not (od_path.is_file() and pred_path.is_file()):
-        return pd.DataFrame(columns=list(PREDICTION_COLUMNS),
-                            index=pd.MultiIndex.from_arrays([[], []], names=["origin_id", "destination_id"]))
+        return pd.DataFrame(
+            columns=list(PREDICTION_COLUMNS),
+            index=pd.MultiIndex.from_arrays([[], []], names=["origin_id", "destination_id"]),
+        )
     od = pd.read_csv(od_path)
     pred = pd.read_csv(pred_path)
     _require(od, ["OD_id", "origin_id", "destination_id"], od_path)

@@ -35,22 +35,23 @@ class NetworkTables:
     """Nodes and directed arcs as read from disk (ids as in the files)."""
 
     name: str
-    node_id: np.ndarray        # int64, unique
-    lon: np.ndarray            # float64, WGS84 degrees
-    lat: np.ndarray            # float64
-    arc_from: np.ndarray       # int64 node ids
-    arc_to: np.ndarray         # int64 node ids
-    arc_length_m: np.ndarray   # float64, > 0
-    arc_link_id: np.ndarray    # int64, the file's link id (shared by both directions)
-    source: str                # file paths, for provenance
+    node_id: np.ndarray  # int64, unique
+    lon: np.ndarray  # float64, WGS84 degrees
+    lat: np.ndarray  # float64
+    arc_from: np.ndarray  # int64 node ids
+    arc_to: np.ndarray  # int64 node ids
+    arc_length_m: np.ndarray  # float64, > 0
+    arc_link_id: np.ndarray  # int64, the file's link id (shared by both directions)
+    source: str  # file paths, for provenance
 
 
 def read_haikou_network(data_dir: Path) -> NetworkTables:
     """The authors' Haikou network: 3,901 nodes, 5,458 two-way links."""
     node_path, link_path = data_dir / NODE_FILE, data_dir / LINK_FILE
     nodes = read_table(node_path, "network node", {"node_id": INT, "x_coord": FLOAT, "y_coord": FLOAT})
-    links = read_table(link_path, "network link",
-                       {"link_id": INT, "from_node_id": INT, "to_node_id": INT, "length": FLOAT})
+    links = read_table(
+        link_path, "network link", {"link_id": INT, "from_node_id": INT, "to_node_id": INT, "length": FLOAT}
+    )
     _check_nodes(nodes["node_id"].to_numpy(), node_path)
     _check_coordinates(nodes["x_coord"].to_numpy(), nodes["y_coord"].to_numpy(), node_path)
     a = links["from_node_id"].to_numpy()
@@ -75,8 +76,7 @@ def read_predecessor_network(data_dir: Path) -> NetworkTables:
     """The TR-B 2021 Haikou network: 724 vertices, 1,955 directed edges."""
     vpath, epath = data_dir / PRED_VERTEX_FILE, data_dir / PRED_EDGE_FILE
     vertices = read_table(vpath, "predecessor vertex", {"id": INT, "coor": TEXT})
-    edges = read_table(epath, "predecessor edge",
-                       {"id": INT, "length": FLOAT, "head_ver": INT, "tail_ver": INT})
+    edges = read_table(epath, "predecessor edge", {"id": INT, "length": FLOAT, "head_ver": INT, "tail_ver": INT})
     lonlat = np.array([_parse_pair(s, vpath, i) for i, s in enumerate(vertices["coor"])], dtype=float)
     ids = vertices["id"].to_numpy()
     _check_nodes(ids, vpath)
@@ -87,8 +87,13 @@ def read_predecessor_network(data_dir: Path) -> NetworkTables:
     _check_arcs(ids, a, b, length, epath)
     return NetworkTables(
         name="haikou-trb2021",
-        node_id=ids, lon=lonlat[:, 0], lat=lonlat[:, 1],
-        arc_from=a, arc_to=b, arc_length_m=length, arc_link_id=edges["id"].to_numpy(),
+        node_id=ids,
+        lon=lonlat[:, 0],
+        lat=lonlat[:, 1],
+        arc_from=a,
+        arc_to=b,
+        arc_length_m=length,
+        arc_link_id=edges["id"].to_numpy(),
         source=f"{vpath} + {epath}",
     )
 
@@ -98,8 +103,10 @@ def _parse_pair(text: str, path: Path, row: int) -> tuple[float, float]:
         value = ast.literal_eval(str(text))
         lon, lat = float(value[0]), float(value[1])
     except (ValueError, SyntaxError, TypeError, IndexError):
-        raise DataError(f"predecessor vertex file {str(path)!r}, column 'coor', data row {row + 1}: "
-                        f"value {text!r} is not a '[lon, lat]' pair") from None
+        raise DataError(
+            f"predecessor vertex file {str(path)!r}, column 'coor', data row {row + 1}: "
+            f"value {text!r} is not a '[lon, lat]' pair"
+        ) from None
     return lon, lat
 
 
@@ -116,17 +123,17 @@ def _check_arcs(node_id: np.ndarray, a: np.ndarray, b: np.ndarray, length: np.nd
     if not known.all():
         row = int(np.flatnonzero(~known)[0])
         bad = a[row] if a[row] not in node_id else b[row]
-        raise DataError(f"network file {str(path)!r}, data row {row + 1}: node id {int(bad)} "
-                        "is not in the node file")
+        raise DataError(f"network file {str(path)!r}, data row {row + 1}: node id {int(bad)} is not in the node file")
     if (length <= 0).any():
         row = int(np.flatnonzero(length <= 0)[0])
-        raise DataError(f"network file {str(path)!r}, data row {row + 1}: length {length[row]} m "
-                        "is not positive")
+        raise DataError(f"network file {str(path)!r}, data row {row + 1}: length {length[row]} m is not positive")
     # A link of 1e300 m is finite, but path sums over such links overflow to inf (= "unreachable").
     if (length > MAX_LINK_M).any():
         row = int(np.flatnonzero(length > MAX_LINK_M)[0])
-        raise DataError(f"network file {str(path)!r}, data row {row + 1}: length {length[row]:g} m "
-                        f"exceeds {MAX_LINK_M:g} m; lengths are in metres")
+        raise DataError(
+            f"network file {str(path)!r}, data row {row + 1}: length {length[row]:g} m "
+            f"exceeds {MAX_LINK_M:g} m; lengths are in metres"
+        )
 
 
 def _check_coordinates(lon: np.ndarray, lat: np.ndarray, path: Path) -> None:
@@ -134,5 +141,7 @@ def _check_coordinates(lon: np.ndarray, lat: np.ndarray, path: Path) -> None:
     bad = ~((np.abs(lon) <= 180) & (np.abs(lat) <= 90))
     if bad.any():
         row = int(np.flatnonzero(bad)[0])
-        raise DataError(f"network file {str(path)!r}, data row {row + 1}: coordinates ({lon[row]:g}, {lat[row]:g}) "
-                        "are not WGS84 degrees (longitude in [-180, 180], latitude in [-90, 90])")
+        raise DataError(
+            f"network file {str(path)!r}, data row {row + 1}: coordinates ({lon[row]:g}, {lat[row]:g}) "
+            "are not WGS84 degrees (longitude in [-180, 180], latitude in [-90, 90])"
+        )

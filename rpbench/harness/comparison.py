@@ -69,8 +69,10 @@ def parse_strategies(text: str | list[str]) -> list[str]:
         if name in ORACLE_RUNS or name in STRATEGY_REGISTRY:
             continue
         if not is_spec(name) and name not in plugin_names():
-            raise ParameterError(f"unknown strategy {name!r}; choose from {', '.join(known_runs())}, "
-                                 "or give a strategy class as MODULE:CLASS (e.g. mypkg.rules:Greedy)")
+            raise ParameterError(
+                f"unknown strategy {name!r}; choose from {', '.join(known_runs())}, "
+                "or give a strategy class as MODULE:CLASS (e.g. mypkg.rules:Greedy)"
+            )
         strategy_class(name)
     if len(set(names)) != len(names):
         raise ParameterError(f"strategy list {','.join(names)} names a strategy twice")
@@ -112,10 +114,10 @@ def split_option_key(key: str, names: list[str]) -> tuple[str, str]:
     when there is no dot."""
     for name in sorted(names, key=len, reverse=True):
         if key.startswith(f"{name}."):
-            return name, key[len(name) + 1:]
+            return name, key[len(name) + 1 :]
     colon = key.find(":")
     dot = key.find(".", colon + 1 if colon >= 0 else 0)
-    return (key, "") if dot < 0 else (key[:dot], key[dot + 1:])
+    return (key, "") if dot < 0 else (key[:dot], key[dot + 1 :])
 
 
 def progress_bar(scenario: Scenario, label: str, enabled: bool | None):
@@ -125,13 +127,28 @@ def progress_bar(scenario: Scenario, label: str, enabled: bool | None):
     if not enabled:
         return None
     from tqdm import tqdm
-    return tqdm(total=scenario.horizon_s, desc=f"{label:>6}", unit="sim s", leave=False, file=sys.stderr,
-                bar_format="{desc} {percentage:3.0f}%|{bar}| {n:.0f}/{total:.0f} sim s [{elapsed}<{remaining}]")
+
+    return tqdm(
+        total=scenario.horizon_s,
+        desc=f"{label:>6}",
+        unit="sim s",
+        leave=False,
+        file=sys.stderr,
+        bar_format="{desc} {percentage:3.0f}%|{bar}| {n:.0f}/{total:.0f} sim s [{elapsed}<{remaining}]",
+    )
 
 
-def simulate_strategy(scenario: Scenario, name: str, preset: Preset, *, options: RunOptions | None = None,
-                      progress: bool | None = None, canonical_ties: bool = True, capture=None,
-                      strict: bool = False) -> StrategyRun:
+def simulate_strategy(
+    scenario: Scenario,
+    name: str,
+    preset: Preset,
+    *,
+    options: RunOptions | None = None,
+    progress: bool | None = None,
+    canonical_ties: bool = True,
+    capture=None,
+    strict: bool = False,
+) -> StrategyRun:
     """Simulate one strategy and compute its KPIs from the event log (``strict``: an unproven round is an
     error, see :mod:`rpbench.harness.strict`)."""
     cls = strategy_class(name)
@@ -139,14 +156,17 @@ def simulate_strategy(scenario: Scenario, name: str, preset: Preset, *, options:
     strategy = cls(options)
     backend = preset.backend_class()
     if strategy.structure not in backend.exact:
-        raise ParameterError(f"solver preset {preset.name!r} (backend {preset.backend!r}) does not solve "
-                             f"{strategy.structure.value} models exactly, which strategy {name!r} needs; "
-                             "choose another --solver")
+        raise ParameterError(
+            f"solver preset {preset.name!r} (backend {preset.backend!r}) does not solve "
+            f"{strategy.structure.value} models exactly, which strategy {name!r} needs; "
+            "choose another --solver"
+        )
     backend.ensure_installed()
     bar = progress_bar(scenario, name, progress)
     try:
-        sim = Simulator(scenario, strategy, preset, canonical_ties=canonical_ties, progress=bar,
-                        capture=capture, strict=strict).run()
+        sim = Simulator(
+            scenario, strategy, preset, canonical_ties=canonical_ties, progress=bar, capture=capture, strict=strict
+        ).run()
     finally:
         if bar is not None:
             bar.close()
@@ -163,10 +183,19 @@ def evaluate(scenario: Scenario, sim: SimResult, name: str, options: RunOptions)
     return StrategyRun(name=name, sim=sim, passengers=tab, kpis=kpis, hourly=metrics.hourly(tab), options=options)
 
 
-def run_comparison(scenario: Scenario, strategies: list[str], preset_name: str, *, out: str | Path | None = None,
-                   run_options: dict[str, RunOptions | dict] | None = None, progress: bool | None = None,
-                   request: ScenarioRequest | None = None, command: str | None = None,
-                   oracle_solver: str | None = None, strict: bool | None = None) -> tuple[Path, pd.DataFrame]:
+def run_comparison(
+    scenario: Scenario,
+    strategies: list[str],
+    preset_name: str,
+    *,
+    out: str | Path | None = None,
+    run_options: dict[str, RunOptions | dict] | None = None,
+    progress: bool | None = None,
+    request: ScenarioRequest | None = None,
+    command: str | None = None,
+    oracle_solver: str | None = None,
+    strict: bool | None = None,
+) -> tuple[Path, pd.DataFrame]:
     """Run every strategy (and oracle) on ``scenario`` and write one results folder.
 
     ``run_options`` maps a run name to its options (parsed, or a dict of
@@ -188,9 +217,14 @@ def run_comparison(scenario: Scenario, strategies: list[str], preset_name: str, 
             continue
         run = done.get(name)
         if run is None or run.options != options[name]:
-            run = simulate_strategy(scenario, name, preset, options=calibrated(scenario, name, options[name], preset,
-                                                                              done, progress, strict=strict),
-                                    progress=progress, strict=strict)
+            run = simulate_strategy(
+                scenario,
+                name,
+                preset,
+                options=calibrated(scenario, name, options[name], preset, done, progress, strict=strict),
+                progress=progress,
+                strict=strict,
+            )
         done[name] = run
         runs.append(run)
     wanted = [n for n in strategies if n in ORACLE_RUNS]
@@ -199,13 +233,20 @@ def run_comparison(scenario: Scenario, strategies: list[str], preset_name: str, 
         oracle_preset = load_preset(oracle_solver) if oracle_solver else preset
         oracle_results = solve_oracles(scenario, wanted, oracle_preset, options)
     for name, res in oracle_results.items():
-        require_proven(f"{run_label(name)} (solver preset {res.solver!r})", res.solution.status.value,
-                       strict=strict)
+        require_proven(f"{run_label(name)} (solver preset {res.solver!r})", res.solution.status.value, strict=strict)
     table = kpi_table(runs, oracle_results, strategies)
     default = f"{results.timestamp()}_{scenario.name}_{preset.name}"
     with results.new_results_folder(out, default) as (folder, final):
-        write_folder(folder, scenario, runs, oracle_results, preset, strategies,
-                     request.meta() if request is not None else {}, command)
+        write_folder(
+            folder,
+            scenario,
+            runs,
+            oracle_results,
+            preset,
+            strategies,
+            request.meta() if request is not None else {},
+            command,
+        )
         write_report(folder, name=final.name)
     return final, table
 
@@ -216,8 +257,16 @@ def _typed(name: str, options: RunOptions | dict | None) -> RunOptions:
     return options_class(name).parse(name, options)
 
 
-def calibrated(scenario: Scenario, name: str, options: RunOptions, preset: Preset, done: dict[str, StrategyRun],
-               progress: bool | None, *, strict: bool = False) -> RunOptions:
+def calibrated(
+    scenario: Scenario,
+    name: str,
+    options: RunOptions,
+    preset: Preset,
+    done: dict[str, StrategyRun],
+    progress: bool | None,
+    *,
+    strict: bool = False,
+) -> RunOptions:
     """``options`` completed from a run of the strategy's ``calibrated_by`` strategy on the same scenario.
 
     The calibration run uses that strategy's default options and is shared
@@ -252,8 +301,11 @@ def solve_oracles(scenario: Scenario, names: list[str], preset: Preset, options:
 
 def oracle_kpis(result) -> dict[str, float]:
     """The numeric KPIs of an oracle result (solver facts go to meta.json)."""
-    return {k: float(v) for k, v in result.kpis().items() if isinstance(v, (int, float, np.number))
-            and not isinstance(v, bool) and k not in ("variant",)}
+    return {
+        k: float(v)
+        for k, v in result.kpis().items()
+        if isinstance(v, (int, float, np.number)) and not isinstance(v, bool) and k not in ("variant",)
+    }
 
 
 def kpi_table(runs: list[StrategyRun], oracle_results: dict, order: list[str]) -> pd.DataFrame:
@@ -272,16 +324,32 @@ def bound_by_hour(pairs: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame({"hour": saving.index, "total_saving_km": saving.to_numpy(), "run": "bound"})
 
 
-def write_folder(folder: Path, scenario: Scenario, runs: list[StrategyRun], oracle_results: dict, preset: Preset,
-                 strategies: list[str], scenario_args: dict[str, Any], command: str | None) -> None:
+def write_folder(
+    folder: Path,
+    scenario: Scenario,
+    runs: list[StrategyRun],
+    oracle_results: dict,
+    preset: Preset,
+    strategies: list[str],
+    scenario_args: dict[str, Any],
+    command: str | None,
+) -> None:
     orders = scenario.orders
     solo = scenario.network.distances()(orders.origin, orders.destination)
-    pd.DataFrame({"order_id": orders.order_id, "request_s": orders.request_s, "origin": orders.origin,
-                  "destination": orders.destination, "patience_s": orders.patience_s, "solo_m": solo}
-                 ).to_csv(folder / "orders.csv.gz", index=False)
+    pd.DataFrame(
+        {
+            "order_id": orders.order_id,
+            "request_s": orders.request_s,
+            "origin": orders.origin,
+            "destination": orders.destination,
+            "patience_s": orders.patience_s,
+            "solo_m": solo,
+        }
+    ).to_csv(folder / "orders.csv.gz", index=False)
     results.save_network(folder / "network.npz", scenario.network)
-    pd.DataFrame({"vehicle": np.arange(len(scenario.fleet)), "initial_node": scenario.fleet.initial_node}
-                 ).to_csv(folder / "fleet.csv.gz", index=False)
+    pd.DataFrame({"vehicle": np.arange(len(scenario.fleet)), "initial_node": scenario.fleet.initial_node}).to_csv(
+        folder / "fleet.csv.gz", index=False
+    )
     tidy, rounds, hourly = [], [], []
     meta_runs = {}
     for r in runs:
@@ -292,24 +360,44 @@ def write_folder(folder: Path, scenario: Scenario, runs: list[StrategyRun], orac
         tidy += [{"run": r.name, "kpi": k, "value": v} for k, v in r.kpis.items()]
         rounds.append(r.sim.rounds.assign(run=r.name))
         hourly.append(r.hourly.assign(run=r.name))
-        meta_runs[r.name] = {"kind": "simulation", "options": r.options.as_dict(), "wall_s": r.sim.wall_s,
-                             "end_s": r.sim.end_s, "rounds_solved": int(len(r.sim.rounds))}
+        meta_runs[r.name] = {
+            "kind": "simulation",
+            "options": r.options.as_dict(),
+            "wall_s": r.sim.wall_s,
+            "end_s": r.sim.end_s,
+            "rounds_solved": int(len(r.sim.rounds)),
+        }
     bound = oracle_results.get("bound")
-    if bound is not None:                     # the competitive ratio of every strategy run (docs/bound.md)
+    if bound is not None:  # the competitive ratio of every strategy run (docs/bound.md)
         bound_km = oracle_kpis(bound)["total_saving_km"]
-        tidy += [{"run": r.name, "kpi": "competitive_ratio_bound",
-                  "value": r.kpis["total_saving_km"] / bound_km if bound_km else float("nan")} for r in runs]
+        tidy += [
+            {
+                "run": r.name,
+                "kpi": "competitive_ratio_bound",
+                "value": r.kpis["total_saving_km"] / bound_km if bound_km else float("nan"),
+            }
+            for r in runs
+        ]
     for name, res in oracle_results.items():
         d = folder / "runs" / name
         d.mkdir(parents=True)
         res.pairs.to_csv(d / "pairs.csv.gz", index=False)
         tidy += [{"run": name, "kpi": k, "value": v} for k, v in oracle_kpis(res).items()]
         facts = res.kpis()
-        meta_runs[name] = {"kind": "oracle", "variant": res.variant, "solver": res.solver,
-                           "status": facts["status"], "rules": dataclasses.asdict(res.rules),
-                           "objective_m": facts["objective_m"], "bound_m": facts["bound_m"], "gap": facts["gap"],
-                           "candidates": res.n_candidates, "evaluated": res.n_evaluated, "unit_m": res.model.unit_m,
-                           "timings_s": res.timings}
+        meta_runs[name] = {
+            "kind": "oracle",
+            "variant": res.variant,
+            "solver": res.solver,
+            "status": facts["status"],
+            "rules": dataclasses.asdict(res.rules),
+            "objective_m": facts["objective_m"],
+            "bound_m": facts["bound_m"],
+            "gap": facts["gap"],
+            "candidates": res.n_candidates,
+            "evaluated": res.n_evaluated,
+            "unit_m": res.model.unit_m,
+            "timings_s": res.timings,
+        }
     pd.DataFrame(tidy).to_csv(folder / "kpis.csv", index=False)
     if rounds:
         pd.concat(rounds, ignore_index=True).to_csv(folder / "rounds.csv.gz", index=False)
@@ -320,11 +408,18 @@ def write_folder(folder: Path, scenario: Scenario, runs: list[StrategyRun], orac
     meta = {
         "rpbench_results": 1,
         "command": command,
-        "scenario": {"name": scenario.name, "label": scenario.label, "synthetic": scenario.synthetic,
-                     "args": scenario_args, "seed": scenario.seed, "start_time": scenario.start_time,
-                     "horizon_s": scenario.horizon_s, "provenance": scenario.provenance,
-                     "summary": {k: v for k, v in scenario.summary().items() if k != "params"},
-                     "network_hash": scenario.network.content_hash},
+        "scenario": {
+            "name": scenario.name,
+            "label": scenario.label,
+            "synthetic": scenario.synthetic,
+            "args": scenario_args,
+            "seed": scenario.seed,
+            "start_time": scenario.start_time,
+            "horizon_s": scenario.horizon_s,
+            "provenance": scenario.provenance,
+            "summary": {k: v for k, v in scenario.summary().items() if k != "params"},
+            "network_hash": scenario.network.content_hash,
+        },
         "params": scenario.params.as_dict(),
         "preset": preset.as_dict(),
         "strategies": strategies,

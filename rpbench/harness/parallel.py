@@ -23,8 +23,15 @@ from rpbench.exceptions import ParameterError
 from rpbench.harness.strict import is_strict, strict_mode
 
 
-def run_tasks(fn: Callable[[Any], Any], tasks: Sequence[Any], *, workers: int | None = None,
-              scheduler: str | None = None, label: str = "tasks", progress: bool | None = None) -> list[Any]:
+def run_tasks(
+    fn: Callable[[Any], Any],
+    tasks: Sequence[Any],
+    *,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    label: str = "tasks",
+    progress: bool | None = None,
+) -> list[Any]:
     """``[fn(t) for t in tasks]``, in parallel unless ``workers == 1``.
 
     ``fn`` and the tasks must pickle (``fn`` a module-level function).  Worker
@@ -49,14 +56,15 @@ def run_tasks(fn: Callable[[Any], Any], tasks: Sequence[Any], *, workers: int | 
     return _in_processes(job, tasks, min(n, workers or os.cpu_count() or 1), label, progress)
 
 
-def _in_processes(job: Callable[[Any], Any], tasks: Sequence[Any], n_workers: int, label: str,
-                  progress: bool) -> list[Any]:
+def _in_processes(
+    job: Callable[[Any], Any], tasks: Sequence[Any], n_workers: int, label: str, progress: bool
+) -> list[Any]:
     """The tasks on a local pool of ``n_workers`` processes; the first failure stops the rest."""
     pool = ProcessPoolExecutor(n_workers, mp_context=multiprocessing.get_context("spawn"))
     try:
         futures = [pool.submit(job, t) for t in tasks]
         for future in _bar(as_completed(futures), label, progress, total=len(futures)):
-            future.result()             # re-raises a task's exception (BrokenProcessPool if a worker died)
+            future.result()  # re-raises a task's exception (BrokenProcessPool if a worker died)
         results = [f.result() for f in futures]
     except BaseException:
         _terminate(pool)
@@ -67,7 +75,7 @@ def _in_processes(job: Callable[[Any], Any], tasks: Sequence[Any], n_workers: in
 
 def _terminate(pool: ProcessPoolExecutor) -> None:
     """Stop the pool at once: queued tasks are cancelled and running ones' workers terminated."""
-    terminate = getattr(pool, "terminate_workers", None)       # Python >= 3.14
+    terminate = getattr(pool, "terminate_workers", None)  # Python >= 3.14
     if terminate is not None:
         terminate()
         return
@@ -82,8 +90,7 @@ def _terminate(pool: ProcessPoolExecutor) -> None:
         process.join()
 
 
-def _on_dask(job: Callable[[Any], Any], tasks: Sequence[Any], scheduler: str, label: str,
-             progress: bool) -> list[Any]:
+def _on_dask(job: Callable[[Any], Any], tasks: Sequence[Any], scheduler: str, label: str, progress: bool) -> list[Any]:
     """The tasks on an existing Dask cluster (``--scheduler ADDRESS``)."""
     try:
         from dask.distributed import Client
@@ -121,5 +128,5 @@ def _bar(iterable, label: str, enabled: bool, total: int | None = None):
     if not enabled:
         return iterable
     from tqdm import tqdm
-    return tqdm(iterable, total=total, desc=label, unit="run", file=sys.stderr, leave=False)
 
+    return tqdm(iterable, total=total, desc=label, unit="run", file=sys.stderr, leave=False)

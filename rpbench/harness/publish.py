@@ -33,7 +33,7 @@ def publish(source: str | Path, dest: str | Path) -> Path:
     if dest.exists():
         raise ResultsError(f"{str(dest)!r} already exists; publish never overwrites")
     verdicts = []
-    for result in check_tree(source):         # a parent's own checks (deleted days, tables) gate it too
+    for result in check_tree(source):  # a parent's own checks (deleted days, tables) gate it too
         if result.error is not None:
             raise ResultsError(f"{result.folder!r} cannot be checked ({result.error}); not published")
         bad = [c.run for c in result.checks if not c.ok]
@@ -49,14 +49,15 @@ def publish(source: str | Path, dest: str | Path) -> Path:
     # reports re-rendered from the copy say it is a light copy (and point to check.txt)
     for folder, _ in verdicts:
         write_report(tmp / folder.relative_to(source), folder.name)
-    kind = read_meta(tmp).get("kind")       # the multi-day or sweep summary, under the published name
+    kind = read_meta(tmp).get("kind")  # the multi-day or sweep summary, under the published name
     if kind == "multi-day":
         write_multiday_report(tmp, name=dest.name)
     elif kind == "sweep":
         write_sweep_report(tmp, name=dest.name)
     for folder, text in verdicts:
         (tmp / folder.relative_to(source) / "check.txt").write_text(
-            "rpbench check on the full results folder before publishing (all checks passed):\n\n" + text + "\n")
+            "rpbench check on the full results folder before publishing (all checks passed):\n\n" + text + "\n"
+        )
     tmp.rename(dest)
     return dest
 

@@ -43,6 +43,9 @@ def render(folders: list[Path], metrics: list[str] | None = None) -> tuple[str, 
         table = load_kpis(folder)
         if metrics is not None:
             table = table.loc[[m for m in metrics if m in table.index]]
-        blocks.append(f"## {folder.name}\n\n{meta['scenario']['label']}, preset `{meta['preset']['name']}`\n\n"
-                      + selected_markdown(table) + "\n")
+        blocks.append(
+            f"## {folder.name}\n\n{meta['scenario']['label']}, preset `{meta['preset']['name']}`\n\n"
+            + selected_markdown(table)
+            + "\n"
+        )
     return "# rpbench results\n\n" + "\n".join(blocks), written

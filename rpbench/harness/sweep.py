@@ -32,39 +32,80 @@ from rpbench.scenarios import ScenarioRequest
 from rpbench.scenarios.base import Params
 from rpbench.strategies.options import RunOptions
 
-ALIASES = {"K": ("patience_mean_s", "planner_patience_s"), "dt": ("dt_s",), "r_w": ("response_rate",),
-           "ratio": ("vehicles_per_100_orders",)}
+ALIASES = {
+    "K": ("patience_mean_s", "planner_patience_s"),
+    "dt": ("dt_s",),
+    "r_w": ("response_rate",),
+    "ratio": ("vehicles_per_100_orders",),
+}
 
 
 @dataclass(frozen=True)
 class SweepSpec:
     name: str
-    parameter: str                 # display name (an alias or a Params field)
+    parameter: str  # display name (an alias or a Params field)
     values: tuple[float, ...]
     strategies: tuple[str, ...]
     kpis: tuple[str, ...]
     paper_table: dict | None = None
 
 
-SWEEPS: dict[str, SweepSpec] = {s.name: s for s in [
-    SweepSpec("patience", "K", (60, 90, 120, 180, 240, 300, 400, 500, 600), ("mb", "rtv", "fl"),
-              ("avg_detour_m", "total_saving_km", "avg_response_time_s", "response_rate", "pairing_ratio"),
-              paper.TABLE3_K),
-    SweepSpec("response-rate", "r_w", (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9), ("fl",),
-              ("avg_shared_m", "avg_detour_m", "total_saving_km", "avg_response_time_s", "response_rate",
-               "pairing_ratio"), {k: {"fl": v} for k, v in paper.TABLE4_RW.items()}),
-    SweepSpec("interval", "dt", (2, 10, 30, 60), ("mb", "rtv", "fl"),
-              ("avg_detour_m", "total_saving_km", "avg_response_time_s", "response_rate", "pairing_ratio"),
-              paper.TABLE5_DT),
-    SweepSpec("ratio", "ratio", (10, 25), ("mb", "rtv", "fl"),
-              ("avg_detour_m", "total_saving_km", "avg_response_time_s", "platform_profit_cny", "response_rate",
-               "pairing_ratio"), paper.TABLE6_RATIO),
-]}
+SWEEPS: dict[str, SweepSpec] = {
+    s.name: s
+    for s in [
+        SweepSpec(
+            "patience",
+            "K",
+            (60, 90, 120, 180, 240, 300, 400, 500, 600),
+            ("mb", "rtv", "fl"),
+            ("avg_detour_m", "total_saving_km", "avg_response_time_s", "response_rate", "pairing_ratio"),
+            paper.TABLE3_K,
+        ),
+        SweepSpec(
+            "response-rate",
+            "r_w",
+            (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9),
+            ("fl",),
+            (
+                "avg_shared_m",
+                "avg_detour_m",
+                "total_saving_km",
+                "avg_response_time_s",
+                "response_rate",
+                "pairing_ratio",
+            ),
+            {k: {"fl": v} for k, v in paper.TABLE4_RW.items()},
+        ),
+        SweepSpec(
+            "interval",
+            "dt",
+            (2, 10, 30, 60),
+            ("mb", "rtv", "fl"),
+            ("avg_detour_m", "total_saving_km", "avg_response_time_s", "response_rate", "pairing_ratio"),
+            paper.TABLE5_DT,
+        ),
+        SweepSpec(
+            "ratio",
+            "ratio",
+            (10, 25),
+            ("mb", "rtv", "fl"),
+            (
+                "avg_detour_m",
+                "total_saving_km",
+                "avg_response_time_s",
+                "platform_profit_cny",
+                "response_rate",
+                "pairing_ratio",
+            ),
+            paper.TABLE6_RATIO,
+        ),
+    ]
+}
 
 
 @dataclass(frozen=True)
 class SweepPoint:
-    label: str                     # folder name, e.g. "K=90"
+    label: str  # folder name, e.g. "K=90"
     value: float
     overrides: dict[str, float] = field(default_factory=dict)
 
@@ -75,8 +116,10 @@ def parameter_fields(parameter: str) -> tuple[str, ...]:
         return ALIASES[parameter]
     known = set(Params().as_dict())
     if parameter not in known:
-        raise ParameterError(f"unknown sweep parameter {parameter!r}; use one of {', '.join(ALIASES)} or a "
-                             f"parameter name ({', '.join(sorted(known))})")
+        raise ParameterError(
+            f"unknown sweep parameter {parameter!r}; use one of {', '.join(ALIASES)} or a "
+            f"parameter name ({', '.join(sorted(known))})"
+        )
     return (parameter,)
 
 
@@ -88,7 +131,7 @@ def expand(parameter: str, values: list[float] | tuple[float, ...]) -> list[Swee
     points = []
     for v in values:
         overrides = {f: float(v) for f in fields}
-        Params().replace(**overrides)            # fail early on out-of-range values
+        Params().replace(**overrides)  # fail early on out-of-range values
         points.append(SweepPoint(label=f"{parameter}={v:g}", value=float(v), overrides=overrides))
     if len({p.label for p in points}) != len(points):
         raise ParameterError(f"sweep over {parameter!r} repeats a value")
@@ -111,7 +154,7 @@ def parse_over(text: str) -> tuple[str, list[float]]:
 class PointTask:
     """Everything a worker process needs to run one sweep point (picklable)."""
 
-    request: ScenarioRequest              # with the point's overrides applied
+    request: ScenarioRequest  # with the point's overrides applied
     out: str
     strategies: tuple
     preset: str
@@ -121,28 +164,64 @@ class PointTask:
 
 def run_point(task: PointTask) -> str:
     """Worker entry point: one sweep point's comparison written to ``task.out``."""
-    folder, _ = run_comparison(task.request.build(), list(task.strategies), task.preset, out=task.out,
-                               run_options=task.run_options, progress=False, request=task.request,
-                               command=task.command)
+    folder, _ = run_comparison(
+        task.request.build(),
+        list(task.strategies),
+        task.preset,
+        out=task.out,
+        run_options=task.run_options,
+        progress=False,
+        request=task.request,
+        command=task.command,
+    )
     return str(folder)
 
 
-def run_sweep(spec: SweepSpec, points: list[SweepPoint], *, request: ScenarioRequest, preset: str,
-              run_options: dict[str, RunOptions], out: str | None, workers: int | None, scheduler: str | None,
-              command: str | None) -> Path:
+def run_sweep(
+    spec: SweepSpec,
+    points: list[SweepPoint],
+    *,
+    request: ScenarioRequest,
+    preset: str,
+    run_options: dict[str, RunOptions],
+    out: str | None,
+    workers: int | None,
+    scheduler: str | None,
+    command: str | None,
+) -> Path:
     """One comparison per point (the request with the point's overrides), in parallel, then the sweep table."""
     default = f"{results.timestamp()}_sweep-{spec.name}_{request.name}_{preset}"
     with results.new_results_folder(out, default) as (tmp, final):
-        tasks = [PointTask(request=request.with_overrides(p.overrides), out=str(tmp / p.label),
-                           strategies=spec.strategies, preset=preset, run_options=run_options, command=command)
-                 for p in points]
+        tasks = [
+            PointTask(
+                request=request.with_overrides(p.overrides),
+                out=str(tmp / p.label),
+                strategies=spec.strategies,
+                preset=preset,
+                run_options=run_options,
+                command=command,
+            )
+            for p in points
+        ]
         run_tasks(run_point, tasks, workers=workers, scheduler=scheduler, label=f"sweep {spec.name}")
-        results.write_json(tmp / "meta.json", {
-            "rpbench_results": 1, "kind": "sweep", "sweep": spec.name, "parameter": spec.parameter,
-            "points": [{"label": p.label, "value": p.value, "overrides": p.overrides} for p in points],
-            "children": [p.label for p in points],                  # the point folders: `rpbench check`'s manifest
-            "strategies": list(spec.strategies), "kpis": list(spec.kpis), "scenario": request.name,
-            "scenario_args": request.meta(), "preset": preset, "command": command, **results.environment()})
+        results.write_json(
+            tmp / "meta.json",
+            {
+                "rpbench_results": 1,
+                "kind": "sweep",
+                "sweep": spec.name,
+                "parameter": spec.parameter,
+                "points": [{"label": p.label, "value": p.value, "overrides": p.overrides} for p in points],
+                "children": [p.label for p in points],  # the point folders: `rpbench check`'s manifest
+                "strategies": list(spec.strategies),
+                "kpis": list(spec.kpis),
+                "scenario": request.name,
+                "scenario_args": request.meta(),
+                "preset": preset,
+                "command": command,
+                **results.environment(),
+            },
+        )
         sweep_table(tmp).to_csv(tmp / "sweep.csv", index=False)
         write_sweep_report(tmp, name=final.name)
     return final
@@ -156,18 +235,24 @@ def write_sweep_report(parent: Path, name: str | None = None) -> Path:
     kpis = meta["kpis"]
     runs = meta["strategies"]
     args = meta.get("scenario_args", {})
-    with_paper = spec is not None and spec.paper_table and paper.table2_applies(
-        meta["scenario"], args.get("date"), args.get("sample"))
-    lines = [f"# rpbench sweep `{meta['sweep']}` over {meta['parameter']}", "",
-             f"- scenario `{meta['scenario']}` ({', '.join(f'{k}={v}' for k, v in args.items() if v is not None)}), "
-             f"solver preset `{meta['preset']}`",
-             f"- rpbench {meta['versions']['rpbench']}, commit `{meta.get('git_commit')}`", ""]
+    with_paper = (
+        spec is not None
+        and spec.paper_table
+        and paper.table2_applies(meta["scenario"], args.get("date"), args.get("sample"))
+    )
+    lines = [
+        f"# rpbench sweep `{meta['sweep']}` over {meta['parameter']}",
+        "",
+        f"- scenario `{meta['scenario']}` ({', '.join(f'{k}={v}' for k, v in args.items() if v is not None)}), "
+        f"solver preset `{meta['preset']}`",
+        f"- rpbench {meta['versions']['rpbench']}, commit `{meta.get('git_commit')}`",
+        "",
+    ]
     if meta.get("command"):
         lines += ["Command:", "", f"    {meta['command']}", ""]
     if with_paper:
         lines += ["Each cell: rpbench (paper). The paper's values are shown for comparison only.", ""]
-    head = [meta["parameter"]] + [f"{KPI_LABELS.get(k, k).split(' (')[0]} {run_label(r)}"
-                                  for k in kpis for r in runs]
+    head = [meta["parameter"]] + [f"{KPI_LABELS.get(k, k).split(' (')[0]} {run_label(r)}" for k in kpis for r in runs]
     lines += ["| " + " | ".join(head) + " |", "|---|" + "---:|" * (len(head) - 1)]
     for p in meta["points"]:
         sel = table[table["label"] == p["label"]].set_index(["kpi", "run"])["value"]
@@ -181,10 +266,15 @@ def write_sweep_report(parent: Path, name: str | None = None) -> Path:
                 cells.append(cell)
         lines.append(f"| {p['value']:g} | " + " | ".join(cells) + " |")
     lines.append("")
-    plot = sweep_figure(table[table["run"].isin(runs)], meta["parameter"], kpis, parent / "sweep.png",
-                        f"sweep {meta['sweep']}")
-    lines += [f"![sweep]({plot.name})", "",
-              f"Each point is an ordinary results folder: `rpbench check {name or parent.name}/<point>`.", ""]
+    plot = sweep_figure(
+        table[table["run"].isin(runs)], meta["parameter"], kpis, parent / "sweep.png", f"sweep {meta['sweep']}"
+    )
+    lines += [
+        f"![sweep]({plot.name})",
+        "",
+        f"Each point is an ordinary results folder: `rpbench check {name or parent.name}/<point>`.",
+        "",
+    ]
     path = parent / "report.md"
     path.write_text("\n".join(lines))
     return path

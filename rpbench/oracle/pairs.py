@@ -63,15 +63,15 @@ WINDOWS = ("patience", "bound")
 class PairRules:
     """The pair-feasibility rules of §4.2 (defaults = the authors' oracle, A18)."""
 
-    planner_patience_s: float = 90.0        # K̄
-    max_detour_m: float = 3000.0            # D̄
-    max_pickup_m: float = 3000.0            # R̄ (only used with pickup_check)
-    speed_mps: float = 30.0 / 3.6           # v (only used with allow_enroute)
-    both_pickup_orders: bool = False        # oracle_both_pickup_orders
-    pickup_check: bool = False              # oracle_pickup_check
-    allow_enroute: bool = False             # oracle_allow_enroute
+    planner_patience_s: float = 90.0  # K̄
+    max_detour_m: float = 3000.0  # D̄
+    max_pickup_m: float = 3000.0  # R̄ (only used with pickup_check)
+    speed_mps: float = 30.0 / 3.6  # v (only used with allow_enroute)
+    both_pickup_orders: bool = False  # oracle_both_pickup_orders
+    pickup_check: bool = False  # oracle_pickup_check
+    allow_enroute: bool = False  # oracle_allow_enroute
     order_rule: str = "min_feasible"
-    window: str = "patience"                # "patience": §4.2's K̄; "bound": the upper bound's (docs/bound.md)
+    window: str = "patience"  # "patience": §4.2's K̄; "bound": the upper bound's (docs/bound.md)
 
     def __post_init__(self) -> None:
         for name in ("planner_patience_s", "max_detour_m", "max_pickup_m", "speed_mps"):
@@ -84,16 +84,24 @@ class PairRules:
             raise ParameterError(f"order_rule {self.order_rule!r} unknown; expected one of {', '.join(ORDER_RULES)}")
         if self.window not in WINDOWS:
             raise ParameterError(f"pair window {self.window!r} unknown; expected one of {', '.join(WINDOWS)}")
-        if self.window == "bound" and (self.pickup_check or self.allow_enroute or not self.both_pickup_orders
-                                       or self.order_rule != "min_feasible"):
-            raise ParameterError("the upper bound's pairs take both pick-up orders, no pick-up test, no en-route "
-                                 "geometry and the best feasible service order: its rules cannot be changed")
+        if self.window == "bound" and (
+            self.pickup_check or self.allow_enroute or not self.both_pickup_orders or self.order_rule != "min_feasible"
+        ):
+            raise ParameterError(
+                "the upper bound's pairs take both pick-up orders, no pick-up test, no en-route "
+                "geometry and the best feasible service order: its rules cannot be changed"
+            )
 
     @classmethod
     def from_params(cls, params: Params, **flags) -> "PairRules":
         """K̄, D̄, R̄ and v from a scenario's parameters, plus the flags."""
-        return cls(planner_patience_s=params.planner_patience_s, max_detour_m=params.max_detour_m,
-                   max_pickup_m=params.max_pickup_m, speed_mps=params.speed_mps, **flags)
+        return cls(
+            planner_patience_s=params.planner_patience_s,
+            max_detour_m=params.max_detour_m,
+            max_pickup_m=params.max_pickup_m,
+            speed_mps=params.speed_mps,
+            **flags,
+        )
 
     def replace(self, **changes) -> "PairRules":
         return replace(self, **changes)
@@ -112,18 +120,18 @@ class CandidatePairs:
     """
 
     n_orders: int
-    first: np.ndarray          # int64
-    second: np.ndarray         # int64
-    enroute: np.ndarray        # bool: B joins while A rides (allow_enroute)
-    fofo: np.ndarray           # bool: A dropped first
-    saving_m: np.ndarray       # e = l_A + l_B - L
-    length_m: np.ndarray       # L, from A's origin
+    first: np.ndarray  # int64
+    second: np.ndarray  # int64
+    enroute: np.ndarray  # bool: B joins while A rides (allow_enroute)
+    fofo: np.ndarray  # bool: A dropped first
+    saving_m: np.ndarray  # e = l_A + l_B - L
+    length_m: np.ndarray  # L, from A's origin
     detour_first_m: np.ndarray
     detour_second_m: np.ndarray
     shared_m: np.ndarray
-    pickup_m: np.ndarray       # pk = pre + l(h, o_B)
+    pickup_m: np.ndarray  # pk = pre + l(h, o_B)
     rules: PairRules
-    evaluated: int = 0         # pairs inside the time windows, tested with POOL
+    evaluated: int = 0  # pairs inside the time windows, tested with POOL
     seconds: float = 0.0
     stats: dict = field(default_factory=dict)
 
@@ -140,30 +148,34 @@ class CandidatePairs:
 
     def take(self, rows) -> "CandidatePairs":
         """The subset of rows ``rows`` (indices or a boolean mask)."""
-        pick = {f.name: getattr(self, f.name)[rows] for f in fields(self)
-                if isinstance(getattr(self, f.name), np.ndarray)}
+        pick = {
+            f.name: getattr(self, f.name)[rows] for f in fields(self) if isinstance(getattr(self, f.name), np.ndarray)
+        }
         return replace(self, **pick)
 
     def to_frame(self, orders: Orders) -> pd.DataFrame:
         """One row per pair, with order ids, request times and the POOL result."""
-        return pd.DataFrame({
-            "first_id": orders.order_id[self.first],
-            "second_id": orders.order_id[self.second],
-            "first_request_s": orders.request_s[self.first],
-            "second_request_s": orders.request_s[self.second],
-            "service_order": np.where(self.fofo, "FOFO", "FOLO"),
-            "enroute": self.enroute,
-            "saving_m": self.saving_m,
-            "length_m": self.length_m,
-            "detour_first_m": self.detour_first_m,
-            "detour_second_m": self.detour_second_m,
-            "shared_m": self.shared_m,
-            "pickup_m": self.pickup_m,
-        })
+        return pd.DataFrame(
+            {
+                "first_id": orders.order_id[self.first],
+                "second_id": orders.order_id[self.second],
+                "first_request_s": orders.request_s[self.first],
+                "second_request_s": orders.request_s[self.second],
+                "service_order": np.where(self.fofo, "FOFO", "FOLO"),
+                "enroute": self.enroute,
+                "saving_m": self.saving_m,
+                "length_m": self.length_m,
+                "detour_first_m": self.detour_first_m,
+                "detour_second_m": self.detour_second_m,
+                "shared_m": self.shared_m,
+                "pickup_m": self.pickup_m,
+            }
+        )
 
 
-def find_candidates(distances: DistanceOracle | np.ndarray, orders: Orders, rules: PairRules, *,
-                    block_pairs: int = BLOCK_PAIRS) -> CandidatePairs:
+def find_candidates(
+    distances: DistanceOracle | np.ndarray, orders: Orders, rules: PairRules, *, block_pairs: int = BLOCK_PAIRS
+) -> CandidatePairs:
     """All feasible pairs of ``orders`` under ``rules`` (ALGORITHMS.md §4.2).
 
     ``distances`` is the network's one distance oracle (its shortest paths
@@ -174,23 +186,27 @@ def find_candidates(distances: DistanceOracle | np.ndarray, orders: Orders, rule
     if isinstance(distances, DistanceOracle):
         dist = distances.dist
     elif rules.allow_enroute:
-        raise ParameterError("allow_enroute needs the orders' shortest paths: pass the network's "
-                             "DistanceOracle (network.distances()), not a bare distance matrix")
+        raise ParameterError(
+            "allow_enroute needs the orders' shortest paths: pass the network's "
+            "DistanceOracle (network.distances()), not a bare distance matrix"
+        )
     else:
         dist = distances
     dist = np.asarray(dist)  # a plain view: gathers from a memmap subclass are slower
     if block_pairs < 1:
         raise ParameterError(f"block_pairs = {block_pairs!r} must be >= 1")
     n = len(orders)
-    rank = np.lexsort((orders.order_id, orders.request_s))   # (time, id) order
+    rank = np.lexsort((orders.order_id, orders.request_s))  # (time, id) order
     t = orders.request_s[rank]
     o = orders.origin[rank].astype(np.intp)
     d = orders.destination[rank].astype(np.intp)
     solo = dist[o, d]
     if rules.window == "bound":
         if not isinstance(distances, DistanceOracle):
-            raise ParameterError("the upper bound needs the orders' shortest paths: pass the network's "
-                                 "DistanceOracle (network.distances()), not a bare distance matrix")
+            raise ParameterError(
+                "the upper bound needs the orders' shortest paths: pass the network's "
+                "DistanceOracle (network.distances()), not a bare distance matrix"
+            )
         return _bound_candidates(distances, dist, orders, rules, rank, t, o, d, solo, block_pairs, t0)
     k_bar = float(rules.planner_patience_s)
 
@@ -236,13 +252,19 @@ def _pair_blocks(count: np.ndarray, block_pairs: int):
 
 def _assemble(parts: list[dict], rank, n: int, rules: PairRules, evaluated: int, t0: float) -> "CandidatePairs":
     """The evaluated blocks as one CandidatePairs, in scenario row positions and a canonical row order."""
-    cols = {k: np.concatenate([p[k] for p in parts]) if parts else np.zeros(0, dtype)
-            for k, dtype in _COLUMNS.items()}
+    cols = {k: np.concatenate([p[k] for p in parts]) if parts else np.zeros(0, dtype) for k, dtype in _COLUMNS.items()}
     first, second = rank[cols.pop("first")].astype(np.int64), rank[cols.pop("second")].astype(np.int64)
     srt = np.lexsort((np.maximum(first, second), np.minimum(first, second)))
     cols = {k: v[srt] for k, v in cols.items()}
-    return CandidatePairs(n_orders=n, first=first[srt], second=second[srt], rules=rules, evaluated=int(evaluated),
-                          seconds=time.perf_counter() - t0, **cols)
+    return CandidatePairs(
+        n_orders=n,
+        first=first[srt],
+        second=second[srt],
+        rules=rules,
+        evaluated=int(evaluated),
+        seconds=time.perf_counter() - t0,
+        **cols,
+    )
 
 
 def bound_rules(params: Params) -> PairRules:
@@ -250,8 +272,9 @@ def bound_rules(params: Params) -> PairRules:
     return PairRules.from_params(params, both_pickup_orders=True, window="bound")
 
 
-def _bound_candidates(distances: DistanceOracle, dist, orders: Orders, rules: PairRules, rank, t, o, d, solo,
-                      block_pairs: int, t0: float) -> "CandidatePairs":
+def _bound_candidates(
+    distances: DistanceOracle, dist, orders: Orders, rules: PairRules, rank, t, o, d, solo, block_pairs: int, t0: float
+) -> "CandidatePairs":
     """Every pair the simulator can form, weighted by the largest saving it can realise (docs/bound.md)."""
     n = len(orders)
     patience = orders.patience_s[rank]
@@ -270,8 +293,7 @@ def _bound_candidates(distances: DistanceOracle, dist, orders: Orders, rules: Pa
         # how far along its path the first passenger's vehicle can be while the second still waits
         reach_f = rules.speed_mps * (t[jj] + patience[jj] - t[ii]) + 1e-6
         reach_r = rules.speed_mps * (t[ii] + patience[ii] - t[jj]) + 1e-6
-        parts.append(_best_orientation(dist, o, d, solo, ii, jj, reverse_ok, rules,
-                                       turn=(path, reach_f, reach_r)))
+        parts.append(_best_orientation(dist, o, d, solo, ii, jj, reverse_ok, rules, turn=(path, reach_f, reach_r)))
     return replace(_assemble(parts, rank, n, rules, evaluated, t0), stats={"window": "bound"})
 
 
@@ -289,8 +311,9 @@ def _best_orientation(dist, o, d, solo, ii, jj, reverse_ok, rules: PairRules, tu
     else:
         path, reach_f, reach_r = turn
         rows_f, fwd = _turn_at_first_reachable_node(dist, o, d, solo, ii, jj, reach_f, path, rules)
-        rows_r, rev = _turn_at_first_reachable_node(dist, o, d, solo, jj[rev_idx], ii[rev_idx], reach_r[rev_idx],
-                                                    path, rules)
+        rows_r, rev = _turn_at_first_reachable_node(
+            dist, o, d, solo, jj[rev_idx], ii[rev_idx], reach_r[rev_idx], path, rules
+        )
     rows_r = rev_idx[rows_r]
     best_f = np.full(len(ii), -np.inf)
     best_f[rows_f] = fwd.saving
@@ -299,13 +322,24 @@ def _best_orientation(dist, o, d, solo, ii, jj, reverse_ok, rules: PairRules, tu
     keep_f, keep_r = ~flip[rows_f], flip[rows_r]
     fwd = PoolResult(*(getattr(fwd, f.name)[keep_f] for f in fields(PoolResult)))
     rev = PoolResult(*(getattr(rev, f.name)[keep_r] for f in fields(PoolResult)))
-    return _concat(_rows(ii[rows_f[keep_f]], jj[rows_f[keep_f]], False, fwd),
-                   _rows(jj[rows_r[keep_r]], ii[rows_r[keep_r]], False, rev))
+    return _concat(
+        _rows(ii[rows_f[keep_f]], jj[rows_f[keep_f]], False, fwd),
+        _rows(jj[rows_r[keep_r]], ii[rows_r[keep_r]], False, rev),
+    )
 
 
-_COLUMNS = {"first": np.int64, "second": np.int64, "enroute": bool, "fofo": bool, "saving_m": np.float64,
-            "length_m": np.float64, "detour_first_m": np.float64, "detour_second_m": np.float64,
-            "shared_m": np.float64, "pickup_m": np.float64}
+_COLUMNS = {
+    "first": np.int64,
+    "second": np.int64,
+    "enroute": bool,
+    "fofo": bool,
+    "saving_m": np.float64,
+    "length_m": np.float64,
+    "detour_first_m": np.float64,
+    "detour_second_m": np.float64,
+    "shared_m": np.float64,
+    "pickup_m": np.float64,
+}
 
 
 def _blocks(count: np.ndarray, block_pairs: int):
@@ -318,7 +352,7 @@ def _blocks(count: np.ndarray, block_pairs: int):
     while i0 < n:
         base = cum[i0 - 1] if i0 else 0
         i1 = int(np.searchsorted(cum, base + block_pairs, side="right"))
-        i1 = max(i1, i0 + 1)            # one order with a huge window still forms a block
+        i1 = max(i1, i0 + 1)  # one order with a huge window still forms a block
         yield i0, min(i1, n)
         i0 = i1
 
@@ -345,8 +379,9 @@ def _pool_where_possible(dist, o, d, solo, a, b, rules: PairRules, h=None, delta
     # The slack absorbs float rounding in the triangle inequality of computed distances.
     rows = np.flatnonzero(bound <= rules.max_detour_m + 1e-6 * (1.0 + np.abs(bound)))
     a, b = a[rows], b[rows]
-    g = pair_geometry(dist, o[a], d[a], solo[a], o[b], d[b], solo[b], h[rows], delta[rows], pre[rows],
-                      rules.max_detour_m)
+    g = pair_geometry(
+        dist, o[a], d[a], solo[a], o[b], d[b], solo[b], h[rows], delta[rows], pre[rows], rules.max_detour_m
+    )
     r = choose_order(g, _pickup_limit(rules), rules.order_rule)
     ok = r.feasible
     return rows[ok], PoolResult(*(getattr(r, f.name)[ok] for f in fields(PoolResult)))
@@ -366,7 +401,7 @@ def _turn_at_first_reachable_node(dist, o, d, solo, a, b, reach_m, path, rules: 
     keep = [(rows[near], PoolResult(*(getattr(at_origin, f.name)[near] for f in fields(PoolResult))))]
     walk = rows[~near]
     if len(walk):
-        pos = offsets[a[walk]] + 1                      # o_A itself failed the pick-up test
+        pos = offsets[a[walk]] + 1  # o_A itself failed the pick-up test
         end = offsets[a[walk] + 1]
         h = np.full(len(walk), -1, dtype=np.intp)
         active = np.flatnonzero(pos < end)
@@ -381,8 +416,19 @@ def _turn_at_first_reachable_node(dist, o, d, solo, a, b, reach_m, path, rules: 
         found = h >= 0
         w, hp = walk[found], h[found]
         if len(w):
-            g = pair_geometry(dist, o[a[w]], d[a[w]], solo[a[w]], o[b[w]], d[b[w]], solo[b[w]], nodes[hp], cum[hp],
-                              np.zeros(len(w)), rules.max_detour_m)
+            g = pair_geometry(
+                dist,
+                o[a[w]],
+                d[a[w]],
+                solo[a[w]],
+                o[b[w]],
+                d[b[w]],
+                solo[b[w]],
+                nodes[hp],
+                cum[hp],
+                np.zeros(len(w)),
+                rules.max_detour_m,
+            )
             r = choose_order(g, np.inf, rules.order_rule)
             ok = r.feasible
             keep.append((w[ok], PoolResult(*(getattr(r, f.name)[ok] for f in fields(PoolResult)))))
@@ -392,9 +438,18 @@ def _turn_at_first_reachable_node(dist, o, d, solo, a, b, reach_m, path, rules: 
 
 
 def _rows(a, b, enroute: bool, r: PoolResult) -> dict:
-    return {"first": a, "second": b, "enroute": np.full(len(a), enroute), "fofo": r.fofo,
-            "saving_m": r.saving, "length_m": r.length, "detour_first_m": r.detour_a,
-            "detour_second_m": r.detour_b, "shared_m": r.shared, "pickup_m": r.pk}
+    return {
+        "first": a,
+        "second": b,
+        "enroute": np.full(len(a), enroute),
+        "fofo": r.fofo,
+        "saving_m": r.saving,
+        "length_m": r.length,
+        "detour_first_m": r.detour_a,
+        "detour_second_m": r.detour_b,
+        "shared_m": r.shared,
+        "pickup_m": r.pk,
+    }
 
 
 def _concat(*parts: dict) -> dict:

@@ -32,8 +32,8 @@ class OracleRun:
     """One offline column of a comparison."""
 
     name: str
-    variant: int                     # 1: maximum saving; 2: maximum pairs, ties by saving
-    label: str                       # column header and legend entry
+    variant: int  # 1: maximum saving; 2: maximum pairs, ties by saving
+    label: str  # column header and legend entry
     color: str
     description: str
     defaults: dict[str, Any] = field(default_factory=dict)
@@ -46,11 +46,32 @@ class OracleRun:
         return PairRules.from_params(params, **flags)
 
 
-ORACLE_RUNS: dict[str, OracleRun] = {run.name: run for run in [
-    OracleRun("bound", 1, "Upper bound", "black", "offline: proven upper bound on any strategy's saving "
-              "(docs/bound.md)", {"window": "bound", "both_pickup_orders": True}, RunOptions),
-    OracleRun("oracle1", 1, "Oracle-1", "tab:red", "offline: the paper's Oracle-1, maximum saving over pairs "
-              "requested within K̄ of each other (Eqs. 18-22); a reference, not a bound"),
-    OracleRun("oracle2", 2, "Oracle-2", "tab:purple", "offline: the paper's Oracle-2, maximum number of pairs, "
-              "ties by saving"),
-]}
+ORACLE_RUNS: dict[str, OracleRun] = {
+    run.name: run
+    for run in [
+        OracleRun(
+            "bound",
+            1,
+            "Upper bound",
+            "black",
+            "offline: proven upper bound on any strategy's saving (docs/bound.md)",
+            {"window": "bound", "both_pickup_orders": True},
+            RunOptions,
+        ),
+        OracleRun(
+            "oracle1",
+            1,
+            "Oracle-1",
+            "tab:red",
+            "offline: the paper's Oracle-1, maximum saving over pairs "
+            "requested within K̄ of each other (Eqs. 18-22); a reference, not a bound",
+        ),
+        OracleRun(
+            "oracle2",
+            2,
+            "Oracle-2",
+            "tab:purple",
+            "offline: the paper's Oracle-2, maximum number of pairs, ties by saving",
+        ),
+    ]
+}

@@ -45,8 +45,7 @@ VARIANTS = {1: "weight", 2: "cardinality_then_weight"}
 UNIT_M = 0.01
 
 #: KPI keys shared with the strategies' reports (NaN where undefined).
-KPI_KEYS = ("orders", "pairs", "pooled_passengers", "pairing_ratio", "avg_detour_m", "avg_shared_m",
-            "total_saving_km")
+KPI_KEYS = ("orders", "pairs", "pooled_passengers", "pairing_ratio", "avg_detour_m", "avg_shared_m", "total_saving_km")
 
 
 @dataclass(frozen=True, eq=False)
@@ -58,11 +57,11 @@ class OracleResult:
     rules: PairRules
     solver: str
     n_orders: int
-    n_candidates: int          # feasible pairs found (§4.2)
-    n_evaluated: int           # pairs inside the time windows, tested with POOL
+    n_candidates: int  # feasible pairs found (§4.2)
+    n_evaluated: int  # pairs inside the time windows, tested with POOL
     model: PairingModel
     solution: Solution
-    pairs: pd.DataFrame        # the chosen pairs, one row each
+    pairs: pd.DataFrame  # the chosen pairs, one row each
     timings: dict = field(default_factory=dict)
 
     @property
@@ -146,12 +145,15 @@ def check_variant(variant) -> int:
     except (TypeError, ValueError):
         v = None
     if v not in VARIANTS or isinstance(variant, bool) or (isinstance(variant, float) and variant != v):
-        raise ParameterError(f"oracle variant {variant!r} unknown; expected 1 (maximum saving) or "
-                             "2 (maximum pairs, ties by saving)")
+        raise ParameterError(
+            f"oracle variant {variant!r} unknown; expected 1 (maximum saving) or 2 (maximum pairs, ties by saving)"
+        )
     return v
 
 
-def oracle_model(candidates: CandidatePairs, variant: int, *, unit_m: float = UNIT_M) -> tuple[PairingModel, np.ndarray]:
+def oracle_model(
+    candidates: CandidatePairs, variant: int, *, unit_m: float = UNIT_M
+) -> tuple[PairingModel, np.ndarray]:
     """The PairingModel of a variant and, per column, its row in ``candidates``.
 
     Oracle-1 keeps the pairs whose quantised saving is positive (a pair with
@@ -165,8 +167,15 @@ def oracle_model(candidates: CandidatePairs, variant: int, *, unit_m: float = UN
     else:
         values = quantize(candidates.saving_m, unit_m)
     rows = np.flatnonzero(values > 0) if variant == 1 else np.arange(len(candidates))
-    model = PairingModel(candidates.n_orders, candidates.low[rows], candidates.high[rows], values[rows],
-                         objective=VARIANTS[variant], unit_m=unit_m, name=f"oracle-{variant}")
+    model = PairingModel(
+        candidates.n_orders,
+        candidates.low[rows],
+        candidates.high[rows],
+        values[rows],
+        objective=VARIANTS[variant],
+        unit_m=unit_m,
+        name=f"oracle-{variant}",
+    )
     return model, rows
 
 
@@ -183,11 +192,15 @@ def resolve_preset(solver: str | Preset | Backend, options: SolveOptions | None 
         except ModuleNotFoundError as exc:
             if not (exc.name or "").startswith("rpbench.backends."):
                 raise
-            raise PresetError(f"solver preset {preset.name!r}: the adapter module {exc.name} of backend "
-                              f"{preset.backend!r} is missing from this installation; choose another --solver") from None
+            raise PresetError(
+                f"solver preset {preset.name!r}: the adapter module {exc.name} of backend "
+                f"{preset.backend!r} is missing from this installation; choose another --solver"
+            ) from None
     if Structure.PAIRING not in preset.backend_class().exact:
-        raise PresetError(f"solver {preset.name!r} (backend {preset.backend!r}) does not solve the pairing model "
-                          f"exactly; choose a backend that does: {', '.join(pairing_backends()) or 'none'}")
+        raise PresetError(
+            f"solver {preset.name!r} (backend {preset.backend!r}) does not solve the pairing model "
+            f"exactly; choose a backend that does: {', '.join(pairing_backends()) or 'none'}"
+        )
     return preset
 
 
@@ -203,9 +216,16 @@ def pairing_backends() -> list[str]:
     return out
 
 
-def solve_oracle(scenario: Scenario, variant: int = 1, solver: str | Preset | Backend = "matching", *,
-                 rules: PairRules | None = None, candidates: CandidatePairs | None = None,
-                 options: SolveOptions | None = None, unit_m: float = UNIT_M) -> OracleResult:
+def solve_oracle(
+    scenario: Scenario,
+    variant: int = 1,
+    solver: str | Preset | Backend = "matching",
+    *,
+    rules: PairRules | None = None,
+    candidates: CandidatePairs | None = None,
+    options: SolveOptions | None = None,
+    unit_m: float = UNIT_M,
+) -> OracleResult:
     """Solve Oracle-``variant`` over all orders of ``scenario``.
 
     ``rules`` default to the scenario's K̄, D̄, R̄, v with the authors' flags
@@ -226,18 +246,43 @@ def solve_oracle(scenario: Scenario, variant: int = 1, solver: str | Preset | Ba
     t0 = time.perf_counter()
     model, rows = oracle_model(candidates, variant, unit_m=unit_m)
     model_s = time.perf_counter() - t0
-    solution = solve(model, preset)            # a matching of the model: verified there
+    solution = solve(model, preset)  # a matching of the model: verified there
 
     chosen = rows[solution.chosen]
     pairs = candidates.take(chosen).to_frame(scenario.orders)
-    timings = {"candidates_s": candidates.seconds, "model_s": model_s, "build_s": solution.build_s,
-               "solve_s": solution.solve_s, "extract_s": solution.extract_s,
-               "total_s": candidates.seconds + model_s + solution.total_s}
-    return OracleResult(variant=variant, scenario=scenario.name, rules=candidates.rules, solver=preset.name,
-                        n_orders=len(scenario.orders), n_candidates=len(candidates),
-                        n_evaluated=candidates.evaluated, model=model, solution=solution, pairs=pairs,
-                        timings=timings)
+    timings = {
+        "candidates_s": candidates.seconds,
+        "model_s": model_s,
+        "build_s": solution.build_s,
+        "solve_s": solution.solve_s,
+        "extract_s": solution.extract_s,
+        "total_s": candidates.seconds + model_s + solution.total_s,
+    }
+    return OracleResult(
+        variant=variant,
+        scenario=scenario.name,
+        rules=candidates.rules,
+        solver=preset.name,
+        n_orders=len(scenario.orders),
+        n_candidates=len(candidates),
+        n_evaluated=candidates.evaluated,
+        model=model,
+        solution=solution,
+        pairs=pairs,
+        timings=timings,
+    )
 
 
-__all__ = ["KPI_KEYS", "UNIT_M", "VARIANTS", "CandidatePairs", "OracleResult", "PairRules", "find_candidates",
-           "oracle_model", "pairing_backends", "resolve_preset", "solve_oracle"]
+__all__ = [
+    "KPI_KEYS",
+    "UNIT_M",
+    "VARIANTS",
+    "CandidatePairs",
+    "OracleResult",
+    "PairRules",
+    "find_candidates",
+    "oracle_model",
+    "pairing_backends",
+    "resolve_preset",
+    "solve_oracle",
+]

@@ -32,8 +32,8 @@ class AndersonMixing:
 
     def __init__(self, depth: int) -> None:
         self.depth = depth
-        self._dx: np.ndarray | None = None       # (n, depth), Fortran order: a ring of ΔX columns
-        self._q: np.ndarray | None = None        # (n, depth), Fortran order: q_0 .. q_{size-1}
+        self._dx: np.ndarray | None = None  # (n, depth), Fortran order: a ring of ΔX columns
+        self._q: np.ndarray | None = None  # (n, depth), Fortran order: q_0 .. q_{size-1}
         self._q_spare: np.ndarray | None = None  # where the next drop writes Q (then the two swap)
         self._r = np.zeros((depth, depth))
         self.restart()
@@ -41,8 +41,8 @@ class AndersonMixing:
     def restart(self) -> None:
         """Forget the history (the next step is the damped one)."""
         self.x_prev = self.f_prev = None
-        self.size = 0                           # columns in the history
-        self._slots: list[int] = []             # ring slot of ΔX's column j, oldest first
+        self.size = 0  # columns in the history
+        self._slots: list[int] = []  # ring slot of ΔX's column j, oldest first
 
     def step(self, x: np.ndarray, f: np.ndarray, damped: np.ndarray, beta: float) -> np.ndarray:
         """The step from iterate ``x`` with residual ``f = g(x) - x`` (``damped = β f``)."""
@@ -53,7 +53,7 @@ class AndersonMixing:
             return damped
         try:
             gamma = self.coefficients(f)
-        except np.linalg.LinAlgError:           # the SVD of a non-finite history does not converge
+        except np.linalg.LinAlgError:  # the SVD of a non-finite history does not converge
             gamma = np.full(self.size, np.nan)
         if not np.all(np.isfinite(gamma)):
             self.restart()
@@ -61,8 +61,8 @@ class AndersonMixing:
         m = self.size
         weights = np.zeros(self.depth)
         weights[self._slots] = gamma
-        out = damped - self._dx @ weights                                   # - ΔX γ
-        out -= self._q[:, :m] @ (beta * (self._r[:m, :m] @ gamma))          # - β ΔF γ, ΔF = QR
+        out = damped - self._dx @ weights  # - ΔX γ
+        out -= self._q[:, :m] @ (beta * (self._r[:m, :m] @ gamma))  # - β ΔF γ, ΔF = QR
         return out
 
     def coefficients(self, f: np.ndarray) -> np.ndarray:
@@ -104,13 +104,13 @@ class AndersonMixing:
         else:
             if norm > 0.0:
                 v /= norm
-            else:                                # an exact repeat: any direction outside Q will do
+            else:  # an exact repeat: any direction outside Q will do
                 v[:] = np.random.default_rng(m).standard_normal(len(v))
             self._gram_schmidt(q, v)
             v /= np.linalg.norm(v)
         self._r[:m, m] = r
         self._r[m, m] = norm
-        self._r[m + 1:, m] = 0.0
+        self._r[m + 1 :, m] = 0.0
         self.size = m + 1
 
     @staticmethod
@@ -132,7 +132,7 @@ class AndersonMixing:
         """
         m = self.size
         r = self._r
-        r[:m, :m - 1] = r[:m, 1:m].copy()
+        r[:m, : m - 1] = r[:m, 1:m].copy()
         r[:, m - 1] = 0.0
         g = np.eye(m)
         for k in range(m - 1):
@@ -142,11 +142,11 @@ class AndersonMixing:
                 continue
             c, s = a / h, b / h
             rotation = np.array([[c, s], [-s, c]])
-            r[k:k + 2, k:m - 1] = rotation @ r[k:k + 2, k:m - 1]
+            r[k : k + 2, k : m - 1] = rotation @ r[k : k + 2, k : m - 1]
             r[k + 1, k] = 0.0
-            g[k:k + 2, :] = rotation @ g[k:k + 2, :]
+            g[k : k + 2, :] = rotation @ g[k : k + 2, :]
         r[m - 1, :] = 0.0
-        np.matmul(self._q[:, :m], g[:m - 1, :].T, out=self._q_spare[:, :m - 1])
+        np.matmul(self._q[:, :m], g[: m - 1, :].T, out=self._q_spare[:, : m - 1])
         self._q, self._q_spare = self._q_spare, self._q
-        self._slots.pop(0)                      # its ΔX slot is reused by the next column
+        self._slots.pop(0)  # its ΔX slot is reused by the next column
         self.size = m - 1

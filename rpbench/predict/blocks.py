@@ -40,15 +40,15 @@ NARROW_LIMIT = 1 << 16
 class ClassBlocks:
     """Block b: seekers ``seeker_off[b]..seeker_off[b+1]-1``, classes ``cls[cls_off[b]:cls_off[b+1]]``."""
 
-    seeker_off: np.ndarray      # int64 (B+1)
-    cls: np.ndarray             # int32: the global class of each (block, local number)
-    cls_off: np.ndarray         # int64 (B+1)
+    seeker_off: np.ndarray  # int64 (B+1)
+    cls: np.ndarray  # int32: the global class of each (block, local number)
+    cls_off: np.ndarray  # int64 (B+1)
 
     @property
     def n_blocks(self) -> int:
         return len(self.seeker_off) - 1
 
-    @cached_property                     # asked for by every sweep
+    @cached_property  # asked for by every sweep
     def width(self) -> int:
         """Classes of the widest block (the gather buffers' length)."""
         return int(np.diff(self.cls_off).max()) if self.n_blocks else 0
@@ -72,8 +72,8 @@ class ClassBlocks:
         while b < self.n_blocks and self.seeker_off[b] < s1:
             lo, hi = max(s0, int(self.seeker_off[b])), min(s1, int(self.seeker_off[b + 1]))
             i0, i1 = int(pair_off[lo]), int(pair_off[hi])
-            table = self.cls[self.cls_off[b]:self.cls_off[b + 1]]
-            out[i0 - base:i1 - base] = table[np.asarray(local[i0:i1], dtype=np.int64)]
+            table = self.cls[self.cls_off[b] : self.cls_off[b + 1]]
+            out[i0 - base : i1 - base] = table[np.asarray(local[i0:i1], dtype=np.int64)]
             b += 1
         return out
 
@@ -85,8 +85,16 @@ class ClassBlocks:
         with np.load(directory / "blocks.npz", allow_pickle=False) as data:
             blocks = cls(seeker_off=data["seeker_off"], cls=data["cls"], cls_off=data["cls_off"])
         so, co = blocks.seeker_off, blocks.cls_off
-        if (len(so) != len(co) or len(so) < 1 or so[0] != 0 or so[-1] != n_od or co[0] != 0
-                or co[-1] != len(blocks.cls) or np.any(np.diff(so) < 0) or np.any(np.diff(co) < 0)):
+        if (
+            len(so) != len(co)
+            or len(so) < 1
+            or so[0] != 0
+            or so[-1] != n_od
+            or co[0] != 0
+            or co[-1] != len(blocks.cls)
+            or np.any(np.diff(so) < 0)
+            or np.any(np.diff(co) < 0)
+        ):
             raise ValueError("its class blocks are inconsistent")
         return blocks
 
@@ -100,8 +108,13 @@ class Localizer:
     also counts Σ_s |T_s|, the seeker-taker *state* pairs, in the same pass.
     """
 
-    def __init__(self, n_classes: int, out: BinaryIO | None = None, limit: int = BLOCK_CLASSES,
-                 class_size: np.ndarray | None = None) -> None:
+    def __init__(
+        self,
+        n_classes: int,
+        out: BinaryIO | None = None,
+        limit: int = BLOCK_CLASSES,
+        class_size: np.ndarray | None = None,
+    ) -> None:
         self.limit = int(limit)
         self.out = out
         self.dtype = np.dtype("<u2") if self.limit <= NARROW_LIMIT else np.dtype("<i4")
@@ -113,23 +126,24 @@ class Localizer:
         # open block, its classes, seekers, block classes, Σ class_size over the pairs
         self.state = np.zeros(5, dtype=np.int64)
         self.block_seeker, self.block_pos, self.block_cls = [np.zeros(1, np.int64)], [np.zeros(1, np.int64)], []
-        self.parts: list[np.ndarray] = []               # the local numbers, when there is no file
+        self.parts: list[np.ndarray] = []  # the local numbers, when there is no file
 
     def append(self, lens: np.ndarray, cls: np.ndarray) -> np.ndarray:
         """The local numbers of seekers with ``lens`` pairs and global classes ``cls`` (written to ``out``)."""
         lens = np.asarray(lens, dtype=np.int64)
         cls = np.asarray(cls)
-        if cls.dtype not in (np.int32, np.int64):          # the kernel reads int32 lists as they are
+        if cls.dtype not in (np.int32, np.int64):  # the kernel reads int32 lists as they are
             cls = cls.astype(np.int64)
         # A block names at most max(limit, the longest list) classes; 16 bits hold NARROW_LIMIT.
         if len(lens) and int(lens.max()) > NARROW_LIMIT and self.dtype.itemsize == 2:
             self._widen()
-        local = np.empty(len(cls), dtype=self.dtype)       # written in its final type by the kernel
+        local = np.empty(len(cls), dtype=self.dtype)  # written in its final type by the kernel
         new_seeker = np.empty(len(lens) + 1, dtype=np.int64)
         new_pos = np.empty(len(lens) + 1, dtype=np.int64)
         block_cls = np.empty(len(cls), dtype=np.int32)
-        n_new, n_cls = kernels.localize(lens, cls, self.limit, self.per_class, self.state, local, new_seeker,
-                                        new_pos, block_cls)
+        n_new, n_cls = kernels.localize(
+            lens, cls, self.limit, self.per_class, self.state, local, new_seeker, new_pos, block_cls
+        )
         self.block_seeker.append(new_seeker[:n_new].copy())
         self.block_pos.append(new_pos[:n_new].copy())
         self.block_cls.append(block_cls[:n_cls].copy())
@@ -146,9 +160,11 @@ class Localizer:
 
     def finish(self) -> ClassBlocks:
         seekers, written = int(self.state[2]), int(self.state[3])
-        return ClassBlocks(seeker_off=np.concatenate(self.block_seeker + [np.array([seekers])]).astype(np.int64),
-                           cls=np.concatenate(self.block_cls or [np.zeros(0, np.int32)]).astype(np.int32),
-                           cls_off=np.concatenate(self.block_pos + [np.array([written])]).astype(np.int64))
+        return ClassBlocks(
+            seeker_off=np.concatenate(self.block_seeker + [np.array([seekers])]).astype(np.int64),
+            cls=np.concatenate(self.block_cls or [np.zeros(0, np.int32)]).astype(np.int32),
+            cls_off=np.concatenate(self.block_pos + [np.array([written])]).astype(np.int64),
+        )
 
     def local(self) -> np.ndarray:
         """All local numbers appended (in-memory use only)."""
@@ -167,8 +183,9 @@ class Localizer:
         self.out.write(memoryview(narrow.astype("<i4")))
 
 
-def localize_lists(seeker_off: np.ndarray, cls: np.ndarray, n_classes: int,
-                   limit: int = BLOCK_CLASSES) -> tuple[np.ndarray, ClassBlocks]:
+def localize_lists(
+    seeker_off: np.ndarray, cls: np.ndarray, n_classes: int, limit: int = BLOCK_CLASSES
+) -> tuple[np.ndarray, ClassBlocks]:
     """Local numbers and blocks of lists held in memory (tests, small models)."""
     localizer = Localizer(n_classes, limit=limit)
     localizer.append(np.diff(seeker_off), cls)

@@ -32,7 +32,7 @@ from rpbench.predict.config import PredictConfig
 from rpbench.predict.rates import OdRates
 from rpbench.scenarios.base import Params
 
-MODEL_VERSION = "2"        # 2: Anderson mixing solves on an updated QR factorisation (last bits differ)
+MODEL_VERSION = "2"  # 2: Anderson mixing solves on an updated QR factorisation (last bits differ)
 PARAM_FIELDS = ("max_pickup_m", "max_detour_m", "speed_mps")
 
 
@@ -53,8 +53,16 @@ def cache_path(key: str) -> Path:
 #: Everything reading a damaged ``.npz`` can raise: a truncated or corrupt zip (BadZipFile, EOFError,
 #: zlib.error), a bad ``.npy`` header or pickled member (ValueError, UnpicklingError), a missing member
 #: (KeyError), bad JSON or text (ValueError), an unreadable file (OSError).
-READ_ERRORS = (OSError, EOFError, ValueError, KeyError, TypeError, zipfile.BadZipFile, zlib.error,
-               pickle.UnpicklingError)
+READ_ERRORS = (
+    OSError,
+    EOFError,
+    ValueError,
+    KeyError,
+    TypeError,
+    zipfile.BadZipFile,
+    zlib.error,
+    pickle.UnpicklingError,
+)
 
 
 def save(key: str, arrays: dict[str, np.ndarray], info: dict) -> Path:
@@ -74,7 +82,7 @@ def save(key: str, arrays: dict[str, np.ndarray], info: dict) -> Path:
         with open(tmp, "wb") as fh:
             np.savez(fh, **payload)
         os.replace(tmp, path)
-    except BaseException as exc:            # disk full, permissions, Ctrl-C: no temporary file left behind
+    except BaseException as exc:  # disk full, permissions, Ctrl-C: no temporary file left behind
         tmp.unlink(missing_ok=True)
         if isinstance(exc, OSError):
             raise cache_write_error(path, exc) from None
@@ -97,7 +105,7 @@ def load(key: str, n_ods: int, *, skip: frozenset[str] = frozenset()) -> tuple[d
     try:
         before = path.stat()
     except OSError:
-        return None                                 # not cached (yet)
+        return None  # not cached (yet)
     try:
         arrays, info, manifest = _read_entry(path, skip)
         if manifest is not None:
@@ -145,5 +153,5 @@ def _discard(path: Path, before: os.stat_result, problem: str) -> None:
         if (now.st_ino, now.st_mtime_ns, now.st_size) == (before.st_ino, before.st_mtime_ns, before.st_size):
             path.unlink()
     except OSError:
-        pass                                        # gone already, or not ours to delete: recomputing is enough
+        pass  # gone already, or not ours to delete: recomputing is enough
     print(f"rpbench: note: the cached prediction {path.name} {problem}; recomputing it", file=sys.stderr)

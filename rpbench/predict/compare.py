@@ -20,10 +20,21 @@ import pandas as pd
 from rpbench.data import read_authors_predictions, read_day_od_shares
 from rpbench.predict.prediction import Prediction
 
-COLUMNS = ("matching_prob", "ride_distance", "detour_distance", "shared_distance", "saved_distance",
-           "ride_distance_for_taker", "detour_distance_for_taker", "shared_distance_for_taker",
-           "saved_distance_for_taker", "ride_distance_for_seeker", "detour_distance_for_seeker",
-           "shared_distance_for_seeker", "saved_distance_for_seeker")
+COLUMNS = (
+    "matching_prob",
+    "ride_distance",
+    "detour_distance",
+    "shared_distance",
+    "saved_distance",
+    "ride_distance_for_taker",
+    "detour_distance_for_taker",
+    "shared_distance_for_taker",
+    "saved_distance_for_taker",
+    "ride_distance_for_seeker",
+    "detour_distance_for_seeker",
+    "shared_distance_for_seeker",
+    "saved_distance_for_seeker",
+)
 
 
 def joined(prediction: Prediction, data_dir: Path) -> pd.DataFrame:
@@ -47,18 +58,26 @@ def compare(prediction: Prediction, data_dir: Path) -> tuple[dict, pd.DataFrame]
         ok = np.isfinite(ours) & np.isfinite(theirs)
         ours, theirs = ours[ok], theirs[ok]
         varied = len(ours) > 2 and np.std(ours) > 0 and np.std(theirs) > 0
-        rows.append({
-            "column": col, "n": int(ok.sum()),
-            "mean_ours": float(ours.mean()) if len(ours) else None,
-            "mean_authors": float(theirs.mean()) if len(theirs) else None,
-            "mean_diff": float((ours - theirs).mean()) if len(ours) else None,
-            "mean_abs_diff": float(np.abs(ours - theirs).mean()) if len(ours) else None,
-            "median_ratio": float(np.median(ours[theirs != 0] / theirs[theirs != 0])) if (theirs != 0).any() else None,
-            "pearson": float(stats.pearsonr(ours, theirs)[0]) if varied else None,
-            "spearman": float(stats.spearmanr(ours, theirs)[0]) if varied else None,
-        })
+        rows.append(
+            {
+                "column": col,
+                "n": int(ok.sum()),
+                "mean_ours": float(ours.mean()) if len(ours) else None,
+                "mean_authors": float(theirs.mean()) if len(theirs) else None,
+                "mean_diff": float((ours - theirs).mean()) if len(ours) else None,
+                "mean_abs_diff": float(np.abs(ours - theirs).mean()) if len(ours) else None,
+                "median_ratio": float(np.median(ours[theirs != 0] / theirs[theirs != 0]))
+                if (theirs != 0).any()
+                else None,
+                "pearson": float(stats.pearsonr(ours, theirs)[0]) if varied else None,
+                "spearman": float(stats.spearmanr(ours, theirs)[0]) if varied else None,
+            }
+        )
     table = pd.DataFrame(rows)
-    summary = {"ods_joined": int(len(frame)), "ods_ours": int(len(prediction.rates)),
-               "ods_authors": int(len(read_authors_predictions(data_dir))),
-               "columns": table.to_dict(orient="records")}
+    summary = {
+        "ods_joined": int(len(frame)),
+        "ods_ours": int(len(prediction.rates)),
+        "ods_authors": int(len(read_authors_predictions(data_dir))),
+        "columns": table.to_dict(orient="records"),
+    }
     return summary, frame

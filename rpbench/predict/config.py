@@ -30,19 +30,19 @@ DEFAULT_TAU0_S = 120.0
 class PredictConfig:
     """Options of the seeker/taker model and of its damped fixed-point solver."""
 
-    tau0_s: float = DEFAULT_TAU0_S        # τ_0: sojourn of the origin state (calibrated mean pick-up time, A4)
-    include_origin_state: bool = True     # taker state k = 0 at the origin (A4)
-    priority: str = "net_saving"          # §2.4 / A7
-    keep_nonpositive: bool = False        # keep pairs with E <= 0 (A11 drops them)
-    order_rule: str = "min_feasible"      # §1.1 / A6
-    rho_mode: str = "little"              # A8
-    beta: float = 0.5                     # damping β (A9)
+    tau0_s: float = DEFAULT_TAU0_S  # τ_0: sojourn of the origin state (calibrated mean pick-up time, A4)
+    include_origin_state: bool = True  # taker state k = 0 at the origin (A4)
+    priority: str = "net_saving"  # §2.4 / A7
+    keep_nonpositive: bool = False  # keep pairs with E <= 0 (A11 drops them)
+    order_rule: str = "min_feasible"  # §1.1 / A6
+    rho_mode: str = "little"  # A8
+    beta: float = 0.5  # damping β (A9)
     beta_floor: float = 1.0 / 16.0
-    grow_patience: int = 5                # halve β after this many growing residuals in a row
-    tol: float = 1e-10                    # stop when max|ρ' - ρ| <= tol
+    grow_patience: int = 5  # halve β after this many growing residuals in a row
+    tol: float = 1e-10  # stop when max|ρ' - ρ| <= tol
     max_iter: int = 2000
-    rho_cap: float = 1.0 - 1e-12          # clip of ρ' (A8)
-    accel: str = "none"                   # "anderson": same fixed point in fewer sweeps
+    rho_cap: float = 1.0 - 1e-12  # clip of ρ' (A8)
+    accel: str = "none"  # "anderson": same fixed point in fewer sweeps
     anderson_depth: int = 5
 
     def __post_init__(self) -> None:
@@ -55,8 +55,9 @@ class PredictConfig:
         if self.rho_mode not in RHO_MODES:
             raise ParameterError(f"rho_mode {self.rho_mode!r} unknown; expected one of {', '.join(RHO_MODES)}")
         if not 0 < self.beta <= 1 or not 0 < self.beta_floor <= self.beta:
-            raise ParameterError(f"damping beta = {self.beta!r} must lie in (0, 1] and beta_floor "
-                                 f"= {self.beta_floor!r} in (0, beta]")
+            raise ParameterError(
+                f"damping beta = {self.beta!r} must lie in (0, 1] and beta_floor = {self.beta_floor!r} in (0, beta]"
+            )
         if not self.tol > 0 or int(self.max_iter) < 1 or int(self.grow_patience) < 1:
             raise ParameterError("tol must be > 0, max_iter and grow_patience >= 1")
         if self.accel not in ACCELERATIONS:
@@ -69,8 +70,10 @@ class PredictConfig:
     def replace(self, **changes: Any) -> "PredictConfig":
         unknown = set(changes) - {f.name for f in dataclasses.fields(self)}
         if unknown:
-            raise ParameterError(f"unknown prediction option(s) {', '.join(sorted(unknown))}; "
-                                 f"known: {', '.join(f.name for f in dataclasses.fields(self))}")
+            raise ParameterError(
+                f"unknown prediction option(s) {', '.join(sorted(unknown))}; "
+                f"known: {', '.join(f.name for f in dataclasses.fields(self))}"
+            )
         return dataclasses.replace(self, **changes)
 
     def as_dict(self) -> dict[str, Any]:

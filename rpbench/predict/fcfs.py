@@ -40,12 +40,12 @@ class FcfsResult:
     hours: float
     warmup_s: float
     seed: int
-    orders: np.ndarray          # per OD: orders measured
-    paired: np.ndarray          # ... of which paired (as seeker or taker)
-    as_seeker: np.ndarray       # ... paired at request time
-    ride_m: np.ndarray          # Σ ride distance
-    shared_m: np.ndarray        # Σ shared distance
-    saving_m: np.ndarray        # Σ pair saving E of the order's pair
+    orders: np.ndarray  # per OD: orders measured
+    paired: np.ndarray  # ... of which paired (as seeker or taker)
+    as_seeker: np.ndarray  # ... paired at request time
+    ride_m: np.ndarray  # Σ ride distance
+    shared_m: np.ndarray  # Σ shared distance
+    saving_m: np.ndarray  # Σ pair saving E of the order's pair
     simulated_orders: int
     time_s: float
 
@@ -63,7 +63,7 @@ def simulate(model: PredictionModel, *, hours: float, seed: int = 0, warmup_s: f
     total = np.where(np.diff(off) > 0, total, 0.0)
     longest = float(total.max()) if n_od else 0.0
     warmup = longest if warmup_s is None else float(warmup_s)
-    horizon = warmup + hours * 3600.0 + longest               # measured orders all resolve
+    horizon = warmup + hours * 3600.0 + longest  # measured orders all resolve
     rng = np.random.default_rng(seed)
     counts = rng.poisson(lam * horizon)
     od_of = np.repeat(np.arange(n_od), counts)
@@ -86,7 +86,7 @@ def simulate(model: PredictionModel, *, hours: float, seed: int = 0, warmup_s: f
     saving = np.zeros(len(od_of))
     paired = np.zeros(len(od_of), dtype=bool)
     as_seeker = np.zeros(len(od_of), dtype=bool)
-    act_id = np.zeros(0, dtype=np.int64)          # active (unpaired) takers: order index, OD, start time
+    act_id = np.zeros(0, dtype=np.int64)  # active (unpaired) takers: order index, OD, start time
     act_od = np.zeros(0, dtype=np.int64)
     act_t = np.zeros(0)
     for i in range(len(od_of)):
@@ -115,11 +115,23 @@ def simulate(model: PredictionModel, *, hours: float, seed: int = 0, warmup_s: f
         act_id, act_od, act_t = (np.delete(a, taker) for a in (act_id, act_od, act_t))
 
     window = (t_req >= warmup) & (t_req < warmup + hours * 3600.0)
-    sums = [np.bincount(od_of[window], weights=x[window], minlength=n_od)
-            for x in (np.ones(len(od_of)), paired, as_seeker, ride, shared, saving)]
-    return FcfsResult(hours=float(hours), warmup_s=warmup, seed=int(seed), orders=sums[0].astype(np.int64),
-                      paired=sums[1], as_seeker=sums[2], ride_m=sums[3], shared_m=sums[4], saving_m=sums[5],
-                      simulated_orders=int(len(od_of)), time_s=time.perf_counter() - t_start)
+    sums = [
+        np.bincount(od_of[window], weights=x[window], minlength=n_od)
+        for x in (np.ones(len(od_of)), paired, as_seeker, ride, shared, saving)
+    ]
+    return FcfsResult(
+        hours=float(hours),
+        warmup_s=warmup,
+        seed=int(seed),
+        orders=sums[0].astype(np.int64),
+        paired=sums[1],
+        as_seeker=sums[2],
+        ride_m=sums[3],
+        shared_m=sums[4],
+        saving_m=sums[5],
+        simulated_orders=int(len(od_of)),
+        time_s=time.perf_counter() - t_start,
+    )
 
 
 class _SeekerLists:
@@ -174,15 +186,29 @@ def validate(prediction: Prediction, result: FcfsResult, *, min_samples: int = 2
         sim_ride = result.ride_m / n
         sim_shared = result.shared_m / n
     od = prediction.od
-    table = pd.DataFrame({
-        "od": np.arange(len(n)), "orders": n, "pred_pairing_prob": od.pairing_prob, "sim_pairing_prob": sim_p,
-        "pred_p_seeker": od.p_seeker, "sim_p_seeker": result.as_seeker / np.maximum(n, 1),
-        "pred_ride_m": od.ride_m, "sim_ride_m": sim_ride, "pred_shared_m": od.shared_m, "sim_shared_m": sim_shared,
-    })
+    table = pd.DataFrame(
+        {
+            "od": np.arange(len(n)),
+            "orders": n,
+            "pred_pairing_prob": od.pairing_prob,
+            "sim_pairing_prob": sim_p,
+            "pred_p_seeker": od.p_seeker,
+            "sim_p_seeker": result.as_seeker / np.maximum(n, 1),
+            "pred_ride_m": od.ride_m,
+            "sim_ride_m": sim_ride,
+            "pred_shared_m": od.shared_m,
+            "sim_shared_m": sim_shared,
+        }
+    )
     sel = table[table["orders"] >= min_samples]
-    metrics: dict = {"min_samples": int(min_samples), "ods_compared": int(len(sel)),
-                     "orders_compared": int(sel["orders"].sum()), "hours": result.hours,
-                     "simulated_orders": result.simulated_orders, "sim_time_s": round(result.time_s, 3)}
+    metrics: dict = {
+        "min_samples": int(min_samples),
+        "ods_compared": int(len(sel)),
+        "orders_compared": int(sel["orders"].sum()),
+        "hours": result.hours,
+        "simulated_orders": result.simulated_orders,
+        "sim_time_s": round(result.time_s, 3),
+    }
     for name in ("pairing_prob", "p_seeker", "ride_m", "shared_m"):
         pred, sim = sel[f"pred_{name}"].to_numpy(), sel[f"sim_{name}"].to_numpy()
         pos = sim > 0

@@ -51,13 +51,12 @@ class System:
 
     space: StateSpace
     matching: Matching
-    rate_per_s: np.ndarray       # λ_w per OD
+    rate_per_s: np.ndarray  # λ_w per OD
     config: PredictConfig
-    work: dict = field(default_factory=dict, repr=False)    # sweep buffers, reused across iterations
+    work: dict = field(default_factory=dict, repr=False)  # sweep buffers, reused across iterations
 
     @classmethod
-    def build(cls, space: StateSpace, matching: Matching, rate_per_s: np.ndarray,
-              config: PredictConfig) -> "System":
+    def build(cls, space: StateSpace, matching: Matching, rate_per_s: np.ndarray, config: PredictConfig) -> "System":
         return cls(space, matching, np.asarray(rate_per_s, dtype=np.float64), config)
 
     def scratch(self, rows: int, n_classes: int) -> np.ndarray:
@@ -73,17 +72,17 @@ class System:
 class Evaluation:
     """All variables computed from one ρ (per state unless noted)."""
 
-    rho: np.ndarray              # the input ρ
-    rho_next: np.ndarray         # clip(ρ'), the map's output
-    clipped: np.ndarray          # bool: the clip of A8 was active
-    eta: np.ndarray              # η_t
-    p_taker: np.ndarray          # p_t
-    lam_taker: np.ndarray        # λ_t
-    log_not_taker: np.ndarray    # Σ_{j<k} η_j τ_j along the path (log of 1/Π_{j<k}(1-p_j))
-    p_seeker: np.ndarray         # p_s per OD
-    class_log_q: np.ndarray      # log Q_c per class
-    class_h: np.ndarray          # H_c per class
-    member_log_r: np.ndarray     # log r_t per state
+    rho: np.ndarray  # the input ρ
+    rho_next: np.ndarray  # clip(ρ'), the map's output
+    clipped: np.ndarray  # bool: the clip of A8 was active
+    eta: np.ndarray  # η_t
+    p_taker: np.ndarray  # p_t
+    lam_taker: np.ndarray  # λ_t
+    log_not_taker: np.ndarray  # Σ_{j<k} η_j τ_j along the path (log of 1/Π_{j<k}(1-p_j))
+    p_seeker: np.ndarray  # p_s per OD
+    class_log_q: np.ndarray  # log Q_c per class
+    class_h: np.ndarray  # H_c per class
+    member_log_r: np.ndarray  # log r_t per state
 
     @property
     def residual(self) -> float:
@@ -100,17 +99,18 @@ class SolveInfo:
     residual: float
     iterations: int
     clip_count: int
-    beta: float                  # damping in force at the end
+    beta: float  # damping in force at the end
     time_s: float
-    history: tuple = ()          # residual per iteration
+    history: tuple = ()  # residual per iteration
 
 
 SAVINGS_CHUNK_PAIRS = 1 << 22
 SAVINGS_PARTS = 2
 
 
-def sweep(system: System, class_log_q: np.ndarray, sums: PairSums | None = None, *,
-          chunk_pairs: int = CHUNK_PAIRS) -> tuple[np.ndarray, np.ndarray]:
+def sweep(
+    system: System, class_log_q: np.ndarray, sums: PairSums | None = None, *, chunk_pairs: int = CHUNK_PAIRS
+) -> tuple[np.ndarray, np.ndarray]:
     """One pass over all seeker lists: returns (H_c per class, log(1 - p_s) per OD).
 
     ``H_c = Σ_s λ_s Π_{c' ≻_s c} Q_c'`` and ``log(1 - p_s) = Σ_{c ∈ T_s} log Q_c``,
@@ -132,8 +132,19 @@ def sweep(system: System, class_log_q: np.ndarray, sums: PairSums | None = None,
 
         def sweep_chunk(k: int) -> None:
             chunk_h[k].fill(0.0)
-            sweep_blocks(m.seeker_off, m.local, lam, q, class_log_q, *block_args, chunk_block[k], chunk_block[k + 1],
-                         chunk_h[k], log_not_paired, np.empty(width * int(SWEEP_ROW)))
+            sweep_blocks(
+                m.seeker_off,
+                m.local,
+                lam,
+                q,
+                class_log_q,
+                *block_args,
+                chunk_block[k],
+                chunk_block[k + 1],
+                chunk_h[k],
+                log_not_paired,
+                np.empty(width * int(SWEEP_ROW)),
+            )
 
         _in_threads(sweep_chunk, len(chunk_block) - 1)
         return chunk_h.sum(axis=0), log_not_paired
@@ -150,9 +161,26 @@ def sweep(system: System, class_log_q: np.ndarray, sums: PairSums | None = None,
         loc = np.empty(width * int(SAVINGS_ROW))
         for c in range(runs[k], runs[k + 1]):
             b0, b1 = chunk_block[c], chunk_block[c + 1]
-            savings_blocks(m.seeker_off, m.local, m.saving_m, m.piece, m.piece_off, m.piece_shared_m, m.piece_detour_m,
-                           lam, q, class_log_q, one_minus_q, *block_args, b0, b1, parts[k], sums.by_seeker,
-                           log_not_paired, loc)
+            savings_blocks(
+                m.seeker_off,
+                m.local,
+                m.saving_m,
+                m.piece,
+                m.piece_off,
+                m.piece_shared_m,
+                m.piece_detour_m,
+                lam,
+                q,
+                class_log_q,
+                one_minus_q,
+                *block_args,
+                b0,
+                b1,
+                parts[k],
+                sums.by_seeker,
+                log_not_paired,
+                loc,
+            )
             m.release_seekers(int(blocks.seeker_off[b0]), int(blocks.seeker_off[b1]))
 
     _in_threads(savings_run, len(runs) - 1)
@@ -170,7 +198,7 @@ def _in_threads(task: Callable[[int], None], n: int) -> None:
             task(k)
         return
     with ThreadPoolExecutor(threads) as pool:
-        for _ in pool.map(task, range(n)):          # re-raises a task's exception here
+        for _ in pool.map(task, range(n)):  # re-raises a task's exception here
             pass
 
 
@@ -192,8 +220,8 @@ class PairSums:
     ``w (1 - Q_c)`` over s's list.
     """
 
-    by_class: np.ndarray        # (classes, 4)
-    by_seeker: np.ndarray       # (ODs, 4)
+    by_class: np.ndarray  # (classes, 4)
+    by_seeker: np.ndarray  # (ODs, 4)
 
     @classmethod
     def zeros(cls, n_classes: int, n_od: int) -> "PairSums":
@@ -208,24 +236,57 @@ def evaluate(system: System, rho: np.ndarray, sums: PairSums | None = None) -> E
     # The per-class and per-state passes run in threads too, on ranges of classes / ODs (each writes its own
     # entries, so the values do not depend on the split).
     class_cut = _cut(sp.class_off)
-    _in_threads(lambda k: class_products(rho, sp.class_members, sp.class_off, class_log_q, member_log_r,
-                                         class_cut[k], class_cut[k + 1]), len(class_cut) - 1)
+    _in_threads(
+        lambda k: class_products(
+            rho, sp.class_members, sp.class_off, class_log_q, member_log_r, class_cut[k], class_cut[k + 1]
+        ),
+        len(class_cut) - 1,
+    )
     class_h, log_not_paired = sweep(system, class_log_q, sums)
     p_seeker = -np.expm1(log_not_paired)
     eta, p_taker, log_not_taker, lam_taker, rho_next = (np.empty(sp.n_states) for _ in range(5))
     clipped = np.empty(sp.n_states, dtype=bool)
     od_cut = _cut(sp.od_state_off)
-    _in_threads(lambda k: taker_map(class_h, log_not_paired, member_log_r, sp.cls, sp.tau_s, sp.od_state_off,
-                                    system.rate_per_s, cfg.rho_mode == "poisson", cfg.rho_cap, eta, p_taker,
-                                    log_not_taker, lam_taker, rho_next, clipped, od_cut[k], od_cut[k + 1]),
-                len(od_cut) - 1)
-    return Evaluation(rho=rho, rho_next=rho_next, clipped=clipped, eta=eta, p_taker=p_taker, lam_taker=lam_taker,
-                      log_not_taker=log_not_taker, p_seeker=p_seeker, class_log_q=class_log_q, class_h=class_h,
-                      member_log_r=member_log_r)
+    _in_threads(
+        lambda k: taker_map(
+            class_h,
+            log_not_paired,
+            member_log_r,
+            sp.cls,
+            sp.tau_s,
+            sp.od_state_off,
+            system.rate_per_s,
+            cfg.rho_mode == "poisson",
+            cfg.rho_cap,
+            eta,
+            p_taker,
+            log_not_taker,
+            lam_taker,
+            rho_next,
+            clipped,
+            od_cut[k],
+            od_cut[k + 1],
+        ),
+        len(od_cut) - 1,
+    )
+    return Evaluation(
+        rho=rho,
+        rho_next=rho_next,
+        clipped=clipped,
+        eta=eta,
+        p_taker=p_taker,
+        lam_taker=lam_taker,
+        log_not_taker=log_not_taker,
+        p_seeker=p_seeker,
+        class_log_q=class_log_q,
+        class_h=class_h,
+        member_log_r=member_log_r,
+    )
 
 
-def solve(system: System, *, progress: Callable[[int, float], None] | None = None,
-          rho0: np.ndarray | None = None) -> tuple[Evaluation, SolveInfo]:
+def solve(
+    system: System, *, progress: Callable[[int, float], None] | None = None, rho0: np.ndarray | None = None
+) -> tuple[Evaluation, SolveInfo]:
     """Damped fixed-point iteration (§2.6) from ρ = 0; returns the final consistent evaluation.
 
     ``rho0`` warm-starts the iteration (e.g. from the solution at a nearby
@@ -271,6 +332,13 @@ def solve(system: System, *, progress: Callable[[int, float], None] | None = Non
     # The last evaluation already used the final ρ unless the cap was hit with an update after it.
     if not converged:
         ev = evaluate(system, rho)
-    info = SolveInfo(converged=converged, residual=ev.residual, iterations=len(history), clip_count=ev.clip_count,
-                     beta=beta, time_s=time.perf_counter() - t0, history=tuple(history))
+    info = SolveInfo(
+        converged=converged,
+        residual=ev.residual,
+        iterations=len(history),
+        clip_count=ev.clip_count,
+        beta=beta,
+        time_s=time.perf_counter() - t0,
+        history=tuple(history),
+    )
     return ev, info

@@ -32,8 +32,9 @@ RATE_SOURCES = ("auto", "month", "scenario")
 TAU0_RESOLUTION_S = 10.0
 
 
-def scenario_predictions(scenario: Scenario, source: str, tau0_s: np.ndarray,
-                         config: PredictConfig) -> list[Prediction]:
+def scenario_predictions(
+    scenario: Scenario, source: str, tau0_s: np.ndarray, config: PredictConfig
+) -> list[Prediction]:
     """One prediction per hour of ``scenario`` (``len(tau0_s)`` hours; hours with equal inputs share one).
 
     The dispatcher reads per-OD values only, so the hours come back slim
@@ -57,8 +58,11 @@ def scenario_predictions(scenario: Scenario, source: str, tau0_s: np.ndarray,
                 # Warm-start from the previous hour when the OD set is the same (only the demand level moved).
                 rho0 = None
                 if previous is not None and _same_ods(previous[0], rates[h]):
-                    rho0 = previous[2].rho if len(previous[2].rho) else \
-                        cached_prediction(net, previous[0], params, previous[1]).rho
+                    rho0 = (
+                        previous[2].rho
+                        if len(previous[2].rho)
+                        else cached_prediction(net, previous[0], params, previous[1]).rho
+                    )
                 prediction = cached_prediction(net, rates[h], params, cfg, rho0=rho0)
             previous = (rates[h], cfg, prediction)
             memo[key] = prediction.slim()
@@ -79,8 +83,10 @@ def hourly_rates(scenario: Scenario, source: str, hours: int) -> list[OdRates]:
         source = "month" if demand.table == "month" else "scenario"
     if source == "month":
         if demand.data_dir is None or net.name != "haikou":
-            raise ParameterError(f"FL rates 'month' need the Haikou network and data folder; scenario "
-                                 f"{scenario.name!r} has neither (use --opt fl.rates=scenario)")
+            raise ParameterError(
+                f"FL rates 'month' need the Haikou network and data folder; scenario "
+                f"{scenario.name!r} has neither (use --opt fl.rates=scenario)"
+            )
         base = month_rates(net, Path(demand.data_dir))
         if demand.orders_per_hour is None:
             return [base] * hours
@@ -88,12 +94,27 @@ def hourly_rates(scenario: Scenario, source: str, hours: int) -> list[OdRates]:
         return [base.scaled(float(n / (base.total_per_s * 3600.0))) for n in demand.orders_per_hour[:hours]]
     o = scenario.orders
     hour_of = np.minimum((o.request_s // 3600.0).astype(int), hours - 1)
-    return [order_rates(net, o.origin[hour_of == h], o.destination[hour_of == h], 3600.0,
-                        source=f"{scenario.name} orders of hour {h} (count/3600 s)") for h in range(hours)]
+    return [
+        order_rates(
+            net,
+            o.origin[hour_of == h],
+            o.destination[hour_of == h],
+            3600.0,
+            source=f"{scenario.name} orders of hour {h} (count/3600 s)",
+        )
+        for h in range(hours)
+    ]
 
 
-def cached_prediction(net: RoadNetwork, rates: OdRates, params: Params, config: PredictConfig, *,
-                      rho0: np.ndarray | None = None, slim: bool = False) -> Prediction | None:
+def cached_prediction(
+    net: RoadNetwork,
+    rates: OdRates,
+    params: Params,
+    config: PredictConfig,
+    *,
+    rho0: np.ndarray | None = None,
+    slim: bool = False,
+) -> Prediction | None:
     """A solved prediction: from the disk cache, else solved on the cached structure (built once per machine).
 
     ``slim=True`` only reads the cache (per-OD arrays) and returns None when the prediction is not cached.

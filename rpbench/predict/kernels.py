@@ -34,15 +34,16 @@ from numba import njit
 
 #: Row widths of the block tables (``loc``), flat arrays of ``width x ROW`` float64: a constant power of two
 #: makes a row's address a shift of the class number, where a 2-D array's stride would cost a multiply.
-SWEEP_ROW = np.uint64(4)        # Q, log Q, the block's H sum, padding: two rows per 64-byte cache line
-SAVINGS_ROW = np.uint64(8)      # Q, log Q, 1 - Q, four class sums, padding: one row per cache line
-RANK_ROW = np.uint64(4)         # a survivor's a, class, piece scratch, padding (``match_sets._Group.by_rank``)
+SWEEP_ROW = np.uint64(4)  # Q, log Q, the block's H sum, padding: two rows per 64-byte cache line
+SAVINGS_ROW = np.uint64(8)  # Q, log Q, 1 - Q, four class sums, padding: one row per cache line
+RANK_ROW = np.uint64(4)  # a survivor's a, class, piece scratch, padding (``match_sets._Group.by_rank``)
 _ONE = np.uint64(1)
 
 
 @njit(cache=True, nogil=True)
-def sweep_blocks(off, local, lam, q, log_q, block_seeker, block_cls, block_cls_off, b0, b1, h, log_not_paired,
-                 loc):  # pragma: no cover - compiled
+def sweep_blocks(
+    off, local, lam, q, log_q, block_seeker, block_cls, block_cls_off, b0, b1, h, log_not_paired, loc
+):  # pragma: no cover - compiled
     """Blocks ``b0..b1-1``: ``h[c] += λ_s Π_{c' ≻_s c} Q_c'`` and ``log_not_paired[s] = Σ log Q_c``.
 
     Block b holds seekers ``block_seeker[b]..block_seeker[b+1]-1`` and the
@@ -56,7 +57,7 @@ def sweep_blocks(off, local, lam, q, log_q, block_seeker, block_cls, block_cls_o
     for b in range(b0, b1):
         k0 = block_cls_off[b]
         k = block_cls_off[b + 1] - k0
-        _gather_block(block_cls[k0:k0 + k], (q, log_q), loc, SWEEP_ROW)
+        _gather_block(block_cls[k0 : k0 + k], (q, log_q), loc, SWEEP_ROW)
         _sweep_seekers(off, local, lam, loc, log_not_paired, block_seeker[b], block_seeker[b + 1])
         for j in range(k):
             h[block_cls[k0 + j]] += loc[np.uint64(j) * SWEEP_ROW + np.uint64(2)]
@@ -96,7 +97,7 @@ def _sweep_seekers(off, cls, lam, loc, log_not_paired, s0, s1):  # pragma: no co
             loc[d + np.uint64(2)] += weight_b
             weight_b *= loc[d]
             total_b += loc[d + _ONE]
-        log_not_paired[s] = _walk(i + n, end_a, cls, weight_a, total_a, loc)      # the longer list's rest
+        log_not_paired[s] = _walk(i + n, end_a, cls, weight_a, total_a, loc)  # the longer list's rest
         log_not_paired[s + 1] = _walk(j + n, end_b, cls, weight_b, total_b, loc)
         s += 2
     if s < s1:
@@ -117,9 +118,28 @@ def _walk(i, end, cls, weight, total, loc):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
-def savings_blocks(off, local, saving, piece, piece_off, piece_shared, piece_detour, lam, q, log_q, one_minus_q,
-                   block_seeker, block_cls, block_cls_off, b0, b1, by_class, by_seeker, log_not_paired,
-                   loc):  # pragma: no cover
+def savings_blocks(
+    off,
+    local,
+    saving,
+    piece,
+    piece_off,
+    piece_shared,
+    piece_detour,
+    lam,
+    q,
+    log_q,
+    one_minus_q,
+    block_seeker,
+    block_cls,
+    block_cls_off,
+    b0,
+    b1,
+    by_class,
+    by_seeker,
+    log_not_paired,
+    loc,
+):  # pragma: no cover
     """:func:`sweep_blocks` that also sums the pair quantities of the savings pass (§2.7).
 
     Per class c: ``by_class[c, 0..3] += w · (1, E, shared, detour)`` (column 0
@@ -133,7 +153,7 @@ def savings_blocks(off, local, saving, piece, piece_off, piece_shared, piece_det
     for b in range(b0, b1):
         k0 = block_cls_off[b]
         k = block_cls_off[b + 1] - k0
-        _gather_block(block_cls[k0:k0 + k], (q, log_q, one_minus_q), loc, SAVINGS_ROW)
+        _gather_block(block_cls[k0 : k0 + k], (q, log_q, one_minus_q), loc, SAVINGS_ROW)
         for s in range(block_seeker[b], block_seeker[b + 1]):
             weight = lam[s]
             total = 0.0
@@ -169,8 +189,9 @@ def savings_blocks(off, local, saving, piece, piece_off, piece_shared, piece_det
 
 
 @njit(cache=True, nogil=True)
-def localize(lens, cls, limit, per_class, state, local_out, new_block_seeker, new_block_pos,
-             block_cls_out):  # pragma: no cover - compiled
+def localize(
+    lens, cls, limit, per_class, state, local_out, new_block_seeker, new_block_pos, block_cls_out
+):  # pragma: no cover - compiled
     """Cut the seekers of ``lens`` (pairs ``cls``) into blocks of at most ``limit`` classes, continuing
     the open block of ``state`` = [block number, its class count, seekers so far, block classes so far,
     Σ class size over the pairs so far].
@@ -230,7 +251,7 @@ def count_at_most(a, lo, size, t):  # pragma: no cover - compiled
     if not t >= a[lo]:
         return 0, 0
     first = lo
-    while lo < hi:                  # first value > t
+    while lo < hi:  # first value > t
         mid = (lo + hi) >> 1
         if a[mid] <= t:
             lo = mid + 1
@@ -250,8 +271,25 @@ def _minimum(x, y):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
-def feasible_runs(from_b, to_b, solo_b, group_dest, group_d_oa, a, start, size, d_lim, keep_nonpositive,
-                  min_feasible, row, first, length, piece_g, shared, detour):  # pragma: no cover - compiled
+def feasible_runs(
+    from_b,
+    to_b,
+    solo_b,
+    group_dest,
+    group_d_oa,
+    a,
+    start,
+    size,
+    d_lim,
+    keep_nonpositive,
+    min_feasible,
+    row,
+    first,
+    length,
+    piece_g,
+    shared,
+    detour,
+):  # pragma: no cover - compiled
     """The pieces of one origin's seekers (``match_sets`` stage 2): ``(pieces written, searches)``.
 
     For seeker row r (solo length ``solo_b[r]``; ``from_b[r]`` and ``to_b[r]``
@@ -277,7 +315,7 @@ def feasible_runs(from_b, to_b, solo_b, group_dest, group_d_oa, a, start, size, 
     """
     capacity = len(row)
     n_u = len(group_dest)
-    fofo_u = np.empty(n_u, dtype=np.int64)          # a row's FOFO runs, written after its FOLO runs
+    fofo_u = np.empty(n_u, dtype=np.int64)  # a row's FOFO runs, written after its FOLO runs
     fofo_lo = np.empty(n_u, dtype=np.int64)
     fofo_hi = np.empty(n_u, dtype=np.int64)
     fofo_g = np.empty(n_u)
@@ -295,7 +333,7 @@ def feasible_runs(from_b, to_b, solo_b, group_dest, group_d_oa, a, start, size, 
             g_l = -d_ba
             thr_l = d_lim - l_b - d_ba
             if min_feasible:
-                folo_pref = g_l > g_f                     # L_FOLO < L_FOFO (tie -> FOFO)
+                folo_pref = g_l > g_f  # L_FOLO < L_FOFO (tie -> FOFO)
                 take_l = not f_ok or folo_pref
                 take_f = f_ok
             else:
@@ -314,7 +352,7 @@ def feasible_runs(from_b, to_b, solo_b, group_dest, group_d_oa, a, start, size, 
                     k += 1
             if take_f:
                 lo = 0
-                if folo_pref:                             # FOLO's feasible classes are taken by FOLO
+                if folo_pref:  # FOLO's feasible classes are taken by FOLO
                     lo, s = count_at_most(a, start[u], size[u], thr_l)
                     searches += s
                 cut_f = np.inf if keep_nonpositive else np.nextafter(g_f, -np.inf)
@@ -334,8 +372,9 @@ def feasible_runs(from_b, to_b, solo_b, group_dest, group_d_oa, a, start, size, 
 
 
 @njit(cache=True, nogil=True)
-def net_saving_keys(rows, start, n, piece_g, kappa, tie_rank, tie_bits, q_bits, grid, q_limit,
-                    keys):  # pragma: no cover - compiled
+def net_saving_keys(
+    rows, start, n, piece_g, kappa, tie_rank, tie_bits, q_bits, grid, q_limit, keys
+):  # pragma: no cover - compiled
     """Sort keys ``row | quantised descending (E - pk) | tie rank`` of the pieces' entries (see ``match_sets``).
 
     The arithmetic is the same IEEE sequence as the numpy packing: ``prio =
@@ -360,8 +399,9 @@ def net_saving_keys(rows, start, n, piece_g, kappa, tie_rank, tie_bits, q_bits, 
 
 
 @njit(cache=True, nogil=True)
-def decode_entries(keys, tie_bits, rows, start, n, piece_g, tie_rank, by_rank, cls_out, saving_out,
-                   piece_out):  # pragma: no cover - compiled
+def decode_entries(
+    keys, tie_bits, rows, start, n, piece_g, tie_rank, by_rank, cls_out, saving_out, piece_out
+):  # pragma: no cover - compiled
     """Write the sorted entries' columns from their keys: class, E and the piece within its row.
 
     A key's low ``tie_bits`` bits are its survivor's tie rank r; ``by_rank[r]``
@@ -372,7 +412,7 @@ def decode_entries(keys, tie_bits, rows, start, n, piece_g, tie_rank, by_rank, c
     random access per entry, to a line the row's scratch pass just touched.
     """
     mask = (np.uint64(1) << np.uint64(tie_bits)) - np.uint64(1)
-    table = by_rank.reshape(-1)      # a view, flat: a row's address is a shift of its rank
+    table = by_rank.reshape(-1)  # a view, flat: a row's address is a shift of its rank
     e = 0
     j = 0
     m = len(n)
@@ -408,8 +448,25 @@ def class_products(rho, members, class_off, class_log_q, member_log_r, c0, c1): 
 
 
 @njit(cache=True, nogil=True)
-def taker_map(class_h, log_not_paired, member_log_r, cls, tau, od_state_off, rate, poisson, rho_cap, eta,
-              p_taker, log_not_taker, lam_taker, rho_next, clipped, w0, w1):  # pragma: no cover - compiled
+def taker_map(
+    class_h,
+    log_not_paired,
+    member_log_r,
+    cls,
+    tau,
+    od_state_off,
+    rate,
+    poisson,
+    rho_cap,
+    eta,
+    p_taker,
+    log_not_taker,
+    lam_taker,
+    rho_next,
+    clipped,
+    w0,
+    w1,
+):  # pragma: no cover - compiled
     """(A2), (A3), (A5), (A6) along the taker states of ODs ``w0..w1-1``, in one pass (see
     :func:`.fixed_point.evaluate`).
 

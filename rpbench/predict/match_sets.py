@@ -84,17 +84,17 @@ from rpbench.predict.rates import OdRates
 from rpbench.predict.states import StateSpace
 from rpbench.scenarios.base import Params
 
-GRID = float(1 << 20)          # priority / pick-up grid: 2^-20 m
-Q_BITS = 39                    # quantised priorities cover (-2^18, 2^18) m
+GRID = float(1 << 20)  # priority / pick-up grid: 2^-20 m
+Q_BITS = 39  # quantised priorities cover (-2^18, 2^18) m
 _Q_LIMIT = float(1 << 18) - 1.0
-SORT_ENTRIES = 1 << 21         # entries expanded and sorted at once (bounds temporaries)
-CHUNK_PAIRS = 1 << 24          # pairs per chunk when the sweeps stream the columns
+SORT_ENTRIES = 1 << 21  # entries expanded and sorted at once (bounds temporaries)
+CHUNK_PAIRS = 1 << 24  # pairs per chunk when the sweeps stream the columns
 
 #: The per-pair distance columns (name, dtype), each stored as one raw little-endian file ``<name>.bin``;
 #: the classes are stored as ``local.bin`` (block-local numbers, uint16 or int32) and ``blocks.npz``, the
 #: pairs' pieces as ``piece.bin``, and the per-piece columns as ``piece_<name>.bin`` with ``piece_off.npy``.
 COLUMNS = (("saving_m", "<f4"),)
-PIECE_COLUMNS = (("shared_m", "<f4"), ("detour_m", "<f4"))      # the seeker's detour
+PIECE_COLUMNS = (("shared_m", "<f4"), ("detour_m", "<f4"))  # the seeker's detour
 
 
 def piece_dtype(n_nodes: int) -> np.dtype:
@@ -112,19 +112,28 @@ class Matching:
     copy in the page cache, and a sweep only brings in what it touches.
     """
 
-    seeker_off: np.ndarray        # int64 (W+1)
-    local: np.ndarray             # uint16 (or int32) taker class per pair, numbered within its block
-    saving_m: np.ndarray          # float32 E(s, t)
-    piece: np.ndarray             # uint16 (or uint32) the pair's piece, numbered within its seeker
-    piece_off: np.ndarray         # int64 (W+1): seeker s's pieces are piece_off[s] .. piece_off[s+1]-1
-    piece_shared_m: np.ndarray    # float32 shared distance, per piece
-    piece_detour_m: np.ndarray    # float32 detour of the seeker, per piece
-    blocks: ClassBlocks           # the seekers' blocks and the global class of each local number
+    seeker_off: np.ndarray  # int64 (W+1)
+    local: np.ndarray  # uint16 (or int32) taker class per pair, numbered within its block
+    saving_m: np.ndarray  # float32 E(s, t)
+    piece: np.ndarray  # uint16 (or uint32) the pair's piece, numbered within its seeker
+    piece_off: np.ndarray  # int64 (W+1): seeker s's pieces are piece_off[s] .. piece_off[s+1]-1
+    piece_shared_m: np.ndarray  # float32 shared distance, per piece
+    piece_detour_m: np.ndarray  # float32 detour of the seeker, per piece
+    blocks: ClassBlocks  # the seekers' blocks and the global class of each local number
     stats: dict = field(default_factory=dict)
 
     @classmethod
-    def from_lists(cls, seeker_off, classes, saving_m, shared_m, seeker_detour_m, *, n_classes: int | None = None,
-                   limit: int = BLOCK_CLASSES) -> "Matching":
+    def from_lists(
+        cls,
+        seeker_off,
+        classes,
+        saving_m,
+        shared_m,
+        seeker_detour_m,
+        *,
+        n_classes: int | None = None,
+        limit: int = BLOCK_CLASSES,
+    ) -> "Matching":
         """A matching held in memory, from global class lists and per-pair distances, one piece per pair
         (tests and small models)."""
         seeker_off = np.asarray(seeker_off, dtype=np.int64)
@@ -135,9 +144,16 @@ class Matching:
         lens = np.diff(seeker_off)
         wide = len(lens) and int(lens.max()) > (1 << 16)
         piece = (np.arange(len(classes)) - np.repeat(seeker_off[:-1], lens)).astype("<u4" if wide else "<u2")
-        return cls(seeker_off=seeker_off, local=local, saving_m=np.asarray(saving_m, dtype=np.float32),
-                   piece=piece, piece_off=seeker_off.copy(), piece_shared_m=np.asarray(shared_m, dtype=np.float32),
-                   piece_detour_m=np.asarray(seeker_detour_m, dtype=np.float32), blocks=blocks)
+        return cls(
+            seeker_off=seeker_off,
+            local=local,
+            saving_m=np.asarray(saving_m, dtype=np.float32),
+            piece=piece,
+            piece_off=seeker_off.copy(),
+            piece_shared_m=np.asarray(shared_m, dtype=np.float32),
+            piece_detour_m=np.asarray(seeker_detour_m, dtype=np.float32),
+            blocks=blocks,
+        )
 
     @property
     def cls(self) -> np.ndarray:
@@ -158,7 +174,7 @@ class Matching:
         """Index into the piece table of every pair of seekers ``s0..s1-1``."""
         off = self.seeker_off
         i0, i1 = int(off[s0]), int(off[s1])
-        return np.repeat(self.piece_off[s0:s1], np.diff(off[s0:s1 + 1])) + self.piece[i0:i1]
+        return np.repeat(self.piece_off[s0:s1], np.diff(off[s0 : s1 + 1])) + self.piece[i0:i1]
 
     @property
     def n_pairs(self) -> int:
@@ -176,16 +192,22 @@ class Matching:
         total, b = 0, self.blocks
         for k in range(b.n_blocks):
             i0, i1 = self.seeker_off[b.seeker_off[k]], self.seeker_off[b.seeker_off[k + 1]]
-            table = b.cls[b.cls_off[k]:b.cls_off[k + 1]]
+            table = b.cls[b.cls_off[k] : b.cls_off[k + 1]]
             listed = np.bincount(self.local[i0:i1], minlength=len(table))
             total += int(listed @ class_size[table])
         return total
 
     @property
     def nbytes(self) -> int:
-        return int(self.seeker_off.nbytes + self.local.nbytes + self.piece.nbytes + self.piece_off.nbytes
-                   + self.piece_shared_m.nbytes + self.piece_detour_m.nbytes
-                   + sum(getattr(self, name).nbytes for name, _ in COLUMNS))
+        return int(
+            self.seeker_off.nbytes
+            + self.local.nbytes
+            + self.piece.nbytes
+            + self.piece_off.nbytes
+            + self.piece_shared_m.nbytes
+            + self.piece_detour_m.nbytes
+            + sum(getattr(self, name).nbytes for name, _ in COLUMNS)
+        )
 
     def chunks(self, max_pairs: int = CHUNK_PAIRS):
         """``(s0, s1, i0, i1)``: seeker ranges of about ``max_pairs`` pairs (at least one seeker each)."""
@@ -211,10 +233,10 @@ class Matching:
         """
         for name in names:
             col = getattr(self, name)
-            mapped = getattr(col, "_mmap", None)            # numpy keeps the mmap object of a np.memmap here
+            mapped = getattr(col, "_mmap", None)  # numpy keeps the mmap object of a np.memmap here
             if mapped is None or not hasattr(mapped, "madvise"):
                 continue
-            start = i0 * col.itemsize // mmap.PAGESIZE * mmap.PAGESIZE     # the columns are mapped from byte 0
+            start = i0 * col.itemsize // mmap.PAGESIZE * mmap.PAGESIZE  # the columns are mapped from byte 0
             end = min(i1 * col.itemsize, len(mapped))
             if end > start:
                 mapped.madvise(mmap.MADV_DONTNEED, start, end - start)
@@ -246,23 +268,34 @@ class Matching:
         piece_off = np.load(directory / "piece_off.npy", allow_pickle=False)
         if len(piece_off) != n_od + 1 or piece_off[0] != 0 or np.any(np.diff(piece_off) < 0):
             raise ValueError("its piece offsets are inconsistent")
-        table = {f"piece_{name}": _open_column(directory / f"piece_{name}.bin", dtype, int(piece_off[-1]))
-                 for name, dtype in PIECE_COLUMNS}
+        table = {
+            f"piece_{name}": _open_column(directory / f"piece_{name}.bin", dtype, int(piece_off[-1]))
+            for name, dtype in PIECE_COLUMNS
+        }
         blocks = ClassBlocks.load(directory, n_od)
-        return cls(seeker_off=seeker_off, stats=stats, local=local, piece=piece, piece_off=piece_off, blocks=blocks,
-                   **columns, **table)
+        return cls(
+            seeker_off=seeker_off,
+            stats=stats,
+            local=local,
+            piece=piece,
+            piece_off=piece_off,
+            blocks=blocks,
+            **columns,
+            **table,
+        )
 
 
 def _open_column(path: Path, dtype: str, n: int) -> np.ndarray:
     if path.stat().st_size != n * np.dtype(dtype).itemsize:
         raise ValueError(f"{path.name} holds {path.stat().st_size} bytes, expected {n} {dtype} values")
-    if n == 0:                                   # an empty file cannot be mapped
+    if n == 0:  # an empty file cannot be mapped
         return np.zeros(0, dtype=dtype)
     return np.memmap(path, dtype=dtype, mode="r", shape=(n,))
 
 
-def build_matching(space: StateSpace, rates: OdRates, dist: np.ndarray, params: Params,
-                   config: PredictConfig, directory: Path) -> Matching:
+def build_matching(
+    space: StateSpace, rates: OdRates, dist: np.ndarray, params: Params, config: PredictConfig, directory: Path
+) -> Matching:
     """Matching sets of every seeker, written into ``directory`` (see the module docstring for the method).
 
     Origins are independent, so they are processed by a few threads (numpy's
@@ -280,8 +313,9 @@ def build_matching(space: StateSpace, rates: OdRates, dist: np.ndarray, params: 
             starts = np.concatenate([[0], bounds]).astype(np.int64)
             ends = np.concatenate([bounds, [len(origin)]]).astype(np.int64)
             tasks = [(int(origin[w0]), int(w0), int(w1)) for w0, w1 in zip(starts, ends)]
-            bar = tqdm(total=len(origin), desc="prediction structure", unit="OD", file=sys.stderr, leave=False,
-                       disable=None)                             # off when stderr is not a terminal
+            bar = tqdm(
+                total=len(origin), desc="prediction structure", unit="OD", file=sys.stderr, leave=False, disable=None
+            )  # off when stderr is not a terminal
             with bar, ThreadPoolExecutor(max(1, get_num_threads())) as pool:
                 for (_, w0, w1), lists in zip(tasks, _in_order(pool, builder.origin_lists, tasks)):
                     writer.append(w0, lists.lens, lists.columns, lists.pieces)
@@ -291,7 +325,7 @@ def build_matching(space: StateSpace, rates: OdRates, dist: np.ndarray, params: 
         seeker_off, dtypes = writer.finish()
     finally:
         writer.close()
-    stats["state_pairs"] = writer.localizer.state_pairs                  # Σ_s |T_s|, for reports
+    stats["state_pairs"] = writer.localizer.state_pairs  # Σ_s |T_s|, for reports
     matching = Matching.open(directory, seeker_off, stats, dtypes)
     matching.stats["build_s"] = time.perf_counter() - t0
     return matching
@@ -333,12 +367,13 @@ class _ColumnWriter:
         self.files.update({f"piece_{name}": open(directory / f"piece_{name}.bin", "wb") for name, _ in PIECE_COLUMNS})
         self.files["local"] = open(directory / "local.bin", "w+b")
         self.localizer = Localizer(len(class_size), self.files["local"], class_size=class_size)
-        self.next = 0            # next seeker expected
+        self.next = 0  # next seeker expected
         self.lens: list[np.ndarray] = []
         self.piece_counts: list[np.ndarray] = []
 
-    def append(self, w0: int, lens: np.ndarray, columns: tuple[np.ndarray, ...] = (),
-               pieces: tuple[np.ndarray, ...] = ()) -> None:
+    def append(
+        self, w0: int, lens: np.ndarray, columns: tuple[np.ndarray, ...] = (), pieces: tuple[np.ndarray, ...] = ()
+    ) -> None:
         """Seekers ``w0 .. w0+len(lens)-1`` with ``lens`` pairs each, their pairs' columns (global
         classes, E, piece) and their piece table (pieces per seeker, shared distance, seeker detour)."""
         assert w0 == self.next, "seekers must be written in OD order"
@@ -374,8 +409,9 @@ class _ColumnWriter:
 class _Builder:
     """Per-origin construction of the sorted matching lists."""
 
-    def __init__(self, space: StateSpace, rates: OdRates, dist: np.ndarray, params: Params,
-                 config: PredictConfig) -> None:
+    def __init__(
+        self, space: StateSpace, rates: OdRates, dist: np.ndarray, params: Params, config: PredictConfig
+    ) -> None:
         self.space, self.config = space, config
         self.dist = dist
         # l(h, o) by destination: rows of the transpose are what the column reads of ``dist`` would be,
@@ -394,9 +430,9 @@ class _Builder:
     def origin_lists(self, o: int, w0: int, w1: int) -> _OriginLists:
         """Sorted lists of the seekers ``w0..w1-1`` (all with origin ``o``); safe to call from threads."""
         sp, cfg = self.space, self.config
-        to_o = self.dist_to[o]                                               # l(h, o) for every node h
-        near = np.flatnonzero(to_o <= self.r_lim)                            # within R̄ of the seekers
-        cand = expand_ranges(self.head_off[near], self.head_off[near + 1])   # sorted by class index
+        to_o = self.dist_to[o]  # l(h, o) for every node h
+        near = np.flatnonzero(to_o <= self.r_lim)  # within R̄ of the seekers
+        cand = expand_ranges(self.head_off[near], self.head_off[near + 1])  # sorted by class index
         stats = {"stage1_candidates": len(cand), "stage1_kept": 0, "group_queries": 0}
         row_o = self.dist[o]
         p = to_o[sp.class_head[cand]]
@@ -404,10 +440,10 @@ class _Builder:
         rest = sp.class_rest_m[cand]
         d_a = sp.class_dest[cand]
         a = p - rest
-        keep = (pk <= self.r_lim) & (a + row_o[d_a] <= self.d_lim)         # pick-up; FOFO detour of A
+        keep = (pk <= self.r_lim) & (a + row_o[d_a] <= self.d_lim)  # pick-up; FOFO detour of A
         if not cfg.keep_nonpositive:
-            keep &= a < 0                                                   # E <= l(h,d_A) - p
-        kept = np.flatnonzero(keep)                  # one pass over the mask serves the five gathers
+            keep &= a < 0  # E <= l(h,d_A) - p
+        kept = np.flatnonzero(keep)  # one pass over the mask serves the five gathers
         if not len(kept):
             return _OriginLists(np.zeros(w1 - w0, dtype=np.int64), (), (), stats)
         g = _Group(cand[kept], a[kept], pk[kept], rest[kept], d_a[kept], row_o)
@@ -415,7 +451,7 @@ class _Builder:
         pieces = self._pieces(g, w0, w1)
         stats["group_queries"] = pieces.searches
         lens, columns = self._emit(g, w0, w1, pieces)
-        table = (np.bincount(pieces.row, minlength=w1 - w0), pieces.shared, pieces.det)   # pieces are by row
+        table = (np.bincount(pieces.row, minlength=w1 - w0), pieces.shared, pieces.det)  # pieces are by row
         return _OriginLists(lens, columns, table, stats)
 
     # ------------------------------------------------------------------ stage 2
@@ -427,16 +463,31 @@ class _Builder:
         # The seekers' rows of l(d_B, .) and l(., d_B), copied once: contiguous reads, where gathers from
         # the whole 122 MB matrices would miss the cache on nearly every cell.
         from_b, to_b = self.dist.take(d_b, axis=0), self.dist_to.take(d_b, axis=0)
-        capacity = m * n_u + 64                 # about a third of the (seeker, group) cells hold a run here
+        capacity = m * n_u + 64  # about a third of the (seeker, group) cells hold a run here
         while True:
             out = _Pieces.empty(capacity)
             k, searches = kernels.feasible_runs(
-                from_b, to_b, self.solo[w0:w1], g.dest, g.d_oa, g.a, g.start, g.size,
-                self.d_lim, self.config.keep_nonpositive, self.config.order_rule == "min_feasible",
-                out.row, out.start, out.n, out.g, out.shared, out.det)
+                from_b,
+                to_b,
+                self.solo[w0:w1],
+                g.dest,
+                g.d_oa,
+                g.a,
+                g.start,
+                g.size,
+                self.d_lim,
+                self.config.keep_nonpositive,
+                self.config.order_rule == "min_feasible",
+                out.row,
+                out.start,
+                out.n,
+                out.g,
+                out.shared,
+                out.det,
+            )
             if k >= 0:
                 return out.head(k, searches)
-            capacity = 2 * m * n_u                # at most two runs (FOLO, FOFO) per cell
+            capacity = 2 * m * n_u  # at most two runs (FOLO, FOFO) per cell
 
     def _emit(self, g: "_Group", w0: int, w1: int, pc: "_Pieces") -> tuple[np.ndarray, tuple[np.ndarray, ...]]:
         """Pairs per seeker and the sorted columns: pieces expanded, prioritised and sorted a batch at a time."""
@@ -453,7 +504,7 @@ class _Builder:
             i0, i1 = (int(i) for i in np.searchsorted(pc.row, [r0, r1]))
             total = int(cum[r1 - 1] - base)
             if total:
-                self._sorted_entries(g, pc, i0, i1, r0, w0, tuple(c[base:base + total] for c in columns))
+                self._sorted_entries(g, pc, i0, i1, r0, w0, tuple(c[base : base + total] for c in columns))
             r0 = r1
         return per_row, columns
 
@@ -469,20 +520,29 @@ class _Builder:
         keys = np.empty(int(n.sum()), dtype=np.uint64)
         packable = 64 - Q_BITS - g.tie_bits >= max(1, int(rows.max()).bit_length())
         piece = col = None
-        if self.config.priority == "net_saving":             # E - pk = g - a - pk, computed in the kernel
-            packable = packable and kernels.net_saving_keys(rows, start, n, pc.g[i0:i1], g.kappa, g.tie_rank,
-                                                            g.tie_bits, Q_BITS, GRID, _Q_LIMIT, keys)
+        if self.config.priority == "net_saving":  # E - pk = g - a - pk, computed in the kernel
+            packable = packable and kernels.net_saving_keys(
+                rows, start, n, pc.g[i0:i1], g.kappa, g.tie_rank, g.tie_bits, Q_BITS, GRID, _Q_LIMIT, keys
+            )
             prio = None
         else:
             piece, col = np.repeat(np.arange(i0, i1), n), expand_ranges(start, start + n)
-            prio = _priority(self.config.priority, pc.g[piece] - g.a[col], g.pk[col], pc.shared[piece],
-                             pc.det[piece], g.rest[col], self.solo[w0 + pc.row[piece]])
+            prio = _priority(
+                self.config.priority,
+                pc.g[piece] - g.a[col],
+                g.pk[col],
+                pc.shared[piece],
+                pc.det[piece],
+                g.rest[col],
+                self.solo[w0 + pc.row[piece]],
+            )
             packable = packable and _pack_keys(rows, n, prio, g.tie_rank[col], g.tie_bits, keys)
         cls, saving, piece_out = out
         if packable:
             keys.sort()
-            kernels.decode_entries(keys, g.tie_bits, rows, start, n, pc.g[i0:i1], g.tie_rank, g.by_rank, cls, saving,
-                                   piece_out)
+            kernels.decode_entries(
+                keys, g.tie_bits, rows, start, n, pc.g[i0:i1], g.tie_rank, g.by_rank, cls, saving, piece_out
+            )
             return
         # Huge distances (beyond 2^18 m) or huge groups: the same order through a slower lexsort.
         if piece is None:
@@ -493,7 +553,7 @@ class _Builder:
         col, piece = col[perm], piece[perm]
         np.take(g.cls, col, out=cls)
         np.subtract(pc.g[piece], g.a[col], out=saving, casting="same_kind")
-        first_of_row = np.searchsorted(pc.row, pc.row[piece], side="left")        # pieces are sorted by row
+        first_of_row = np.searchsorted(pc.row, pc.row[piece], side="left")  # pieces are sorted by row
         piece_out[:] = piece - first_of_row
 
 
@@ -501,24 +561,36 @@ class _Builder:
 class _Pieces:
     """Runs ``[start, start + n)`` of survivors, one per (seeker row, group, service order), sorted by row."""
 
-    row: np.ndarray      # seeker row of each run
-    start: np.ndarray    # first survivor of the run
-    n: np.ndarray        # run length
-    g: np.ndarray        # E + a on the run (float64)
-    shared: np.ndarray   # shared distance on the run (float32)
-    det: np.ndarray      # seeker detour on the run (float32)
-    searches: int = 0    # binary searches the runs took
+    row: np.ndarray  # seeker row of each run
+    start: np.ndarray  # first survivor of the run
+    n: np.ndarray  # run length
+    g: np.ndarray  # E + a on the run (float64)
+    shared: np.ndarray  # shared distance on the run (float32)
+    det: np.ndarray  # seeker detour on the run (float32)
+    searches: int = 0  # binary searches the runs took
 
     @classmethod
     def empty(cls, capacity: int) -> "_Pieces":
-        return cls(row=np.empty(capacity, dtype=np.int64), start=np.empty(capacity, dtype=np.int64),
-                   n=np.empty(capacity, dtype=np.int64), g=np.empty(capacity),
-                   shared=np.empty(capacity, dtype=np.float32), det=np.empty(capacity, dtype=np.float32))
+        return cls(
+            row=np.empty(capacity, dtype=np.int64),
+            start=np.empty(capacity, dtype=np.int64),
+            n=np.empty(capacity, dtype=np.int64),
+            g=np.empty(capacity),
+            shared=np.empty(capacity, dtype=np.float32),
+            det=np.empty(capacity, dtype=np.float32),
+        )
 
     def head(self, k: int, searches: int) -> "_Pieces":
         """The first ``k`` runs (copies: the rest of the buffers is freed)."""
-        return _Pieces(row=self.row[:k].copy(), start=self.start[:k].copy(), n=self.n[:k].copy(),
-                       g=self.g[:k].copy(), shared=self.shared[:k].copy(), det=self.det[:k].copy(), searches=searches)
+        return _Pieces(
+            row=self.row[:k].copy(),
+            start=self.start[:k].copy(),
+            n=self.n[:k].copy(),
+            g=self.g[:k].copy(),
+            shared=self.shared[:k].copy(),
+            det=self.det[:k].copy(),
+            searches=searches,
+        )
 
 
 class _Group:
@@ -536,13 +608,13 @@ class _Group:
         self.cls = cls[order].astype(np.int32)
         self.a, self.pk, self.rest = a[order], pk[order], rest[order]
         dest = dest[order]
-        self.kappa = -self.a - self.pk                       # E - pk = g + kappa
+        self.kappa = -self.a - self.pk  # E - pk = g + kappa
         new = np.ones(n, dtype=bool)
         new[1:] = dest[1:] != dest[:-1]
         self.start = np.flatnonzero(new).astype(np.int64)
         self.size = np.diff(np.append(self.start, n))
         self.dest = dest[self.start].astype(np.int64)
-        self.d_oa = row_o[self.dest]                         # l(o, d_A) per group
+        self.d_oa = row_o[self.dest]  # l(o, d_A) per group
         # Tie ranks: ascending pk on the priority grid, then class index (the survivors arrive in class
         # order, so the pre-sort position breaks ties).
         pk_q = np.floor(pk * GRID).astype(np.int64)
@@ -559,19 +631,19 @@ class _Group:
         self.by_rank[:, 1] = self.cls[tie]
         self.tie_bits = max(1, int(n).bit_length())
         row_bits = 64 - Q_BITS - self.tie_bits
-        self.rows_per_sort = 1 << row_bits if row_bits >= 1 else 1   # 1: _sorted_entries falls back to lexsort
+        self.rows_per_sort = 1 << row_bits if row_bits >= 1 else 1  # 1: _sorted_entries falls back to lexsort
 
 
 def _priority(kind: str, e, pk, shared, seeker_detour, rest, l_b) -> np.ndarray:
     """Priority value of each entry, larger = served first (§2.4)."""
     if kind == "net_saving":
         return e - pk
-    if kind == "fl_utility":                     # e²/(e+pk), the FL V1 utility (Eq. 15) without α^k;
-        with np.errstate(divide="ignore", invalid="ignore"):     # e <= 0 (kept on request): e, continuous at 0
+    if kind == "fl_utility":  # e²/(e+pk), the FL V1 utility (Eq. 15) without α^k;
+        with np.errstate(divide="ignore", invalid="ignore"):  # e <= 0 (kept on request): e, continuous at 0
             return np.where(e > 0, e * e / (e + pk), e)
-    if kind == "pickup":                         # nearest first (the TR-B simulators)
+    if kind == "pickup":  # nearest first (the TR-B simulators)
         return -pk
-    if kind == "vehicle_distance":               # ascending distance the vehicle drives from h
+    if kind == "vehicle_distance":  # ascending distance the vehicle drives from h
         return -(rest + l_b - e)
     # authors_feng_grid: -0.5 detour - 0.3 pickup + 0.2 shared (detour = both passengers')
     taker_detour = shared - e - seeker_detour
@@ -583,8 +655,8 @@ def _pack_keys(piece_row, piece_len, prio, tie_rank, tie_bits: int, keys: np.nda
     if len(prio) and not np.abs(prio).max() < _Q_LIMIT:
         return False
     desc = np.multiply(prio, -GRID)
-    desc += float(1 << (Q_BITS - 1))                    # in (0, 2^Q_BITS): larger priority, smaller key
-    keys[:] = desc.astype(np.uint64)                    # positive: truncation is the floor
+    desc += float(1 << (Q_BITS - 1))  # in (0, 2^Q_BITS): larger priority, smaller key
+    keys[:] = desc.astype(np.uint64)  # positive: truncation is the floor
     keys <<= np.uint64(tie_bits)
     keys |= tie_rank.astype(np.uint64)
     keys |= np.repeat(piece_row.astype(np.uint64) << np.uint64(Q_BITS + tie_bits), piece_len)

@@ -36,11 +36,11 @@ from rpbench.scenarios.base import Params
 class Lookup:
     """Per-passenger predictions for arrays of (origin, destination) node indices (0 where unknown)."""
 
-    e_vacant: np.ndarray       # ē(p): expected saving when matched with a vacant vehicle (Eq. 9)
-    p_seeker: np.ndarray       # p_s(w)
-    e_seeker: np.ndarray       # ē(s(w)) (Eq. 11)
-    pairing_prob: np.ndarray   # P_w
-    known: np.ndarray          # bool: the OD is in the rate table
+    e_vacant: np.ndarray  # ē(p): expected saving when matched with a vacant vehicle (Eq. 9)
+    p_seeker: np.ndarray  # p_s(w)
+    e_seeker: np.ndarray  # ē(s(w)) (Eq. 11)
+    pairing_prob: np.ndarray  # P_w
+    known: np.ndarray  # bool: the OD is in the rate table
 
 
 @dataclass(frozen=True, eq=False)
@@ -64,20 +64,20 @@ class PredictionModel:
 class Prediction:
     """Solved prediction: per-OD and per-state results plus solver facts."""
 
-    node_id: np.ndarray                    # file node ids of the network (index -> id)
+    node_id: np.ndarray  # file node ids of the network (index -> id)
     rates: OdRates
     params: dict
     config: PredictConfig
     od: Outcome
-    state_od: np.ndarray                   # per state: OD index
-    state_k: np.ndarray                    # per state: k (0 = origin state)
-    state_head: np.ndarray                 # per state: head node index
+    state_od: np.ndarray  # per state: OD index
+    state_k: np.ndarray  # per state: k (0 = origin state)
+    state_head: np.ndarray  # per state: head node index
     state_tau_s: np.ndarray
     rho: np.ndarray
     p_taker: np.ndarray
     eta: np.ndarray
     lam_taker: np.ndarray
-    info: dict                             # summary facts (see summary())
+    info: dict  # summary facts (see summary())
     from_cache: bool = False
 
     #: Per-state arrays stored beside the per-OD outcome (``od_<field>``) in the disk cache.
@@ -90,14 +90,23 @@ class Prediction:
         return arrays, self.info
 
     @classmethod
-    def from_arrays(cls, stored: tuple[dict[str, np.ndarray], dict], *, node_id: np.ndarray, rates: OdRates,
-                    config: PredictConfig) -> "Prediction":
+    def from_arrays(
+        cls, stored: tuple[dict[str, np.ndarray], dict], *, node_id: np.ndarray, rates: OdRates, config: PredictConfig
+    ) -> "Prediction":
         """A prediction from the disk cache's (arrays, facts)."""
         arrays, info = stored
-        empty = np.zeros(0)          # per-state arrays not read (a slim load) stay empty
+        empty = np.zeros(0)  # per-state arrays not read (a slim load) stay empty
         od = Outcome(**{f.name: arrays.get(f"od_{f.name}", empty) for f in dataclasses.fields(Outcome)})
-        return cls(node_id=node_id, rates=rates, params=info.get("params", {}), config=config, od=od, info=info,
-                   from_cache=True, **{name: arrays.get(name, empty) for name in cls.STATE_FIELDS})
+        return cls(
+            node_id=node_id,
+            rates=rates,
+            params=info.get("params", {}),
+            config=config,
+            od=od,
+            info=info,
+            from_cache=True,
+            **{name: arrays.get(name, empty) for name in cls.STATE_FIELDS},
+        )
 
     @classmethod
     def per_state_members(cls) -> frozenset[str]:
@@ -113,7 +122,7 @@ class Prediction:
     # ------------------------------------------------------------------ queries
     @cached_property
     def _keys(self) -> np.ndarray:
-        return self.rates.key(len(self.node_id))           # sorted: the rates are canonical
+        return self.rates.key(len(self.node_id))  # sorted: the rates are canonical
 
     def _index(self, origins, destinations) -> tuple[np.ndarray, np.ndarray]:
         o = np.asarray(origins, dtype=np.int64)
@@ -132,8 +141,13 @@ class Prediction:
             return np.where(known, values[pos], 0.0) if len(values) else np.zeros(pos.shape)
 
         od = self.od
-        return Lookup(e_vacant=take(od.e_vacant), p_seeker=take(od.p_seeker), e_seeker=take(od.e_seeker),
-                      pairing_prob=take(od.pairing_prob), known=known)
+        return Lookup(
+            e_vacant=take(od.e_vacant),
+            p_seeker=take(od.p_seeker),
+            e_seeker=take(od.e_seeker),
+            pairing_prob=take(od.pairing_prob),
+            known=known,
+        )
 
     def e_wait(self, origins, destinations, k_p, params: Params) -> np.ndarray:
         """ē(0,p) of Eq. (10'): ``[1 - (1 - r_w)^{n_rem}] [p_s ē(s) + (1 - p_s) ē(p)]`` (0 for unknown ODs).
@@ -144,8 +158,13 @@ class Prediction:
         """
         pos, known = self._index(origins, destinations)
         bracket = self.od.e_bracket[pos] if len(self.od.e_bracket) else np.zeros(pos.shape)
-        value = waiting_saving(bracket, k_p, planner_patience_s=params.planner_patience_s, dt_s=params.dt_s,
-                               response_rate=params.response_rate)
+        value = waiting_saving(
+            bracket,
+            k_p,
+            planner_patience_s=params.planner_patience_s,
+            dt_s=params.dt_s,
+            response_rate=params.response_rate,
+        )
         return np.where(known, value, 0.0)
 
     # ------------------------------------------------------------------ reports
@@ -157,46 +176,68 @@ class Prediction:
         """
         od, r = self.od, self.rates
         lam = r.rate_per_s
-        return pd.DataFrame({
-            "od_id": r.od_id, "origin_id": self.node_id[r.origin], "destination_id": self.node_id[r.destination],
-            "rate_per_s": lam, "solo_distance": od.solo_m,
-            "p_seeker": od.p_seeker, "matching_prob": od.pairing_prob, "p_paired_as_taker": od.taker_paired,
-            "e_seeker": od.e_seeker, "e_vacant": od.e_vacant, "e_assigned": od.e_bracket,
-            "ride_distance": od.ride_m, "detour_distance": od.detour_m, "shared_distance": od.shared_m,
-            "saved_distance": od.e_bracket,
-            "ride_distance_for_taker": od.taker_ride_m, "detour_distance_for_taker": od.taker_detour_m,
-            "shared_distance_for_taker": od.taker_shared_m, "saved_distance_for_taker": od.e_vacant,
-            "ride_distance_for_seeker": od.p_seeker * (od.solo_m + od.seeker_detour_m)
-            + (1.0 - od.p_seeker) * od.solo_m,
-            "detour_distance_for_seeker": od.p_seeker * od.seeker_detour_m,
-            "shared_distance_for_seeker": od.p_seeker * od.seeker_shared_m,
-            "saved_distance_for_seeker": od.p_seeker * od.e_seeker,
-        })
+        return pd.DataFrame(
+            {
+                "od_id": r.od_id,
+                "origin_id": self.node_id[r.origin],
+                "destination_id": self.node_id[r.destination],
+                "rate_per_s": lam,
+                "solo_distance": od.solo_m,
+                "p_seeker": od.p_seeker,
+                "matching_prob": od.pairing_prob,
+                "p_paired_as_taker": od.taker_paired,
+                "e_seeker": od.e_seeker,
+                "e_vacant": od.e_vacant,
+                "e_assigned": od.e_bracket,
+                "ride_distance": od.ride_m,
+                "detour_distance": od.detour_m,
+                "shared_distance": od.shared_m,
+                "saved_distance": od.e_bracket,
+                "ride_distance_for_taker": od.taker_ride_m,
+                "detour_distance_for_taker": od.taker_detour_m,
+                "shared_distance_for_taker": od.taker_shared_m,
+                "saved_distance_for_taker": od.e_vacant,
+                "ride_distance_for_seeker": od.p_seeker * (od.solo_m + od.seeker_detour_m)
+                + (1.0 - od.p_seeker) * od.solo_m,
+                "detour_distance_for_seeker": od.p_seeker * od.seeker_detour_m,
+                "shared_distance_for_seeker": od.p_seeker * od.seeker_shared_m,
+                "saved_distance_for_seeker": od.p_seeker * od.e_seeker,
+            }
+        )
 
     def summary(self) -> dict[str, Any]:
         """Facts for ``rpbench predict --json`` (ODs, states, pairs, iterations, residual, converged, ...)."""
         lam = self.rates.rate_per_s
         total = float(lam.sum())
         out = dict(self.info)
-        out.update({
-            "from_cache": self.from_cache,
-            "mean_pairing_prob": float((lam * self.od.pairing_prob).sum() / total) if total > 0 else 0.0,
-            "mean_p_seeker": float((lam * self.od.p_seeker).sum() / total) if total > 0 else 0.0,
-        })
+        out.update(
+            {
+                "from_cache": self.from_cache,
+                "mean_pairing_prob": float((lam * self.od.pairing_prob).sum() / total) if total > 0 else 0.0,
+                "mean_p_seeker": float((lam * self.od.p_seeker).sum() / total) if total > 0 else 0.0,
+            }
+        )
         return out
 
 
 # ---------------------------------------------------------------------- build
-def build_model(network: RoadNetwork, rates: OdRates, params: Params | None = None,
-                config: PredictConfig | None = None, *, use_cache: bool = True) -> PredictionModel:
+def build_model(
+    network: RoadNetwork,
+    rates: OdRates,
+    params: Params | None = None,
+    config: PredictConfig | None = None,
+    *,
+    use_cache: bool = True,
+) -> PredictionModel:
     """States and matching sets: the τ_0-independent structure from the disk cache (built once), τ_0 applied."""
     params = params or Params()
     config = config or PredictConfig()
     if len(rates) and (rates.origin.max() >= network.n_nodes or rates.destination.max() >= network.n_nodes):
         raise ParameterError("OD rates refer to nodes outside this network; build them for the same network")
     structure = load_structure(network, rates, params, config, use_cache=use_cache)
-    return PredictionModel(network, rates, params, config, structure.space_for(config.tau0_s),
-                           structure.matching, structure.build_s)
+    return PredictionModel(
+        network, rates, params, config, structure.space_for(config.tau0_s), structure.matching, structure.build_s
+    )
 
 
 def solve_model(model: PredictionModel, *, progress=None, rho0: np.ndarray | None = None) -> Prediction:
@@ -209,8 +250,15 @@ def solve_model(model: PredictionModel, *, progress=None, rho0: np.ndarray | Non
     return _prediction(model, ev, out, info, savings_s)
 
 
-def predict(network: RoadNetwork, rates: OdRates, params: Params | None = None,
-            config: PredictConfig | None = None, *, use_cache: bool = True, progress=None) -> Prediction:
+def predict(
+    network: RoadNetwork,
+    rates: OdRates,
+    params: Params | None = None,
+    config: PredictConfig | None = None,
+    *,
+    use_cache: bool = True,
+    progress=None,
+) -> Prediction:
     """The prediction for ``rates`` on ``network`` (cached on disk by inputs, parameters and network)."""
     params = params or Params()
     config = config or PredictConfig()
@@ -224,7 +272,7 @@ def predict(network: RoadNetwork, rates: OdRates, params: Params | None = None,
     prediction = solve_model(model, progress=progress)
     del model
     prediction.info["time_s"] = round(time.perf_counter() - t0, 4)
-    prediction.info["cpu_s"] = round(time.process_time() - c0, 4)     # wall > cpu when the machine is shared
+    prediction.info["cpu_s"] = round(time.process_time() - c0, 4)  # wall > cpu when the machine is shared
     prediction.info["peak_rss_mb"] = round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0, 1)
     if use_cache:
         cache.save(key, *prediction.arrays())
@@ -248,13 +296,28 @@ def _prediction(model: PredictionModel, ev, out: Outcome, info: SolveInfo, savin
         "converged": bool(info.converged),
         "clip_count": info.clip_count,
         "beta_final": info.beta,
-        "timings_s": {**{k: round(v, 4) for k, v in model.build_s.items()},
-                      "solve_s": round(info.time_s, 4), "savings_s": round(savings_s, 4)},
+        "timings_s": {
+            **{k: round(v, 4) for k, v in model.build_s.items()},
+            "solve_s": round(info.time_s, 4),
+            "savings_s": round(savings_s, 4),
+        },
         "matching_mb": round(m.nbytes / 2**20, 1),
         "params": relevant,
         "config": model.config.as_dict(),
     }
-    return Prediction(node_id=model.network.node_id, rates=model.rates, params=relevant, config=model.config,
-                      od=out, state_od=sp.od, state_k=sp.k, state_head=sp.head, state_tau_s=sp.tau_s,
-                      rho=ev.rho, p_taker=ev.p_taker, eta=ev.eta, lam_taker=ev.lam_taker, info=facts)
-
+    return Prediction(
+        node_id=model.network.node_id,
+        rates=model.rates,
+        params=relevant,
+        config=model.config,
+        od=out,
+        state_od=sp.od,
+        state_k=sp.k,
+        state_head=sp.head,
+        state_tau_s=sp.tau_s,
+        rho=ev.rho,
+        p_taker=ev.p_taker,
+        eta=ev.eta,
+        lam_taker=ev.lam_taker,
+        info=facts,
+    )

@@ -41,10 +41,10 @@ DEFAULT_DATE = "2017-05-01"
 class OdRates:
     """OD pairs (internal node indices) with demand rates in orders per second."""
 
-    origin: np.ndarray        # int32 node index
-    destination: np.ndarray   # int32 node index
-    rate_per_s: np.ndarray    # float64 λ_w >= 0
-    od_id: np.ndarray         # int64 id in the source table (-1 when none)
+    origin: np.ndarray  # int32 node index
+    destination: np.ndarray  # int32 node index
+    rate_per_s: np.ndarray  # float64 λ_w >= 0
+    od_id: np.ndarray  # int64 id in the source table (-1 when none)
     source: str = ""
 
     def __post_init__(self) -> None:
@@ -54,15 +54,20 @@ class OdRates:
                 raise ParameterError(f"OD rates: column {name} has {len(getattr(self, name))} rows, expected {n}")
         rate = self.rate_per_s
         if n and not np.all(np.isfinite(rate)):
-            raise DataError(f"OD rates ({self.source}): rate of OD row {int(np.flatnonzero(~np.isfinite(rate))[0])} "
-                            "is not a finite number")
+            raise DataError(
+                f"OD rates ({self.source}): rate of OD row {int(np.flatnonzero(~np.isfinite(rate))[0])} "
+                "is not a finite number"
+            )
         if n and np.any(rate < 0):
             row = int(np.flatnonzero(rate < 0)[0])
-            raise DataError(f"OD rates ({self.source}): negative rate {rate[row]!r} orders/s at OD row {row}; "
-                            "rates must be >= 0")
+            raise DataError(
+                f"OD rates ({self.source}): negative rate {rate[row]!r} orders/s at OD row {row}; rates must be >= 0"
+            )
         if n and np.any(np.diff(self.key(1 << 31)) <= 0):
-            raise ParameterError("OD rates must be sorted by (origin, destination) without duplicates; "
-                                 "build them with OdRates.from_arrays")
+            raise ParameterError(
+                "OD rates must be sorted by (origin, destination) without duplicates; "
+                "build them with OdRates.from_arrays"
+            )
 
     def __len__(self) -> int:
         return len(self.origin)
@@ -76,8 +81,7 @@ class OdRates:
         return float(self.rate_per_s.sum())
 
     @classmethod
-    def from_arrays(cls, origin, destination, rate_per_s, od_id=None, *, n_nodes: int,
-                    source: str = "") -> "OdRates":
+    def from_arrays(cls, origin, destination, rate_per_s, od_id=None, *, n_nodes: int, source: str = "") -> "OdRates":
         """Canonical rates from unsorted arrays; repeated ODs are merged (rates summed, first id kept)."""
         origin = np.asarray(origin, dtype=np.int64)
         destination = np.asarray(destination, dtype=np.int64)
@@ -90,8 +94,10 @@ class OdRates:
                 raise DataError(f"OD rates ({source}): {name} node index outside the network (0..{n_nodes - 1})")
         if len(rate) and np.any(~np.isfinite(rate) | (rate < 0)):
             row = int(np.flatnonzero(~np.isfinite(rate) | (rate < 0))[0])
-            raise DataError(f"OD rates ({source}): rate {rate[row]!r} at row {row} is negative or not finite; "
-                            "rates must be finite and >= 0")
+            raise DataError(
+                f"OD rates ({source}): rate {rate[row]!r} at row {row} is negative or not finite; "
+                "rates must be finite and >= 0"
+            )
         key = origin * n_nodes + destination
         order = np.argsort(key, kind="stable")
         key = key[order]
@@ -100,20 +106,32 @@ class OdRates:
         group = np.cumsum(first) - 1
         merged = np.bincount(group, weights=rate[order], minlength=int(first.sum())) if len(key) else rate
         pick = order[first]
-        return cls(origin=origin[pick].astype(np.int32), destination=destination[pick].astype(np.int32),
-                   rate_per_s=np.asarray(merged, dtype=np.float64), od_id=od_id[pick], source=source)
+        return cls(
+            origin=origin[pick].astype(np.int32),
+            destination=destination[pick].astype(np.int32),
+            rate_per_s=np.asarray(merged, dtype=np.float64),
+            od_id=od_id[pick],
+            source=source,
+        )
 
     def scaled(self, factor: float) -> "OdRates":
         """The same ODs with every rate multiplied by ``factor`` (>= 0)."""
         if not np.isfinite(factor) or factor < 0:
             raise ParameterError(f"rate scale factor {factor!r} must be finite and >= 0")
-        return OdRates(self.origin, self.destination, self.rate_per_s * float(factor), self.od_id,
-                       f"{self.source} x{factor:g}")
+        return OdRates(
+            self.origin, self.destination, self.rate_per_s * float(factor), self.od_id, f"{self.source} x{factor:g}"
+        )
 
     def frame(self, network: RoadNetwork) -> pd.DataFrame:
         """``od_id, origin_id, destination_id, rate_per_s`` with file node ids."""
-        return pd.DataFrame({"od_id": self.od_id, "origin_id": network.node_id[self.origin],
-                             "destination_id": network.node_id[self.destination], "rate_per_s": self.rate_per_s})
+        return pd.DataFrame(
+            {
+                "od_id": self.od_id,
+                "origin_id": network.node_id[self.origin],
+                "destination_id": network.node_id[self.destination],
+                "rate_per_s": self.rate_per_s,
+            }
+        )
 
 
 def rates_from_frame(network: RoadNetwork, frame: pd.DataFrame, *, source: str) -> OdRates:
@@ -121,8 +139,9 @@ def rates_from_frame(network: RoadNetwork, frame: pd.DataFrame, *, source: str) 
     origin = network.index_of(frame["origin_id"], what=f"origin node id in {source}")
     destination = network.index_of(frame["destination_id"], what=f"destination node id in {source}")
     od_id = frame["od_id"].to_numpy() if "od_id" in frame else None
-    return OdRates.from_arrays(origin, destination, frame["rate_per_s"].to_numpy(), od_id,
-                               n_nodes=network.n_nodes, source=source)
+    return OdRates.from_arrays(
+        origin, destination, frame["rate_per_s"].to_numpy(), od_id, n_nodes=network.n_nodes, source=source
+    )
 
 
 def table_rates(network: RoadNetwork, path: Path) -> OdRates:
@@ -140,8 +159,9 @@ def order_rates(network: RoadNetwork, origin, destination, period_s: float, *, s
     if not np.isfinite(period_s) or period_s <= 0:
         raise ParameterError(f"rate period {period_s!r} s must be > 0")
     origin = np.asarray(origin)
-    return OdRates.from_arrays(origin, destination, np.full(len(origin), 1.0 / period_s),
-                               n_nodes=network.n_nodes, source=source)
+    return OdRates.from_arrays(
+        origin, destination, np.full(len(origin), 1.0 / period_s), n_nodes=network.n_nodes, source=source
+    )
 
 
 def peak_order_rates(network: RoadNetwork, data_dir: Path, date: str) -> OdRates:
@@ -166,8 +186,9 @@ def day_table_rates(network: RoadNetwork, data_dir: Path) -> OdRates:
         raise DataError("per-day OD table: shares must be positive")
     count = share / share.min()
     if np.abs(count - np.rint(count)).max() > 1e-6:
-        raise DataError("per-day OD table: shares are not whole multiples of the smallest share; "
-                        "cannot recover order counts")
+        raise DataError(
+            "per-day OD table: shares are not whole multiples of the smallest share; cannot recover order counts"
+        )
     frame = frame.assign(rate_per_s=np.rint(count) / HOUR_S)
     return rates_from_frame(network, frame, source="OD_2017-05-01_0800-0900 (count/3600 s)")
 
@@ -175,8 +196,13 @@ def day_table_rates(network: RoadNetwork, data_dir: Path) -> OdRates:
 def scenario_rates(scenario) -> OdRates:
     """λ_w = (orders of OD w in the scenario) / its horizon."""
     o = scenario.orders
-    return order_rates(scenario.network, o.origin, o.destination, scenario.horizon_s,
-                       source=f"{scenario.name} orders (count/{scenario.horizon_s:g} s)")
+    return order_rates(
+        scenario.network,
+        o.origin,
+        o.destination,
+        scenario.horizon_s,
+        source=f"{scenario.name} orders (count/{scenario.horizon_s:g} s)",
+    )
 
 
 def load_rates(kind: str, network: RoadNetwork, data_dir: Path, date: str | None = None) -> OdRates:
@@ -193,5 +219,7 @@ def load_rates(kind: str, network: RoadNetwork, data_dir: Path, date: str | None
     path = Path(kind)
     if path.is_file():
         return table_rates(network, path)
-    raise ParameterError(f"--rates {kind!r}: expected one of {', '.join(RATE_KINDS)} or the path of an OD "
-                         "table CSV (OD_id, origin_id, destination_id, lambda per minute)")
+    raise ParameterError(
+        f"--rates {kind!r}: expected one of {', '.join(RATE_KINDS)} or the path of an OD "
+        "table CSV (OD_id, origin_id, destination_id, lambda per minute)"
+    )

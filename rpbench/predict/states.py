@@ -35,22 +35,22 @@ from rpbench.predict.rates import OdRates
 class StateSpace:
     """Taker states (flat arrays, grouped by OD in ``(w, k)`` order) and their classes."""
 
-    od_state_off: np.ndarray   # int64 (W+1): states of OD w are [off[w], off[w+1])
-    solo_m: np.ndarray         # float64 (W,): l_w
-    od: np.ndarray             # int32 per state
-    k: np.ndarray              # int32 per state (0 = origin state)
-    head: np.ndarray           # int32 node h
-    arc: np.ndarray            # int32 arc index of a_k (-1 for k = 0)
-    pre_m: np.ndarray          # float64 expected residual distance to h
-    tau_s: np.ndarray          # float64 sojourn τ
-    delta_m: np.ndarray        # float64 path length o_w -> h
-    cls: np.ndarray            # int32 class of each state
-    class_head: np.ndarray     # int32 (C,)
-    class_dest: np.ndarray     # int32 (C,)
-    class_pre_m: np.ndarray    # float64 (C,)
-    class_rest_m: np.ndarray   # float64 (C,): l(h, d)
+    od_state_off: np.ndarray  # int64 (W+1): states of OD w are [off[w], off[w+1])
+    solo_m: np.ndarray  # float64 (W,): l_w
+    od: np.ndarray  # int32 per state
+    k: np.ndarray  # int32 per state (0 = origin state)
+    head: np.ndarray  # int32 node h
+    arc: np.ndarray  # int32 arc index of a_k (-1 for k = 0)
+    pre_m: np.ndarray  # float64 expected residual distance to h
+    tau_s: np.ndarray  # float64 sojourn τ
+    delta_m: np.ndarray  # float64 path length o_w -> h
+    cls: np.ndarray  # int32 class of each state
+    class_head: np.ndarray  # int32 (C,)
+    class_dest: np.ndarray  # int32 (C,)
+    class_pre_m: np.ndarray  # float64 (C,)
+    class_rest_m: np.ndarray  # float64 (C,): l(h, d)
     class_members: np.ndarray  # int64 state indices sorted by (class, w, k); classes sorted by head node
-    class_off: np.ndarray      # int64 (C+1)
+    class_off: np.ndarray  # int64 (C+1)
 
     @property
     def n_od(self) -> int:
@@ -69,8 +69,15 @@ class StateSpace:
         return np.diff(self.class_off)
 
 
-def build_states(network: RoadNetwork, oracle: DistanceOracle, rates: OdRates, *, tau0_s: float,
-                 speed_mps: float, include_origin_state: bool = True) -> StateSpace:
+def build_states(
+    network: RoadNetwork,
+    oracle: DistanceOracle,
+    rates: OdRates,
+    *,
+    tau0_s: float,
+    speed_mps: float,
+    include_origin_state: bool = True,
+) -> StateSpace:
     """Enumerate the taker states of every OD along the oracle's shortest paths."""
     if not speed_mps > 0:
         raise ParameterError(f"speed_mps = {speed_mps!r} must be > 0")
@@ -94,7 +101,7 @@ def build_states(network: RoadNetwork, oracle: DistanceOracle, rates: OdRates, *
     length = np.zeros(len(od))
     length[link] = network.arc_length_m[arc[link]]
     tau = np.where(link, length / speed_mps, float(tau0_s))
-    delta = np.asarray(dist[o[od], head], dtype=np.float64)   # prefix of a shortest path = l(o_w, h)
+    delta = np.asarray(dist[o[od], head], dtype=np.float64)  # prefix of a shortest path = l(o_w, h)
 
     # Classes: (head, entry, destination) with entry = arc for k >= 1, n_arcs + origin node for k = 0.
     # Numbering them by head node first lets the matching gather a head's classes as one range.
@@ -103,15 +110,27 @@ def build_states(network: RoadNetwork, oracle: DistanceOracle, rates: OdRates, *
     key = (head.astype(np.int64) * n_entries + entry) * network.n_nodes + d[od]
     _, cls = np.unique(key, return_inverse=True)
     cls = cls.astype(np.int32).ravel()
-    members = np.argsort(cls, kind="stable").astype(np.int64)   # (class, w, k) order
+    members = np.argsort(cls, kind="stable").astype(np.int64)  # (class, w, k) order
     n_classes = int(cls.max()) + 1 if len(cls) else 0
     class_off = np.concatenate([[0], np.cumsum(np.bincount(cls, minlength=n_classes))]).astype(np.int64)
     rep = members[class_off[:-1]]
     class_head = head[rep]
     class_dest = d[od[rep]].astype(np.int32)
     return StateSpace(
-        od_state_off=od_state_off, solo_m=np.asarray(dist[o, d], dtype=np.float64), od=od, k=k, head=head,
-        arc=arc, pre_m=length / 2.0, tau_s=tau, delta_m=delta, cls=cls, class_head=class_head,
-        class_dest=class_dest, class_pre_m=length[rep] / 2.0,
+        od_state_off=od_state_off,
+        solo_m=np.asarray(dist[o, d], dtype=np.float64),
+        od=od,
+        k=k,
+        head=head,
+        arc=arc,
+        pre_m=length / 2.0,
+        tau_s=tau,
+        delta_m=delta,
+        cls=cls,
+        class_head=class_head,
+        class_dest=class_dest,
+        class_pre_m=length[rep] / 2.0,
         class_rest_m=np.asarray(dist[class_head, class_dest], dtype=np.float64),
-        class_members=members, class_off=class_off)
+        class_members=members,
+        class_off=class_off,
+    )

@@ -51,7 +51,7 @@ from rpbench.predict.states import StateSpace, build_states
 from rpbench.scenarios.base import Params
 
 #: Bump when the states or the lists change for the same inputs.
-STRUCTURE_VERSION = "3"        # 2: classes stored as block-local numbers; 3: per-piece distances
+STRUCTURE_VERSION = "3"  # 2: classes stored as block-local numbers; 3: per-piece distances
 #: The network-side parameters and the configuration fields the structure depends on.
 STRUCTURE_PARAMS = ("max_pickup_m", "max_detour_m", "speed_mps")
 STRUCTURE_CONFIG = ("include_origin_state", "priority", "keep_nonpositive", "order_rule")
@@ -67,8 +67,8 @@ class Structure:
 
     space: StateSpace
     matching: Matching
-    build_s: dict               # seconds per build stage (zero when loaded from the cache)
-    directory: Path | None      # the cache entry (None: a private build, already unlinked)
+    build_s: dict  # seconds per build stage (zero when loaded from the cache)
+    directory: Path | None  # the cache entry (None: a private build, already unlinked)
 
     def space_for(self, tau0_s: float) -> StateSpace:
         """The states with the origin states' sojourn set to ``tau0_s`` (A4)."""
@@ -87,8 +87,9 @@ def structure_key(network: RoadNetwork, rates: OdRates, params: Params, config: 
     return h.hexdigest()[:24]
 
 
-def load_structure(network: RoadNetwork, rates: OdRates, params: Params, config: PredictConfig, *,
-                   use_cache: bool = True) -> Structure:
+def load_structure(
+    network: RoadNetwork, rates: OdRates, params: Params, config: PredictConfig, *, use_cache: bool = True
+) -> Structure:
     """The structure for these inputs: from the cache, else built (into the cache when ``use_cache``)."""
     if not use_cache:
         return _private_build(network, rates, params, config)
@@ -103,16 +104,19 @@ def load_structure(network: RoadNetwork, rates: OdRates, params: Params, config:
         _RECENT[key] = found
         return found
     with _build_lock(root / f"predict-structure-{key}.lock", len(rates)):
-        found = _open_entry(final, len(rates))          # another process may have finished it meanwhile
+        found = _open_entry(final, len(rates))  # another process may have finished it meanwhile
         if found is not None:
             return found
-        print(f"rpbench: building the seeker/taker prediction structure for {len(rates):,} OD pairs "
-              f"({rates.source}); once per machine, cached in {root}", file=sys.stderr)
+        print(
+            f"rpbench: building the seeker/taker prediction structure for {len(rates):,} OD pairs "
+            f"({rates.source}); once per machine, cached in {root}",
+            file=sys.stderr,
+        )
         tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}.", dir=root))
         try:
             structure = _build_into(tmp, network, rates, params, config)
             os.replace(tmp, final)
-        except BaseException as exc:                   # disk full, Ctrl-C: no half entry left behind
+        except BaseException as exc:  # disk full, Ctrl-C: no half entry left behind
             shutil.rmtree(tmp, ignore_errors=True)
             if isinstance(exc, OSError) and not isinstance(exc, FileNotFoundError):
                 raise cache_write_error(final, exc) from None
@@ -134,8 +138,11 @@ def _remove_outdated(root: Path) -> None:
         if outdated:
             size = sum(f.stat().st_size for f in entry.iterdir() if f.is_file())
             shutil.rmtree(entry, ignore_errors=True)
-            print(f"rpbench: removed the outdated prediction structure {entry.name} "
-                  f"(format {version}, {size / 1e9:.1f} GB) from the cache", file=sys.stderr)
+            print(
+                f"rpbench: removed the outdated prediction structure {entry.name} "
+                f"(format {version}, {size / 1e9:.1f} GB) from the cache",
+                file=sys.stderr,
+            )
 
 
 def _private_build(network, rates, params, config) -> Structure:
@@ -150,24 +157,30 @@ def _private_build(network, rates, params, config) -> Structure:
         shutil.rmtree(tmp, ignore_errors=True)
 
 
-def _build_into(directory: Path, network: RoadNetwork, rates: OdRates, params: Params,
-                config: PredictConfig) -> Structure:
+def _build_into(
+    directory: Path, network: RoadNetwork, rates: OdRates, params: Params, config: PredictConfig
+) -> Structure:
     t0 = time.perf_counter()
     oracle = network.distances()
     dist = np.ascontiguousarray(oracle.dist)
     t1 = time.perf_counter()
-    space = build_states(network, oracle, rates, tau0_s=0.0, speed_mps=params.speed_mps,
-                         include_origin_state=config.include_origin_state)
+    space = build_states(
+        network, oracle, rates, tau0_s=0.0, speed_mps=params.speed_mps, include_origin_state=config.include_origin_state
+    )
     t2 = time.perf_counter()
     matching = build_matching(space, rates, dist, params, config, directory)
     t3 = time.perf_counter()
     build_s = {"distances_s": t1 - t0, "states_s": t2 - t1, "matching_s": t3 - t2}
     np.savez(directory / "states.npz", **{f.name: getattr(space, f.name) for f in dataclasses.fields(space)})
     np.save(directory / "seeker_off.npy", matching.seeker_off)
-    manifest = {"version": STRUCTURE_VERSION, "n_od": len(rates), "n_pairs": matching.n_pairs,
-                "columns": dict(COLUMNS, local=matching.local.dtype.str, piece=matching.piece.dtype.str),
-                "stats": matching.stats,
-                "build_s": build_s}
+    manifest = {
+        "version": STRUCTURE_VERSION,
+        "n_od": len(rates),
+        "n_pairs": matching.n_pairs,
+        "columns": dict(COLUMNS, local=matching.local.dtype.str, piece=matching.piece.dtype.str),
+        "stats": matching.stats,
+        "build_s": build_s,
+    }
     (directory / "manifest.json").write_text(json.dumps(manifest, default=float, indent=1))
     _release_free_heap()
     return Structure(space=space, matching=matching, build_s=build_s, directory=directory)
@@ -178,7 +191,7 @@ def _release_free_heap() -> None:
     otherwise, and the sweeps that follow would add the mapped lists on top of them)."""
     try:
         ctypes.CDLL("libc.so.6").malloc_trim(0)
-    except (OSError, AttributeError):          # not glibc: nothing to do
+    except (OSError, AttributeError):  # not glibc: nothing to do
         pass
 
 
@@ -196,9 +209,12 @@ def _open_entry(directory: Path, n_od: int) -> Structure | None:
         if len(seeker_off) != n_od + 1 or int(seeker_off[-1]) != manifest.get("n_pairs"):
             raise ValueError("its offsets do not match the manifest")
         matching = Matching.open(directory, seeker_off, manifest.get("stats", {}), manifest["columns"])
-    except (OSError, ValueError, KeyError, TypeError, EOFError, zipfile.BadZipFile) as exc:   # npz: a zip
-        print(f"rpbench: note: the cached prediction structure {directory.name} is unusable "
-              f"({type(exc).__name__}: {one_line(exc)}); rebuilding it", file=sys.stderr)
+    except (OSError, ValueError, KeyError, TypeError, EOFError, zipfile.BadZipFile) as exc:  # npz: a zip
+        print(
+            f"rpbench: note: the cached prediction structure {directory.name} is unusable "
+            f"({type(exc).__name__}: {one_line(exc)}); rebuilding it",
+            file=sys.stderr,
+        )
         shutil.rmtree(directory, ignore_errors=True)
         return None
     zero = {k: 0.0 for k in ("distances_s", "states_s", "matching_s")}
@@ -216,8 +232,10 @@ def _build_lock(path: Path, n_od: int):
         try:
             fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
-            print(f"rpbench: another process is building the prediction structure for {n_od:,} ODs; "
-                  f"waiting for it", file=sys.stderr)
+            print(
+                f"rpbench: another process is building the prediction structure for {n_od:,} ODs; waiting for it",
+                file=sys.stderr,
+            )
             fcntl.flock(fh, fcntl.LOCK_EX)
         try:
             yield

@@ -40,7 +40,7 @@ from rpbench.scenarios.base import Scenario
 STRATEGIES = ("np", "mb", "rtv", "fl-nd", "fl")
 #: Strategies whose authors' code returns before moving anyone in a round without passengers or free vehicles.
 EARLY_RETURN = ("mb", "fl-nd", "fl")
-SECONDS_PER_M = 0.12           # the authors' unit_driving_time (30 km/h)
+SECONDS_PER_M = 0.12  # the authors' unit_driving_time (30 km/h)
 DT_S = 10.0
 SOLO_TIMEOUT_S = 600.0
 AUTHORS_PATIENCE_CONST_S = 90.0
@@ -69,17 +69,17 @@ class Leg:
 @dataclass
 class Vehicle:
     node: int
-    active_at: float = 0.0              # the authors' activate_time: free again when t > active_at
-    p0: int = -1                        # the passenger of a taker, -1 when vacant
+    active_at: float = 0.0  # the authors' activate_time: free again when t > active_at
+    p0: int = -1  # the passenger of a taker, -1 when vacant
     picked: bool = False
-    pickup_s: float = np.nan            # proper movement: when p0 boards
-    arrive_s: float = np.nan            # proper movement: when p0 reaches the destination
+    pickup_s: float = np.nan  # proper movement: when p0 boards
+    arrive_s: float = np.nan  # proper movement: when p0 reaches the destination
     assigned_s: float = 0.0
     assign_node: int = -1
-    p0_pickup_m: float = 0.0            # the authors' ledger of p0's pick-up
+    p0_pickup_m: float = 0.0  # the authors' ledger of p0's pick-up
     leg: Leg | None = None
-    idle_route: list[int] = field(default_factory=list)   # teleport: nodes still to visit, taken from the end
-    idle_first_m: float = 0.0           # teleport: first link of the idle route (the authors' waiting test)
+    idle_route: list[int] = field(default_factory=list)  # teleport: nodes still to visit, taken from the end
+    idle_first_m: float = 0.0  # teleport: first link of the idle route (the authors' waiting test)
     reposition_s: float = 0.0
 
 
@@ -113,8 +113,8 @@ class Outcome:
     n_vehicles: int
     rounds: int
     wall_s: float
-    assigned: list[tuple[int, int, float]] = field(default_factory=list)   # (order, vehicle, t)
-    scenario_orders: object = None       # the scenario's Orders (record ``order`` indexes them)
+    assigned: list[tuple[int, int, float]] = field(default_factory=list)  # (order, vehicle, t)
+    scenario_orders: object = None  # the scenario's Orders (record ``order`` indexes them)
     patience_s: np.ndarray | None = None  # the patience the engine applied (floored or not)
     solo_m: np.ndarray | None = None
 
@@ -136,8 +136,9 @@ class Outcome:
             "avg_detour_m": float(np.mean([r.detour_m for r in pooled])) if pooled else float("nan"),
             "avg_shared_m": float(np.mean(self.shared_m)) if self.shared_m else float("nan"),
             "avg_response_time_s": float(np.mean([r.wait_s for r in self.records])) if self.records else float("nan"),
-            "avg_pickup_time_s": (SECONDS_PER_M * float(np.mean([r.pickup_m for r in self.records]))
-                                  if self.records else float("nan")),
+            "avg_pickup_time_s": (
+                SECONDS_PER_M * float(np.mean([r.pickup_m for r in self.records])) if self.records else float("nan")
+            ),
             "wall_s": self.wall_s,
         }
 
@@ -155,9 +156,18 @@ class AuthorsEngine:
     sample's row order, which decides who is "first" in an RTV pair edge.
     """
 
-    def __init__(self, scenario: Scenario, strategy: str, preset: Preset, *, switches: Switches | None = None,
-                 predictions: pd.DataFrame | None = None, denominator: int | None = None,
-                 reposition_origins: np.ndarray | None = None, release_rank: np.ndarray | None = None):
+    def __init__(
+        self,
+        scenario: Scenario,
+        strategy: str,
+        preset: Preset,
+        *,
+        switches: Switches | None = None,
+        predictions: pd.DataFrame | None = None,
+        denominator: int | None = None,
+        reposition_origins: np.ndarray | None = None,
+        release_rank: np.ndarray | None = None,
+    ):
         if strategy not in STRATEGIES:
             raise ParameterError(f"the authors' engine runs {', '.join(STRATEGIES)}; not {strategy!r}")
         self.sc = scenario
@@ -178,8 +188,9 @@ class AuthorsEngine:
         self.vehicles = [Vehicle(node=int(n)) for n in scenario.fleet.initial_node]
         # The authors draw idle targets from the sampled origins with Python's global random state, last
         # seeded by the fleet placement (random.seed(n - 1) followed by one choice).
-        self.idle_origins = (np.asarray(reposition_origins) if reposition_origins is not None
-                             else np.asarray(pd.unique(self.o)))
+        self.idle_origins = (
+            np.asarray(reposition_origins) if reposition_origins is not None else np.asarray(pd.unique(self.o))
+        )
         self.rng = random.Random(len(self.vehicles) - 1)
         self.rng.choice(list(self.idle_origins))
         self.release_rank = None if release_rank is None else np.asarray(release_rank, dtype=np.int64)
@@ -199,13 +210,15 @@ class AuthorsEngine:
         if self.strategy not in ("fl", "fl-nd"):
             return np.zeros(n), np.zeros(n)
         if predictions is None or not {"saved_distance_for_seeker", "saved_distance_for_taker"} <= set(predictions):
-            raise ParameterError(f"strategy {self.strategy!r} under the authors' engine needs the per-order "
-                                 "predictions of the order files (use the haikou-paper-input scenario)")
+            raise ParameterError(
+                f"strategy {self.strategy!r} under the authors' engine needs the per-order "
+                "predictions of the order files (use the haikou-paper-input scenario)"
+            )
         seeker = predictions["saved_distance_for_seeker"].to_numpy(dtype=float)
         taker = predictions["saved_distance_for_taker"].to_numpy(dtype=float)
         if np.isnan(seeker).any() or np.isnan(taker).any():
             raise ParameterError("some orders have no prediction for their OD pair")
-        scale = 2.0 if self.sw.authors_ledger else 1.0        # the authors double both when loading
+        scale = 2.0 if self.sw.authors_ledger else 1.0  # the authors double both when loading
         return scale * seeker, scale * taker
 
     def dist_m(self, a, b):
@@ -220,7 +233,7 @@ class AuthorsEngine:
         n = len(self.req)
         rounds = 0
         t = DT_S
-        while t < self.sc.horizon_s:             # the authors stop at 09:00:00 without a last round
+        while t < self.sc.horizon_s:  # the authors stop at 09:00:00 without a last round
             rounds += 1
             new_end = int(np.searchsorted(self.req, t, side="right"))
             new = [i for i in range(released, new_end) if self.req[i] > t - DT_S]
@@ -248,11 +261,22 @@ class AuthorsEngine:
             waiting = [i for i in seekers if not self.responded[i] and t - self.req[i] < self.patience[i]]
             self._mark_waiting(waiting, t)
             t += DT_S
-        return Outcome(strategy=self.strategy, switches=self.sw, records=self.records,
-                       pair_saving_m=self.pair_saving, shared_m=self.shared, denominator=self.denominator,
-                       n_orders=n, n_vehicles=len(self.vehicles), rounds=rounds,
-                       wall_s=time.perf_counter() - t0, assigned=self.assigned, scenario_orders=self.sc.orders,
-                       patience_s=self.patience, solo_m=self.solo)
+        return Outcome(
+            strategy=self.strategy,
+            switches=self.sw,
+            records=self.records,
+            pair_saving_m=self.pair_saving,
+            shared_m=self.shared,
+            denominator=self.denominator,
+            n_orders=n,
+            n_vehicles=len(self.vehicles),
+            rounds=rounds,
+            wall_s=time.perf_counter() - t0,
+            assigned=self.assigned,
+            scenario_orders=self.sc.orders,
+            patience_s=self.patience,
+            solo_m=self.solo,
+        )
 
     def _mark_waiting(self, waiting: list[int], t: float) -> None:
         for i in waiting:
@@ -266,12 +290,12 @@ class AuthorsEngine:
         oa, da, la = self.o[a], self.d[a], self.solo[a]
         ob, db, lb = self.o[b], self.d[b], self.solo[b]
         if self.sw.pickup_from_first_origin:
-            pk_weight = self.dist_m(ob, oa)                      # the authors' weight: passenger origin -> first origin
-            lead = self.dist_m(oa, ob)                           # the ledger: first origin -> second origin
+            pk_weight = self.dist_m(ob, oa)  # the authors' weight: passenger origin -> first origin
+            lead = self.dist_m(oa, ob)  # the ledger: first origin -> second origin
         else:
             x = veh.node
             if veh.picked:
-                lead = self.dist_m(oa, x) + self.dist_m(x, ob)        # p0 has ridden O_a -> x along its shortest route
+                lead = self.dist_m(oa, x) + self.dist_m(x, ob)  # p0 has ridden O_a -> x along its shortest route
                 pk_weight = self.dist_m(x, ob)
             else:
                 lead = self.dist_m(oa, ob)
@@ -283,9 +307,18 @@ class AuthorsEngine:
         b_in = np.where(fofo, f1 + f2, l1)
         shared = np.where(fofo, f1, l1)
         saving = la + lb - (a_in + b_in - shared)
-        return {"pk": pk_weight, "lead": lead, "fofo": fofo, "a_in": a_in, "b_in": b_in, "shared": shared,
-                "saving": saving, "detour_a": a_in - la, "detour_b": b_in - lb,
-                "rest": np.where(fofo, f1 + f2, l1 + l2)}
+        return {
+            "pk": pk_weight,
+            "lead": lead,
+            "fofo": fofo,
+            "a_in": a_in,
+            "b_in": b_in,
+            "shared": shared,
+            "saving": saving,
+            "detour_a": a_in - la,
+            "detour_b": b_in - lb,
+            "rest": np.where(fofo, f1 + f2, l1 + l2),
+        }
 
     def _match(self, t: float, seekers: list[int], active: list[int]) -> dict[int, int]:
         p = self.sc.params
@@ -303,15 +336,16 @@ class AuthorsEngine:
         if vacant:
             nodes = np.asarray([self.vehicles[vi].node for vi in vacant], dtype=np.int64)
             if self.strategy == "np" or not self.sw.pickup_from_first_origin:
-                pk = self.dist.dist[nodes[:, None], self.o[s][None, :]]     # vehicle -> origin
+                pk = self.dist.dist[nodes[:, None], self.o[s][None, :]]  # vehicle -> origin
             else:
-                pk = self.dist.dist[self.o[s][None, :], nodes[:, None]]     # the authors' reversed direction
+                pk = self.dist.dist[self.o[s][None, :], nodes[:, None]]  # the authors' reversed direction
             ok = pk <= p.max_pickup_m
             if origin_cell is not None:
                 vcell = self.cell[nodes]
                 ok &= (vcell[:, None] == origin_cell[None, :]) & (vcell[:, None] != NO_CELL)
-            value = W.vacant_values(self.strategy, authors, pk, self.solo[s][None, :], self.e_taker[s][None, :],
-                                    prio[None, :])
+            value = W.vacant_values(
+                self.strategy, authors, pk, self.solo[s][None, :], self.e_taker[s][None, :], prio[None, :]
+            )
             rows, cols = np.nonzero(ok)
             cols_p.extend(cols.tolist())
             cols_v.extend(col_of[vacant[r]] for r in rows.tolist())
@@ -346,8 +380,7 @@ class AuthorsEngine:
 
     def _timed_out(self, veh: Vehicle, t: float) -> bool:
         """The authors deliver a taker alone 600 s after the request (less its pick-up time)."""
-        return (self.sw.authors_weights
-                and t - self.req[veh.p0] - SECONDS_PER_M * veh.p0_pickup_m > SOLO_TIMEOUT_S)
+        return self.sw.authors_weights and t - self.req[veh.p0] - SECONDS_PER_M * veh.p0_pickup_m > SOLO_TIMEOUT_S
 
     def _taker_geometry_one(self, veh: Vehicle, b: int, *, from_vehicle: bool) -> dict[str, float]:
         """One passenger's pair geometry as floats; ``from_vehicle`` (with the authors' pick-up rule): the
@@ -455,11 +488,13 @@ class AuthorsEngine:
         wait_a = self._first_wait(a)
         if self.sw.authors_ledger or not self._recorded(a):
             self.records = [r for r in self.records if r.order != a]
-            self.records.append(Record(a, vi, veh.assigned_s, wait_a, veh.p0_pickup_m, True, b,
-                                       g["detour_a"], g["shared"], g["a_in"]))
+            self.records.append(
+                Record(a, vi, veh.assigned_s, wait_a, veh.p0_pickup_m, True, b, g["detour_a"], g["shared"], g["a_in"])
+            )
         else:
-            self._update_record(a, pooled=True, partner=b, detour_m=g["detour_a"], shared_m=g["shared"],
-                                ride_m=g["a_in"])
+            self._update_record(
+                a, pooled=True, partner=b, detour_m=g["detour_a"], shared_m=g["shared"], ride_m=g["a_in"]
+            )
         self.records.append(Record(b, vi, t, t - self.req[b], pk_b, True, a, g["detour_b"], g["shared"], g["b_in"]))
         route_m = pk_b + g["rest"]
         veh.active_at = t + SECONDS_PER_M * route_m
@@ -504,8 +539,9 @@ class AuthorsEngine:
     def _deliver_solo(self, vi: int, veh: Vehicle, t: float, vacant_from: float) -> None:
         a = veh.p0
         if self.sw.authors_ledger:
-            self.records.append(Record(a, vi, veh.assigned_s, self._first_wait(a), veh.p0_pickup_m,
-                                       ride_m=self.solo[a]))
+            self.records.append(
+                Record(a, vi, veh.assigned_s, self._first_wait(a), veh.p0_pickup_m, ride_m=self.solo[a])
+            )
         real_done = veh.assigned_s + SECONDS_PER_M * (self.dist_m(veh.assign_node, self.o[a]) + self.solo[a])
         veh.active_at = vacant_from if self.sw.early_release else max(vacant_from, real_done)
         veh.node = int(self.d[a])
@@ -513,7 +549,7 @@ class AuthorsEngine:
 
     def _move_taker(self, vi: int, veh: Vehicle, t: float) -> None:
         if not self.sw.teleport:
-            return                                   # proper movement is advanced by the clock
+            return  # proper movement is advanced by the clock
         a = veh.p0
         if self._timed_out(veh, t):
             travel = self.dist_m(veh.node, self.d[a])
@@ -522,7 +558,7 @@ class AuthorsEngine:
         target = int(self.o[a]) if not veh.picked else int(self.d[a])
         if veh.node == target:
             if not veh.picked:
-                veh.picked = True                    # boards this round
+                veh.picked = True  # boards this round
                 veh.active_at = t
             else:
                 self._deliver_solo(vi, veh, t, t)
@@ -535,7 +571,7 @@ class AuthorsEngine:
                 whole = self.dist_m(veh.node, target)
                 veh.p0_pickup_m += last_link if (self.sw.authors_ledger and self.strategy == "mb") else whole
                 veh.active_at = t
-            veh.node = target                        # the LAST node of the route: the jump
+            veh.node = target  # the LAST node of the route: the jump
 
     def _idle(self, veh: Vehicle, t: float) -> None:
         if not self.sw.idle_jumps:
@@ -563,7 +599,7 @@ class AuthorsEngine:
                 veh.idle_route = [int(x) for x in path[1:]]
                 veh.idle_first_m = float(self.dist_m(path[0], path[1])) if len(path) > 1 else 0.0
             if not veh.idle_route:
-                veh.reposition_s = t                 # drew its own node: stays, the round noted
+                veh.reposition_s = t  # drew its own node: stays, the round noted
             elif t > veh.reposition_s + SECONDS_PER_M * veh.idle_first_m:
                 veh.reposition_s, veh.node = t, veh.idle_route.pop()
             return

@@ -35,14 +35,34 @@ METRICS = {
 #: Per strategy and KPI of the paper's Table 2 (2017-05-01): "typed" = a value typed into Analysis.py,
 #: "run" = equals the committed output of a run (rounded), "neither" = matches neither.
 TABLE2_ORIGIN = {
-    "mb": {"response_rate": "typed", "pairing_ratio": "run", "avg_detour_m": "typed", "avg_shared_m": "typed",
-           "total_saving_km": "typed"},
-    "rtv": {"response_rate": "typed", "pairing_ratio": "neither", "avg_detour_m": "typed", "avg_shared_m": "typed",
-            "total_saving_km": "typed"},
-    "fl": {"response_rate": "typed", "pairing_ratio": "run", "avg_detour_m": "typed", "avg_shared_m": "typed",
-           "total_saving_km": "typed"},
-    "fl-nd": {"response_rate": "run", "pairing_ratio": "run", "avg_detour_m": "run", "avg_shared_m": "run",
-              "total_saving_km": "run"},
+    "mb": {
+        "response_rate": "typed",
+        "pairing_ratio": "run",
+        "avg_detour_m": "typed",
+        "avg_shared_m": "typed",
+        "total_saving_km": "typed",
+    },
+    "rtv": {
+        "response_rate": "typed",
+        "pairing_ratio": "neither",
+        "avg_detour_m": "typed",
+        "avg_shared_m": "typed",
+        "total_saving_km": "typed",
+    },
+    "fl": {
+        "response_rate": "typed",
+        "pairing_ratio": "run",
+        "avg_detour_m": "typed",
+        "avg_shared_m": "typed",
+        "total_saving_km": "typed",
+    },
+    "fl-nd": {
+        "response_rate": "run",
+        "pairing_ratio": "run",
+        "avg_detour_m": "run",
+        "avg_shared_m": "run",
+        "total_saving_km": "run",
+    },
     "np": {"response_rate": "neither"},
 }
 TABLE2_DATE = "2017-05-01"
@@ -57,12 +77,14 @@ def read_committed(data_dir: Path) -> pd.DataFrame:
     raw = pd.read_csv(path)
     by_method = {v: k for k, v in METHODS.items()}
     raw = raw[raw["method"].isin(by_method) & raw["metric"].isin(METRICS)]
-    return pd.DataFrame({
-        "strategy": raw["method"].map(by_method),
-        "date": raw["day"],
-        "kpi": raw["metric"].map(lambda m: METRICS[m][0]),
-        "value": raw["mean_value"].astype(float) * raw["metric"].map(lambda m: METRICS[m][1]),
-    }).reset_index(drop=True)
+    return pd.DataFrame(
+        {
+            "strategy": raw["method"].map(by_method),
+            "date": raw["day"],
+            "kpi": raw["metric"].map(lambda m: METRICS[m][0]),
+            "value": raw["mean_value"].astype(float) * raw["metric"].map(lambda m: METRICS[m][1]),
+        }
+    ).reset_index(drop=True)
 
 
 def committed_value(table: pd.DataFrame, strategy: str, date: str, kpi: str) -> float:

@@ -31,9 +31,11 @@ def agreement(frame: pd.DataFrame) -> pd.DataFrame:
     a["rel_saving"] = [_rel(x, y) for x, y in zip(a["total_saving_km"], a["committed_total_saving_km"])]
     a["diff_response"] = a["response_rate"] - a["committed_response_rate"].astype(float)
     a["within"] = [
-        (abs(rp) <= REL_TOL and abs(rs) <= REL_TOL) if s in CRITERION_STRATEGIES else
-        (abs(dr) <= NP_RESPONSE_TOL if s == "np" else np.nan)
-        for s, rp, rs, dr in zip(a["strategy"], a["rel_pairing"], a["rel_saving"], a["diff_response"])]
+        (abs(rp) <= REL_TOL and abs(rs) <= REL_TOL)
+        if s in CRITERION_STRATEGIES
+        else (abs(dr) <= NP_RESPONSE_TOL if s == "np" else np.nan)
+        for s, rp, rs, dr in zip(a["strategy"], a["rel_pairing"], a["rel_saving"], a["diff_response"])
+    ]
     return a
 
 
@@ -53,9 +55,13 @@ def criterion(frame: pd.DataFrame) -> dict[str, str]:
 
 def agreement_table(frame: pd.DataFrame) -> str:
     a = agreement(frame)
-    lines = [("| date | strategy | pairing (committed) | rel. diff | saving km (committed) | rel. diff | "
-              "response (committed) | diff | within |"),
-             "|---|---|---:|---:|---:|---:|---:|---:|:-:|"]
+    lines = [
+        (
+            "| date | strategy | pairing (committed) | rel. diff | saving km (committed) | rel. diff | "
+            "response (committed) | diff | within |"
+        ),
+        "|---|---|---:|---:|---:|---:|---:|---:|:-:|",
+    ]
     for _, r in a.sort_values(["strategy", "date"]).iterrows():
         within = "" if pd.isna(r["within"]) else ("yes" if r["within"] else "no")
         lines.append(
@@ -63,26 +69,32 @@ def agreement_table(frame: pd.DataFrame) -> str:
             f"{_fmt(100 * r['rel_pairing'], 1)} % | {_fmt(r['total_saving_km'], 1)} "
             f"({_fmt(r['committed_total_saving_km'], 1)}) | {_fmt(100 * r['rel_saving'], 1)} % | "
             f"{_fmt(r['response_rate'])} ({_fmt(r['committed_response_rate'])}) | {_fmt(r['diff_response'])} | "
-            f"{within} |")
+            f"{within} |"
+        )
     return "\n".join(lines)
 
 
 def ablation_table(frame: pd.DataFrame) -> str:
     """Per strategy and engine: means over the dates, and the share of the authors-to-rpbench gap each step covers."""
-    lines = ["| strategy | engine | days | pairing | saving km | response | detour m | share of saving gap |",
-             "|---|---|---:|---:|---:|---:|---:|---:|"]
+    lines = [
+        "| strategy | engine | days | pairing | saving km | response | detour m | share of saving gap |",
+        "|---|---|---:|---:|---:|---:|---:|---:|",
+    ]
     for strategy, part in frame.groupby("strategy", sort=False):
-        means = part.groupby("engine", sort=False)[["pairing_ratio", "total_saving_km", "response_rate",
-                                                     "avg_detour_m"]].mean(numeric_only=True)
+        means = part.groupby("engine", sort=False)[
+            ["pairing_ratio", "total_saving_km", "response_rate", "avg_detour_m"]
+        ].mean(numeric_only=True)
         days = part.groupby("engine", sort=False)["date"].nunique()
         base = means["total_saving_km"].get("authors", np.nan)
         top = means["total_saving_km"].get("rpbench", np.nan)
         gap = top - base if np.isfinite(base) and np.isfinite(top) else np.nan
         for engine, r in means.iterrows():
             share = (r["total_saving_km"] - base) / gap if np.isfinite(gap) and gap != 0 else np.nan
-            lines.append(f"| {strategy} | {engine} | {days[engine]} | {_fmt(r['pairing_ratio'])} | "
-                         f"{_fmt(r['total_saving_km'], 1)} | {_fmt(r['response_rate'])} | {_fmt(r['avg_detour_m'], 0)} | "
-                         f"{_fmt(100 * share, 0)} % |")
+            lines.append(
+                f"| {strategy} | {engine} | {days[engine]} | {_fmt(r['pairing_ratio'])} | "
+                f"{_fmt(r['total_saving_km'], 1)} | {_fmt(r['response_rate'])} | {_fmt(r['avg_detour_m'], 0)} | "
+                f"{_fmt(100 * share, 0)} % |"
+            )
     return "\n".join(lines)
 
 
@@ -92,20 +104,26 @@ def cumulative_table(frame: pd.DataFrame) -> str:
     cum = frame[frame["engine"].str.startswith("authors-cum") | (frame["engine"] == "authors")]
     if not cum["engine"].str.startswith("authors-cum").any():
         return ""
-    lines = [("| strategy | step (mechanisms 1..k off) | pairing | saving km | response | change of saving km | "
-              "share of the whole change |"), "|---|---|---:|---:|---:|---:|---:|"]
+    lines = [
+        (
+            "| strategy | step (mechanisms 1..k off) | pairing | saving km | response | change of saving km | "
+            "share of the whole change |"
+        ),
+        "|---|---|---:|---:|---:|---:|---:|",
+    ]
     for strategy, part in cum.groupby("strategy", sort=False):
         means = part.groupby("engine", sort=False)[["pairing_ratio", "total_saving_km", "response_rate"]].mean()
-        order = ["authors"] + sorted((e for e in means.index if e != "authors"),
-                                     key=lambda e: int(e.split("-")[1][3:]))
+        order = ["authors"] + sorted((e for e in means.index if e != "authors"), key=lambda e: int(e.split("-")[1][3:]))
         means = means.loc[order]
         whole = means["total_saving_km"].iloc[-1] - means["total_saving_km"].iloc[0]
         previous = None
         for engine, r in means.iterrows():
             change = np.nan if previous is None else r["total_saving_km"] - previous
             share = change / whole if np.isfinite(change) and whole else np.nan
-            lines.append(f"| {strategy} | {engine} | {_fmt(r['pairing_ratio'])} | {_fmt(r['total_saving_km'], 1)} | "
-                         f"{_fmt(r['response_rate'])} | {_fmt(change, 1)} | {_fmt(100 * share, 0)} % |")
+            lines.append(
+                f"| {strategy} | {engine} | {_fmt(r['pairing_ratio'])} | {_fmt(r['total_saving_km'], 1)} | "
+                f"{_fmt(r['response_rate'])} | {_fmt(change, 1)} | {_fmt(100 * share, 0)} % |"
+            )
             previous = r["total_saving_km"]
     return "\n".join(lines)
 
@@ -115,10 +133,17 @@ def paper_table(frame: pd.DataFrame, date: str = "2017-05-01") -> str:
     rows = frame[frame["date"] == date]
     if not len(rows):
         return ""
-    kpis = (("response_rate", 3), ("pairing_ratio", 3), ("total_saving_km", 1), ("avg_detour_m", 0),
-            ("avg_shared_m", 0))
-    lines = ["| strategy | KPI | authors' engine | rpbench's engine | committed output | paper (origin) |",
-             "|---|---|---:|---:|---:|---|"]
+    kpis = (
+        ("response_rate", 3),
+        ("pairing_ratio", 3),
+        ("total_saving_km", 1),
+        ("avg_detour_m", 0),
+        ("avg_shared_m", 0),
+    )
+    lines = [
+        "| strategy | KPI | authors' engine | rpbench's engine | committed output | paper (origin) |",
+        "|---|---|---:|---:|---:|---|",
+    ]
     for strategy in dict.fromkeys(rows["strategy"]):
         part = rows[rows["strategy"] == strategy].set_index("engine")
         for kpi, digits in kpis:
@@ -126,11 +151,13 @@ def paper_table(frame: pd.DataFrame, date: str = "2017-05-01") -> str:
             rp = part[kpi].get("rpbench") if "rpbench" in part.index else None
             ref = part.iloc[0]
             origin = ref.get(f"paper_{kpi}_origin")
-            origin = origin if isinstance(origin, str) else ""      # NaN when read back from runs.csv
+            origin = origin if isinstance(origin, str) else ""  # NaN when read back from runs.csv
             paper_value = ref.get(f"paper_{kpi}")
             shown = _fmt(paper_value, digits) + (f" ({origin})" if origin else "")
-            lines.append(f"| {strategy} | {kpi} | {_fmt(ours, digits)} | {_fmt(rp, digits)} | "
-                         f"{_fmt(ref.get(f'committed_{kpi}'), digits)} | {shown} |")
+            lines.append(
+                f"| {strategy} | {kpi} | {_fmt(ours, digits)} | {_fmt(rp, digits)} | "
+                f"{_fmt(ref.get(f'committed_{kpi}'), digits)} | {shown} |"
+            )
     return "\n".join(lines)
 
 
@@ -139,8 +166,10 @@ def conclusions(frame: pd.DataFrame) -> str:
     lines = ["| engine | FL saves the most | FL detours least | FL responds less |", "|---|---:|---:|---:|"]
     rivals = ("mb", "rtv", "fl-nd")
     for engine, part in frame.groupby("engine", sort=False):
-        pivot = {k: part.pivot_table(index="date", columns="strategy", values=k) for k in
-                 ("total_saving_km", "avg_detour_m", "response_rate")}
+        pivot = {
+            k: part.pivot_table(index="date", columns="strategy", values=k)
+            for k in ("total_saving_km", "avg_detour_m", "response_rate")
+        }
         if "fl" not in pivot["total_saving_km"].columns:
             continue
         others = [s for s in rivals if s in pivot["total_saving_km"].columns]
@@ -156,27 +185,56 @@ def conclusions(frame: pd.DataFrame) -> str:
 
 def markdown(frame: pd.DataFrame, meta: dict) -> str:
     crit = criterion(frame)
-    parts = [f"# rpbench replicate: {meta.get('dates_text', '')}", "",
-             (f"- strategies {', '.join(meta.get('strategies', []))}; solver preset `{meta.get('preset')}`; "
-              f"rpbench {meta.get('version')}, commit `{meta.get('git_commit')}`"),
-             f"- command: `{meta.get('command') or ''}`", "",
-             "## Agreement of the authors' engine with the committed outputs", "",
-             ("Criterion (issue 13): MB and RTV within 15 % on pairing ratio and total saving on at least 10 of "
-              "14 days; NP's response rate within 0.03."), ""]
+    parts = [
+        f"# rpbench replicate: {meta.get('dates_text', '')}",
+        "",
+        (
+            f"- strategies {', '.join(meta.get('strategies', []))}; solver preset `{meta.get('preset')}`; "
+            f"rpbench {meta.get('version')}, commit `{meta.get('git_commit')}`"
+        ),
+        f"- command: `{meta.get('command') or ''}`",
+        "",
+        "## Agreement of the authors' engine with the committed outputs",
+        "",
+        (
+            "Criterion (issue 13): MB and RTV within 15 % on pairing ratio and total saving on at least 10 of "
+            "14 days; NP's response rate within 0.03."
+        ),
+        "",
+    ]
     parts += [f"- {s}: {v}" for s, v in crit.items()] + ["", agreement_table(frame), ""]
-    parts += ["## Ablation (means over the dates; one mechanism off at a time)", "",
-              ("`share of saving gap` = (engine - authors) / (rpbench - authors) of the mean total saving, where "
-               "`rpbench` is rpbench's engine on the authors' input; `rpbench-peak` is rpbench's engine on its own "
-               "input (haikou-peak), the counterpart of `authors-all-off`."), "",
-              ablation_table(frame), ""]
+    parts += [
+        "## Ablation (means over the dates; one mechanism off at a time)",
+        "",
+        (
+            "`share of saving gap` = (engine - authors) / (rpbench - authors) of the mean total saving, where "
+            "`rpbench` is rpbench's engine on the authors' input; `rpbench-peak` is rpbench's engine on its own "
+            "input (haikou-peak), the counterpart of `authors-all-off`."
+        ),
+        "",
+        ablation_table(frame),
+        "",
+    ]
     cumulative = cumulative_table(frame)
     if cumulative:
-        parts += ["## Cumulative ablation (mechanisms 1..k off, in the fixed order; means over the dates)", "",
-                  cumulative, ""]
+        parts += [
+            "## Cumulative ablation (mechanisms 1..k off, in the fixed order; means over the dates)",
+            "",
+            cumulative,
+            "",
+        ]
     table2 = paper_table(frame)
     if table2:
-        parts += ["## Beside the paper's Table 2 (2017-05-01)", "",
-                  ("Origin of each printed value: `typed` = typed into the authors' Analysis.py, `run` = equals "
-                   "the committed output of a run, `neither` = matches neither."), "", table2, ""]
+        parts += [
+            "## Beside the paper's Table 2 (2017-05-01)",
+            "",
+            (
+                "Origin of each printed value: `typed` = typed into the authors' Analysis.py, `run` = equals "
+                "the committed output of a run, `neither` = matches neither."
+            ),
+            "",
+            table2,
+            "",
+        ]
     parts += ["## The paper's conclusions under each engine", "", conclusions(frame), ""]
     return "\n".join(parts)

@@ -26,8 +26,9 @@ from rpbench.model import TripPackingModel, quantize
 from rpbench.replication.weights import AUTHORS_BONUS
 
 
-def pair_legs(dist: np.ndarray, o: np.ndarray, d: np.ndarray, solo: np.ndarray, first: int, second: int,
-              strict_ties: bool) -> tuple[bool, float, float, float]:
+def pair_legs(
+    dist: np.ndarray, o: np.ndarray, d: np.ndarray, solo: np.ndarray, first: int, second: int, strict_ties: bool
+) -> tuple[bool, float, float, float]:
     """Drop-off order of ``second`` joining ``first`` from O_second: (first-on-first-off?, shared, rest, ...).
 
     Returns (fofo, leg1, leg2, shared) with the authors' rule: FOFO iff its two legs sum strictly less.
@@ -45,8 +46,16 @@ def pair_geometry(dist, o, d, solo, first: int, second: int, lead_m: float, stri
     a_in = lead_m + leg1 if fofo else lead_m + leg1 + leg2
     b_in = leg1 + leg2 if fofo else leg1
     saving = solo[first] + solo[second] - (a_in + b_in - shared)
-    return {"fofo": fofo, "a_in": a_in, "b_in": b_in, "shared": shared, "saving": saving,
-            "detour_a": a_in - solo[first], "detour_b": b_in - solo[second], "rest": leg1 + leg2}
+    return {
+        "fofo": fofo,
+        "a_in": a_in,
+        "b_in": b_in,
+        "shared": shared,
+        "saving": saving,
+        "detour_a": a_in - solo[first],
+        "detour_b": b_in - solo[second],
+        "rest": leg1 + leg2,
+    }
 
 
 def _within(x: float, limit: float, strict: bool) -> bool:
@@ -96,11 +105,15 @@ def build_round(engine, t: float, seekers: list[int], active: list[int]) -> tupl
             a = veh.p0
             for r in near:
                 from_vehicle = engine._taker_geometry_one(veh, r, from_vehicle=True)
-                if not (_within(from_vehicle["detour_a"], p.max_detour_m, strict)
-                        and _within(from_vehicle["detour_b"], p.max_detour_m, strict)):
+                if not (
+                    _within(from_vehicle["detour_a"], p.max_detour_m, strict)
+                    and _within(from_vehicle["detour_b"], p.max_detour_m, strict)
+                ):
                     continue
                 g = engine._taker_geometry_one(veh, r, from_vehicle=not sw.pickup_from_first_origin)
-                if not (_within(g["detour_a"], p.max_detour_m, strict) and _within(g["detour_b"], p.max_detour_m, strict)):
+                if not (
+                    _within(g["detour_a"], p.max_detour_m, strict) and _within(g["detour_b"], p.max_detour_m, strict)
+                ):
                     continue
                 pk_w = dist[o[a], o[r]] if sw.pickup_from_first_origin else g["pk"]
                 if pk_w > p.max_pickup_m:
@@ -112,7 +125,14 @@ def build_round(engine, t: float, seekers: list[int], active: list[int]) -> tupl
     req2 = [-1 if len(trip) == 1 else max(pos[trip[0]], pos[trip[1]]) for _, trip in cols]
     # Only trips worth more than leaving everyone unmatched can be chosen; dropping the rest changes nothing.
     keep = [i for i, v in enumerate(values) if v > 0]
-    model = TripPackingModel(len(s), len(active), [col_vehicle[i] for i in keep], [req1[i] for i in keep],
-                             [req2[i] for i in keep], quantize([values[i] for i in keep]), name="authors-rtv-round")
+    model = TripPackingModel(
+        len(s),
+        len(active),
+        [col_vehicle[i] for i in keep],
+        [req1[i] for i in keep],
+        [req2[i] for i in keep],
+        quantize([values[i] for i in keep]),
+        name="authors-rtv-round",
+    )
     decode = [(active[cols[i][0]], cols[i][1]) for i in keep]
     return model, decode

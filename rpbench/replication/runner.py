@@ -35,8 +35,15 @@ from rpbench.scenarios.paper_input import PaperInput, load_paper_input
 from rpbench.scenarios.peak import build_peak
 
 KNOWN_STRATEGIES = ("np", "mb", "rtv", "fl-nd", "fl")
-KPIS = ("response_rate", "pairing_ratio", "total_saving_km", "avg_detour_m", "avg_shared_m",
-        "avg_response_time_s", "avg_pickup_time_s")
+KPIS = (
+    "response_rate",
+    "pairing_ratio",
+    "total_saving_km",
+    "avg_detour_m",
+    "avg_shared_m",
+    "avg_response_time_s",
+    "avg_pickup_time_s",
+)
 
 
 @dataclass
@@ -50,29 +57,34 @@ class Inputs:
 @dataclass
 class Replication:
     rows: list[dict] = field(default_factory=list)
-    outcomes: dict[tuple[str, str, str], Outcome] = field(default_factory=dict)   # (date, strategy, engine)
+    outcomes: dict[tuple[str, str, str], Outcome] = field(default_factory=dict)  # (date, strategy, engine)
 
 
 def parse_strategies(text: str) -> list[str]:
     names = [s.strip().lower() for s in text.split(",") if s.strip()]
     unknown = [s for s in names if s not in KNOWN_STRATEGIES]
     if not names or unknown:
-        raise ParameterError(f"--strategies {text!r}: expected a comma-separated subset of "
-                             f"{', '.join(KNOWN_STRATEGIES)}")
+        raise ParameterError(
+            f"--strategies {text!r}: expected a comma-separated subset of {', '.join(KNOWN_STRATEGIES)}"
+        )
     return list(dict.fromkeys(names))
 
 
 def load_inputs(data_dir: Path, date: str) -> Inputs:
     paper = load_paper_input(data_dir, date=date)
     peak_scenario = build_peak(data_dir, date=date, sample=0.3, seed=0)
-    peak = PaperInput(scenario=peak_scenario, predictions=_peak_predictions(data_dir, date, peak_scenario),
-                      response_denominator=len(peak_scenario.orders))
+    peak = PaperInput(
+        scenario=peak_scenario,
+        predictions=_peak_predictions(data_dir, date, peak_scenario),
+        response_denominator=len(peak_scenario.orders),
+    )
     return Inputs(paper=paper, peak=peak)
 
 
 def _peak_predictions(data_dir: Path, date: str, scenario) -> pd.DataFrame:
     """The order file's per-order predictions aligned with a haikou-peak scenario's orders."""
     from rpbench.data.orders import peak_order_path
+
     raw = pd.read_csv(peak_order_path(data_dir, date))
     raw = raw.drop_duplicates("dwv_order_make_haikou_1.order_id").set_index("dwv_order_make_haikou_1.order_id")
     cols = [c for c in PREDICTION_COLUMNS if c in raw.columns]
@@ -85,15 +97,23 @@ def engine_name(label: str) -> str:
 
 def run_authors(inputs: Inputs, strategy: str, switches, preset: Preset) -> Outcome:
     chosen = inputs.paper if switches.authors_input else inputs.peak
-    return AuthorsEngine(chosen.scenario, strategy, preset, switches=switches, predictions=chosen.predictions,
-                         denominator=chosen.response_denominator, reposition_origins=chosen.idle_origins,
-                         release_rank=chosen.sample_rank).run()
+    return AuthorsEngine(
+        chosen.scenario,
+        strategy,
+        preset,
+        switches=switches,
+        predictions=chosen.predictions,
+        denominator=chosen.response_denominator,
+        reposition_origins=chosen.idle_origins,
+        release_rank=chosen.sample_rank,
+    ).run()
 
 
 def run_rpbench(chosen: PaperInput, strategy: str, preset: Preset, done: dict) -> dict[str, float]:
     """rpbench's own engine on ``chosen``; response over its denominator (the authors': the whole sample)."""
     from rpbench.harness.comparison import calibrated, simulate_strategy
     from rpbench.strategies import strategy_class
+
     scenario = chosen.scenario
     options = calibrated(scenario, strategy, strategy_class(strategy).Options(), preset, done, False)
     run = simulate_strategy(scenario, strategy, preset, options=options, progress=False)
@@ -105,8 +125,16 @@ def run_rpbench(chosen: PaperInput, strategy: str, preset: Preset, done: dict) -
     return k
 
 
-def replicate(data_dir: Path, dates: list[str], strategies: list[str], preset: Preset, *, ablation: str = "single",
-              rpbench_engine: bool = True, progress: bool = False) -> Replication:
+def replicate(
+    data_dir: Path,
+    dates: list[str],
+    strategies: list[str],
+    preset: Preset,
+    *,
+    ablation: str = "single",
+    rpbench_engine: bool = True,
+    progress: bool = False,
+) -> Replication:
     """Every (date, strategy): the authors' engine and the ablation steps of ``ablation`` (single, cumulative,
     both, none), then rpbench's engine on both inputs unless ``rpbench_engine`` is false."""
     committed = reference.read_committed(data_dir)
@@ -124,15 +152,23 @@ def replicate(data_dir: Path, dates: list[str], strategies: list[str], preset: P
                     out.outcomes[(date, strategy, name)] = outcome
                     out.rows.append(_row(name, strategy, date, outcome.kpis(), switches.off(), committed))
                     if progress:
-                        print(f"rpbench: {date} {strategy:>5} {name:<40} pairing {out.rows[-1]['pairing_ratio']:.3f}"
-                              f" saving {out.rows[-1]['total_saving_km']:.1f} km", file=sys.stderr, flush=True)
+                        print(
+                            f"rpbench: {date} {strategy:>5} {name:<40} pairing {out.rows[-1]['pairing_ratio']:.3f}"
+                            f" saving {out.rows[-1]['total_saving_km']:.1f} km",
+                            file=sys.stderr,
+                            flush=True,
+                        )
             if rpbench_engine:
                 for name, chosen, cache in (("rpbench", inputs.paper, done), ("rpbench-peak", inputs.peak, done_peak)):
                     kpis = run_rpbench(chosen, strategy, preset, cache)
                     out.rows.append(_row(name, strategy, date, kpis, ["(rpbench's simulator)"], committed))
                     if progress:
-                        print(f"rpbench: {date} {strategy:>5} {name:<40} pairing {kpis['pairing_ratio']:.3f}"
-                              f" saving {kpis['total_saving_km']:.1f} km", file=sys.stderr, flush=True)
+                        print(
+                            f"rpbench: {date} {strategy:>5} {name:<40} pairing {kpis['pairing_ratio']:.3f}"
+                            f" saving {kpis['total_saving_km']:.1f} km",
+                            file=sys.stderr,
+                            flush=True,
+                        )
     return out
 
 

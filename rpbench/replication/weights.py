@@ -30,11 +30,11 @@ AUTHORS_BONUS = 3000.0
 
 @dataclass(frozen=True)
 class FLParams:
-    alpha: float          # waiting-priority base (authors 1.1, paper 1.01)
+    alpha: float  # waiting-priority base (authors 1.1, paper 1.01)
     response_rate: float  # r_w (authors 0.8, paper 0.75)
     double_predictions: bool
     divide_wait_by_k: bool
-    patience_rounds: float = 9.0   # K / dt = 90 s / 10 s
+    patience_rounds: float = 9.0  # K / dt = 90 s / 10 s
 
 
 def fl_params(authors_ledger: bool) -> FLParams:
@@ -45,7 +45,7 @@ def fl_params(authors_ledger: bool) -> FLParams:
 
 def priority(k: np.ndarray, fresh: np.ndarray, p: FLParams) -> np.ndarray:
     """alpha^k for a passenger kept waiting k rounds; 1 for one released this round (the authors' delay = 1)."""
-    return np.where(fresh, 1.0, p.alpha ** k)
+    return np.where(fresh, 1.0, p.alpha**k)
 
 
 def balanced(e: np.ndarray, pk: np.ndarray) -> np.ndarray:
@@ -55,8 +55,9 @@ def balanced(e: np.ndarray, pk: np.ndarray) -> np.ndarray:
         return np.where(den == 0, 0.0, e * e / np.where(den == 0, 1.0, den))
 
 
-def vacant_values(strategy: str, authors: bool, pk: np.ndarray, solo_m: np.ndarray, e_taker: np.ndarray,
-                  prio: np.ndarray) -> np.ndarray:
+def vacant_values(
+    strategy: str, authors: bool, pk: np.ndarray, solo_m: np.ndarray, e_taker: np.ndarray, prio: np.ndarray
+) -> np.ndarray:
     """Model value of a vacant vehicle taking a passenger (before the offset)."""
     if strategy == "np":
         return solo_m - pk + AUTHORS_BONUS if authors else -pk

@@ -101,29 +101,81 @@ RUN_SPEC_FIELDS = ("kind", "options", "variant", "rules", "status", "unit_m")
 EVENT_KINDS = ("request", "assign", "pickup", "dropoff", "cancel", "reposition")
 #: Reported figures the files cannot reproduce (timings, sizes of the oracle's enumeration and model, the
 #: solver's gap): listed in docs/guarantees.md; any other KPI in kpis.csv must be one the checker recomputes.
-UNVERIFIED_KPIS = {"simulation": {"wall_s"},
-                   "oracle": {"candidates", "edges", "gap", "candidates_s", "model_s", "build_s", "solve_s",
-                              "extract_s", "total_s"}}
-SIMULATION_KPIS = ("orders", "served", "cancelled", "pooled_passengers", "pairs", "response_rate", "pairing_ratio",
-                   "pairing_ratio_of_orders", "platform_profit_cny", "platform_profit_alt_cny", "avg_response_time_s",
-                   "avg_pickup_time_s", "avg_pickup_distance_m", "avg_detour_m", "avg_shared_m", "total_occupied_km",
-                   "total_solo_served_km", "total_saving_km")
-ORACLE_KPIS = ("orders", "pairs", "pooled_passengers", "pairing_ratio", "avg_detour_m", "avg_shared_m",
-               "total_saving_km", "objective_m", "bound_m", "pairs_bound")
+UNVERIFIED_KPIS = {
+    "simulation": {"wall_s"},
+    "oracle": {"candidates", "edges", "gap", "candidates_s", "model_s", "build_s", "solve_s", "extract_s", "total_s"},
+}
+SIMULATION_KPIS = (
+    "orders",
+    "served",
+    "cancelled",
+    "pooled_passengers",
+    "pairs",
+    "response_rate",
+    "pairing_ratio",
+    "pairing_ratio_of_orders",
+    "platform_profit_cny",
+    "platform_profit_alt_cny",
+    "avg_response_time_s",
+    "avg_pickup_time_s",
+    "avg_pickup_distance_m",
+    "avg_detour_m",
+    "avg_shared_m",
+    "total_occupied_km",
+    "total_solo_served_km",
+    "total_saving_km",
+)
+ORACLE_KPIS = (
+    "orders",
+    "pairs",
+    "pooled_passengers",
+    "pairing_ratio",
+    "avg_detour_m",
+    "avg_shared_m",
+    "total_saving_km",
+    "objective_m",
+    "bound_m",
+    "pairs_bound",
+)
 #: Saving ratios: against the folder's bound (in kpis.csv) and against Oracle-1 (rendered from kpis.csv).
 RATIO_KPIS = ("competitive_ratio_bound", "competitive_ratio")
 KNOWN_KPIS = {*SIMULATION_KPIS, *ORACLE_KPIS, *RATIO_KPIS, *UNVERIFIED_KPIS["simulation"], *UNVERIFIED_KPIS["oracle"]}
-HOURLY_COLUMNS = ("orders", "response_rate", "pairing_ratio", "avg_detour_m", "avg_shared_m", "total_saving_km",
-                  "avg_pickup_m", "avg_pickup_time_s")
+HOURLY_COLUMNS = (
+    "orders",
+    "response_rate",
+    "pairing_ratio",
+    "avg_detour_m",
+    "avg_shared_m",
+    "total_saving_km",
+    "avg_pickup_m",
+    "avg_pickup_time_s",
+)
 
 # Column schemas: a file lacking a column, or holding text or a missing value in a numeric one, is unreadable.
-ORDER_COLUMNS = {"order_id": "int", "request_s": "float", "origin": "int", "destination": "int",
-                 "patience_s": "float", "solo_m": "float"}
+ORDER_COLUMNS = {
+    "order_id": "int",
+    "request_s": "float",
+    "origin": "int",
+    "destination": "int",
+    "patience_s": "float",
+    "solo_m": "float",
+}
 FLEET_COLUMNS = {"vehicle": "int", "initial_node": "int"}
 EVENT_COLUMNS = {"t_s": "float", "event": "str", "order": "int", "vehicle": "int", "node": "int", "partner": "int"}
-PAIR_COLUMNS = {"first_id": "int", "second_id": "int", "first_request_s": "float", "second_request_s": "float",
-                "service_order": "str", "enroute": "bool", "saving_m": "float", "length_m": "float",
-                "detour_first_m": "float", "detour_second_m": "float", "shared_m": "float", "pickup_m": "float"}
+PAIR_COLUMNS = {
+    "first_id": "int",
+    "second_id": "int",
+    "first_request_s": "float",
+    "second_request_s": "float",
+    "service_order": "str",
+    "enroute": "bool",
+    "saving_m": "float",
+    "length_m": "float",
+    "detour_first_m": "float",
+    "detour_second_m": "float",
+    "shared_m": "float",
+    "pickup_m": "float",
+}
 KPI_COLUMNS = {"run": "str", "kpi": "str", "value": "raw"}
 RULE_NUMBERS = ("planner_patience_s", "max_detour_m", "max_pickup_m", "speed_mps")
 RULE_FLAGS = ("both_pickup_orders", "pickup_check", "allow_enroute")
@@ -136,7 +188,7 @@ class RunCheck:
     run: str
     violations: dict[str, list[str]] = field(default_factory=dict)
     checked: dict[str, int] = field(default_factory=dict)
-    skipped: dict[str, str] = field(default_factory=dict)      # check -> why it could not be made
+    skipped: dict[str, str] = field(default_factory=dict)  # check -> why it could not be made
 
     def fail(self, check: str, message: str) -> None:
         self.violations.setdefault(check, []).append(message)
@@ -160,7 +212,7 @@ class FolderResult:
     folder: str
     runs: list[RunCheck] = field(default_factory=list)
     folder_check: RunCheck | None = None
-    error: str | None = None              # one line: the folder is unreadable
+    error: str | None = None  # one line: the folder is unreadable
 
     @property
     def checks(self) -> list[RunCheck]:
@@ -217,7 +269,7 @@ def check_results(folder: str | Path) -> FolderResult:
     """Check one results folder (a comparison: ``runs/<name>/``); never raises on a malformed folder."""
     out = FolderResult(str(folder))
     try:
-        with np.errstate(all="ignore"):        # absurd values (1e300 s) must not print numpy warnings
+        with np.errstate(all="ignore"):  # absurd values (1e300 s) must not print numpy warnings
             out.folder_check, out.runs = _check_comparison(Path(folder))
     except RpbenchError as exc:
         out.error = one_line(exc)
@@ -251,9 +303,13 @@ def _check_comparison(folder: Path) -> tuple[RunCheck, list[RunCheck]]:
         if table is not None:
             hourly[name] = table
     if not any(f.meta["runs"][name]["kind"] == "simulation" for name in names):
-        hourly = {}                   # hourly.csv is written for the strategy runs (and then the bound's split)
-    per_hour = {name for name in names if f.meta["runs"][name]["kind"] == "simulation"
-                or f.meta["runs"][name].get("rules", {}).get("window") == "bound"}
+        hourly = {}  # hourly.csv is written for the strategy runs (and then the bound's split)
+    per_hour = {
+        name
+        for name in names
+        if f.meta["runs"][name]["kind"] == "simulation"
+        or f.meta["runs"][name].get("rules", {}).get("window") == "bound"
+    }
     _check_hourly(fc, f, runs, hourly, per_hour)
     _check_report(fc, f)
     return fc, runs
@@ -277,10 +333,12 @@ def _check_run(f: "_Folder", name: str, bound_km: float | None) -> tuple[RunChec
 def inputs_digest(folder: str | Path, params: dict, runs: dict) -> dict:
     """What meta.json records at run time so that later edits are caught (``inputs-digest``): the SHA-256
     of the input files' bytes, of the parameters and of each run's options and rules (canonical JSON)."""
-    return {"algorithm": "sha256",
-            "files": {name: file_sha256(Path(folder) / name) for name in DIGEST_FILES},
-            "params": json_sha256(params),
-            "runs": {name: json_sha256(run_spec(record)) for name, record in runs.items()}}
+    return {
+        "algorithm": "sha256",
+        "files": {name: file_sha256(Path(folder) / name) for name in DIGEST_FILES},
+        "params": json_sha256(params),
+        "runs": {name: json_sha256(run_spec(record)) for name, record in runs.items()},
+    }
 
 
 def file_sha256(path: Path) -> str:
@@ -331,22 +389,32 @@ class _Folder:
 def _read_folder(folder: Path) -> _Folder:
     meta = results.read_meta(folder)
     if not (folder / "runs").is_dir() and (folder / "check.txt").is_file():
-        raise ResultsError(f"{str(folder)!r} is a published light copy without event logs or inputs: check.txt holds "
-                           "the verdict on the full folder; rerun the command in its meta.json to check it again")
+        raise ResultsError(
+            f"{str(folder)!r} is a published light copy without event logs or inputs: check.txt holds "
+            "the verdict on the full folder; rerun the command in its meta.json to check it again"
+        )
     params = _read_params(folder, meta)
     _read_run_records(folder, meta)
     network = results.load_network(folder / "network.npz")
     orders = _read_table(folder / "orders.csv.gz", ORDER_COLUMNS)
-    _require(folder / "orders.csv.gz", orders, network.n_nodes, nodes=("origin", "destination"),
-             finite=("request_s", "patience_s", "solo_m"))
+    _require(
+        folder / "orders.csv.gz",
+        orders,
+        network.n_nodes,
+        nodes=("origin", "destination"),
+        finite=("request_s", "patience_s", "solo_m"),
+    )
     if orders["order_id"].duplicated().any():
-        raise ResultsError(f"results file {str(folder / 'orders.csv.gz')!r}: order ids repeat "
-                           f"(e.g. {int(orders['order_id'][orders['order_id'].duplicated()].iloc[0])})")
+        raise ResultsError(
+            f"results file {str(folder / 'orders.csv.gz')!r}: order ids repeat "
+            f"(e.g. {int(orders['order_id'][orders['order_id'].duplicated()].iloc[0])})"
+        )
     fleet = _read_table(folder / "fleet.csv.gz", FLEET_COLUMNS)
     _require(folder / "fleet.csv.gz", fleet, network.n_nodes, nodes=("initial_node",), finite=())
     if not np.array_equal(fleet["vehicle"].to_numpy(), np.arange(len(fleet))):
-        raise ResultsError(f"results file {str(folder / 'fleet.csv.gz')!r}: vehicles are not numbered "
-                           f"0..{len(fleet) - 1}")
+        raise ResultsError(
+            f"results file {str(folder / 'fleet.csv.gz')!r}: vehicles are not numbered 0..{len(fleet) - 1}"
+        )
     kpis = _read_table(folder / "kpis.csv", KPI_COLUMNS)
     distances = network.distances()
     solo = distances.dist[orders["origin"].to_numpy(), orders["destination"].to_numpy()]
@@ -366,8 +434,9 @@ def _read_params(folder: Path, meta: dict) -> Params:
     if missing:
         raise ResultsError(f"{where!r}: params lack {', '.join(missing)} (the checker assumes no default)")
     if unknown:
-        raise ResultsError(f"{where!r}: params hold unknown parameter(s) {', '.join(unknown)} "
-                           "(written by another rpbench version?)")
+        raise ResultsError(
+            f"{where!r}: params hold unknown parameter(s) {', '.join(unknown)} (written by another rpbench version?)"
+        )
     if any(isinstance(v, bool) for v in raw.values()):
         raise ResultsError(f"{where!r}: params must be numbers, not true/false")
     try:
@@ -388,12 +457,16 @@ def _read_run_records(folder: Path, meta: dict) -> None:
         if rec["kind"] != "oracle":
             continue
         rules = rec.get("rules")
-        ok = isinstance(rules, dict) and all(
-            isinstance(rules.get(k), (int, float)) and not isinstance(rules.get(k), bool) for k in RULE_NUMBERS) \
+        ok = (
+            isinstance(rules, dict)
+            and all(isinstance(rules.get(k), (int, float)) and not isinstance(rules.get(k), bool) for k in RULE_NUMBERS)
             and all(isinstance(rules.get(k), bool) for k in RULE_FLAGS)
+        )
         if not ok:
-            raise ResultsError(f"{where!r}: oracle run {name!r} lacks its pair rules ({', '.join(RULE_NUMBERS)} "
-                               f"as numbers, {', '.join(RULE_FLAGS)} as true/false)")
+            raise ResultsError(
+                f"{where!r}: oracle run {name!r} lacks its pair rules ({', '.join(RULE_NUMBERS)} "
+                f"as numbers, {', '.join(RULE_FLAGS)} as true/false)"
+            )
         if not isinstance(rec.get("unit_m", 0.01), (int, float)) or not rec.get("unit_m", 0.01) > 0:
             raise ResultsError(f"{where!r}: oracle run {name!r}: unit_m must be a positive number")
 
@@ -414,14 +487,15 @@ def _coerce(path: Path, name: str, col: pd.Series, kind: str) -> pd.Series:
     if kind == "raw":
         return col
     if kind == "str":
-        return col.fillna("").astype(str)                 # an empty cell is the empty text, never NaN
+        return col.fillna("").astype(str)  # an empty cell is the empty text, never NaN
     if kind == "bool":
         if col.dtype == bool:
             return col
         mapped = col.map({True: True, False: False, "True": True, "False": False, "true": True, "false": False})
         if mapped.isna().any():
-            raise ResultsError(f"results file {str(path)!r}: column {name!r} holds {col[mapped.isna()].iloc[0]!r}, "
-                               "not True/False")
+            raise ResultsError(
+                f"results file {str(path)!r}: column {name!r} holds {col[mapped.isna()].iloc[0]!r}, not True/False"
+            )
         return mapped.astype(bool)
     if kind == "int" and pd.api.types.is_integer_dtype(col.dtype):
         return col.astype(np.int64)
@@ -430,8 +504,10 @@ def _coerce(path: Path, name: str, col: pd.Series, kind: str) -> pd.Series:
     number = pd.to_numeric(col, errors="coerce")
     text = number.isna() & col.notna()
     if text.any():
-        raise ResultsError(f"results file {str(path)!r}: column {name!r} holds {col[text].iloc[0]!r}, not a number "
-                           f"(row {int(np.flatnonzero(text)[0]) + 2})")
+        raise ResultsError(
+            f"results file {str(path)!r}: column {name!r} holds {col[text].iloc[0]!r}, not a number "
+            f"(row {int(np.flatnonzero(text)[0]) + 2})"
+        )
     if kind == "float":
         return number.astype(np.float64)
     values = number.to_numpy(dtype=np.float64)
@@ -445,8 +521,9 @@ def _require(path: Path, table: pd.DataFrame, n_nodes: int, *, nodes: tuple, fin
     for name in nodes:
         values = table[name].to_numpy()
         if len(values) and (values.min() < 0 or values.max() >= n_nodes):
-            raise ResultsError(f"results file {str(path)!r}: column {name!r} names a node outside the network's "
-                               f"0..{n_nodes - 1}")
+            raise ResultsError(
+                f"results file {str(path)!r}: column {name!r} names a node outside the network's 0..{n_nodes - 1}"
+            )
     for name in finite:
         if not np.isfinite(table[name].to_numpy()).all():
             raise ResultsError(f"results file {str(path)!r}: column {name!r} holds NaN or infinite values")
@@ -491,7 +568,7 @@ def _check_manifest(fc: RunCheck, f: _Folder) -> list[str]:
     listed = _listed_runs(f.meta)
     present = results.run_names(f.path)
     if listed is None:
-        fc.fail("manifest", "meta.json's manifest is malformed (expected {\"runs\": [run names]})")
+        fc.fail("manifest", 'meta.json\'s manifest is malformed (expected {"runs": [run names]})')
         listed = list(f.meta["runs"])
     if not listed and not present:
         raise ResultsError(f"results folder {str(f.path)!r} holds no runs (no runs/<name>/ folders)")
@@ -505,8 +582,10 @@ def _check_manifest(fc: RunCheck, f: _Folder) -> list[str]:
             fc.fail("manifest", f"runs/{name}/ is not a run meta.json lists")
     strategies = f.meta.get("strategies")
     if isinstance(strategies, list) and sorted(map(str, strategies)) != sorted(listed):
-        fc.fail("manifest", f"meta.json's strategies ({', '.join(map(str, strategies))}) are not its runs "
-                            f"({', '.join(listed)})")
+        fc.fail(
+            "manifest",
+            f"meta.json's strategies ({', '.join(map(str, strategies))}) are not its runs ({', '.join(listed)})",
+        )
     stray = sorted(set(f.kpis["run"]) - set(listed))
     if stray:
         fc.fail("manifest", f"kpis.csv reports run(s) {', '.join(map(repr, stray))} that meta.json does not list")
@@ -519,15 +598,24 @@ def _check_digest(fc: RunCheck, f: _Folder) -> None:
     (say max_detour_m raised to hide a violation) changes its SHA-256."""
     recorded = f.meta.get("inputs_digest")
     if recorded is None and "manifest" in f.meta:
-        fc.fail("inputs-digest", "meta.json has a manifest but no inputs_digest: rpbench writes both, so the digest "
-                                 "was removed")
+        fc.fail(
+            "inputs-digest",
+            "meta.json has a manifest but no inputs_digest: rpbench writes both, so the digest was removed",
+        )
         return
     if recorded is None:
-        fc.skip("inputs-digest", "meta.json records no inputs digest (a folder written before rpbench recorded "
-                                 "one): edited inputs or parameters are caught only where another check breaks")
+        fc.skip(
+            "inputs-digest",
+            "meta.json records no inputs digest (a folder written before rpbench recorded "
+            "one): edited inputs or parameters are caught only where another check breaks",
+        )
         return
-    if not (isinstance(recorded, dict) and isinstance(recorded.get("files"), dict)
-            and isinstance(recorded.get("runs"), dict) and recorded.get("algorithm") == "sha256"):
+    if not (
+        isinstance(recorded, dict)
+        and isinstance(recorded.get("files"), dict)
+        and isinstance(recorded.get("runs"), dict)
+        and recorded.get("algorithm") == "sha256"
+    ):
         fc.fail("inputs-digest", "meta.json's inputs_digest is malformed (files, params, runs of sha256 digests)")
         return
     actual = inputs_digest(f.path, f.meta["params"], f.meta["runs"])
@@ -538,8 +626,11 @@ def _check_digest(fc: RunCheck, f: _Folder) -> None:
         fc.fail("inputs-digest", "meta.json's params are not those of the run (their SHA-256 differs)")
     for name in sorted(set(actual["runs"]) | set(recorded["runs"])):
         if recorded["runs"].get(name) != actual["runs"].get(name):
-            fc.fail("inputs-digest", f"run {name!r}: its options/rules in meta.json are not those of the run "
-                                     "(SHA-256 differs, or the run is not in the digest)")
+            fc.fail(
+                "inputs-digest",
+                f"run {name!r}: its options/rules in meta.json are not those of the run "
+                "(SHA-256 differs, or the run is not in the digest)",
+            )
     fc.checked["digests"] = len(actual["files"]) + 1 + len(actual["runs"])
 
 
@@ -549,9 +640,12 @@ def _check_orders(fc: RunCheck, f: _Folder) -> None:
         fc.fail("orders", "orders.csv.gz is not in request-time order")
     bad = np.flatnonzero(np.abs(f.col("solo_m") - f.solo) > TOL_M)
     if len(bad):
-        fc.fail("orders", f"{len(bad)} orders' stored solo distances differ from the shortest paths of the folder's "
-                          f"network, e.g. order {bad[0]}: {f.col('solo_m')[bad[0]]:.3f} m, network "
-                          f"{f.solo[bad[0]]:.3f} m")
+        fc.fail(
+            "orders",
+            f"{len(bad)} orders' stored solo distances differ from the shortest paths of the folder's "
+            f"network, e.g. order {bad[0]}: {f.col('solo_m')[bad[0]]:.3f} m, network "
+            f"{f.solo[bad[0]]:.3f} m",
+        )
     if (f.col("patience_s") <= 0).any():
         fc.fail("orders", "an order has a patience <= 0")
     fc.checked["orders"] = f.n
@@ -569,8 +663,9 @@ def _bound_km(f: _Folder) -> float | None:
 
 
 # ------------------------------------------------------------- simulation runs
-def _check_simulation(f: _Folder, name: str, run_dir: Path,
-                      bound_km: float | None) -> tuple[RunCheck, pd.DataFrame | None]:
+def _check_simulation(
+    f: _Folder, name: str, run_dir: Path, bound_km: float | None
+) -> tuple[RunCheck, pd.DataFrame | None]:
     rc = RunCheck(name)
     events = _read_table(run_dir / "events.csv.gz", EVENT_COLUMNS)
     traj = results.load_trajectories(run_dir / "trajectories.npz")
@@ -598,24 +693,29 @@ def _check_movement(rc: RunCheck, traj, network, initial: np.ndarray, params: Pa
         rc.fail("movement", f"{len(off) - 1} trajectories for {len(initial)} vehicles")
         return False
     if off[0] != 0 or off[-1] != len(nodes) or (np.diff(off) < 1).any():
-        rc.fail("movement", "the trajectory offsets do not split the entries into one non-empty trajectory per "
-                            "vehicle")
+        rc.fail("movement", "the trajectory offsets do not split the entries into one non-empty trajectory per vehicle")
         return False
     bad = ~np.isfinite(t) | ~np.isfinite(odo)
     if bad.any():
         k = int(np.flatnonzero(bad)[0])
-        rc.fail("movement", f"{int(bad.sum())} trajectory entries have a non-finite time or odometer (NaN or inf), "
-                            f"e.g. entry {k}: t = {_show(t[k])}, odo = {_show(odo[k])}")
+        rc.fail(
+            "movement",
+            f"{int(bad.sum())} trajectory entries have a non-finite time or odometer (NaN or inf), "
+            f"e.g. entry {k}: t = {_show(t[k])}, odo = {_show(odo[k])}",
+        )
     outside = (nodes < 0) | (nodes >= network.n_nodes)
     if outside.any():
-        rc.fail("movement", f"{int(outside.sum())} trajectory entries name a node outside the network, e.g. "
-                            f"{nodes[np.flatnonzero(outside)[0]]}")
+        rc.fail(
+            "movement",
+            f"{int(outside.sum())} trajectory entries name a node outside the network, e.g. "
+            f"{nodes[np.flatnonzero(outside)[0]]}",
+        )
     starts = off[:-1]
     bad_start = np.flatnonzero((nodes[starts] != initial) | ~(np.abs(t[starts]) <= TOL_S))
     for v in bad_start[:5]:
         rc.fail("movement", f"vehicle {v} does not start at its initial node {initial[v]} at t=0")
     step = np.ones(len(nodes), dtype=bool)
-    step[off[1:] - 1] = False                 # no step across vehicles (nor past the last entry)
+    step[off[1:] - 1] = False  # no step across vehicles (nor past the last entry)
     i = np.flatnonzero(step)
     u, w = nodes[i], nodes[i + 1]
     dt, dodo = t[i + 1] - t[i], odo[i + 1] - odo[i]
@@ -635,8 +735,11 @@ def _check_movement(rc: RunCheck, traj, network, initial: np.ndarray, params: Pa
         wrong = np.abs(dodo[move] - length) > TOL_M
         if wrong.any():
             k = np.flatnonzero(wrong)[0]
-            rc.fail("movement", f"{int(wrong.sum())} steps' odometer differs from the arc length, e.g. entry "
-                                f"{i[move][k]}: {dodo[move][k]:.3f} m on an arc of {length[k]:.3f} m")
+            rc.fail(
+                "movement",
+                f"{int(wrong.sum())} steps' odometer differs from the arc length, e.g. entry "
+                f"{i[move][k]}: {dodo[move][k]:.3f} m on an arc of {length[k]:.3f} m",
+            )
         too_fast = dt[move] < length / params.speed_mps - TOL_S
         if too_fast.any():
             rc.fail("movement", f"{int(too_fast.sum())} arcs driven faster than {params.speed_mps:.4f} m/s")
@@ -665,7 +768,7 @@ def _locate(traj, vehicle: np.ndarray, t: np.ndarray, node: np.ndarray) -> np.nd
         hi[group] = a + np.searchsorted(ts[a:b], t[group] + TOL_S, side="right")
     out = np.full(len(vehicle), np.nan)
     active = np.flatnonzero(lo < hi)
-    while len(active):                        # entries within TOL_S of t: a handful per query
+    while len(active):  # entries within TOL_S of t: a handful per query
         k = lo[active]
         hit = nodes[k] == node[active]
         out[active[hit]] = odo[k[hit]]
@@ -702,16 +805,19 @@ def _check_event_log(rc: RunCheck, events: pd.DataFrame, f: _Folder, n_vehicles:
         f"a vehicle outside 0..{n_vehicles - 1}": known & ~unvehicled & ((vehicle < 0) | (vehicle >= n_vehicles)),
         "a vehicle (a request or cancellation names none)": unvehicled & (vehicle != -1),
         "a node outside the network": known & (kind != "assign") & ((node < 0) | (node >= f.network.n_nodes)),
-        "a partner that is not another order": (partner != -1) & ((kind != "assign") | (partner < 0)
-                                                                  | (partner >= n) | (partner == order)),
+        "a partner that is not another order": (partner != -1)
+        & ((kind != "assign") | (partner < 0) | (partner >= n) | (partner == order)),
     }
     valid = np.ones(len(events), dtype=bool)
     for what, bad in problems.items():
         if bad.any():
             k = int(np.flatnonzero(bad)[0])
-            rc.fail("event-log", f"{int(bad.sum())} events name {what}, e.g. row {k + 2}: {kind[k]} of order "
-                                 f"{order[k]}, vehicle {vehicle[k]}, node {node[k]}, partner {partner[k]} "
-                                 f"at t={_show(t[k])}")
+            rc.fail(
+                "event-log",
+                f"{int(bad.sum())} events name {what}, e.g. row {k + 2}: {kind[k]} of order "
+                f"{order[k]}, vehicle {vehicle[k]}, node {node[k]}, partner {partner[k]} "
+                f"at t={_show(t[k])}",
+            )
             valid &= ~bad
     ev = events[valid]
     _check_event_places(rc, ev, f)
@@ -726,23 +832,35 @@ def _check_event_places(rc: RunCheck, ev: pd.DataFrame, f: _Folder) -> None:
     counts = np.bincount(req["order"].to_numpy(), minlength=f.n)
     wrong = np.flatnonzero(counts != 1)
     if len(wrong):
-        rc.fail("event-log", f"{len(wrong)} orders do not have exactly one request event, e.g. order {wrong[0]}: "
-                             f"{counts[wrong[0]]}")
+        rc.fail(
+            "event-log",
+            f"{len(wrong)} orders do not have exactly one request event, e.g. order {wrong[0]}: {counts[wrong[0]]}",
+        )
     o, t = req["order"].to_numpy(), req["t_s"].to_numpy()
     late = np.flatnonzero(np.abs(t - request[o]) > TOL_S)
     if len(late):
         k = late[0]
-        rc.fail("event-log", f"{len(late)} request events are not at the order's request time, e.g. order {o[k]}: "
-                             f"{t[k]:.3f} s in the log, {request[o[k]]:.3f} s in orders.csv.gz")
-    for kind, where, label in (("request", origin, "origin"), ("pickup", origin, "origin"),
-                               ("cancel", origin, "origin"), ("dropoff", dest, "destination")):
+        rc.fail(
+            "event-log",
+            f"{len(late)} request events are not at the order's request time, e.g. order {o[k]}: "
+            f"{t[k]:.3f} s in the log, {request[o[k]]:.3f} s in orders.csv.gz",
+        )
+    for kind, where, label in (
+        ("request", origin, "origin"),
+        ("pickup", origin, "origin"),
+        ("cancel", origin, "origin"),
+        ("dropoff", dest, "destination"),
+    ):
         sel = ev[ev["event"] == kind]
         o, node = sel["order"].to_numpy(), sel["node"].to_numpy()
         bad = np.flatnonzero(node != where[o])
         if len(bad):
             k = bad[0]
-            rc.fail("event-log", f"{len(bad)} {kind} events are not at the order's {label}, e.g. order {o[k]} at "
-                                 f"node {node[k]}, its {label} is {where[o[k]]}")
+            rc.fail(
+                "event-log",
+                f"{len(bad)} {kind} events are not at the order's {label}, e.g. order {o[k]} at "
+                f"node {node[k]}, its {label} is {where[o[k]]}",
+            )
 
 
 # ----------------------------------------------------------------------- events
@@ -777,12 +895,17 @@ def _check_events(rc: RunCheck, events: pd.DataFrame, f: _Folder, traj) -> pd.Da
         rc.fail("assigned-once", f"order {o} cancelled at {t_cancel[o]:.3f} s, not at request + patience")
     late = assigned & ((t_assign < request - TOL_S) | (t_assign - request > patience + TOL_S))
     for o in np.flatnonzero(late)[:5]:
-        rc.fail("within-patience", f"order {o} assigned {t_assign[o] - request[o]:.2f} s after its request "
-                                   f"(patience {patience[o]:.2f} s)")
+        rc.fail(
+            "within-patience",
+            f"order {o} assigned {t_assign[o] - request[o]:.2f} s after its request (patience {patience[o]:.2f} s)",
+        )
     unresolved = ~assigned & ~cancelled
     if unresolved.any():
-        rc.fail("service", f"{int(unresolved.sum())} orders are neither assigned nor cancelled, e.g. order "
-                           f"{np.flatnonzero(unresolved)[0]}")
+        rc.fail(
+            "service",
+            f"{int(unresolved.sum())} orders are neither assigned nor cancelled, e.g. order "
+            f"{np.flatnonzero(unresolved)[0]}",
+        )
     orphan = ~assigned & (~np.isnan(t_pick) | ~np.isnan(t_drop))
     for o in np.flatnonzero(orphan)[:5]:
         rc.fail("service", f"order {o} is picked up or dropped off but never assigned")
@@ -801,8 +924,10 @@ def _check_events(rc: RunCheck, events: pd.DataFrame, f: _Folder, traj) -> pd.Da
     odo_drop = _locate(traj, np.where(served, v_assign, -1), t_drop, dest)
     missing = served & (np.isnan(odo_pick) | np.isnan(odo_drop))
     for o in np.flatnonzero(missing)[:5]:
-        rc.fail("service", f"order {o}: vehicle {v_assign[o]} is not at the origin/destination node at the "
-                           "pick-up/drop-off time")
+        rc.fail(
+            "service",
+            f"order {o}: vehicle {v_assign[o]} is not at the origin/destination node at the pick-up/drop-off time",
+        )
     ok = served & ~missing
     detour = odo_drop - odo_pick - f.solo
     over = ok & (detour > params.max_detour_m + TOL_M)
@@ -823,9 +948,22 @@ def _check_events(rc: RunCheck, events: pd.DataFrame, f: _Folder, traj) -> pd.Da
         rc.fail("max-pickup", f"order {o}: pick-up distance {pickup[o]:.1f} m > R̄ = {params.max_pickup_m:g} m")
     _check_capacity(rc, v_assign, t_assign, t_pick, t_drop, served)
     rc.checked["events"] = int(len(events))
-    return pd.DataFrame({"request_s": request, "vehicle": v_assign, "assign_s": t_assign, "pickup_s": t_pick,
-                         "dropoff_s": t_drop, "cancelled": cancelled, "served": served, "ok": ok, "partner": partner,
-                         "odo_pick": odo_pick, "odo_drop": odo_drop, "odo_start": odo_start})
+    return pd.DataFrame(
+        {
+            "request_s": request,
+            "vehicle": v_assign,
+            "assign_s": t_assign,
+            "pickup_s": t_pick,
+            "dropoff_s": t_drop,
+            "cancelled": cancelled,
+            "served": served,
+            "ok": ok,
+            "partner": partner,
+            "odo_pick": odo_pick,
+            "odo_drop": odo_drop,
+            "odo_start": odo_start,
+        }
+    )
 
 
 def _partners(rc: RunCheck, events: pd.DataFrame, n: int, assigned: np.ndarray) -> np.ndarray:
@@ -835,13 +973,16 @@ def _partners(rc: RunCheck, events: pd.DataFrame, n: int, assigned: np.ndarray) 
     order, named = a["order"].to_numpy(), a["partner"].to_numpy()
     has = named >= 0
     lo, hi = np.minimum(order[has], named[has]), np.maximum(order[has], named[has])
-    _, first = np.unique(lo * max(n, 1) + hi, return_index=True)     # a pair named from both sides counts once
+    _, first = np.unique(lo * max(n, 1) + hi, return_index=True)  # a pair named from both sides counts once
     lo, hi = lo[first], hi[first]
     count = np.bincount(np.concatenate([lo, hi]), minlength=n)
     clash = (count[lo] > 1) | (count[hi] > 1) | ~assigned[lo] | ~assigned[hi]
     for k in np.flatnonzero(clash)[:5]:
-        rc.fail("event-log", f"orders {lo[k]} and {hi[k]} are named partners, but one of them is unassigned or "
-                             "named in another pair too")
+        rc.fail(
+            "event-log",
+            f"orders {lo[k]} and {hi[k]} are named partners, but one of them is unassigned or "
+            "named in another pair too",
+        )
     partner = np.full(n, -1, dtype=np.int64)
     partner[lo[~clash]] = hi[~clash]
     partner[hi[~clash]] = lo[~clash]
@@ -877,7 +1018,7 @@ def _union_length(vehicle: np.ndarray, start: np.ndarray, end: np.ndarray) -> fl
         return 0.0
     srt = np.lexsort((start, vehicle))
     vehicle, start, end = vehicle[srt], start[srt], end[srt]
-    reach = pd.Series(end).groupby(vehicle).cummax().to_numpy()   # furthest end so far, per vehicle
+    reach = pd.Series(end).groupby(vehicle).cummax().to_numpy()  # furthest end so far, per vehicle
     before = np.r_[-np.inf, reach[:-1]]
     before[np.r_[True, vehicle[1:] != vehicle[:-1]]] = -np.inf
     return float(np.maximum(0.0, end - np.maximum(start, before)).sum())
@@ -891,10 +1032,17 @@ def _passenger_facts(tab: pd.DataFrame, solo: np.ndarray) -> dict[str, np.ndarra
     pick, drop = tab["odo_pick"].to_numpy(), tab["odo_drop"].to_numpy()
     ride = drop - pick
     shared = np.where(pooled, np.maximum(0.0, np.minimum(drop, drop[p]) - np.maximum(pick, pick[p])), 0.0)
-    return {"served": served, "pooled": pooled, "partner": partner, "ride": ride, "shared": shared,
-            "detour": ride - solo, "pickup_m": pick - tab["odo_start"].to_numpy(),
-            "response_s": (tab["assign_s"] - tab["request_s"]).to_numpy(),
-            "pickup_s": (tab["pickup_s"] - tab["assign_s"]).to_numpy()}
+    return {
+        "served": served,
+        "pooled": pooled,
+        "partner": partner,
+        "ride": ride,
+        "shared": shared,
+        "detour": ride - solo,
+        "pickup_m": pick - tab["odo_start"].to_numpy(),
+        "response_s": (tab["assign_s"] - tab["request_s"]).to_numpy(),
+        "pickup_s": (tab["pickup_s"] - tab["assign_s"]).to_numpy(),
+    }
 
 
 def _mean(x: np.ndarray, mask: np.ndarray) -> float:
@@ -906,35 +1054,45 @@ def _simulation_kpis(tab: pd.DataFrame, solo: np.ndarray, params: Params, bound_
     x = _passenger_facts(tab, solo)
     served, pooled = x["served"], x["pooled"]
     n, n_served, n_pooled = len(tab), int(served.sum()), int(pooled.sum())
-    occupied_km = _union_length(tab["vehicle"].to_numpy()[served], tab["odo_pick"].to_numpy()[served],
-                                tab["odo_drop"].to_numpy()[served]) / 1000.0
+    occupied_km = (
+        _union_length(
+            tab["vehicle"].to_numpy()[served], tab["odo_pick"].to_numpy()[served], tab["odo_drop"].to_numpy()[served]
+        )
+        / 1000.0
+    )
     solo_km = float(solo[served].sum()) / 1000.0
     fare = np.where(pooled, params.fare_pooled_cny_per_km, params.fare_solo_cny_per_km)
     revenue = float((fare * solo)[served].sum()) / 1000.0
-    alt = (params.fare_solo_cny_per_km * (x["ride"] - x["shared"]) + params.fare_pooled_cny_per_km * x["shared"])
+    alt = params.fare_solo_cny_per_km * (x["ride"] - x["shared"]) + params.fare_pooled_cny_per_km * x["shared"]
     pay = params.driver_pay_cny_per_km * occupied_km
-    out = {"orders": n, "served": n_served, "cancelled": int(tab["cancelled"].sum()),
-           "pooled_passengers": n_pooled, "pairs": n_pooled // 2,
-           "response_rate": n_served / n if n else float("nan"),
-           "pairing_ratio": n_pooled / n_served if n_served else float("nan"),
-           "pairing_ratio_of_orders": n_pooled / n if n else float("nan"),
-           "platform_profit_cny": revenue - pay,
-           "platform_profit_alt_cny": float(alt[served].sum()) / 1000.0 - pay,
-           "avg_response_time_s": _mean(x["response_s"], served),
-           "avg_pickup_time_s": _mean(x["pickup_s"], served),
-           "avg_pickup_distance_m": _mean(x["pickup_m"], served),
-           "avg_detour_m": _mean(x["detour"], pooled),
-           "avg_shared_m": _mean(x["shared"], pooled),
-           "total_occupied_km": occupied_km,
-           "total_solo_served_km": solo_km,
-           "total_saving_km": solo_km - occupied_km}
-    if bound_km is not None:              # the competitive ratio against the folder's proven bound
+    out = {
+        "orders": n,
+        "served": n_served,
+        "cancelled": int(tab["cancelled"].sum()),
+        "pooled_passengers": n_pooled,
+        "pairs": n_pooled // 2,
+        "response_rate": n_served / n if n else float("nan"),
+        "pairing_ratio": n_pooled / n_served if n_served else float("nan"),
+        "pairing_ratio_of_orders": n_pooled / n if n else float("nan"),
+        "platform_profit_cny": revenue - pay,
+        "platform_profit_alt_cny": float(alt[served].sum()) / 1000.0 - pay,
+        "avg_response_time_s": _mean(x["response_s"], served),
+        "avg_pickup_time_s": _mean(x["pickup_s"], served),
+        "avg_pickup_distance_m": _mean(x["pickup_m"], served),
+        "avg_detour_m": _mean(x["detour"], pooled),
+        "avg_shared_m": _mean(x["shared"], pooled),
+        "total_occupied_km": occupied_km,
+        "total_solo_served_km": solo_km,
+        "total_saving_km": solo_km - occupied_km,
+    }
+    if bound_km is not None:  # the competitive ratio against the folder's proven bound
         out["competitive_ratio_bound"] = out["total_saving_km"] / bound_km if bound_km else float("nan")
     return out
 
 
-def _compare_kpis(rc: RunCheck, kind: str, recomputed: dict, reported: pd.DataFrame,
-                  claims: dict | None = None) -> None:
+def _compare_kpis(
+    rc: RunCheck, kind: str, recomputed: dict, reported: pd.DataFrame, claims: dict | None = None
+) -> None:
     """Every recomputed KPI is reported and equal; every reported one is recomputed, a solver claim that
     passed its consistency test (``claims``: key -> failure message or None) or listed as unverifiable."""
     seen: dict[str, float | None] = {}
@@ -955,7 +1113,7 @@ def _compare_kpis(rc: RunCheck, kind: str, recomputed: dict, reported: pd.DataFr
     allowed = set(recomputed) | set(claims or {}) | UNVERIFIED_KPIS[kind]
     for key in sorted(set(seen) - allowed):
         rc.fail("kpi", f"KPI {key} in kpis.csv is not a KPI rpbench reports for a {kind} run")
-    for key in sorted(set(seen) & UNVERIFIED_KPIS[kind]):          # timings and sizes: plausible at least
+    for key in sorted(set(seen) & UNVERIFIED_KPIS[kind]):  # timings and sizes: plausible at least
         if seen[key] is not None and not (np.isnan(seen[key]) or 0 <= seen[key] < np.inf):
             rc.fail("kpi", f"KPI {key}: reported {seen[key]!r}, not a time or size (finite, >= 0)")
     rc.checked["kpis"] = len(recomputed)
@@ -974,24 +1132,38 @@ def _hourly_expected(tab: pd.DataFrame, solo: np.ndarray) -> pd.DataFrame:
     pick, drop = tab["odo_pick"].to_numpy(), tab["odo_drop"].to_numpy()
     saving = solo[lead] + solo[b] - (np.maximum(drop[lead], drop[b]) - np.minimum(pick[lead], pick[b]))
     pair_hour = np.floor(np.minimum(request[lead], request[b]) / 3600.0).astype(np.int64)
-    frame = pd.DataFrame({"hour": hour, "served": served, "pooled": pooled,
-                          "detour": np.where(pooled, x["detour"], np.nan),
-                          "shared": np.where(pooled, x["shared"], np.nan),
-                          "pickup_m": np.where(served, x["pickup_m"], np.nan),
-                          "pickup_s": np.where(served, x["pickup_s"], np.nan)})
+    frame = pd.DataFrame(
+        {
+            "hour": hour,
+            "served": served,
+            "pooled": pooled,
+            "detour": np.where(pooled, x["detour"], np.nan),
+            "shared": np.where(pooled, x["shared"], np.nan),
+            "pickup_m": np.where(served, x["pickup_m"], np.nan),
+            "pickup_s": np.where(served, x["pickup_s"], np.nan),
+        }
+    )
     g = frame.groupby("hour")
     n_served = g["served"].sum()
-    out = pd.DataFrame({"orders": g.size(), "response_rate": g["served"].mean(),
-                        "pairing_ratio": g["pooled"].sum() / n_served.where(n_served > 0),
-                        "avg_detour_m": g["detour"].mean(), "avg_shared_m": g["shared"].mean(),
-                        "total_saving_km": pd.Series(saving / 1000.0).groupby(pair_hour).sum(),
-                        "avg_pickup_m": g["pickup_m"].mean(), "avg_pickup_time_s": g["pickup_s"].mean()})
+    out = pd.DataFrame(
+        {
+            "orders": g.size(),
+            "response_rate": g["served"].mean(),
+            "pairing_ratio": g["pooled"].sum() / n_served.where(n_served > 0),
+            "avg_detour_m": g["detour"].mean(),
+            "avg_shared_m": g["shared"].mean(),
+            "total_saving_km": pd.Series(saving / 1000.0).groupby(pair_hour).sum(),
+            "avg_pickup_m": g["pickup_m"].mean(),
+            "avg_pickup_time_s": g["pickup_s"].mean(),
+        }
+    )
     out["total_saving_km"] = out["total_saving_km"].fillna(0.0)
     return out.loc[g.size().index]
 
 
-def _check_hourly(fc: RunCheck, f: _Folder, runs: list[RunCheck], tables: dict[str, pd.DataFrame],
-                  per_hour: set[str]) -> None:
+def _check_hourly(
+    fc: RunCheck, f: _Folder, runs: list[RunCheck], tables: dict[str, pd.DataFrame], per_hour: set[str]
+) -> None:
     """hourly.csv (plotted as hourly.png) equals its recomputation ``tables``: a run's wrong rows fail that
     run's ``hourly`` check, rows of a run without per-hour figures (not in ``per_hour``) the folder's."""
     path = f.path / "hourly.csv"
@@ -1018,8 +1190,11 @@ def _check_hourly(fc: RunCheck, f: _Folder, runs: list[RunCheck], tables: dict[s
 
 def _compare_hourly(rc: RunCheck, rows: pd.DataFrame, expected: pd.DataFrame) -> None:
     if rows.index.has_duplicates or set(rows.index) != set(expected.index):
-        rc.fail("hourly", f"hourly.csv has hours {sorted(map(str, rows.index))}, the run's orders request in "
-                          f"hours {sorted(map(str, expected.index))}")
+        rc.fail(
+            "hourly",
+            f"hourly.csv has hours {sorted(map(str, rows.index))}, the run's orders request in "
+            f"hours {sorted(map(str, expected.index))}",
+        )
         return
     for column in expected.columns:
         if column not in rows.columns:
@@ -1028,8 +1203,11 @@ def _compare_hourly(rc: RunCheck, rows: pd.DataFrame, expected: pd.DataFrame) ->
         for hour in expected.index:
             value = _as_number(rows.loc[hour, column])
             if value is None or not _same(value, float(expected.loc[hour, column])):
-                rc.fail("hourly", f"hour {hour}: {column} reported {_show(rows.loc[hour, column])}, recomputed "
-                                  f"{float(expected.loc[hour, column])!r}")
+                rc.fail(
+                    "hourly",
+                    f"hour {hour}: {column} reported {_show(rows.loc[hour, column])}, recomputed "
+                    f"{float(expected.loc[hour, column])!r}",
+                )
     rc.checked["hours"] = len(expected)
 
 
@@ -1044,8 +1222,10 @@ def _check_report(fc: RunCheck, f: _Folder) -> None:
     try:
         expected = _metric_tables(report_markdown(f.path, f.path.name))
     except (RpbenchError, KeyError, ValueError, TypeError, IndexError) as exc:
-        fc.skip("report", f"kpis.csv or meta.json cannot be rendered ({type(exc).__name__}: {one_line(exc)}); the "
-                          "kpi checks say why")
+        fc.skip(
+            "report",
+            f"kpis.csv or meta.json cannot be rendered ({type(exc).__name__}: {one_line(exc)}); the kpi checks say why",
+        )
         return
     found = _metric_tables(path.read_text(errors="replace"))
     unmatched = set()
@@ -1057,12 +1237,17 @@ def _check_report(fc: RunCheck, f: _Folder) -> None:
             if label not in shown:
                 unmatched.add(label)
             elif shown[label] != cells:
-                fc.fail("report", f"report.md shows {label}: {' | '.join(shown[label])}; kpis.csv renders "
-                                  f"{' | '.join(cells)}")
+                fc.fail(
+                    "report",
+                    f"report.md shows {label}: {' | '.join(shown[label])}; kpis.csv renders {' | '.join(cells)}",
+                )
         unmatched |= set(shown) - {label for label, _ in want}
-    if unmatched:      # a row deleted, or worded by another rpbench version: nothing false is shown
-        fc.skip("report", f"report.md rows not compared (absent from report.md or from today's rendering): "
-                          f"{', '.join(sorted(unmatched))}")
+    if unmatched:  # a row deleted, or worded by another rpbench version: nothing false is shown
+        fc.skip(
+            "report",
+            f"report.md rows not compared (absent from report.md or from today's rendering): "
+            f"{', '.join(sorted(unmatched))}",
+        )
     fc.checked["report_tables"] = len(expected)
 
 
@@ -1076,7 +1261,7 @@ def _metric_tables(text: str) -> list[list[tuple[str, list[str]]]]:
             tables.append(current)
         elif current is not None and line.startswith("|"):
             cells = [c.strip() for c in line.strip().strip("|").split("|")]
-            if not set("".join(cells)) <= set("-: "):                  # not the |---|---:| line
+            if not set("".join(cells)) <= set("-: "):  # not the |---|---:| line
                 current.append((cells[0], cells[1:]))
         else:
             current = None
@@ -1094,13 +1279,13 @@ class _Geometry:
         FOLO (x dropped last):  L = δ + l(h, o_y) + l_y + l(d_y, d_x)
     """
 
-    head: np.ndarray           # δ + l(h, o_y)
-    pk: np.ndarray             # pre + l(h, o_y): y's pick-up distance
+    head: np.ndarray  # δ + l(h, o_y)
+    pk: np.ndarray  # pre + l(h, o_y): y's pick-up distance
     l_oy_dx: np.ndarray
     l_dx_dy: np.ndarray
     fofo_len: np.ndarray
     folo_len: np.ndarray
-    fofo_ok: np.ndarray        # both detours <= D̄
+    fofo_ok: np.ndarray  # both detours <= D̄
     folo_ok: np.ndarray
     l_x: np.ndarray
     l_y: np.ndarray
@@ -1114,9 +1299,18 @@ class _Geometry:
         fofo_len = head + l_oy_dx + l_dx_dy
         folo_len = head + solo[y] + l_dy_dx
         lim = max_detour_m + DETOUR_TOL_M
-        return cls(head=head, pk=pre + p, l_oy_dx=l_oy_dx, l_dx_dy=l_dx_dy, fofo_len=fofo_len, folo_len=folo_len,
-                   fofo_ok=(head + l_oy_dx - solo[x] <= lim) & (l_oy_dx + l_dx_dy - solo[y] <= lim),
-                   folo_ok=folo_len - solo[x] <= lim, l_x=solo[x], l_y=solo[y])
+        return cls(
+            head=head,
+            pk=pre + p,
+            l_oy_dx=l_oy_dx,
+            l_dx_dy=l_dx_dy,
+            fofo_len=fofo_len,
+            folo_len=folo_len,
+            fofo_ok=(head + l_oy_dx - solo[x] <= lim) & (l_oy_dx + l_dx_dy - solo[y] <= lim),
+            folo_ok=folo_len - solo[x] <= lim,
+            l_x=solo[x],
+            l_y=solo[y],
+        )
 
     def rule_order(self, rule: str) -> np.ndarray:
         """FOFO? as the order rule picks: the feasible order with the smaller L (tie: FOFO), or the smaller L."""
@@ -1129,9 +1323,15 @@ class _Geometry:
         length = np.where(fofo, self.fofo_len, self.folo_len)
         ride_x = np.where(fofo, self.head + self.l_oy_dx, length)
         ride_y = np.where(fofo, self.l_oy_dx + self.l_dx_dy, self.l_y)
-        return {"ok": np.where(fofo, self.fofo_ok, self.folo_ok), "length": length, "detour_x": ride_x - self.l_x,
-                "detour_y": ride_y - self.l_y, "shared": np.where(fofo, self.l_oy_dx, self.l_y), "pk": self.pk,
-                "saving": self.l_x + self.l_y - length}
+        return {
+            "ok": np.where(fofo, self.fofo_ok, self.folo_ok),
+            "length": length,
+            "detour_x": ride_x - self.l_x,
+            "detour_y": ride_y - self.l_y,
+            "shared": np.where(fofo, self.l_oy_dx, self.l_y),
+            "pk": self.pk,
+            "saving": self.l_x + self.l_y - length,
+        }
 
 
 def _paths(f: _Folder, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -1204,40 +1404,61 @@ def _weights(f: _Folder, a: np.ndarray, b: np.ndarray, a_first_only: bool = Fals
     return weight, np.isfinite(weight)
 
 
-def bound_weights(distances, orders: pd.DataFrame, solo: np.ndarray, params: Params, a: np.ndarray,
-                  b: np.ndarray, a_first_only: bool = False) -> tuple[np.ndarray, np.ndarray]:
+def bound_weights(
+    distances,
+    orders: pd.DataFrame,
+    solo: np.ndarray,
+    params: Params,
+    a: np.ndarray,
+    b: np.ndarray,
+    a_first_only: bool = False,
+) -> tuple[np.ndarray, np.ndarray]:
     """(weight, edge) of pairs (a, b) in the upper bound's graph (docs/bound.md), computed here, apart from
     the enumeration of rpbench.oracle.pairs.  ``distances`` is the network's DistanceOracle; ``orders``
     holds request_s, patience_s, origin and destination."""
-    f = _Folder(Path("."), {}, params, orders, pd.DataFrame(), distances.network, distances,
-                np.asarray(solo, dtype=np.float64), pd.DataFrame())
+    f = _Folder(
+        Path("."),
+        {},
+        params,
+        orders,
+        pd.DataFrame(),
+        distances.network,
+        distances,
+        np.asarray(solo, dtype=np.float64),
+        pd.DataFrame(),
+    )
     return _weights(f, a, b, a_first_only)
 
 
 # ------------------------------------------------------------ bound certificate
-def _check_certificate(rc: RunCheck, tab: pd.DataFrame, f: _Folder, saving_km: float,
-                       bound_km: float | None) -> None:
+def _check_certificate(rc: RunCheck, tab: pd.DataFrame, f: _Folder, saving_km: float, bound_km: float | None) -> None:
     """Every pair of the run is a bound edge whose weight covers its realised saving; saving <= bound."""
     partner, ok = tab["partner"].to_numpy(), tab["ok"].to_numpy()
     t_pick = tab["pickup_s"].to_numpy()
     both = (partner >= 0) & ok & ok[np.maximum(partner, 0)]
     me = np.flatnonzero(both)
     first_me = (t_pick[me] < t_pick[partner[me]]) | ((t_pick[me] == t_pick[partner[me]]) & (me < partner[me]))
-    a = me[first_me]                         # picked up first
+    a = me[first_me]  # picked up first
     b = partner[a]
     odo_pick, odo_drop = tab["odo_pick"].to_numpy(), tab["odo_drop"].to_numpy()
     occupied = np.maximum(odo_drop[a], odo_drop[b]) - odo_pick[a]
     realised = f.solo[a] + f.solo[b] - occupied
-    own = _orientation_weight(f, a, b)               # the run's pick-up order, computed once
+    own = _orientation_weight(f, a, b)  # the run's pick-up order, computed once
     weight = np.fmax(own, _orientation_weight(f, b, a))
     edge, own_edge = np.isfinite(weight), np.isfinite(own)
     for k in np.flatnonzero(~own_edge)[:5]:
-        rc.fail("bound-certificate", f"pair ({a[k]}, {b[k]}) is not an edge of the upper bound's graph with "
-                                     f"order {a[k]} first (time window or detours at its origin)")
+        rc.fail(
+            "bound-certificate",
+            f"pair ({a[k]}, {b[k]}) is not an edge of the upper bound's graph with "
+            f"order {a[k]} first (time window or detours at its origin)",
+        )
     over = edge & (realised > weight + CERT_TOL_M)
     for k in np.flatnonzero(over)[:5]:
-        rc.fail("bound-certificate", f"pair ({a[k]}, {b[k]}): realised saving {realised[k]:.3f} m exceeds the "
-                                     f"bound's edge weight {weight[k]:.3f} m")
+        rc.fail(
+            "bound-certificate",
+            f"pair ({a[k]}, {b[k]}): realised saving {realised[k]:.3f} m exceeds the "
+            f"bound's edge weight {weight[k]:.3f} m",
+        )
     rc.checked["certified_pairs"] = int((own_edge & ~over).sum())
     if bound_km is None:
         return
@@ -1262,7 +1483,7 @@ def _check_oracle(f: _Folder, name: str, run_dir: Path) -> tuple[RunCheck, pd.Da
     a, b = rows
     request = f.col("request_s")
     for col, which in (("first_request_s", a), ("second_request_s", b)):
-        bad = np.flatnonzero(~(np.abs(pairs[col].to_numpy() - request[which]) <= TOL_S))     # NaN is wrong too
+        bad = np.flatnonzero(~(np.abs(pairs[col].to_numpy() - request[which]) <= TOL_S))  # NaN is wrong too
         if len(bad):
             rc.fail("oracle-pairs", f"{len(bad)} pairs' stored {col} differ from orders.csv.gz's request times")
     fofo = pairs["service_order"].to_numpy() == "FOFO"
@@ -1276,8 +1497,11 @@ def _check_oracle(f: _Folder, name: str, run_dir: Path) -> tuple[RunCheck, pd.Da
     _check_stored_route(rc, pairs, route)
     over = np.flatnonzero(np.maximum(route["detour_x"], route["detour_y"]) > f.params.max_detour_m + TOL_M)
     if len(over):
-        rc.fail("max-detour", f"{len(over)} pairs detour a passenger by more than D̄ = {f.params.max_detour_m:g} m, "
-                              f"e.g. pair ({pairs['first_id'].iloc[over[0]]}, {pairs['second_id'].iloc[over[0]]})")
+        rc.fail(
+            "max-detour",
+            f"{len(over)} pairs detour a passenger by more than D̄ = {f.params.max_detour_m:g} m, "
+            f"e.g. pair ({pairs['first_id'].iloc[over[0]]}, {pairs['second_id'].iloc[over[0]]})",
+        )
     recomputed, claims = _oracle_kpis(rec, rules, pairs, route, f, f.reported(name))
     _compare_kpis(rc, "oracle", recomputed, f.reported(name), claims)
     rc.checked.update({"pairs": len(pairs), "orders": f.n})
@@ -1286,7 +1510,7 @@ def _check_oracle(f: _Folder, name: str, run_dir: Path) -> tuple[RunCheck, pd.Da
     hour = np.floor(np.minimum(request[a], request[b]) / 3600.0).astype(np.int64)
     by_hour = pd.Series(pairs["saving_m"].to_numpy() / 1000.0).groupby(hour).sum()
     table = pd.DataFrame({column: np.nan for column in HOURLY_COLUMNS}, index=by_hour.index)
-    table["total_saving_km"] = by_hour       # the bound's rows of hourly.csv: only its matching's saving
+    table["total_saving_km"] = by_hour  # the bound's rows of hourly.csv: only its matching's saving
     return rc, table
 
 
@@ -1295,8 +1519,9 @@ def _oracle_rules(rc: RunCheck, recorded: dict, params: Params) -> dict:
     otherwise fails ``oracle-rules`` and is not used); the flags are the run's."""
     for key in RULE_NUMBERS:
         if not _same(float(recorded[key]), float(getattr(params, key)), rtol=1e-12, atol=1e-9):
-            rc.fail("oracle-rules", f"rule {key} = {recorded[key]!r} is not the folder's parameter "
-                                    f"{getattr(params, key)!r}")
+            rc.fail(
+                "oracle-rules", f"rule {key} = {recorded[key]!r} is not the folder's parameter {getattr(params, key)!r}"
+            )
     rules = {key: float(getattr(params, key)) for key in RULE_NUMBERS}
     rules.update({key: bool(recorded[key]) for key in RULE_FLAGS})
     rules["order_rule"] = recorded.get("order_rule", "min_feasible")
@@ -1307,10 +1532,17 @@ def _oracle_rules(rc: RunCheck, recorded: dict, params: Params) -> dict:
     if rules["window"] not in ("patience", "bound"):
         rc.fail("oracle-rules", f"unknown pair window {rules['window']!r}")
         rules["window"] = "patience"
-    if rules["window"] == "bound" and (rules["pickup_check"] or rules["allow_enroute"]
-                                       or not rules["both_pickup_orders"] or rules["order_rule"] != "min_feasible"):
-        rc.fail("oracle-rules", "the upper bound's rules are fixed (both pick-up orders, no pick-up test, no "
-                                "en-route geometry, the best feasible service order); meta.json records others")
+    if rules["window"] == "bound" and (
+        rules["pickup_check"]
+        or rules["allow_enroute"]
+        or not rules["both_pickup_orders"]
+        or rules["order_rule"] != "min_feasible"
+    ):
+        rc.fail(
+            "oracle-rules",
+            "the upper bound's rules are fixed (both pick-up orders, no pick-up test, no "
+            "en-route geometry, the best feasible service order); meta.json records others",
+        )
     return rules
 
 
@@ -1320,8 +1552,11 @@ def _pair_rows(rc: RunCheck, pairs: pd.DataFrame, f: _Folder):
     unknown = ~pairs["first_id"].isin(index.index) | ~pairs["second_id"].isin(index.index)
     if unknown.any():
         k = int(np.flatnonzero(unknown.to_numpy())[0])
-        rc.fail("oracle-pairs", f"{int(unknown.sum())} pairs name order ids that are not in orders.csv.gz, e.g. "
-                                f"({pairs['first_id'].iloc[k]}, {pairs['second_id'].iloc[k]})")
+        rc.fail(
+            "oracle-pairs",
+            f"{int(unknown.sum())} pairs name order ids that are not in orders.csv.gz, e.g. "
+            f"({pairs['first_id'].iloc[k]}, {pairs['second_id'].iloc[k]})",
+        )
         return None
     a = index[pairs["first_id"]].to_numpy()
     b = index[pairs["second_id"]].to_numpy()
@@ -1347,13 +1582,17 @@ def _check_paper_pairs(rc: RunCheck, rules: dict, pairs: pd.DataFrame, a, b, fof
     def fail(mask: np.ndarray, what: str) -> None:
         if mask.any():
             k = int(np.flatnonzero(mask)[0])
-            rc.fail("oracle-pairs", f"{int(mask.sum())} pairs {what}, e.g. ({ids[0][k]}, {ids[1][k]}) requested "
-                                    f"{gap[k]:.0f} s apart")
+            rc.fail(
+                "oracle-pairs",
+                f"{int(mask.sum())} pairs {what}, e.g. ({ids[0][k]}, {ids[1][k]}) requested {gap[k]:.0f} s apart",
+            )
 
     fail(waiting & (np.abs(gap) > k_bar + TOL_S), f"of waiting orders request more than K̄ = {k_bar:g} s apart")
     in_window = (gap > k_bar) & (s > 0) & (s < f.solo[a])
-    fail(enroute & ~in_window, "are en-route pairs outside the en-route window (the second order requests "
-                               "after K̄, while the first one rides)")
+    fail(
+        enroute & ~in_window,
+        "are en-route pairs outside the en-route window (the second order requests after K̄, while the first one rides)",
+    )
     if not rules["allow_enroute"]:
         fail(enroute, "are en-route pairs in an oracle whose rules do not allow them")
     if not rules["both_pickup_orders"]:
@@ -1363,8 +1602,8 @@ def _check_paper_pairs(rc: RunCheck, rules: dict, pairs: pd.DataFrame, a, b, fof
     en = np.flatnonzero(enroute & in_window)
     if len(en):
         off, nodes, cum = _paths(f, a[en])
-        first = _first_true(cum >= np.repeat(s[en], np.diff(off)), off)    # the next node at or after s
-        first = np.where(first < 0, off[1:] - 1, first)                      # s < l_a: never, but no crash
+        first = _first_true(cum >= np.repeat(s[en], np.diff(off)), off)  # the next node at or after s
+        first = np.where(first < 0, off[1:] - 1, first)  # s < l_a: never, but no crash
         h[en], delta[en] = nodes[first], cum[first]
         pre[en] = delta[en] - s[en]
     g = _Geometry.of(f, a, b, h, delta, pre, rules["max_detour_m"])
@@ -1372,15 +1611,19 @@ def _check_paper_pairs(rc: RunCheck, rules: dict, pairs: pd.DataFrame, a, b, fof
     feasible = route["ok"] & ((route["pk"] <= rules["max_pickup_m"] + DETOUR_TOL_M) | (not rules["pickup_check"]))
     fail(~feasible, "are not feasible under the rules (a detour > D̄, or a pick-up > R̄ with pickup_check)")
     chosen = g.rule_order(rules["order_rule"])
-    fail((chosen != fofo) & (np.abs(g.fofo_len - g.folo_len) > TOL_M),
-         f"are not served in the order the rule {rules['order_rule']} picks")
+    fail(
+        (chosen != fofo) & (np.abs(g.fofo_len - g.folo_len) > TOL_M),
+        f"are not served in the order the rule {rules['order_rule']} picks",
+    )
     if rules["both_pickup_orders"] and waiting.any():
         o_b = f.col("origin")[b].astype(np.int64)
         rev = _Geometry.of(f, b, a, o_b, np.zeros(len(a)), np.zeros(len(a)), rules["max_detour_m"])
         other = rev.served(rev.rule_order(rules["order_rule"]))
         other_ok = other["ok"] & ((other["pk"] <= rules["max_pickup_m"] + DETOUR_TOL_M) | (not rules["pickup_check"]))
-        fail(waiting & other_ok & (other["saving"] > route["saving"] + TOL_M),
-             "are not in the pick-up order of the larger saving (§4.2: both orders tried, the larger wins)")
+        fail(
+            waiting & other_ok & (other["saving"] > route["saving"] + TOL_M),
+            "are not in the pick-up order of the larger saving (§4.2: both orders tried, the larger wins)",
+        )
     return route
 
 
@@ -1391,22 +1634,34 @@ def _check_bound_pairs(rc: RunCheck, pairs: pd.DataFrame, a, b, fofo, f: _Folder
     not_edge = ~(allowed & route["ok"])
     if not_edge.any():
         k = int(np.flatnonzero(not_edge)[0])
-        rc.fail("oracle-pairs", f"{int(not_edge.sum())} pairs are not edges of the upper bound's graph with the "
-                                f"stored first order, e.g. ({pairs['first_id'].iloc[k]}, {pairs['second_id'].iloc[k]})")
+        rc.fail(
+            "oracle-pairs",
+            f"{int(not_edge.sum())} pairs are not edges of the upper bound's graph with the "
+            f"stored first order, e.g. ({pairs['first_id'].iloc[k]}, {pairs['second_id'].iloc[k]})",
+        )
     weight, _ = _weights(f, a, b)
     stored = pairs["saving_m"].to_numpy()
     if not np.allclose(weight[~not_edge], stored[~not_edge], rtol=0, atol=TOL_M):
         rc.fail("oracle-pairs", "stored weights differ from the largest realisable savings recomputed here")
-    off = ~not_edge & ((g.rule_order("min_feasible") != fofo) & (np.abs(g.fofo_len - g.folo_len) > TOL_M)
-                       | (route["saving"] < weight - TOL_M))
+    off = ~not_edge & (
+        (g.rule_order("min_feasible") != fofo) & (np.abs(g.fofo_len - g.folo_len) > TOL_M)
+        | (route["saving"] < weight - TOL_M)
+    )
     if off.any():
-        rc.fail("oracle-pairs", f"{int(off.sum())} pairs are not in the orientation and service order of the "
-                                "largest weight")
+        rc.fail(
+            "oracle-pairs", f"{int(off.sum())} pairs are not in the orientation and service order of the largest weight"
+        )
     return route
 
 
-STORED_ROUTE = (("saving_m", "saving"), ("length_m", "length"), ("detour_first_m", "detour_x"),
-                ("detour_second_m", "detour_y"), ("shared_m", "shared"), ("pickup_m", "pk"))
+STORED_ROUTE = (
+    ("saving_m", "saving"),
+    ("length_m", "length"),
+    ("detour_first_m", "detour_x"),
+    ("detour_second_m", "detour_y"),
+    ("shared_m", "shared"),
+    ("pickup_m", "pk"),
+)
 
 
 def _check_stored_route(rc: RunCheck, pairs: pd.DataFrame, route: dict) -> None:
@@ -1416,13 +1671,17 @@ def _check_stored_route(rc: RunCheck, pairs: pd.DataFrame, route: dict) -> None:
         bad = ~np.isclose(stored, route[key], rtol=0, atol=TOL_M)
         if bad.any():
             k = int(np.flatnonzero(bad)[0])
-            rc.fail("oracle-pairs", f"{int(bad.sum())} pairs' stored {column} differ from the recomputed ones, e.g. "
-                                    f"({pairs['first_id'].iloc[k]}, {pairs['second_id'].iloc[k]}): stored "
-                                    f"{stored[k]:.3f} m, recomputed {route[key][k]:.3f} m")
+            rc.fail(
+                "oracle-pairs",
+                f"{int(bad.sum())} pairs' stored {column} differ from the recomputed ones, e.g. "
+                f"({pairs['first_id'].iloc[k]}, {pairs['second_id'].iloc[k]}): stored "
+                f"{stored[k]:.3f} m, recomputed {route[key][k]:.3f} m",
+            )
 
 
-def _oracle_kpis(rec: dict, rules: dict, pairs: pd.DataFrame, route: dict, f: _Folder,
-                 reported: pd.DataFrame) -> tuple[dict, dict]:
+def _oracle_kpis(
+    rec: dict, rules: dict, pairs: pd.DataFrame, route: dict, f: _Folder, reported: pd.DataFrame
+) -> tuple[dict, dict]:
     """(recomputed KPIs, solver claims -> failure message or None).  The objective is the matching's value
     in model units (savings rounded to ``unit_m``; the bound's rounded up, docs/bound.md)."""
     n, count = f.n, len(pairs)
@@ -1431,23 +1690,32 @@ def _oracle_kpis(rec: dict, rules: dict, pairs: pd.DataFrame, route: dict, f: _F
     bound = rules["window"] == "bound"
     objective = float((np.ceil(stored / unit) if bound else np.round(stored / unit)).sum() * unit)
     detours = np.concatenate([route["detour_x"], route["detour_y"]])
-    out = {"orders": n, "pairs": count, "pooled_passengers": 2 * count,
-           "pairing_ratio": 2 * count / n if n else float("nan"),
-           "avg_detour_m": float(detours.mean()) if count else float("nan"),
-           "avg_shared_m": float(route["shared"].mean()) if count else float("nan"),
-           "objective_m": objective}
+    out = {
+        "orders": n,
+        "pairs": count,
+        "pooled_passengers": 2 * count,
+        "pairing_ratio": 2 * count / n if n else float("nan"),
+        "avg_detour_m": float(detours.mean()) if count else float("nan"),
+        "avg_shared_m": float(route["shared"].mean()) if count else float("nan"),
+        "objective_m": objective,
+    }
     have = {k: _as_number(v) for k, v in zip(reported["kpi"], reported["value"])}
     optimal = rec.get("status", "optimal") == "optimal"
     claims = {}
     if not bound:
         out["total_saving_km"] = float(route["saving"].sum()) / 1000.0
     elif optimal:
-        out["total_saving_km"] = objective / 1000.0             # the rounded-up optimum is the bound
+        out["total_saving_km"] = objective / 1000.0  # the rounded-up optimum is the bound
     else:
         rep = have.get("total_saving_km")
-        claims["total_saving_km"] = None if rep is None or rep >= objective / 1000.0 - 1e-6 else (
-            f"KPI total_saving_km: the reported bound {rep!r} km lies below its own matching's "
-            f"{objective / 1000.0!r} km")
+        claims["total_saving_km"] = (
+            None
+            if rep is None or rep >= objective / 1000.0 - 1e-6
+            else (
+                f"KPI total_saving_km: the reported bound {rep!r} km lies below its own matching's "
+                f"{objective / 1000.0!r} km"
+            )
+        )
     bound_m, gap = have.get("bound_m"), have.get("gap")
     claims["bound_m"] = None
     if bound_m is not None and not np.isnan(bound_m):
@@ -1459,9 +1727,11 @@ def _oracle_kpis(rec: dict, rules: dict, pairs: pd.DataFrame, route: dict, f: _F
     claims["pairs_bound"] = None
     if rec.get("variant", 1) == 2 and pairs_bound is not None:
         if not pairs_bound >= count or (optimal and pairs_bound != count):
-            claims["pairs_bound"] = (f"KPI pairs_bound: the proven maximum number of pairs {pairs_bound!r} does not "
-                                     f"{'equal' if optimal else 'cover'} the {count} pairs of the "
-                                     f"{'optimal ' if optimal else ''}matching")
+            claims["pairs_bound"] = (
+                f"KPI pairs_bound: the proven maximum number of pairs {pairs_bound!r} does not "
+                f"{'equal' if optimal else 'cover'} the {count} pairs of the "
+                f"{'optimal ' if optimal else ''}matching"
+            )
     elif pairs_bound is not None and not np.isnan(pairs_bound):
         claims["pairs_bound"] = f"KPI pairs_bound: reported {pairs_bound!r} for an oracle that proves none"
     return out, claims
@@ -1471,9 +1741,13 @@ def _oracle_kpis(rec: dict, rules: dict, pairs: pd.DataFrame, route: dict, f: _F
 def _listed_children(meta: dict) -> list[str] | None:
     """The child folders a parent's meta.json lists: ``children`` (recorded since rpbench writes it), else the
     multi-day ``dates`` or the sweep points' labels (the folders are named after them); None: no list."""
-    for listed in (meta.get("children"), meta.get("dates") if meta.get("kind") == "multi-day" else None,
-                   [p.get("label") for p in meta.get("points", []) if isinstance(p, dict)]
-                   if meta.get("kind") == "sweep" and isinstance(meta.get("points"), list) else None):
+    for listed in (
+        meta.get("children"),
+        meta.get("dates") if meta.get("kind") == "multi-day" else None,
+        [p.get("label") for p in meta.get("points", []) if isinstance(p, dict)]
+        if meta.get("kind") == "sweep" and isinstance(meta.get("points"), list)
+        else None,
+    ):
         if isinstance(listed, list) and listed and all(isinstance(x, str) for x in listed):
             return listed
     return None
@@ -1509,13 +1783,17 @@ def _check_parent_tables(fc: RunCheck, parent: Path, meta: dict) -> None:
             table = by_day_table(parent)
             _compare_table(fc, parent / "by_day.csv", table, ["date", "run", "kpi"], ["value"])
             stats = table.groupby(["run", "kpi"], sort=False)["value"].agg(["mean", "std", "min", "max", "count"])
-            _compare_table(fc, parent / "summary.csv", stats.reset_index(), ["run", "kpi"],
-                           ["mean", "std", "min", "max", "count"])
+            _compare_table(
+                fc, parent / "summary.csv", stats.reset_index(), ["run", "kpi"], ["mean", "std", "min", "max", "count"]
+            )
         else:
             _compare_table(fc, parent / "sweep.csv", sweep_table(parent), ["label", "run", "kpi"], ["point", "value"])
     except (RpbenchError, KeyError, ValueError, TypeError) as exc:
-        fc.skip("parent-tables", f"the children's KPI tables cannot be gathered ({type(exc).__name__}: "
-                                 f"{one_line(exc)}); their own checks say why")
+        fc.skip(
+            "parent-tables",
+            f"the children's KPI tables cannot be gathered ({type(exc).__name__}: "
+            f"{one_line(exc)}); their own checks say why",
+        )
 
 
 def _compare_table(fc: RunCheck, path: Path, expected: pd.DataFrame, keys: list[str], values: list[str]) -> None:
@@ -1543,19 +1821,27 @@ def _compare_table(fc: RunCheck, path: Path, expected: pd.DataFrame, keys: list[
     # older version did not: not compared, and said so.
     other = {k for k in extra if k[-1] not in KNOWN_KPIS} | {k for k in lost if k[-1] in RATIO_KPIS}
     if other:
-        fc.skip("parent-tables", f"{path.name}: rows of {', '.join(sorted({k[-1] for k in other}))} not compared "
-                                 "(rendered by another rpbench version)")
+        fc.skip(
+            "parent-tables",
+            f"{path.name}: rows of {', '.join(sorted({k[-1] for k in other}))} not compared "
+            "(rendered by another rpbench version)",
+        )
     extra, lost = sorted(extra - other), sorted(lost - other)
     if extra or lost:
-        fc.fail("parent-tables", f"{path.name}: rows {extra[:3]} are not in the children's kpis.csv, rows "
-                                 f"{lost[:3]} are missing")
+        fc.fail(
+            "parent-tables",
+            f"{path.name}: rows {extra[:3]} are not in the children's kpis.csv, rows {lost[:3]} are missing",
+        )
         return
     for column in values:
         for key, value in want[column].items():
             rep = _as_number(have.loc[key, column])
             if rep is None or not _same(rep, float(value)):
-                fc.fail("parent-tables", f"{path.name}: {column} of {key} is {_show(have.loc[key, column])}, the "
-                                         f"children's kpis.csv give {float(value)!r}")
+                fc.fail(
+                    "parent-tables",
+                    f"{path.name}: {column} of {key} is {_show(have.loc[key, column])}, the "
+                    f"children's kpis.csv give {float(value)!r}",
+                )
     fc.checked[path.stem] = len(want)
 
 

@@ -33,8 +33,17 @@ import pandas as pd
 
 from rpbench.scenarios.base import Params
 
-KPI_ORDER = ["response_rate", "pairing_ratio", "platform_profit_cny", "avg_response_time_s", "avg_pickup_time_s",
-             "avg_detour_m", "avg_shared_m", "total_occupied_km", "total_saving_km"]
+KPI_ORDER = [
+    "response_rate",
+    "pairing_ratio",
+    "platform_profit_cny",
+    "avg_response_time_s",
+    "avg_pickup_time_s",
+    "avg_detour_m",
+    "avg_shared_m",
+    "total_occupied_km",
+    "total_saving_km",
+]
 KPI_LABELS = {
     "response_rate": "Response rate",
     "pairing_ratio": "Pairing ratio",
@@ -48,8 +57,17 @@ KPI_LABELS = {
     "competitive_ratio_bound": "Competitive ratio (saving / proven upper bound)",
     "competitive_ratio": "Saving / Oracle-1 (paper: same-window pairs; not a bound)",
 }
-EXTRA_KPIS = ["orders", "served", "cancelled", "pooled_passengers", "pairs", "pairing_ratio_of_orders",
-              "avg_pickup_distance_m", "platform_profit_alt_cny", "total_solo_served_km"]
+EXTRA_KPIS = [
+    "orders",
+    "served",
+    "cancelled",
+    "pooled_passengers",
+    "pairs",
+    "pairing_ratio_of_orders",
+    "avg_pickup_distance_m",
+    "platform_profit_alt_cny",
+    "total_solo_served_km",
+]
 
 
 def odometer_at(traj: dict[str, np.ndarray], vehicle: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -65,8 +83,9 @@ def odometer_at(traj: dict[str, np.ndarray], vehicle: np.ndarray, t: np.ndarray)
     return out
 
 
-def passenger_table(events: pd.DataFrame, solo_m: np.ndarray, request_s: np.ndarray,
-                    traj: dict[str, np.ndarray]) -> pd.DataFrame:
+def passenger_table(
+    events: pd.DataFrame, solo_m: np.ndarray, request_s: np.ndarray, traj: dict[str, np.ndarray]
+) -> pd.DataFrame:
     """One row per order: times, vehicle, partner, and driven distances from the odometers."""
     n = len(solo_m)
     tab = pd.DataFrame({"request_s": request_s, "solo_m": solo_m})
@@ -82,7 +101,7 @@ def passenger_table(events: pd.DataFrame, solo_m: np.ndarray, request_s: np.ndar
     has = assign["partner"].to_numpy() >= 0
     a_order, a_partner = assign["order"].to_numpy()[has], assign["partner"].to_numpy()[has]
     partner[a_order] = a_partner
-    partner[a_partner] = a_order                       # the first passenger of a join learns its partner too
+    partner[a_partner] = a_order  # the first passenger of a join learns its partner too
     kind = np.full(n, "", dtype=object)
     kind[assign["order"].to_numpy()] = assign["kind"].to_numpy()
     tab["vehicle"], tab["partner"], tab["kind"] = vehicle, partner, kind
@@ -151,8 +170,10 @@ def kpis(tab: pd.DataFrame, occupied_m: np.ndarray, params: Params) -> dict[str,
     revenue = float((fare[served] * solo[served]).sum()) / 1000
     shared = np.nan_to_num(tab["shared_m"].to_numpy())
     ride = tab["ride_m"].to_numpy()
-    revenue_alt = float((params.fare_solo_cny_per_km * (ride - shared) + params.fare_pooled_cny_per_km * shared)
-                        [served].sum()) / 1000
+    revenue_alt = (
+        float((params.fare_solo_cny_per_km * (ride - shared) + params.fare_pooled_cny_per_km * shared)[served].sum())
+        / 1000
+    )
     pay = params.driver_pay_cny_per_km * occupied_km
 
     def mean(x, mask):
@@ -191,18 +212,32 @@ def hourly(tab: pd.DataFrame, start_hour: int = 0) -> pd.DataFrame:
     idx = np.arange(len(tab))
     lead = pooled.to_numpy() & ((partner > idx) | (partner < 0))
     p = np.where(partner >= 0, partner, 0)
-    pair_saving = np.where(lead, tab["solo_m"].to_numpy() + tab["solo_m"].to_numpy()[p]
-                           - _pair_length(tab, p), 0.0)
-    frame = pd.DataFrame({"hour": hour, "served": served, "pooled": pooled, "detour_m": tab["detour_m"].where(pooled),
-                          "shared_m": tab["shared_m"].where(pooled), "saving_km": pair_saving / 1000,
-                          "pickup_m": tab["pickup_m"].where(served),
-                          "pickup_time_s": (tab["pickup_s"] - tab["assign_s"]).where(served)})
+    pair_saving = np.where(lead, tab["solo_m"].to_numpy() + tab["solo_m"].to_numpy()[p] - _pair_length(tab, p), 0.0)
+    frame = pd.DataFrame(
+        {
+            "hour": hour,
+            "served": served,
+            "pooled": pooled,
+            "detour_m": tab["detour_m"].where(pooled),
+            "shared_m": tab["shared_m"].where(pooled),
+            "saving_km": pair_saving / 1000,
+            "pickup_m": tab["pickup_m"].where(served),
+            "pickup_time_s": (tab["pickup_s"] - tab["assign_s"]).where(served),
+        }
+    )
     g = frame.groupby("hour")
-    out = pd.DataFrame({"orders": g.size(), "response_rate": g["served"].mean(),
-                        "pairing_ratio": g["pooled"].sum() / g["served"].sum().where(g["served"].sum() > 0),
-                        "avg_detour_m": g["detour_m"].mean(), "avg_shared_m": g["shared_m"].mean(),
-                        "total_saving_km": g["saving_km"].sum(), "avg_pickup_m": g["pickup_m"].mean(),
-                        "avg_pickup_time_s": g["pickup_time_s"].mean()})
+    out = pd.DataFrame(
+        {
+            "orders": g.size(),
+            "response_rate": g["served"].mean(),
+            "pairing_ratio": g["pooled"].sum() / g["served"].sum().where(g["served"].sum() > 0),
+            "avg_detour_m": g["detour_m"].mean(),
+            "avg_shared_m": g["shared_m"].mean(),
+            "total_saving_km": g["saving_km"].sum(),
+            "avg_pickup_m": g["pickup_m"].mean(),
+            "avg_pickup_time_s": g["pickup_time_s"].mean(),
+        }
+    )
     return out.reset_index()
 
 

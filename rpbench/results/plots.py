@@ -10,14 +10,20 @@ import pandas as pd
 from rpbench.results.metrics import KPI_LABELS
 from rpbench.results.runs import run_color, run_label
 
-HOURLY_PANELS = [("avg_shared_m", "(a) Average shared distance (m)"), ("avg_detour_m", "(b) Average detour (m)"),
-                 ("total_saving_km", "(c) Distance saving (km)"), ("response_rate", "(d) Response rate")]
+HOURLY_PANELS = [
+    ("avg_shared_m", "(a) Average shared distance (m)"),
+    ("avg_detour_m", "(b) Average detour (m)"),
+    ("total_saving_km", "(c) Distance saving (km)"),
+    ("response_rate", "(d) Response rate"),
+]
 
 
 def _pyplot():
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     return plt
 
 
@@ -64,7 +70,7 @@ def per_day_figures(by_day: pd.DataFrame, folder: Path, kpis: list[str]) -> list
             ax.plot(pd.to_datetime(g["date"]), g["value"], marker="o", ms=3, label=label, color=color)
         ax.set_title(KPI_LABELS.get(kpi, kpi), fontsize=10)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.01, 0.5))   # beside: lines fill the plot
+        ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.01, 0.5))  # beside: lines fill the plot
         fig.autofmt_xdate()
         fig.tight_layout()
         path = folder / f"by_day_{kpi}.png"
@@ -99,6 +105,7 @@ def bench_figure(table: pd.DataFrame, path: Path, title: str) -> Path:
     """
     plt = _pyplot()
     from matplotlib.ticker import NullFormatter
+
     done = table[table["status"] == "optimal"]
     structures = list(dict.fromkeys(table["structure"]))
     fig, axes = plt.subplots(1, len(structures), figsize=(4.2 * len(structures), 3.8), squeeze=False)
@@ -108,7 +115,7 @@ def bench_figure(table: pd.DataFrame, path: Path, title: str) -> Path:
             ax.plot(g["cols"], g["total_s"] * 1e3, marker="o", ms=3, label=preset)
         ax.set_xscale("log")
         ax.set_yscale("log")
-        ax.xaxis.set_minor_formatter(NullFormatter())    # decade labels only: minor ones overlap
+        ax.xaxis.set_minor_formatter(NullFormatter())  # decade labels only: minor ones overlap
         ax.set_xlabel("model columns")
         ax.set_title(structure, fontsize=10)
         ax.grid(alpha=0.3, which="both")

@@ -32,7 +32,7 @@ SKIPPED = {
     "movement": "the authors' vehicles jump to the last node of their route (teleport): no trajectory exists",
     "trajectories": "no trajectories are written for the authors' engine (teleporting vehicles)",
     "pickup-places": "pick-ups are not at a position on a driven route (teleport, or measured from the first "
-                     "passenger's origin)",
+    "passenger's origin)",
     "capacity-in-time": "on-board intervals need trajectories (teleport)",
     "occupied-distance": "the authors' ledger sums pair savings, not driven distance",
     "bound-certificate": "the upper bound (docs/bound.md) assumes rpbench's movement rules",
@@ -67,11 +67,13 @@ def audit_run(records: pd.DataFrame, row: dict) -> tuple[dict[str, list[str]], d
             continue
         ids, partners = group["order_id"].tolist(), group["partner"].tolist()
         if len(group) > 2 or sorted(ids) != sorted(partners):
-            fail("assignment", f"vehicle {int(vehicle)} took {len(group)} passengers in the round at {t:g} s "
-                               "that are not one trip")
+            fail(
+                "assignment",
+                f"vehicle {int(vehicle)} took {len(group)} passengers in the round at {t:g} s that are not one trip",
+            )
     checked["assignment"] += 4 * len(rec)
     pooled = rec[rec["pooled"].astype(bool)]
-    by_id = rec.drop_duplicates("order_id").set_index("order_id")     # a duplicate is reported above
+    by_id = rec.drop_duplicates("order_id").set_index("order_id")  # a duplicate is reported above
     for _, r in pooled.iterrows():
         p = int(r["partner"])
         if p not in by_id.index or int(by_id.at[p, "partner"]) != int(r["order_id"]):
@@ -86,8 +88,11 @@ def audit_run(records: pd.DataFrame, row: dict) -> tuple[dict[str, list[str]], d
         checked["accounting"] += 3
     lead = pooled[pooled["order_id"] < pooled["partner"]]
     partner = by_id.loc[lead["partner"].astype(np.int64)]
-    saving_m = (lead["solo_m"].to_numpy() + partner["solo_m"].to_numpy()
-                - (lead["ride_m"].to_numpy() + partner["ride_m"].to_numpy() - lead["shared_m"].to_numpy()))
+    saving_m = (
+        lead["solo_m"].to_numpy()
+        + partner["solo_m"].to_numpy()
+        - (lead["ride_m"].to_numpy() + partner["ride_m"].to_numpy() - lead["shared_m"].to_numpy())
+    )
     served = len(rec)
     recomputed = {
         "served": served,
@@ -121,12 +126,30 @@ def audit_folder(folder: Path) -> list[tuple[str, dict, dict, dict]]:
         name = f"{row['date']}/{row['strategy']}/{row['engine']}"
         path = records_file(folder, row["date"], row["strategy"], row["engine"])
         if str(row["engine"]).startswith("rpbench"):
-            out.append((name, {}, {}, {"all": "rpbench's own engine: check its results folder "
-                                              "(rpbench run --scenario haikou-paper-input) with rpbench check"}))
+            out.append(
+                (
+                    name,
+                    {},
+                    {},
+                    {
+                        "all": "rpbench's own engine: check its results folder "
+                        "(rpbench run --scenario haikou-paper-input) with rpbench check"
+                    },
+                )
+            )
             continue
         if not path.is_file():
-            out.append((name, {}, {}, {"assignment": "records not kept for this ablation step",
-                                       "accounting": "records not kept for this ablation step"}))
+            out.append(
+                (
+                    name,
+                    {},
+                    {},
+                    {
+                        "assignment": "records not kept for this ablation step",
+                        "accounting": "records not kept for this ablation step",
+                    },
+                )
+            )
             continue
         try:
             records = pd.read_csv(path)

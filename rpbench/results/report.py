@@ -25,13 +25,20 @@ from rpbench.results.runs import run_label
 #: competitive ratio: the bound is proven (docs/bound.md); Oracle-1 is the paper's reference.
 RATIO_ROWS = {"competitive_ratio_bound": "bound", "competitive_ratio": "oracle1"}
 #: One line under every table with an Oracle-1 column: why its ratio can exceed 1.
-ORACLE1_NOTE = ("Oracle-1 (the paper's) pairs only orders requested within K̄ of each other, while the strategies "
-                "also pair en route, so a strategy can save more than Oracle-1: the saving / Oracle-1 row is a "
-                "reference, not a competitive ratio; the competitive ratio divides by the proven upper bound.")
+ORACLE1_NOTE = (
+    "Oracle-1 (the paper's) pairs only orders requested within K̄ of each other, while the strategies "
+    "also pair en route, so a strategy can save more than Oracle-1: the saving / Oracle-1 row is a "
+    "reference, not a competitive ratio; the competitive ratio divides by the proven upper bound."
+)
 #: Marks the column of a run whose numbers rest on solver answers not proven optimal (see :func:`unproven_runs`).
 UNPROVEN_MARK = "*"
-_DECIMALS = {"response_rate": 2, "pairing_ratio": 2, "competitive_ratio": 3, "competitive_ratio_bound": 3,
-             "pairing_ratio_of_orders": 2}
+_DECIMALS = {
+    "response_rate": 2,
+    "pairing_ratio": 2,
+    "competitive_ratio": 3,
+    "competitive_ratio_bound": 3,
+    "pairing_ratio_of_orders": 2,
+}
 
 
 def fmt(kpi: str, value) -> str:
@@ -41,7 +48,7 @@ def fmt(kpi: str, value) -> str:
     value = float(value) + 0.0
     if kpi in _DECIMALS:
         text = f"{value:.{_DECIMALS[kpi]}f}"
-        return text[1:] if text.startswith("-") and float(text) == 0 else text   # no "-0.000"
+        return text[1:] if text.startswith("-") and float(text) == 0 else text  # no "-0.000"
     if abs(value) >= 100 or kpi.endswith("_s") or kpi.endswith("_m"):
         text = f"{value:,.0f}"
     else:
@@ -57,8 +64,9 @@ def load_kpis(folder: Path) -> pd.DataFrame:
     if missing:
         raise ResultsError(f"{str(folder / 'kpis.csv')!r} lacks column(s) {', '.join(sorted(missing))}")
     wide = tidy.pivot(index="kpi", columns="run", values="value")
-    order = [r for r in meta.get("strategies", []) if r in wide.columns] + \
-            [r for r in wide.columns if r not in meta.get("strategies", [])]
+    order = [r for r in meta.get("strategies", []) if r in wide.columns] + [
+        r for r in wide.columns if r not in meta.get("strategies", [])
+    ]
     return with_competitive_ratios(wide[order].drop(index=list(RATIO_ROWS), errors="ignore"))
 
 
@@ -93,28 +101,35 @@ def text_table(table: pd.DataFrame, *, title: str | None = None, unproven: dict[
     for r in body:
         lines.append("  ".join(x.ljust(widths[0]) if i == 0 else x.rjust(widths[i]) for i, x in enumerate(r)))
     if any(c in unproven for c in cols):
-        lines.append(f"{UNPROVEN_MARK} not proven optimal: the solver stopped early (time limit or gap), so these "
-                     "numbers are not those of the run as defined (details on stderr and in report.md)")
+        lines.append(
+            f"{UNPROVEN_MARK} not proven optimal: the solver stopped early (time limit or gap), so these "
+            "numbers are not those of the run as defined (details on stderr and in report.md)"
+        )
     return "\n".join(lines)
 
 
-def markdown_table(table: pd.DataFrame, paper_values: dict | None = None,
-                   unproven: dict[str, str] | None = None) -> str:
+def markdown_table(
+    table: pd.DataFrame, paper_values: dict | None = None, unproven: dict[str, str] | None = None
+) -> str:
     """The Table 2 layout in markdown; with ``paper_values`` each cell reads "rpbench (paper)"; the columns
     of ``unproven`` runs are marked (the footnote is :func:`unproven_notes`)."""
     rows = table_rows(table)
     cols = list(table.columns)
     unproven = unproven or {}
-    out = ["| Metric | " + " | ".join(run_label(c) + ("\\" + UNPROVEN_MARK if c in unproven else "")
-                                     for c in cols) + " |",
-           "|---|" + "---:|" * len(cols)]
+    out = [
+        "| Metric | " + " | ".join(run_label(c) + ("\\" + UNPROVEN_MARK if c in unproven else "") for c in cols) + " |",
+        "|---|" + "---:|" * len(cols),
+    ]
     for k in rows:
         cells = []
         for c in cols:
             cell = fmt(k, table.loc[k, c])
             if paper_values is not None:
-                ref = paper_values.get(c, {}).get(k, float("nan")) if k not in RATIO_ROWS else (
-                    paper.FL_COMPETITIVE_RATIO if c == "fl" and k == "competitive_ratio" else float("nan"))
+                ref = (
+                    paper_values.get(c, {}).get(k, float("nan"))
+                    if k not in RATIO_ROWS
+                    else (paper.FL_COMPETITIVE_RATIO if c == "fl" and k == "competitive_ratio" else float("nan"))
+                )
                 cell += f" ({fmt(k, ref)})"
             cells.append(cell)
         out.append(f"| {KPI_LABELS.get(k, k)} | " + " | ".join(cells) + " |")
@@ -130,17 +145,19 @@ def solver_summary(folder: Path) -> pd.DataFrame | None:
     if rounds.empty:
         return None
     g = rounds.groupby("run", sort=False)
-    return pd.DataFrame({
-        "rounds": g.size(),
-        "mean cols": g["cols"].mean().round(1),
-        "max cols": g["cols"].max(),
-        "strategy build p50 (ms)": (g["strategy_build_s"].median() * 1e3).round(3),
-        "solve p50 (ms)": (g["solve_s"].median() * 1e3).round(3),
-        "solve p95 (ms)": (g["solve_s"].quantile(0.95) * 1e3).round(3),
-        "solver total (s)": (g["solver_build_s"].sum() + g["solve_s"].sum() + g["extract_s"].sum()).round(3),
-        "not optimal": g["status"].apply(lambda s: int((s != "optimal").sum())),
-        "tie moves": g["tie_moves"].sum(),
-    })
+    return pd.DataFrame(
+        {
+            "rounds": g.size(),
+            "mean cols": g["cols"].mean().round(1),
+            "max cols": g["cols"].max(),
+            "strategy build p50 (ms)": (g["strategy_build_s"].median() * 1e3).round(3),
+            "solve p50 (ms)": (g["solve_s"].median() * 1e3).round(3),
+            "solve p95 (ms)": (g["solve_s"].quantile(0.95) * 1e3).round(3),
+            "solver total (s)": (g["solver_build_s"].sum() + g["solve_s"].sum() + g["extract_s"].sum()).round(3),
+            "not optimal": g["status"].apply(lambda s: int((s != "optimal").sum())),
+            "tie moves": g["tie_moves"].sum(),
+        }
+    )
 
 
 def unproven_runs(folder: Path) -> dict[str, str]:
@@ -160,8 +177,10 @@ def unproven_runs(folder: Path) -> dict[str, str]:
     for run, facts in meta.get("runs", {}).items():
         if facts.get("kind") == "oracle" and facts.get("status", "optimal") != "optimal":
             gap = facts.get("gap")
-            found[run] = (f"stopped with status {facts['status']} "
-                          f"(gap {'unknown' if gap is None or gap != gap else f'{gap:.3g}'})")
+            found[run] = (
+                f"stopped with status {facts['status']} "
+                f"(gap {'unknown' if gap is None or gap != gap else f'{gap:.3g}'})"
+            )
     order = meta.get("strategies", [])
     return dict(sorted(found.items(), key=lambda kv: order.index(kv[0]) if kv[0] in order else len(order)))
 
@@ -171,9 +190,12 @@ def unproven_notes(unproven: dict[str, str]) -> list[str]:
     if not unproven:
         return []
     why = "; ".join(f"{run_label(r)}: {text}" for r, text in unproven.items())
-    return [f"\\{UNPROVEN_MARK} **Not proven optimal.** {why}. The solver stopped before proving optimality "
-            "(its preset's time limit or gap), so these columns are not the runs as defined; raise "
-            "`time_limit_s`, or rerun with `--strict` to make such runs fail.", ""]
+    return [
+        f"\\{UNPROVEN_MARK} **Not proven optimal.** {why}. The solver stopped before proving optimality "
+        "(its preset's time limit or gap), so these columns are not the runs as defined; raise "
+        "`time_limit_s`, or rerun with `--strict` to make such runs fail.",
+        "",
+    ]
 
 
 def report_markdown(folder: Path, name: str | None = None) -> str:
@@ -185,32 +207,45 @@ def report_markdown(folder: Path, name: str | None = None) -> str:
     lines = [f"# rpbench results: {sc['label']}", ""]
     if sc.get("synthetic"):
         lines += ["> **Synthetic scenario** — not real order data (see the scenario label).", ""]
-    lines += [f"- scenario `{sc['name']}`, seed {sc['seed']}, {sc['summary']['orders']} orders, "
-              f"{sc['summary']['vehicles']} vehicles, {sc['summary']['nodes']} nodes",
-              f"- solver preset `{meta['preset']['name']}` (backend `{meta['preset']['backend']}`)",
-              f"- rpbench {meta['versions']['rpbench']}, commit `{meta.get('git_commit')}`, "
-              f"written {meta.get('created')}", ""]
+    lines += [
+        f"- scenario `{sc['name']}`, seed {sc['seed']}, {sc['summary']['orders']} orders, "
+        f"{sc['summary']['vehicles']} vehicles, {sc['summary']['nodes']} nodes",
+        f"- solver preset `{meta['preset']['name']}` (backend `{meta['preset']['backend']}`)",
+        f"- rpbench {meta['versions']['rpbench']}, commit `{meta.get('git_commit')}`, written {meta.get('created')}",
+        "",
+    ]
     if meta.get("command"):
         lines += ["Command:", "", f"    {meta['command']}", ""]
     lines += ["## Comparison (paper Table 2 layout)", "", markdown_table(table, unproven=unproven), ""]
     lines += unproven_notes(unproven) + offline_notes(table, meta)
     if paper.table2_applies(sc["name"], args.get("date"), args.get("sample")):
-        lines += ["## Beside the paper", "",
-                  "Each cell: rpbench (paper Table 2). The paper's numbers are shown for comparison only; "
-                  "nothing is tuned to them.", "", markdown_table(table, paper.TABLE2, unproven), ""]
+        lines += [
+            "## Beside the paper",
+            "",
+            "Each cell: rpbench (paper Table 2). The paper's numbers are shown for comparison only; "
+            "nothing is tuned to them.",
+            "",
+            markdown_table(table, paper.TABLE2, unproven),
+            "",
+        ]
     summary = solver_summary(folder)
     if summary is not None:
-        lines += ["## Solver statistics per run", "", summary.to_markdown() if _has_tabulate() else
-                  "```\n" + summary.to_string() + "\n```", ""]
+        lines += [
+            "## Solver statistics per run",
+            "",
+            summary.to_markdown() if _has_tabulate() else "```\n" + summary.to_string() + "\n```",
+            "",
+        ]
     walls = {r: v.get("wall_s") for r, v in meta.get("runs", {}).items() if v.get("wall_s") is not None}
     if walls:
-        lines += ["Wall time per run: " + ", ".join(f"{run_label(r)} {w:.2f} s" for r, w in walls.items()),
-                  ""]
+        lines += ["Wall time per run: " + ", ".join(f"{run_label(r)} {w:.2f} s" for r, w in walls.items()), ""]
     if results.run_names(folder):
         verify = f"Verify this folder with `rpbench check {name or folder.name}`."
     else:
-        verify = ("This is a published light copy without the event logs: `check.txt` holds the checker's verdict "
-                  "on the full folder; rerun the command above to regenerate and re-check it.")
+        verify = (
+            "This is a published light copy without the event logs: `check.txt` holds the checker's verdict "
+            "on the full folder; rerun the command above to regenerate and re-check it."
+        )
     lines += [f"KPI definitions: see `rpbench/results/metrics.py` (and the README). {verify}", ""]
     return "\n".join(lines)
 
@@ -220,11 +255,16 @@ def offline_notes(table: pd.DataFrame, meta: dict) -> list[str]:
     lines = []
     if "bound" in table.columns:
         status = meta.get("runs", {}).get("bound", {}).get("status", "optimal")
-        proven = ("solved to proven optimality" if status == "optimal" else
-                  f"**not** solved to optimality ({status}): its value is the solver's dual bound")
-        lines.append(f"Upper bound: the maximum-weight matching over every pair rpbench's simulator can form, "
-                     f"each weighted by the largest saving it can realise (docs/bound.md), {proven}; "
-                     "`rpbench check` certifies every strategy pair against it.")
+        proven = (
+            "solved to proven optimality"
+            if status == "optimal"
+            else f"**not** solved to optimality ({status}): its value is the solver's dual bound"
+        )
+        lines.append(
+            f"Upper bound: the maximum-weight matching over every pair rpbench's simulator can form, "
+            f"each weighted by the largest saving it can realise (docs/bound.md), {proven}; "
+            "`rpbench check` certifies every strategy pair against it."
+        )
     if "oracle1" in table.columns:
         lines.append(ORACLE1_NOTE)
     return [" ".join(lines), ""] if lines else []
@@ -243,9 +283,11 @@ def write_report(folder: Path, name: str | None = None) -> Path:
     text = report_markdown(folder, name)
     hourly_png = hourly_plot(folder)
     if hourly_png is not None:
-        text += ("\n## Per hour\n\nKPIs by request hour (saving of a pair counted in the hour of its earlier "
-                 "request). The upper bound's line is its whole-period matching split the same way: per hour it "
-                 f"describes that matching and is not itself a bound.\n\n![per-hour comparison]({hourly_png.name})\n")
+        text += (
+            "\n## Per hour\n\nKPIs by request hour (saving of a pair counted in the hour of its earlier "
+            "request). The upper bound's line is its whole-period matching split the same way: per hour it "
+            f"describes that matching and is not itself a bound.\n\n![per-hour comparison]({hourly_png.name})\n"
+        )
     path = folder / "report.md"
     path.write_text(text)
     return path
@@ -269,12 +311,15 @@ def findings(table: pd.DataFrame) -> dict[str, bool] | None:
         return None
     col = table.loc
     return {
-        "FL saves the most distance (vs MB, RTV)": bool(col["total_saving_km", "fl"] > max(
-            col["total_saving_km", "mb"], col["total_saving_km", "rtv"])),
-        "FL has the lowest average detour (vs MB, RTV)": bool(col["avg_detour_m", "fl"] < min(
-            col["avg_detour_m", "mb"], col["avg_detour_m", "rtv"])),
-        "FL has a lower response rate (vs MB, RTV)": bool(col["response_rate", "fl"] < min(
-            col["response_rate", "mb"], col["response_rate", "rtv"])),
+        "FL saves the most distance (vs MB, RTV)": bool(
+            col["total_saving_km", "fl"] > max(col["total_saving_km", "mb"], col["total_saving_km", "rtv"])
+        ),
+        "FL has the lowest average detour (vs MB, RTV)": bool(
+            col["avg_detour_m", "fl"] < min(col["avg_detour_m", "mb"], col["avg_detour_m", "rtv"])
+        ),
+        "FL has a lower response rate (vs MB, RTV)": bool(
+            col["response_rate", "fl"] < min(col["response_rate", "mb"], col["response_rate", "rtv"])
+        ),
     }
 
 
@@ -285,8 +330,7 @@ def check_metrics(metrics: list[str] | None) -> list[str] | None:
     known = KPI_ORDER + EXTRA_KPIS + list(RATIO_ROWS) + ["wall_s"]
     unknown = [m for m in metrics if m not in known]
     if unknown or not metrics:
-        raise ResultsError(f"unknown metric {unknown[0] if unknown else '(none)'!r}; known metrics: "
-                           f"{', '.join(known)}")
+        raise ResultsError(f"unknown metric {unknown[0] if unknown else '(none)'!r}; known metrics: {', '.join(known)}")
     return metrics
 
 

@@ -28,6 +28,6 @@ def _style(name: str) -> tuple[str, str | None]:
         return run.label, run.color
     try:
         cls = strategy_class(name)
-    except Exception:          # a label is cosmetic: a broken or missing plug-in must not stop a report
+    except Exception:  # a label is cosmetic: a broken or missing plug-in must not stop a report
         return name, None
     return cls.label, cls.color

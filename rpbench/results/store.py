@@ -43,8 +43,7 @@ from rpbench.exceptions import ResultsError, RpbenchError, one_line
 from rpbench.network import RoadNetwork
 from rpbench.paths import source_root
 
-VERSIONED_PACKAGES = ("numpy", "scipy", "pandas", "numba", "highspy", "ortools", "pyomo", "cvxpy", "pymatching",
-                      "lap")
+VERSIONED_PACKAGES = ("numpy", "scipy", "pandas", "numba", "highspy", "ortools", "pyomo", "cvxpy", "pymatching", "lap")
 
 
 #: Where results folders go without ``--out`` (below the current folder).
@@ -67,7 +66,7 @@ def new_results_folder(out: str | os.PathLike | None, default_name: str) -> Iter
     folders of dead processes beside the new one are swept away first (:func:`remove_stale_partials`).
     """
     final = _unique(Path.cwd() / DEFAULT_PARENT / default_name) if out is None else Path(out)
-    check_new_folder(final)                 # again: a long run gives the world time to change
+    check_new_folder(final)  # again: a long run gives the world time to change
     created = _make_parents(final.parent, final)
     remove_stale_partials(final.parent)
     tmp = final.parent / f".{final.name}.partial-{os.getpid()}"
@@ -98,8 +97,10 @@ def check_new_folder(out: str | os.PathLike | None, *, what: str = "--out") -> N
     target = Path.cwd() / DEFAULT_PARENT / "new" if out is None else Path(out)
     if out is not None and os.path.lexists(target):
         dangling = " (a dangling symbolic link)" if target.is_symlink() and not target.exists() else ""
-        raise ResultsError(f"results folder {str(target)!r} already exists{dangling}; rpbench never overwrites "
-                           f"results, choose another {what}")
+        raise ResultsError(
+            f"results folder {str(target)!r} already exists{dangling}; rpbench never overwrites "
+            f"results, choose another {what}"
+        )
     label = f"{what} {str(out)!r}" if out is not None else f"the default results folder ./{DEFAULT_PARENT}"
     _check_can_create_in(_nearest_existing(target.parent), label)
 
@@ -133,11 +134,12 @@ def _make_parents(folder: Path, final: Path) -> list[Path]:
         try:
             f.mkdir()
         except FileExistsError:
-            continue                                  # made meanwhile by a concurrent run: not ours to undo
+            continue  # made meanwhile by a concurrent run: not ours to undo
         except OSError as exc:
             _remove_empty(created[::-1])
-            raise ResultsError(f"cannot create results folder {str(final)!r}: {str(f)!r}: "
-                               f"{exc.strerror or exc}") from None
+            raise ResultsError(
+                f"cannot create results folder {str(final)!r}: {str(f)!r}: {exc.strerror or exc}"
+            ) from None
         created.append(f)
     return created[::-1]
 
@@ -147,14 +149,16 @@ def _remove_empty(folders: list[Path]) -> None:
         try:
             f.rmdir()
         except OSError:
-            return                                    # not empty (someone else's files): keep it and its parents
+            return  # not empty (someone else's files): keep it and its parents
 
 
 def _move_into_place(tmp: Path, final: Path) -> None:
     # os.rename would silently replace an empty folder created at ``final`` meanwhile: never overwrite.
     if os.path.lexists(final):
-        raise ResultsError(f"results folder {str(final)!r} appeared while this run was writing it; rpbench never "
-                           "overwrites results, nothing was written: choose another --out")
+        raise ResultsError(
+            f"results folder {str(final)!r} appeared while this run was writing it; rpbench never "
+            "overwrites results, nothing was written: choose another --out"
+        )
     os.rename(tmp, final)
 
 
@@ -167,10 +171,11 @@ def _write_error(exc: BaseException, tmp: Path, final: Path) -> ResultsError | N
         try:
             inside = Path(os.path.abspath(exc.filename)).relative_to(os.path.abspath(tmp))
         except ValueError:
-            return None                               # not a file of the folder (an input, say)
+            return None  # not a file of the folder (an input, say)
         where = f"{inside}: " if str(inside) != "." else ""
-    return ResultsError(f"cannot write results folder {str(final)!r} ({where}{exc.strerror or exc}); "
-                        "nothing was written")
+    return ResultsError(
+        f"cannot write results folder {str(final)!r} ({where}{exc.strerror or exc}); nothing was written"
+    )
 
 
 def remove_stale_partials(parent: Path, *, older_than_s: float = STALE_PARTIAL_S) -> list[Path]:
@@ -207,7 +212,7 @@ def _pid_alive(pid: int) -> bool:
     except ProcessLookupError:
         return False
     except (OSError, OverflowError):
-        return True                                   # cannot tell: never remove what may be in use
+        return True  # cannot tell: never remove what may be in use
     return True
 
 
@@ -233,10 +238,17 @@ def environment() -> dict[str, Any]:
             versions[pkg] = metadata.version(pkg)
         except metadata.PackageNotFoundError:
             versions[pkg] = None
-    return {"versions": versions, "git_commit": git_commit(),
-            "machine": {"platform": platform.platform(), "processor": platform.machine(), "cpus": os.cpu_count(),
-                        "memory_gib": _memory_gib()},
-            "created": dt.datetime.now().astimezone().isoformat(timespec="seconds")}
+    return {
+        "versions": versions,
+        "git_commit": git_commit(),
+        "machine": {
+            "platform": platform.platform(),
+            "processor": platform.machine(),
+            "cpus": os.cpu_count(),
+            "memory_gib": _memory_gib(),
+        },
+        "created": dt.datetime.now().astimezone().isoformat(timespec="seconds"),
+    }
 
 
 def git_commit() -> str | None:
@@ -244,10 +256,13 @@ def git_commit() -> str | None:
     if not (root / ".git").exists():
         return None
     try:
-        out = subprocess.run(["git", "-C", str(root), "rev-parse", "HEAD"], capture_output=True, text=True,
-                             timeout=5)
-        dirty = subprocess.run(["git", "-C", str(root), "status", "--porcelain", "--untracked-files=no"],
-                               capture_output=True, text=True, timeout=5)
+        out = subprocess.run(["git", "-C", str(root), "rev-parse", "HEAD"], capture_output=True, text=True, timeout=5)
+        dirty = subprocess.run(
+            ["git", "-C", str(root), "status", "--porcelain", "--untracked-files=no"],
+            capture_output=True,
+            text=True,
+            timeout=5,
+        )
     except (OSError, subprocess.SubprocessError):
         return None
     commit = out.stdout.strip() or None
@@ -256,7 +271,7 @@ def git_commit() -> str | None:
 
 def _memory_gib() -> float | None:
     try:
-        return round(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 2 ** 30, 1)
+        return round(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 2**30, 1)
     except (ValueError, OSError, AttributeError):
         return None
 
@@ -293,9 +308,17 @@ def read_meta(folder: Path) -> dict[str, Any]:
 
 # ---------------------------------------------------------- network / orders
 def save_network(path: Path, network: RoadNetwork) -> None:
-    np.savez_compressed(path, node_id=network.node_id, lon=network.lon, lat=network.lat, arc_tail=network.arc_tail,
-                        arc_head=network.arc_head, arc_length_m=network.arc_length_m,
-                        arc_link_id=network.arc_link_id, name=np.array(network.name))
+    np.savez_compressed(
+        path,
+        node_id=network.node_id,
+        lon=network.lon,
+        lat=network.lat,
+        arc_tail=network.arc_tail,
+        arc_head=network.arc_head,
+        arc_length_m=network.arc_length_m,
+        arc_link_id=network.arc_link_id,
+        name=np.array(network.name),
+    )
 
 
 NETWORK_KEYS = ("node_id", "lon", "lat", "arc_tail", "arc_head", "arc_length_m", "arc_link_id", "name")
@@ -310,16 +333,28 @@ def load_network(path: Path) -> RoadNetwork:
         raise ResultsError(f"results file {str(path)!r} holds no nodes or arrays of the wrong shape")
     if not (len(tail) == len(head) == len(length) == len(z["arc_link_id"])) or len(z["lon"]) != n or len(z["lat"]) != n:
         raise ResultsError(f"results file {str(path)!r}: arc (or node) arrays differ in length")
-    if not (np.issubdtype(tail.dtype, np.integer) and np.issubdtype(head.dtype, np.integer)
-            and np.issubdtype(ids.dtype, np.integer) and np.issubdtype(length.dtype, np.number)):
+    if not (
+        np.issubdtype(tail.dtype, np.integer)
+        and np.issubdtype(head.dtype, np.integer)
+        and np.issubdtype(ids.dtype, np.integer)
+        and np.issubdtype(length.dtype, np.number)
+    ):
         raise ResultsError(f"results file {str(path)!r}: node ids, arc ends or arc lengths are not numbers")
     if len(tail) and (min(tail.min(), head.min()) < 0 or max(tail.max(), head.max()) >= n):
         raise ResultsError(f"results file {str(path)!r}: an arc ends at a node index outside 0..{n - 1}")
     if not np.isfinite(length).all() or (length < 0).any():
         raise ResultsError(f"results file {str(path)!r}: an arc length is negative, NaN or infinite")
-    tables = NetworkTables(name=str(z["name"]), node_id=ids, lon=z["lon"], lat=z["lat"],
-                           arc_from=ids[tail], arc_to=ids[head], arc_length_m=length,
-                           arc_link_id=z["arc_link_id"], source=str(path))
+    tables = NetworkTables(
+        name=str(z["name"]),
+        node_id=ids,
+        lon=z["lon"],
+        lat=z["lat"],
+        arc_from=ids[tail],
+        arc_to=ids[head],
+        arc_length_m=length,
+        arc_link_id=z["arc_link_id"],
+        source=str(path),
+    )
     return RoadNetwork.from_tables(tables)
 
 
@@ -352,8 +387,12 @@ def load_trajectories(path: Path) -> dict[str, np.ndarray]:
     traj = _load_npz(path, TRAJECTORY_KEYS)
     if any(a.ndim != 1 for a in traj.values()) or not len(traj["node"]) == len(traj["t_s"]) == len(traj["odo_m"]):
         raise ResultsError(f"results file {str(path)!r}: the node, t_s and odo_m arrays differ in length or shape")
-    if not (np.issubdtype(traj["vehicle_offsets"].dtype, np.integer) and np.issubdtype(traj["node"].dtype, np.integer)
-            and np.issubdtype(traj["t_s"].dtype, np.number) and np.issubdtype(traj["odo_m"].dtype, np.number)):
+    if not (
+        np.issubdtype(traj["vehicle_offsets"].dtype, np.integer)
+        and np.issubdtype(traj["node"].dtype, np.integer)
+        and np.issubdtype(traj["t_s"].dtype, np.number)
+        and np.issubdtype(traj["odo_m"].dtype, np.number)
+    ):
         raise ResultsError(f"results file {str(path)!r}: offsets and nodes must be integers, t_s and odo_m numbers")
     return traj
 

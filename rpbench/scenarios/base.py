@@ -47,38 +47,62 @@ class Params:
     r_w 0.1-0.9, ratio 10-25) lie well inside.
     """
 
-    dt_s: float = 10.0                      # Δt, batch interval
-    max_pickup_m: float = 3000.0            # R̄
-    max_detour_m: float = 3000.0            # D̄
-    speed_mps: float = 30.0 / 3.6           # constant vehicle speed (30 km/h)
-    alpha: float = 1.01                     # FL waiting-priority base α (Eq. 15)
-    response_rate: float = 0.75             # r_w, presumed per-round response rate (Eq. 10)
-    planner_patience_s: float = 90.0        # K̄, the patience the planner assumes (A10)
-    patience_mean_s: float = 90.0           # K_p ~ N(mean, sd), floored
+    dt_s: float = 10.0  # Δt, batch interval
+    max_pickup_m: float = 3000.0  # R̄
+    max_detour_m: float = 3000.0  # D̄
+    speed_mps: float = 30.0 / 3.6  # constant vehicle speed (30 km/h)
+    alpha: float = 1.01  # FL waiting-priority base α (Eq. 15)
+    response_rate: float = 0.75  # r_w, presumed per-round response rate (Eq. 10)
+    planner_patience_s: float = 90.0  # K̄, the patience the planner assumes (A10)
+    patience_mean_s: float = 90.0  # K_p ~ N(mean, sd), floored
     patience_sd_s: float = 10.0
     patience_floor_s: float = 30.0
-    vehicles_per_100_orders: float = 25.0   # order-driver ratio 100:25
+    vehicles_per_100_orders: float = 25.0  # order-driver ratio 100:25
     fare_solo_cny_per_km: float = 5.0
     fare_pooled_cny_per_km: float = 3.5
     driver_pay_cny_per_km: float = 2.0
 
-    _POSITIVE = ("dt_s", "max_pickup_m", "max_detour_m", "speed_mps", "planner_patience_s",
-                 "patience_mean_s", "vehicles_per_100_orders")
-    _NON_NEGATIVE = ("patience_sd_s", "patience_floor_s", "fare_solo_cny_per_km",
-                     "fare_pooled_cny_per_km", "driver_pay_cny_per_km")
+    _POSITIVE = (
+        "dt_s",
+        "max_pickup_m",
+        "max_detour_m",
+        "speed_mps",
+        "planner_patience_s",
+        "patience_mean_s",
+        "vehicles_per_100_orders",
+    )
+    _NON_NEGATIVE = (
+        "patience_sd_s",
+        "patience_floor_s",
+        "fare_solo_cny_per_km",
+        "fare_pooled_cny_per_km",
+        "driver_pay_cny_per_km",
+    )
     #: Upper bounds (and, where above 0, lower bounds) of the class docstring's table: name -> (low, high, unit).
-    _RANGE = {"dt_s": (0.1, 3600.0, "s"), "speed_mps": (0.1, 100.0, "m/s"), "max_pickup_m": (0.0, 1e6, "m"),
-              "max_detour_m": (0.0, 1e6, "m"), "planner_patience_s": (1.0, 86400.0, "s"),
-              "patience_mean_s": (1.0, 86400.0, "s"), "patience_sd_s": (0.0, 86400.0, "s"),
-              "patience_floor_s": (0.0, 86400.0, "s"), "alpha": (0.0, 10.0, ""),
-              "vehicles_per_100_orders": (0.0, 1000.0, ""), "fare_solo_cny_per_km": (0.0, 1000.0, "CNY/km"),
-              "fare_pooled_cny_per_km": (0.0, 1000.0, "CNY/km"), "driver_pay_cny_per_km": (0.0, 1000.0, "CNY/km")}
+    _RANGE = {
+        "dt_s": (0.1, 3600.0, "s"),
+        "speed_mps": (0.1, 100.0, "m/s"),
+        "max_pickup_m": (0.0, 1e6, "m"),
+        "max_detour_m": (0.0, 1e6, "m"),
+        "planner_patience_s": (1.0, 86400.0, "s"),
+        "patience_mean_s": (1.0, 86400.0, "s"),
+        "patience_sd_s": (0.0, 86400.0, "s"),
+        "patience_floor_s": (0.0, 86400.0, "s"),
+        "alpha": (0.0, 10.0, ""),
+        "vehicles_per_100_orders": (0.0, 1000.0, ""),
+        "fare_solo_cny_per_km": (0.0, 1000.0, "CNY/km"),
+        "fare_pooled_cny_per_km": (0.0, 1000.0, "CNY/km"),
+        "driver_pay_cny_per_km": (0.0, 1000.0, "CNY/km"),
+    }
 
     def __post_init__(self) -> None:
         for name in self._POSITIVE + self._NON_NEGATIVE + ("alpha", "response_rate"):
             value = getattr(self, name)
-            if (isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer))
-                    or not np.isfinite(value)):
+            if (
+                isinstance(value, bool)
+                or not isinstance(value, (int, float, np.floating, np.integer))
+                or not np.isfinite(value)
+            ):
                 raise ParameterError(f"parameter {name} = {value!r} is not a finite number")
         for name in self._POSITIVE:
             if getattr(self, name) <= 0:
@@ -97,17 +121,21 @@ class Params:
         for name, (low, high, unit) in self._RANGE.items():
             value = getattr(self, name)
             if value < low or value > high:
-                strict = low == 0 and (name in self._POSITIVE or name == "alpha")     # (0, high]
-                raise ParameterError(f"parameter {name} = {value!r} is outside its sane range "
-                                     f"{'(' if strict else '['}{low:g}, {high:g}]{' ' + unit if unit else ''} "
-                                     f"(the paper uses {getattr(Params, name):g})")
+                strict = low == 0 and (name in self._POSITIVE or name == "alpha")  # (0, high]
+                raise ParameterError(
+                    f"parameter {name} = {value!r} is outside its sane range "
+                    f"{'(' if strict else '['}{low:g}, {high:g}]{' ' + unit if unit else ''} "
+                    f"(the paper uses {getattr(Params, name):g})"
+                )
 
     def replace(self, **changes: Any) -> "Params":
         """A copy with some fields changed (validated); unknown names are an error."""
         unknown = set(changes) - {f.name for f in dataclasses.fields(self)}
         if unknown:
-            raise ParameterError(f"unknown parameter(s) {', '.join(sorted(unknown))}; "
-                                 f"known: {', '.join(f.name for f in dataclasses.fields(self))}")
+            raise ParameterError(
+                f"unknown parameter(s) {', '.join(sorted(unknown))}; "
+                f"known: {', '.join(f.name for f in dataclasses.fields(self))}"
+            )
         return dataclasses.replace(self, **changes)
 
     def as_dict(self) -> dict[str, float]:
@@ -118,11 +146,11 @@ class Params:
 class Orders:
     """Ride requests sorted by request time (node indices are the network's internal ones)."""
 
-    order_id: np.ndarray      # int64, unique
-    request_s: np.ndarray     # float64, seconds from scenario start, non-decreasing
-    origin: np.ndarray        # int32 node index
-    destination: np.ndarray   # int32 node index
-    patience_s: np.ndarray    # float64, K_p > 0
+    order_id: np.ndarray  # int64, unique
+    request_s: np.ndarray  # float64, seconds from scenario start, non-decreasing
+    origin: np.ndarray  # int32 node index
+    destination: np.ndarray  # int32 node index
+    patience_s: np.ndarray  # float64, K_p > 0
 
     def __post_init__(self) -> None:
         n = len(self.order_id)
@@ -150,9 +178,9 @@ class Fleet:
     means every vehicle is on duty all the time.
     """
 
-    initial_node: np.ndarray                  # int32 node index per vehicle
+    initial_node: np.ndarray  # int32 node index per vehicle
     online_times_s: np.ndarray | None = None  # float64, increasing, first = 0
-    online_count: np.ndarray | None = None    # int64, <= number of vehicles
+    online_count: np.ndarray | None = None  # int64, <= number of vehicles
 
     def __post_init__(self) -> None:
         if (self.online_times_s is None) != (self.online_count is None):
@@ -195,16 +223,16 @@ class Demand:
 class Scenario:
     """A complete, reproducible simulation input."""
 
-    name: str                  # generator name, e.g. "haikou-peak"
-    label: str                 # one line shown wherever results are shown
+    name: str  # generator name, e.g. "haikou-peak"
+    label: str  # one line shown wherever results are shown
     network: RoadNetwork
     orders: Orders
     fleet: Fleet
     params: Params
     seed: int
-    horizon_s: float           # simulated period [0, horizon_s)
-    start_time: str            # ISO date-time of t = 0 (for display)
-    synthetic: bool            # True for stand-ins and generated cities
+    horizon_s: float  # simulated period [0, horizon_s)
+    start_time: str  # ISO date-time of t = 0 (for display)
+    synthetic: bool  # True for stand-ins and generated cities
     provenance: dict = field(default_factory=dict)
     demand: Demand = Demand()
 

@@ -64,8 +64,9 @@ def require_orders(n_keep: int, n_total: int, sample: float, where: str) -> None
     if n_total == 0:
         raise NoOrdersError(f"no orders to simulate: {where} holds no order")
     if n_keep == 0:
-        raise NoOrdersError(f"no orders to simulate: --sample {sample:g} keeps none of the {n_total} orders "
-                            f"of {where}; raise --sample")
+        raise NoOrdersError(
+            f"no orders to simulate: --sample {sample:g} keeps none of the {n_total} orders of {where}; raise --sample"
+        )
 
 
 def draw_patience(rng: np.random.Generator, n: int, params: Params) -> np.ndarray:
@@ -77,11 +78,13 @@ def draw_patience(rng: np.random.Generator, n: int, params: Params) -> np.ndarra
 def make_orders(order_id, request_s, origin, destination, patience_s) -> Orders:
     """Orders sorted by (request time, id)."""
     order = np.lexsort((np.asarray(order_id), np.asarray(request_s)))
-    return Orders(order_id=np.asarray(order_id, dtype=np.int64)[order],
-                  request_s=np.asarray(request_s, dtype=np.float64)[order],
-                  origin=np.asarray(origin, dtype=np.int32)[order],
-                  destination=np.asarray(destination, dtype=np.int32)[order],
-                  patience_s=np.asarray(patience_s, dtype=np.float64)[order])
+    return Orders(
+        order_id=np.asarray(order_id, dtype=np.int64)[order],
+        request_s=np.asarray(request_s, dtype=np.float64)[order],
+        origin=np.asarray(origin, dtype=np.int32)[order],
+        destination=np.asarray(destination, dtype=np.int32)[order],
+        patience_s=np.asarray(patience_s, dtype=np.float64)[order],
+    )
 
 
 def fleet_size(n_orders: int, params: Params) -> int:
@@ -89,8 +92,9 @@ def fleet_size(n_orders: int, params: Params) -> int:
     return max(1, int(round(n_orders * params.vehicles_per_100_orders / 100.0)))
 
 
-def place_fleet(rng: np.random.Generator, n_vehicles: int, placement: str, origins: np.ndarray,
-                n_nodes: int) -> np.ndarray:
+def place_fleet(
+    rng: np.random.Generator, n_vehicles: int, placement: str, origins: np.ndarray, n_nodes: int
+) -> np.ndarray:
     """Initial vehicle nodes: random order origins (default) or random nodes."""
     if placement == "order_origins" and len(origins):
         return rng.choice(origins, size=n_vehicles, replace=True).astype(np.int32)
@@ -99,11 +103,19 @@ def place_fleet(rng: np.random.Generator, n_vehicles: int, placement: str, origi
     raise ParameterError(f"fleet placement {placement!r} unknown; expected one of {', '.join(FLEET_PLACEMENTS)}")
 
 
-def hourly_fleet(rng: np.random.Generator, orders_per_hour: np.ndarray, params: Params, placement: str,
-                 origins: np.ndarray, n_nodes: int) -> Fleet:
+def hourly_fleet(
+    rng: np.random.Generator,
+    orders_per_hour: np.ndarray,
+    params: Params,
+    placement: str,
+    origins: np.ndarray,
+    n_nodes: int,
+) -> Fleet:
     """A fleet whose on-duty count follows hourly demand at the order-driver ratio."""
     counts = np.array([fleet_size(int(n), params) if n > 0 else 0 for n in orders_per_hour], dtype=np.int64)
     n_vehicles = max(1, int(counts.max()))
-    return Fleet(initial_node=place_fleet(rng, n_vehicles, placement, origins, n_nodes),
-                 online_times_s=np.arange(len(counts), dtype=np.float64) * 3600.0,
-                 online_count=counts)
+    return Fleet(
+        initial_node=place_fleet(rng, n_vehicles, placement, origins, n_nodes),
+        online_times_s=np.arange(len(counts), dtype=np.float64) * 3600.0,
+        online_count=counts,
+    )

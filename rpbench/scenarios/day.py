@@ -38,8 +38,15 @@ from rpbench.scenarios.common import (
 DEFAULT_DATE = "2017-05-01"
 
 
-def build_day(data_dir: Path, *, date: str = DEFAULT_DATE, sample: float = 1.0, seed: int = 0,
-              params: Params | None = None, fleet_placement: str = "order_origins") -> Scenario:
+def build_day(
+    data_dir: Path,
+    *,
+    date: str = DEFAULT_DATE,
+    sample: float = 1.0,
+    seed: int = 0,
+    params: Params | None = None,
+    fleet_placement: str = "order_origins",
+) -> Scenario:
     params = params or Params()
     sample, seed = check_sample(sample), check_seed(seed)
     day = parse_date(date).isoformat()
@@ -58,19 +65,31 @@ def build_day(data_dir: Path, *, date: str = DEFAULT_DATE, sample: float = 1.0, 
     hour = np.repeat(np.arange(24), per_hour)
     request_s = hour * 3600.0 + rng.times.uniform(0.0, 3600.0, size=n)
     od = rng.od.choice(len(weight), size=n, p=weight / weight.sum())
-    orders = make_orders(np.arange(n), request_s, origin_all[od], dest_all[od],
-                         draw_patience(rng.patience, n, params))
+    orders = make_orders(np.arange(n), request_s, origin_all[od], dest_all[od], draw_patience(rng.patience, n, params))
     fleet = hourly_fleet(rng.fleet, per_hour, params, fleet_placement, orders.origin, network.n_nodes)
     start = pd.Timestamp(day)
     return Scenario(
         name="haikou-day",
-        label=(f"SYNTHETIC full-day stand-in for Haikou {day}: real hourly volumes, OD pairs drawn from the "
-               f"21-day 08:00-09:00 OD rates ({sample * 100:g} % of {int(hourly.sum())} orders, seed {seed})"),
-        network=network, orders=orders, fleet=fleet, params=params, seed=seed, horizon_s=24 * 3600.0,
-        start_time=start.isoformat(), synthetic=True,
-        provenance={"source": f"{data_dir}/samples_and_aggregates/data_dayly_hourly_count.csv + "
-                              f"{data_dir}/demand_0800_0900/month_5_OD.csv.gz",
-                    "date": day, "sample": sample, "orders_per_hour": per_hour.tolist(), "data_dir": str(data_dir),
-                    "fleet_placement": fleet_placement},
+        label=(
+            f"SYNTHETIC full-day stand-in for Haikou {day}: real hourly volumes, OD pairs drawn from the "
+            f"21-day 08:00-09:00 OD rates ({sample * 100:g} % of {int(hourly.sum())} orders, seed {seed})"
+        ),
+        network=network,
+        orders=orders,
+        fleet=fleet,
+        params=params,
+        seed=seed,
+        horizon_s=24 * 3600.0,
+        start_time=start.isoformat(),
+        synthetic=True,
+        provenance={
+            "source": f"{data_dir}/samples_and_aggregates/data_dayly_hourly_count.csv + "
+            f"{data_dir}/demand_0800_0900/month_5_OD.csv.gz",
+            "date": day,
+            "sample": sample,
+            "orders_per_hour": per_hour.tolist(),
+            "data_dir": str(data_dir),
+            "fleet_placement": fleet_placement,
+        },
         demand=Demand(table="month", data_dir=str(data_dir), orders_per_hour=tuple(float(n) for n in per_hour)),
     )

@@ -82,8 +82,9 @@ def authors_patience(row_index: np.ndarray, mean_s: float = 90.0, sd_s: float = 
     return np.array([np.random.RandomState(int(i)).normal(mean_s, sd_s) for i in row_index], dtype=np.float64)
 
 
-def load_paper_input(data_dir: Path, *, date: str = DEFAULT_DATE, sample: float = PAPER_SAMPLE,
-                     params: Params | None = None) -> PaperInput:
+def load_paper_input(
+    data_dir: Path, *, date: str = DEFAULT_DATE, sample: float = PAPER_SAMPLE, params: Params | None = None
+) -> PaperInput:
     """Build the authors' input of ``date`` (see the module docstring)."""
     params = params or Params()
     if not (0 < float(sample) <= 1):
@@ -112,25 +113,52 @@ def load_paper_input(data_dir: Path, *, date: str = DEFAULT_DATE, sample: float 
     source = paper_order_source(data_dir, day)
     scenario = Scenario(
         name="haikou-paper-input",
-        label=(f"Haikou {day} 08:00-09:00, the authors' exact input ({source.name}, pandas sample "
-               f"frac={float(sample):g} random_state=1: {len(drawn)} orders, {len(orders)} released, "
-               f"{n_vehicles} vehicles)"),
-        network=network, orders=orders, fleet=fleet, params=params, seed=PANDAS_RANDOM_STATE, horizon_s=3600.0,
-        start_time=start.isoformat(), synthetic=False,
-        provenance={"source": str(source), "date": day, "data_dir": str(data_dir), "sample": float(sample),
-                    "rows_in_file": len(frame), "sampled": len(drawn), "released": len(orders),
-                    "response_denominator": len(drawn),
-                    "fleet_placement": "random.seed(i); random.choice(sampled origins)",
-                    "sampling": "pandas DataFrame.sample(frac, random_state=1)",
-                    "patience": "np.random.seed(row index); normal(90, 10), not floored",
-                    "release_window": "(08:00, 09:00]"},
+        label=(
+            f"Haikou {day} 08:00-09:00, the authors' exact input ({source.name}, pandas sample "
+            f"frac={float(sample):g} random_state=1: {len(drawn)} orders, {len(orders)} released, "
+            f"{n_vehicles} vehicles)"
+        ),
+        network=network,
+        orders=orders,
+        fleet=fleet,
+        params=params,
+        seed=PANDAS_RANDOM_STATE,
+        horizon_s=3600.0,
+        start_time=start.isoformat(),
+        synthetic=False,
+        provenance={
+            "source": str(source),
+            "date": day,
+            "data_dir": str(data_dir),
+            "sample": float(sample),
+            "rows_in_file": len(frame),
+            "sampled": len(drawn),
+            "released": len(orders),
+            "response_denominator": len(drawn),
+            "fleet_placement": "random.seed(i); random.choice(sampled origins)",
+            "sampling": "pandas DataFrame.sample(frac, random_state=1)",
+            "patience": "np.random.seed(row index); normal(90, 10), not floored",
+            "release_window": "(08:00, 09:00]",
+        },
         demand=Demand(table="month", data_dir=str(data_dir)),
     )
-    return PaperInput(scenario=scenario, predictions=predictions, response_denominator=len(drawn),
-                      sample_rank=sample_rank, idle_origins=idle_origins.astype(np.int64))
+    return PaperInput(
+        scenario=scenario,
+        predictions=predictions,
+        response_denominator=len(drawn),
+        sample_rank=sample_rank,
+        idle_origins=idle_origins.astype(np.int64),
+    )
 
 
-def build_paper_input(data_dir: Path, *, date: str = DEFAULT_DATE, sample: float = PAPER_SAMPLE, seed: int = 0,
-                      params: Params | None = None, **_ignored) -> Scenario:
+def build_paper_input(
+    data_dir: Path,
+    *,
+    date: str = DEFAULT_DATE,
+    sample: float = PAPER_SAMPLE,
+    seed: int = 0,
+    params: Params | None = None,
+    **_ignored,
+) -> Scenario:
     """Registry entry: the scenario alone (``seed`` is fixed by the authors' ``random_state=1``)."""
     return load_paper_input(data_dir, date=date, sample=sample, params=params).scenario

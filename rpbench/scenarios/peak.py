@@ -33,8 +33,15 @@ DEFAULT_DATE = "2017-05-01"
 DEFAULT_SAMPLE = 0.3
 
 
-def build_peak(data_dir: Path, *, date: str = DEFAULT_DATE, sample: float = DEFAULT_SAMPLE, seed: int = 0,
-               params: Params | None = None, fleet_placement: str = "order_origins") -> Scenario:
+def build_peak(
+    data_dir: Path,
+    *,
+    date: str = DEFAULT_DATE,
+    sample: float = DEFAULT_SAMPLE,
+    seed: int = 0,
+    params: Params | None = None,
+    fleet_placement: str = "order_origins",
+) -> Scenario:
     params = params or Params()
     sample, seed = check_sample(sample), check_seed(seed)
     day = parse_date(date).isoformat()
@@ -48,17 +55,35 @@ def build_peak(data_dir: Path, *, date: str = DEFAULT_DATE, sample: float = DEFA
     keep = np.sort(rng.sample.choice(len(frame), size=n_keep, replace=False)) if sample < 1 else np.arange(len(frame))
     start = pd.Timestamp(day) + pd.Timedelta(hours=8)
     request_s = (frame["departure_time"] - start).dt.total_seconds().to_numpy()[keep]
-    orders = make_orders(frame["order_id"].to_numpy()[keep], request_s, origin[keep], destination[keep],
-                         draw_patience(rng.patience, n_keep, params))
-    fleet = Fleet(initial_node=place_fleet(rng.fleet, fleet_size(n_keep, params), fleet_placement,
-                                           orders.origin, network.n_nodes))
+    orders = make_orders(
+        frame["order_id"].to_numpy()[keep],
+        request_s,
+        origin[keep],
+        destination[keep],
+        draw_patience(rng.patience, n_keep, params),
+    )
+    fleet = Fleet(
+        initial_node=place_fleet(rng.fleet, fleet_size(n_keep, params), fleet_placement, orders.origin, network.n_nodes)
+    )
     pct = f"{sample * 100:g} %"
     return Scenario(
         name="haikou-peak",
         label=f"Haikou {day} 08:00-09:00, real DiDi orders ({pct} sample, seed {seed})",
-        network=network, orders=orders, fleet=fleet, params=params, seed=seed, horizon_s=3600.0,
-        start_time=start.isoformat(), synthetic=False,
-        provenance={"source": str(data_dir / "demand_0800_0900" / "orders" / f"{day}.csv.gz"), "date": day, "data_dir": str(data_dir),
-                    "sample": sample, "rows_in_hour": int(len(frame)), "fleet_placement": fleet_placement},
+        network=network,
+        orders=orders,
+        fleet=fleet,
+        params=params,
+        seed=seed,
+        horizon_s=3600.0,
+        start_time=start.isoformat(),
+        synthetic=False,
+        provenance={
+            "source": str(data_dir / "demand_0800_0900" / "orders" / f"{day}.csv.gz"),
+            "date": day,
+            "data_dir": str(data_dir),
+            "sample": sample,
+            "rows_in_hour": int(len(frame)),
+            "fleet_placement": fleet_placement,
+        },
         demand=Demand(table="month", data_dir=str(data_dir)),
     )

@@ -40,34 +40,68 @@ def _hourly_count_dates(data_dir: Path) -> list[str]:
 
 
 SCENARIOS: dict[str, ScenarioSpec] = {
-    spec.name: spec for spec in [
-        ScenarioSpec("haikou-peak", "a date's real 08:00-09:00 DiDi orders on the authors' network "
-                     "(default 2017-05-01, 30 % sample)", True, 0.3, build_peak, available_peak_dates),
-        ScenarioSpec("haikou-paper-input", "the authors' exact input behind their committed outputs: arrive-time "
-                     "selection on 2017-05-01, pandas sample random_state=1, int(n/4) vehicles",
-                     True, 0.3, build_paper_input, available_peak_dates),
-        ScenarioSpec("haikou-day", "SYNTHETIC 24-hour stand-in: a date's real hourly volumes, OD pairs "
-                     "from the 21-day OD rate table", True, 1.0, build_day, _hourly_count_dates),
-        ScenarioSpec("haikou-trace", "the real 2017-07-01 00:00-13:06 trace on the TR-B 2021 network",
-                     True, 1.0, build_trace),
-        ScenarioSpec("toy", "SYNTHETIC small grid city generated in code (no data needed)", False, 1.0,
-                     lambda data_dir, **kw: build_toy(**kw)),
+    spec.name: spec
+    for spec in [
+        ScenarioSpec(
+            "haikou-peak",
+            "a date's real 08:00-09:00 DiDi orders on the authors' network (default 2017-05-01, 30 % sample)",
+            True,
+            0.3,
+            build_peak,
+            available_peak_dates,
+        ),
+        ScenarioSpec(
+            "haikou-paper-input",
+            "the authors' exact input behind their committed outputs: arrive-time "
+            "selection on 2017-05-01, pandas sample random_state=1, int(n/4) vehicles",
+            True,
+            0.3,
+            build_paper_input,
+            available_peak_dates,
+        ),
+        ScenarioSpec(
+            "haikou-day",
+            "SYNTHETIC 24-hour stand-in: a date's real hourly volumes, OD pairs from the 21-day OD rate table",
+            True,
+            1.0,
+            build_day,
+            _hourly_count_dates,
+        ),
+        ScenarioSpec(
+            "haikou-trace", "the real 2017-07-01 00:00-13:06 trace on the TR-B 2021 network", True, 1.0, build_trace
+        ),
+        ScenarioSpec(
+            "toy",
+            "SYNTHETIC small grid city generated in code (no data needed)",
+            False,
+            1.0,
+            lambda data_dir, **kw: build_toy(**kw),
+        ),
     ]
 }
 
 DEFAULT_SCENARIO = "haikou-peak"
 
 
-def build_scenario(name: str, *, data_dir: str | Path | None = None, date: str | None = None,
-                   sample: float | None = None, seed: int = 0, params: Params | None = None,
-                   param_overrides: dict[str, Any] | None = None, **options: Any) -> Scenario:
+def build_scenario(
+    name: str,
+    *,
+    data_dir: str | Path | None = None,
+    date: str | None = None,
+    sample: float | None = None,
+    seed: int = 0,
+    params: Params | None = None,
+    param_overrides: dict[str, Any] | None = None,
+    **options: Any,
+) -> Scenario:
     """Build the named scenario (see :data:`SCENARIOS`)."""
     spec = scenario_spec(name)
     params = params or Params()
     if param_overrides:
         params = params.replace(**param_overrides)
-    kwargs: dict[str, Any] = dict(seed=seed, params=params,
-                                  sample=spec.default_sample if sample is None else sample, **options)
+    kwargs: dict[str, Any] = dict(
+        seed=seed, params=params, sample=spec.default_sample if sample is None else sample, **options
+    )
     if date is not None:
         kwargs["date"] = date
     folder = require_data_dir(data_dir, what=f"scenario {name!r}") if spec.needs_data else None

@@ -29,12 +29,12 @@ class ScenarioRequest:
     date: str | None = None
     sample: float | None = None
     seed: int = 0
-    params: tuple[tuple[str, float], ...] = ()     # overrides, sorted (frozen and hashable)
+    params: tuple[tuple[str, float], ...] = ()  # overrides, sorted (frozen and hashable)
     fleet_placement: str = "order_origins"
     data_dir: str | None = None
 
     def __post_init__(self) -> None:
-        scenario_spec(self.name)                   # an unknown name fails here, before any work
+        scenario_spec(self.name)  # an unknown name fails here, before any work
         object.__setattr__(self, "params", tuple(sorted(dict(self.params).items())))
 
     @property
@@ -52,13 +52,25 @@ class ScenarioRequest:
         return self.replace(params={**self.overrides, **overrides})
 
     def build(self) -> Scenario:
-        return build_scenario(self.name, data_dir=self.data_dir, date=self.date, sample=self.sample,
-                              seed=self.seed, param_overrides=self.overrides, fleet_placement=self.fleet_placement)
+        return build_scenario(
+            self.name,
+            data_dir=self.data_dir,
+            date=self.date,
+            sample=self.sample,
+            seed=self.seed,
+            param_overrides=self.overrides,
+            fleet_placement=self.fleet_placement,
+        )
 
     def meta(self) -> dict[str, Any]:
         """The request as recorded in a results folder (no machine path)."""
-        return {"date": self.date, "sample": self.sample, "seed": self.seed, "params": self.overrides,
-                "fleet_placement": self.fleet_placement}
+        return {
+            "date": self.date,
+            "sample": self.sample,
+            "seed": self.seed,
+            "params": self.overrides,
+            "fleet_placement": self.fleet_placement,
+        }
 
     def dates(self, text: str) -> list[str]:
         """``A..B`` (the days in range the data folder has) or ``A,B,C`` (each must exist) for this scenario."""
@@ -78,14 +90,14 @@ def parse_dates(text: str, have: list[str]) -> list[str]:
             raise ParameterError(f"--dates {text!r}: the range ends before it starts")
         dates = [d for d in have if a <= dt.date.fromisoformat(d) <= b]
         if not dates:
-            raise ParameterError(f"--dates {text!r}: no data for a day in that range "
-                                 f"(available: {_span(have)})")
+            raise ParameterError(f"--dates {text!r}: no data for a day in that range (available: {_span(have)})")
         return dates
     dates = [parse_date(d.strip()).isoformat() for d in text.split(",") if d.strip()]
     missing = [d for d in dates if d not in have]
     if missing or not dates:
-        raise ParameterError(f"--dates {text!r}: no data for {', '.join(missing) or '(none)'} "
-                             f"(available: {_span(have)})")
+        raise ParameterError(
+            f"--dates {text!r}: no data for {', '.join(missing) or '(none)'} (available: {_span(have)})"
+        )
     return dates
 
 

@@ -48,10 +48,16 @@ def grid_network(size: int = 12, seed: int = 0) -> RoadNetwork:
     length = BLOCK_M * (1.0 + 0.2 * rng.random(len(a)))
     m_per_deg_lon = _M_PER_DEG_LAT * np.cos(np.radians(_LAT0))
     tables = NetworkTables(
-        name=f"toy-grid-{size}", node_id=ids, lon=_LON0 + col * BLOCK_M / m_per_deg_lon,
-        lat=_LAT0 + row * BLOCK_M / _M_PER_DEG_LAT, arc_from=np.concatenate([a, b]),
-        arc_to=np.concatenate([b, a]), arc_length_m=np.concatenate([length, length]),
-        arc_link_id=np.concatenate([np.arange(len(a))] * 2), source="generated in code")
+        name=f"toy-grid-{size}",
+        node_id=ids,
+        lon=_LON0 + col * BLOCK_M / m_per_deg_lon,
+        lat=_LAT0 + row * BLOCK_M / _M_PER_DEG_LAT,
+        arc_from=np.concatenate([a, b]),
+        arc_to=np.concatenate([b, a]),
+        arc_length_m=np.concatenate([length, length]),
+        arc_link_id=np.concatenate([np.arange(len(a))] * 2),
+        source="generated in code",
+    )
     return RoadNetwork.from_tables(tables)
 
 
@@ -65,8 +71,16 @@ def _hotspot_nodes(rng: np.random.Generator, centres: np.ndarray, share: float, 
     return np.where(rng.random(n) < share, r * size + c, uniform)
 
 
-def build_toy(*, sample: float = 1.0, seed: int = 0, params: Params | None = None, size: int = 12,
-              fleet_placement: str = "order_origins", data_dir=None, date: str | None = None) -> Scenario:
+def build_toy(
+    *,
+    sample: float = 1.0,
+    seed: int = 0,
+    params: Params | None = None,
+    size: int = 12,
+    fleet_placement: str = "order_origins",
+    data_dir=None,
+    date: str | None = None,
+) -> Scenario:
     params = params or Params()
     sample, seed = check_sample(sample), check_seed(seed)
     network = grid_network(size, seed=0)  # the city stays the same across seeds; demand varies
@@ -79,15 +93,31 @@ def build_toy(*, sample: float = 1.0, seed: int = 0, params: Params | None = Non
     destination = _hotspot_nodes(rng.od, work, 0.6, n, size)
     same = origin == destination
     destination[same] = (destination[same] + size + 1) % (size * size)
-    orders = make_orders(np.arange(n), np.sort(rng.times.uniform(0, 3600.0, size=n)), origin, destination,
-                         draw_patience(rng.patience, n, params))
-    fleet = Fleet(initial_node=place_fleet(rng.fleet, fleet_size(n, params), fleet_placement,
-                                           orders.origin, network.n_nodes))
+    orders = make_orders(
+        np.arange(n),
+        np.sort(rng.times.uniform(0, 3600.0, size=n)),
+        origin,
+        destination,
+        draw_patience(rng.patience, n, params),
+    )
+    fleet = Fleet(
+        initial_node=place_fleet(rng.fleet, fleet_size(n, params), fleet_placement, orders.origin, network.n_nodes)
+    )
     return Scenario(
         name="toy",
         label=f"SYNTHETIC toy city ({size}x{size} grid, {n} orders in one hour, seed {seed})",
-        network=network, orders=orders, fleet=fleet, params=params, seed=seed, horizon_s=3600.0,
-        start_time="2017-05-01T08:00:00", synthetic=True,
-        provenance={"source": "generated in code (rpbench.scenarios.toy)", "sample": sample, "size": size,
-                    "fleet_placement": fleet_placement},
+        network=network,
+        orders=orders,
+        fleet=fleet,
+        params=params,
+        seed=seed,
+        horizon_s=3600.0,
+        start_time="2017-05-01T08:00:00",
+        synthetic=True,
+        provenance={
+            "source": "generated in code (rpbench.scenarios.toy)",
+            "sample": sample,
+            "size": size,
+            "fleet_placement": fleet_placement,
+        },
     )

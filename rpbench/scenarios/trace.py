@@ -38,12 +38,21 @@ def _check_within_day(frame: pd.DataFrame, start: pd.Timestamp) -> None:
     outside = ((departure < start) | (departure >= start + pd.Timedelta(days=1))).to_numpy()
     if outside.any():
         row = int(np.flatnonzero(outside)[0])
-        raise DataError(f"the {TRACE_DATE} trace: order {int(frame['order_id'].iloc[row])} departs at "
-                        f"{departure.iloc[row]}, outside {TRACE_DATE}; the trace covers that day only")
+        raise DataError(
+            f"the {TRACE_DATE} trace: order {int(frame['order_id'].iloc[row])} departs at "
+            f"{departure.iloc[row]}, outside {TRACE_DATE}; the trace covers that day only"
+        )
 
 
-def build_trace(data_dir: Path, *, sample: float = 1.0, seed: int = 0, params: Params | None = None,
-                fleet_placement: str = "order_origins", date: str | None = None) -> Scenario:
+def build_trace(
+    data_dir: Path,
+    *,
+    sample: float = 1.0,
+    seed: int = 0,
+    params: Params | None = None,
+    fleet_placement: str = "order_origins",
+    date: str | None = None,
+) -> Scenario:
     params = params or Params()
     sample, seed = check_sample(sample), check_seed(seed)
     network = predecessor_network(data_dir)
@@ -58,18 +67,36 @@ def build_trace(data_dir: Path, *, sample: float = 1.0, seed: int = 0, params: P
     _check_within_day(frame, start)
     minute_s = (frame["departure_time"] - start).dt.total_seconds().to_numpy()[keep]
     request_s = minute_s + rng.times.uniform(0.0, 60.0, size=n_keep)
-    orders = make_orders(frame["order_id"].to_numpy()[keep], request_s, origin[keep], destination[keep],
-                         draw_patience(rng.patience, n_keep, params))
+    orders = make_orders(
+        frame["order_id"].to_numpy()[keep],
+        request_s,
+        origin[keep],
+        destination[keep],
+        draw_patience(rng.patience, n_keep, params),
+    )
     hours = int(np.ceil(max(request_s.max() if n_keep else 0.0, 1.0) / 3600.0))
     per_hour = np.bincount((request_s // 3600).astype(int), minlength=hours)
     fleet = hourly_fleet(rng.fleet, per_hour, params, fleet_placement, orders.origin, network.n_nodes)
     return Scenario(
         name="haikou-trace",
-        label=(f"Haikou {TRACE_DATE} 00:00-13:06 real trace on the TR-B 2021 network "
-               f"({sample * 100:g} % sample, seed {seed})"),
-        network=network, orders=orders, fleet=fleet, params=params, seed=seed, horizon_s=hours * 3600.0,
-        start_time=start.isoformat(), synthetic=False,
-        provenance={"source": str(data_dir / "predecessor_trb2021_network"), "date": TRACE_DATE, "data_dir": str(data_dir),
-                    "sample": sample, "fleet_placement": fleet_placement},
+        label=(
+            f"Haikou {TRACE_DATE} 00:00-13:06 real trace on the TR-B 2021 network "
+            f"({sample * 100:g} % sample, seed {seed})"
+        ),
+        network=network,
+        orders=orders,
+        fleet=fleet,
+        params=params,
+        seed=seed,
+        horizon_s=hours * 3600.0,
+        start_time=start.isoformat(),
+        synthetic=False,
+        provenance={
+            "source": str(data_dir / "predecessor_trb2021_network"),
+            "date": TRACE_DATE,
+            "data_dir": str(data_dir),
+            "sample": sample,
+            "fleet_placement": fleet_placement,
+        },
         demand=Demand(data_dir=str(data_dir)),  # its own orders: the month table is on another network
     )

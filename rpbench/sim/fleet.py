@@ -27,22 +27,22 @@ from rpbench.network import DistanceOracle, RoadNetwork
 from rpbench.sim.lookahead import PlanWindows
 
 PICKUP, DROPOFF = 0, 1
-CRUISE_ARCS = 24          # random-walk arcs added per extension (~11 km on Haikou)
+CRUISE_ARCS = 24  # random-walk arcs added per extension (~11 km on Haikou)
 _EPS_S = 1e-9
 
 
 @dataclass
 class Stop:
-    index: int        # position in the plan
-    kind: int         # PICKUP or DROPOFF
-    order: int        # scenario order index
+    index: int  # position in the plan
+    kind: int  # PICKUP or DROPOFF
+    order: int  # scenario order index
 
 
 @dataclass
 class Plan:
     nodes: np.ndarray
-    tt: np.ndarray    # time at each node (s)
-    odo: np.ndarray   # odometer at each node (m)
+    tt: np.ndarray  # time at each node (s)
+    odo: np.ndarray  # odometer at each node (m)
     stops: list[Stop] = field(default_factory=list)
     cruising: bool = False
 
@@ -50,8 +50,14 @@ class Plan:
 class FleetState:
     """Mutable vehicle state of one simulation run."""
 
-    def __init__(self, network: RoadNetwork, distances: DistanceOracle, initial_nodes: np.ndarray, speed_mps: float,
-                 rng: np.random.Generator):
+    def __init__(
+        self,
+        network: RoadNetwork,
+        distances: DistanceOracle,
+        initial_nodes: np.ndarray,
+        speed_mps: float,
+        rng: np.random.Generator,
+    ):
         self.network = network
         self.distances = distances
         self.speed = float(speed_mps)
@@ -61,23 +67,23 @@ class FleetState:
         self.history: list[list[Plan]] = [[] for _ in range(n)]
         self.plans: list[Plan] = [self._still(int(node), 0.0, 0.0) for node in initial_nodes]
         self.onboard: list[list[int]] = [[] for _ in range(n)]
-        self.assigned: list[list[int]] = [[] for _ in range(n)]     # assigned, not yet picked up
-        self.load = np.zeros(n, dtype=np.int64)                     # passengers assigned or on board
-        self.paired = np.zeros(n, dtype=bool)                       # carries (or will carry) a pooled pair
+        self.assigned: list[list[int]] = [[] for _ in range(n)]  # assigned, not yet picked up
+        self.load = np.zeros(n, dtype=np.int64)  # passengers assigned or on board
+        self.paired = np.zeros(n, dtype=bool)  # carries (or will carry) a pooled pair
         self.on_duty = np.zeros(n, dtype=bool)
         self._version = np.zeros(n, dtype=np.int64)
-        self._heap: list[tuple[float, int, int]] = []               # (time of next stop, vehicle, version)
+        self._heap: list[tuple[float, int, int]] = []  # (time of next stop, vehicle, version)
         # Cached next plan node per vehicle, valid until the vehicle reaches it.
         self._next_k = np.zeros(n, dtype=np.int64)
         self._next_node = np.asarray(initial_nodes, dtype=np.int64).copy()
         self._next_tt = np.full(n, -np.inf)
         self._next_odo = np.zeros(n)
         self._idle = np.zeros(n, dtype=bool)
-        self._windows = PlanWindows(n)                              # plan nodes ahead, for vectorised lookups
+        self._windows = PlanWindows(n)  # plan nodes ahead, for vectorised lookups
         # Out-neighbours per node as plain lists: the random walk steps one node at a time.
         heads = network.arc_head[network.out_arcs]
         off = network.out_offsets
-        self._successors = [heads[off[u]:off[u + 1]].tolist() for u in range(network.n_nodes)]
+        self._successors = [heads[off[u] : off[u + 1]].tolist() for u in range(network.n_nodes)]
 
     # --------------------------------------------------------------- plans
     def _still(self, node: int, t: float, odo: float) -> Plan:
@@ -142,11 +148,11 @@ class FleetState:
             self._next_tt[hit] = found.tt
             self._next_odo[hit] = found.odo
             stale = found.missed
-        for v in stale.tolist():                        # past the window: look up the plan, then refill
+        for v in stale.tolist():  # past the window: look up the plan, then refill
             plan = self.plans[v]
-            k = int(plan.tt.searchsorted(before))       # :meth:`position`, inlined for the common case
+            k = int(plan.tt.searchsorted(before))  # :meth:`position`, inlined for the common case
             if k >= len(plan.nodes):
-                k = self.position(v, t)[0]              # past the plan's end: cruise extended, or standing
+                k = self.position(v, t)[0]  # past the plan's end: cruise extended, or standing
             tt_k = plan.tt[k]
             self._next_k[v] = k
             self._next_node[v] = plan.nodes[k]
@@ -169,8 +175,16 @@ class FleetState:
         self._idle[v] = False
         self._windows.drop(v)
 
-    def replan(self, v: int, anchor: int, nodes_tail: np.ndarray, stops: list[Stop], *, cruising: bool = False,
-               start_t: float | None = None) -> None:
+    def replan(
+        self,
+        v: int,
+        anchor: int,
+        nodes_tail: np.ndarray,
+        stops: list[Stop],
+        *,
+        cruising: bool = False,
+        start_t: float | None = None,
+    ) -> None:
         """Keep the current plan up to plan index ``anchor`` and continue with ``nodes_tail``.
 
         ``stops`` are indexed in the new plan (0 = the anchor node).  With
@@ -180,7 +194,7 @@ class FleetState:
         plan = self.plans[v]
         if plan.stops and plan.stops[0].index < anchor:
             raise RuntimeError(f"vehicle {v}: replanning past an unserved stop")  # pragma: no cover
-        self.history[v].append(Plan(plan.nodes[:anchor + 1], plan.tt[:anchor + 1], plan.odo[:anchor + 1]))
+        self.history[v].append(Plan(plan.nodes[: anchor + 1], plan.tt[: anchor + 1], plan.odo[: anchor + 1]))
         t0 = float(plan.tt[anchor]) if start_t is None else max(float(plan.tt[anchor]), start_t)
         new = self._plan_from(int(plan.nodes[anchor]), t0, float(plan.odo[anchor]), nodes_tail)
         new.stops = sorted(stops, key=lambda s: (s.index, s.kind))
@@ -206,8 +220,12 @@ class FleetState:
         plan = self.plans[v]
         while plan.tt[-1] < t + 1.0:
             prev = int(plan.nodes[-2]) if len(plan.nodes) > 1 else -1
-            extra = self._plan_from(int(plan.nodes[-1]), float(plan.tt[-1]), float(plan.odo[-1]),
-                                    self._random_walk(int(plan.nodes[-1]), prev))
+            extra = self._plan_from(
+                int(plan.nodes[-1]),
+                float(plan.tt[-1]),
+                float(plan.odo[-1]),
+                self._random_walk(int(plan.nodes[-1]), prev),
+            )
             plan.nodes = np.concatenate([plan.nodes, extra.nodes[1:]])
             plan.tt = np.concatenate([plan.tt, extra.tt[1:]])
             plan.odo = np.concatenate([plan.odo, extra.odo[1:]])
@@ -223,7 +241,7 @@ class FleetState:
         for u in self.rng.random(CRUISE_ARCS).tolist():
             heads = succ[node]
             if len(heads) > 1 and prev >= 0:
-                heads = [h for h in heads if h != prev] or heads    # no U-turn unless at a dead end
+                heads = [h for h in heads if h != prev] or heads  # no U-turn unless at a dead end
             nxt = heads[int(u * len(heads))]
             out.append(nxt)
             prev, node = node, nxt
@@ -256,7 +274,7 @@ class FleetState:
         for c in chunks:
             n, t, o = c.nodes, c.tt, c.odo
             if nodes and nodes[-1][-1] == n[0] and tt[-1][-1] >= t[0] - _EPS_S:
-                n, t, o = n[1:], t[1:], o[1:]        # drop the repeated anchor node
+                n, t, o = n[1:], t[1:], o[1:]  # drop the repeated anchor node
             if len(n):
                 nodes.append(n)
                 tt.append(t)

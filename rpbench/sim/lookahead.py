@@ -24,11 +24,11 @@ class Found:
     """Next plan nodes of the vehicles whose window answered (``vehicles``; the others in ``missed``)."""
 
     vehicles: np.ndarray
-    k: np.ndarray         # plan index of the next node
+    k: np.ndarray  # plan index of the next node
     node: np.ndarray
-    tt: np.ndarray        # time at that node
-    odo: np.ndarray       # odometer at that node
-    at_end: np.ndarray    # the node is the plan's last and the plan is not a cruise
+    tt: np.ndarray  # time at that node
+    odo: np.ndarray  # odometer at that node
+    at_end: np.ndarray  # the node is the plan's last and the plan is not a cruise
     missed: np.ndarray
 
 
@@ -36,13 +36,13 @@ class PlanWindows:
     """Windows of plan nodes ahead of each vehicle (``length`` 0: none)."""
 
     def __init__(self, n_vehicles: int):
-        self.tt = np.full((n_vehicles, WIDTH), np.inf)        # padded with +inf past the window
+        self.tt = np.full((n_vehicles, WIDTH), np.inf)  # padded with +inf past the window
         self.node = np.zeros((n_vehicles, WIDTH), dtype=np.int64)
         self.odo = np.zeros((n_vehicles, WIDTH))
-        self.base = np.zeros(n_vehicles, dtype=np.int64)      # plan index of the window's first node
+        self.base = np.zeros(n_vehicles, dtype=np.int64)  # plan index of the window's first node
         self.length = np.zeros(n_vehicles, dtype=np.int64)
-        self.tt_before = np.full(n_vehicles, -np.inf)         # time at the node before the window
-        self.last = np.zeros(n_vehicles, dtype=np.int64)      # the plan's last index
+        self.tt_before = np.full(n_vehicles, -np.inf)  # time at the node before the window
+        self.last = np.zeros(n_vehicles, dtype=np.int64)  # the plan's last index
         self.cruising = np.zeros(n_vehicles, dtype=bool)
 
     def fill(self, v: int, nodes: np.ndarray, tt: np.ndarray, odo: np.ndarray, cruising: bool, k: int) -> None:
@@ -75,5 +75,12 @@ class PlanWindows:
         hit, j, window = vehicles[ok], j[ok], window[ok]
         k = self.base[hit] + j
         tt = window[np.arange(len(hit)), j]
-        return Found(vehicles=hit, k=k, node=self.node[hit, j], tt=tt, odo=self.odo[hit, j],
-                     at_end=(k == self.last[hit]) & ~self.cruising[hit], missed=vehicles[~ok])
+        return Found(
+            vehicles=hit,
+            k=k,
+            node=self.node[hit, j],
+            tt=tt,
+            odo=self.odo[hit, j],
+            at_end=(k == self.last[hit]) & ~self.cruising[hit],
+            missed=vehicles[~ok],
+        )

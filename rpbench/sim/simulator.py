@@ -47,14 +47,38 @@ from rpbench.strategies.base import Kind, RoundModel, RoundState, Strategy
 
 # passenger states
 PENDING, WAITING, ASSIGNED, ONBOARD, DONE, CANCELLED = range(6)
-EVENT_COLUMNS = ["t_s", "event", "order", "vehicle", "node", "kind", "utility_m", "pickup_plan_m", "partner",
-                 "fofo"]
-EVENT_DTYPES = {"t_s": "float64", "event": "object", "order": "int64", "vehicle": "int64", "node": "int64",
-                "kind": "object", "utility_m": "float64", "pickup_plan_m": "float64", "partner": "int64",
-                "fofo": "bool"}
-ROUND_COLUMNS = ["round", "t_s", "waiting", "v0", "v1", "rows", "cols", "nonzeros", "strategy_build_s",
-                 "solver_build_s", "solve_s", "extract_s", "status", "objective_m", "gap", "assigned",
-                 "tie_moves"]
+EVENT_COLUMNS = ["t_s", "event", "order", "vehicle", "node", "kind", "utility_m", "pickup_plan_m", "partner", "fofo"]
+EVENT_DTYPES = {
+    "t_s": "float64",
+    "event": "object",
+    "order": "int64",
+    "vehicle": "int64",
+    "node": "int64",
+    "kind": "object",
+    "utility_m": "float64",
+    "pickup_plan_m": "float64",
+    "partner": "int64",
+    "fofo": "bool",
+}
+ROUND_COLUMNS = [
+    "round",
+    "t_s",
+    "waiting",
+    "v0",
+    "v1",
+    "rows",
+    "cols",
+    "nonzeros",
+    "strategy_build_s",
+    "solver_build_s",
+    "solve_s",
+    "extract_s",
+    "status",
+    "objective_m",
+    "gap",
+    "assigned",
+    "tie_moves",
+]
 
 
 @dataclass
@@ -64,7 +88,7 @@ class SimResult:
     strategy: str
     events: pd.DataFrame
     rounds: pd.DataFrame
-    trajectories: dict[str, np.ndarray]   # vehicle_offsets, node, t_s, odo_m
+    trajectories: dict[str, np.ndarray]  # vehicle_offsets, node, t_s, odo_m
     wall_s: float
     end_s: float
 
@@ -85,7 +109,7 @@ def _new_dump_file(stem: str) -> Path:
     st = os.lstat(folder)
     if not stat.S_ISDIR(st.st_mode) or st.st_uid != os.getuid():
         raise OSError(f"{folder} is a link or not our own folder: not dumping into it")
-    safe = re.sub(r"[^A-Za-z0-9_.-]+", "_", stem)      # plug-in names hold ':' (mypkg.rules:Greedy)
+    safe = re.sub(r"[^A-Za-z0-9_.-]+", "_", stem)  # plug-in names hold ':' (mypkg.rules:Greedy)
     fd, name = tempfile.mkstemp(prefix=f"{safe}-", suffix=".npz", dir=folder)
     os.close(fd)
     return Path(name)
@@ -94,8 +118,17 @@ def _new_dump_file(stem: str) -> Path:
 class Simulator:
     """One run of one strategy on one scenario with one solver backend."""
 
-    def __init__(self, scenario: Scenario, strategy: Strategy, preset: Preset, *,
-                 canonical_ties: bool = True, progress=None, capture=None, strict: bool = False):
+    def __init__(
+        self,
+        scenario: Scenario,
+        strategy: Strategy,
+        preset: Preset,
+        *,
+        canonical_ties: bool = True,
+        progress=None,
+        capture=None,
+        strict: bool = False,
+    ):
         """``capture(round, t, round_model, solution)``, if given, sees every solved round (snapshots).
 
         ``strict``: a round the solver stops before proving its optimum (time limit, gap) is an error
@@ -121,9 +154,11 @@ class Simulator:
         self.state = np.full(self.n_orders, PENDING, dtype=np.int8)
         self.vehicle_of = np.full(self.n_orders, -1, dtype=np.int64)
         self.pickup_odo = np.full(self.n_orders, np.nan)
-        self.rider = np.full(len(scenario.fleet.initial_node), -1, dtype=np.int64)   # last vacant assignment
+        self.rider = np.full(len(scenario.fleet.initial_node), -1, dtype=np.int64)  # last vacant assignment
         rng = np.random.default_rng(np.random.SeedSequence([scenario.seed, 20170501]))
-        self.fleet = FleetState(scenario.network, self.distances, scenario.fleet.initial_node, self.params.speed_mps, rng)
+        self.fleet = FleetState(
+            scenario.network, self.distances, scenario.fleet.initial_node, self.params.speed_mps, rng
+        )
         self.events: list[tuple] = []
         self.rounds: list[tuple] = []
         self.waiting: list[int] = []
@@ -156,11 +191,17 @@ class Simulator:
             k += 1
         self._process_stops(math.inf)
         end = max([t] + [e[0] for e in self.events])
-        return SimResult(strategy=self.strategy.name,
-                         events=pd.DataFrame(self.events, columns=EVENT_COLUMNS).astype(EVENT_DTYPES).sort_values(
-                             ["t_s", "order", "event"], kind="stable").reset_index(drop=True),
-                         rounds=pd.DataFrame(self.rounds, columns=ROUND_COLUMNS),
-                         trajectories=self._trajectories(end), wall_s=time.perf_counter() - t0, end_s=end)
+        return SimResult(
+            strategy=self.strategy.name,
+            events=pd.DataFrame(self.events, columns=EVENT_COLUMNS)
+            .astype(EVENT_DTYPES)
+            .sort_values(["t_s", "order", "event"], kind="stable")
+            .reset_index(drop=True),
+            rounds=pd.DataFrame(self.rounds, columns=ROUND_COLUMNS),
+            trajectories=self._trajectories(end),
+            wall_s=time.perf_counter() - t0,
+            end_s=end,
+        )
 
     # ------------------------------------------------------------ per round
     def _round(self, k: int, t: float) -> None:
@@ -172,16 +213,21 @@ class Simulator:
         if model.n_cols == 0:
             return
         try:
-            solution = solve(model, self.preset)        # verified feasible there
+            solution = solve(model, self.preset)  # verified feasible there
         except SolverError as exc:
             raise self._round_failure(k, t, model, str(exc)) from None
         if solution.status is Status.INFEASIBLE:
             raise self._round_failure(k, t, model, f"returned {solution.status.value}: {solution.message}")
         if self.strict and solution.status is not Status.OPTIMAL:
             # Fail at the first unproven round, not after hours of simulating on top of it.
-            raise self._round_failure(k, t, model, f"stopped with status {solution.status.value}, not proven "
-                                                   "optimal (--strict); raise the preset's time_limit_s or "
-                                                   "choose a faster exact preset")
+            raise self._round_failure(
+                k,
+                t,
+                model,
+                f"stopped with status {solution.status.value}, not proven "
+                "optimal (--strict); raise the preset's time_limit_s or "
+                "choose a faster exact preset",
+            )
         if self.capture is not None:
             self.capture(k, t, rm, solution)
         moves = 0
@@ -192,16 +238,40 @@ class Simulator:
         for v, node in zip(vehicles, targets):
             self._reposition(int(v), int(node), t)
         size = model.size
-        self.rounds.append((k, t, state.n_passengers, state.n_v0, state.n_v1, size["rows"], size["cols"],
-                            size["nonzeros"], build_s, solution.build_s, solution.solve_s, solution.extract_s,
-                            solution.status.value, solution.objective * model.unit_m, solution.gap, assigned, moves))
+        self.rounds.append(
+            (
+                k,
+                t,
+                state.n_passengers,
+                state.n_v0,
+                state.n_v1,
+                size["rows"],
+                size["cols"],
+                size["nonzeros"],
+                build_s,
+                solution.build_s,
+                solution.solve_s,
+                solution.extract_s,
+                solution.status.value,
+                solution.objective * model.unit_m,
+                solution.gap,
+                assigned,
+                moves,
+            )
+        )
 
     def _round_failure(self, k: int, t: float, model, what: str) -> SolverError:
         """A solver failure naming the strategy and round, with the round's model saved for `rpbench bench`."""
 
         where = f"{self.strategy.name} round {k} (t={t:g} s): solver preset {self.preset.name!r}: {what}"
-        meta = {"scenario": self.scenario.name, "seed": self.scenario.seed, "strategy": self.strategy.name,
-                "round": k, "t_s": t, "error": what}
+        meta = {
+            "scenario": self.scenario.name,
+            "seed": self.scenario.seed,
+            "strategy": self.strategy.name,
+            "round": k,
+            "t_s": t,
+            "error": what,
+        }
         try:
             path = _new_dump_file(f"{self.strategy.name}-round{k:05d}")
         except OSError:
@@ -223,7 +293,7 @@ class Simulator:
         # trip pairs the vehicle), so one array lookup replaces a scan of its passenger lists.
         v1_order = self.rider[v1]
         v1_onboard = self.state[v1_order] == ONBOARD
-        v1_node = self.origin[v1_order]          # not yet picked up: h = o_A, δ = 0, pre = 0 (A14)
+        v1_node = self.origin[v1_order]  # not yet picked up: h = o_A, δ = 0, pre = 0 (A14)
         v1_delta = np.zeros(len(v1))
         v1_pre = np.zeros(len(v1))
         if len(v1):
@@ -234,12 +304,28 @@ class Simulator:
             v1_delta = np.where(v1_onboard, odo_next - self.pickup_odo[v1_order], v1_delta)
         waited = np.maximum(1, np.ceil((t - self.request[p]) / self.params.dt_s - 1e-9)).astype(np.int64)
         return RoundState(
-            t_s=t, params=self.params, dist=self.dist, p_order=p, p_origin=self.origin[p],
-            p_destination=self.destination[p], p_solo_m=self.solo[p], p_request_s=self.request[p],
-            p_rounds_waited=waited, v0_vehicle=v0, v0_node=v0_node, v0_pre_m=v0_pre, v1_vehicle=v1,
-            v1_node=v1_node, v1_delta_m=v1_delta, v1_pre_m=v1_pre, v1_order=v1_order,
-            v1_origin=self.origin[v1_order], v1_destination=self.destination[v1_order],
-            v1_solo_m=self.solo[v1_order], v1_onboard=v1_onboard)
+            t_s=t,
+            params=self.params,
+            dist=self.dist,
+            p_order=p,
+            p_origin=self.origin[p],
+            p_destination=self.destination[p],
+            p_solo_m=self.solo[p],
+            p_request_s=self.request[p],
+            p_rounds_waited=waited,
+            v0_vehicle=v0,
+            v0_node=v0_node,
+            v0_pre_m=v0_pre,
+            v1_vehicle=v1,
+            v1_node=v1_node,
+            v1_delta_m=v1_delta,
+            v1_pre_m=v1_pre,
+            v1_order=v1_order,
+            v1_origin=self.origin[v1_order],
+            v1_destination=self.destination[v1_order],
+            v1_solo_m=self.solo[v1_order],
+            v1_onboard=v1_onboard,
+        )
 
     # --------------------------------------------------------------- commit
     def _commit(self, rm: RoundModel, chosen: np.ndarray, t: float) -> int:
@@ -269,7 +355,7 @@ class Simulator:
                     tail, reach = fl.route_through([h, self.origin[a], *drop_nodes])
                     stops = [Stop(reach[0], PICKUP, a)]
                     anchor = k
-                else:   # divert after picking up the first passenger at o_A (A14)
+                else:  # divert after picking up the first passenger at o_A (A14)
                     plan = fl.plans[v]
                     anchor = next(s.index for s in plan.stops if s.kind == PICKUP and s.order == first)
                     tail, reach = fl.route_through([int(plan.nodes[anchor]), self.origin[a], *drop_nodes])
@@ -281,10 +367,15 @@ class Simulator:
                 served += 1
             elif kind == Kind.TRIP2:
                 drops = self._drop_order(a, b, fofo)
-                tail, reach = fl.route_through([h, self.origin[a], self.origin[b],
-                                                *(int(self.destination[o]) for o in drops)])
-                stops = [Stop(reach[0], PICKUP, a), Stop(reach[1], PICKUP, b),
-                         Stop(reach[2], DROPOFF, drops[0]), Stop(reach[3], DROPOFF, drops[1])]
+                tail, reach = fl.route_through(
+                    [h, self.origin[a], self.origin[b], *(int(self.destination[o]) for o in drops)]
+                )
+                stops = [
+                    Stop(reach[0], PICKUP, a),
+                    Stop(reach[1], PICKUP, b),
+                    Stop(reach[2], DROPOFF, drops[0]),
+                    Stop(reach[3], DROPOFF, drops[1]),
+                ]
                 fl.replan(v, k, tail, stops)
                 fl.paired[v] = True
                 self._assign(a, v, t, rm, c, partner=b)
@@ -297,8 +388,13 @@ class Simulator:
         fl = self.fleet
         k, h, _ = fl.positions(np.array([v]), t)
         tail, _ = fl.route_through([int(h[0]), node])
-        fl.replan(v, int(k[0]), np.concatenate([tail, fl.random_walk_from(node, int(tail[-2]) if len(tail) > 1
-                                                                          else int(h[0]))]), [], cruising=True)
+        fl.replan(
+            v,
+            int(k[0]),
+            np.concatenate([tail, fl.random_walk_from(node, int(tail[-2]) if len(tail) > 1 else int(h[0]))]),
+            [],
+            cruising=True,
+        )
         self._event(t, "reposition", -1, v, node)
 
     @staticmethod
@@ -313,8 +409,9 @@ class Simulator:
         self.fleet.load[v] += 1
         self.waiting.remove(order)
         kind = {Kind.VACANT: "vacant", Kind.JOIN: "join", Kind.TRIP2: "trip2"}[Kind(int(rm.kind[c]))]
-        self._event(t, "assign", order, v, -1, kind, float(rm.utility_m[c]), float(rm.pickup_m[c]), partner,
-                    bool(rm.fofo[c]))
+        self._event(
+            t, "assign", order, v, -1, kind, float(rm.utility_m[c]), float(rm.pickup_m[c]), partner, bool(rm.fofo[c])
+        )
 
     # ---------------------------------------------------------------- stops
     def _process_stops(self, t: float) -> None:
@@ -347,7 +444,7 @@ class Simulator:
             v = int(v)
             fl.on_duty[v] = want[v]
             if fl.onboard[v] or fl.assigned[v]:
-                continue                      # busy vehicles finish their passengers first
+                continue  # busy vehicles finish their passengers first
             plan = fl.plans[v]
             if want[v]:
                 fl.start_cruise(v, len(plan.nodes) - 1 if not plan.cruising else fl.position(v, t)[0], t)
@@ -365,10 +462,12 @@ class Simulator:
         self.waiting = keep
 
     # -------------------------------------------------------------- records
-    def _event(self, t, event, order, vehicle, node, kind="", utility=np.nan, pickup=np.nan, partner=-1,
-               fofo=False) -> None:
-        self.events.append((float(t), event, int(order), int(vehicle), int(node), kind, utility, pickup,
-                            int(partner), bool(fofo)))
+    def _event(
+        self, t, event, order, vehicle, node, kind="", utility=np.nan, pickup=np.nan, partner=-1, fofo=False
+    ) -> None:
+        self.events.append(
+            (float(t), event, int(order), int(vehicle), int(node), kind, utility, pickup, int(partner), bool(fofo))
+        )
 
     def _trajectories(self, end: float) -> dict[str, np.ndarray]:
         nodes, tt, odo, offsets = [], [], [], [0]
@@ -378,6 +477,9 @@ class Simulator:
             tt.append(t_)
             odo.append(o)
             offsets.append(offsets[-1] + len(n))
-        return {"vehicle_offsets": np.asarray(offsets, np.int64), "node": np.concatenate(nodes).astype(np.int32),
-                "t_s": np.concatenate(tt), "odo_m": np.concatenate(odo)}
-
+        return {
+            "vehicle_offsets": np.asarray(offsets, np.int64),
+            "node": np.concatenate(nodes).astype(np.int32),
+            "t_s": np.concatenate(tt),
+            "odo_m": np.concatenate(odo),
+        }

@@ -49,9 +49,18 @@ def canonicalize(model, solution: Solution) -> tuple[Solution, int]:
     chosen, moves = _repair(model, solution.chosen.astype(np.int64), resource, items)
     if moves == 0:
         return solution, 0
-    fixed = make_solution(model, chosen, solution.status, solution.backend, bound=solution.bound, gap=solution.gap,
-                          build_s=solution.build_s, solve_s=solution.solve_s, extract_s=solution.extract_s,
-                          message=solution.message)
+    fixed = make_solution(
+        model,
+        chosen,
+        solution.status,
+        solution.backend,
+        bound=solution.bound,
+        gap=solution.gap,
+        build_s=solution.build_s,
+        solve_s=solution.solve_s,
+        extract_s=solution.extract_s,
+        message=solution.message,
+    )
     if fixed.objective != solution.objective:  # pragma: no cover - moves are value-neutral by construction
         raise AssertionError("tie canonicalisation changed the objective")
     return fixed, moves
@@ -64,7 +73,7 @@ def _repair(model, chosen: np.ndarray, resource: np.ndarray, items: tuple[np.nda
     n = model.n_cols
 
     def rows_of(c: int) -> np.ndarray:
-        return rows[start[c]:start[c + 1]]
+        return rows[start[c] : start[c + 1]]
 
     # Replacement candidates share the value and the "exactly one" rows of the column they replace
     # (for an assignment: the same passenger), so waiting options of other passengers never qualify.
@@ -86,7 +95,7 @@ def _repair(model, chosen: np.ndarray, resource: np.ndarray, items: tuple[np.nda
         key = key * (int(a.max(initial=0)) + 2) + (a + 1)
     key_order = np.argsort(key, kind="stable")
     sorted_keys = key[key_order]
-    item_key = key - (resource + 1)                    # the same key with the resource zeroed
+    item_key = key - (resource + 1)  # the same key with the resource zeroed
 
     def columns_with(item_part: np.ndarray, res: np.ndarray) -> np.ndarray:
         q = item_part + res + 1
@@ -96,8 +105,9 @@ def _repair(model, chosen: np.ndarray, resource: np.ndarray, items: tuple[np.nda
     moves = 0
     while True:
         chosen = np.sort(chosen)
-        if (first_of_group[chosen] < chosen).any() and _replace_once(chosen, values, exact_key, exact, rows_of,
-                                                                     model.n_rows):
+        if (first_of_group[chosen] < chosen).any() and _replace_once(
+            chosen, values, exact_key, exact, rows_of, model.n_rows
+        ):
             moves += 1
             continue
         # Only columns holding a resource can swap it: pairs among them, in the same (row-major) order.
@@ -107,7 +117,7 @@ def _repair(model, chosen: np.ndarray, resource: np.ndarray, items: tuple[np.nda
         cx, cy = chosen[x], chosen[y]
         rx, ry = resource[cx], resource[cy]
         ok = (rx >= 0) & (ry >= 0) & (rx != ry)
-        nx = columns_with(item_key[cx], ry)            # item set of x on y's resource
+        nx = columns_with(item_key[cx], ry)  # item set of x on y's resource
         ny = columns_with(item_key[cy], rx)
         ok &= (nx >= 0) & (ny >= 0)
         ok &= values[np.maximum(nx, 0)] + values[np.maximum(ny, 0)] == values[cx] + values[cy]

@@ -48,8 +48,16 @@ def strategy_class(name: str) -> type[Strategy]:
     must subclass :class:`Strategy`, implement ``build`` and declare
     ``name``, ``label`` and ``structure``.
     """
-    return plugins.resolve(name, builtin=REGISTRY, package=__name__, group=ENTRY_POINT_GROUP, base=Strategy,
-                           what="strategy", required=("name", "label", "structure"), error=ParameterError)
+    return plugins.resolve(
+        name,
+        builtin=REGISTRY,
+        package=__name__,
+        group=ENTRY_POINT_GROUP,
+        base=Strategy,
+        what="strategy",
+        required=("name", "label", "structure"),
+        error=ParameterError,
+    )
 
 
 def plugin_names() -> list[str]:
@@ -61,5 +69,14 @@ def make_strategy(name: str, **options: Any) -> Strategy:
     return strategy_class(name)(**options)
 
 
-__all__ = ["ENTRY_POINT_GROUP", "Kind", "REGISTRY", "RoundModel", "RoundState", "Strategy", "make_strategy",
-           "plugin_names", "strategy_class"]
+__all__ = [
+    "ENTRY_POINT_GROUP",
+    "Kind",
+    "REGISTRY",
+    "RoundModel",
+    "RoundState",
+    "Strategy",
+    "make_strategy",
+    "plugin_names",
+    "strategy_class",
+]

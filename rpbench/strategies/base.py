@@ -25,10 +25,10 @@ from rpbench.strategies.options import RunOptions
 class Kind(enum.IntEnum):
     """What a chosen column means."""
 
-    WAIT = 0      # keep the passenger waiting this round
-    VACANT = 1    # a vacant vehicle (V0) picks the passenger up
-    JOIN = 2      # the passenger joins a partially occupied vehicle (V1)
-    TRIP2 = 3     # a vacant vehicle picks up two waiting passengers (RTV size-2 trip)
+    WAIT = 0  # keep the passenger waiting this round
+    VACANT = 1  # a vacant vehicle (V0) picks the passenger up
+    JOIN = 2  # the passenger joins a partially occupied vehicle (V1)
+    TRIP2 = 3  # a vacant vehicle picks up two waiting passengers (RTV size-2 trip)
 
 
 @dataclass(frozen=True, eq=False)
@@ -45,14 +45,14 @@ class RoundState:
 
     t_s: float
     params: Params
-    dist: np.ndarray                 # all-pairs shortest distances (m)
+    dist: np.ndarray  # all-pairs shortest distances (m)
     # waiting passengers
-    p_order: np.ndarray              # scenario order index
+    p_order: np.ndarray  # scenario order index
     p_origin: np.ndarray
     p_destination: np.ndarray
     p_solo_m: np.ndarray
     p_request_s: np.ndarray
-    p_rounds_waited: np.ndarray      # k_p = ceil((t - t_req) / Δt), >= 1 (A10)
+    p_rounds_waited: np.ndarray  # k_p = ceil((t - t_req) / Δt), >= 1 (A10)
     # vacant vehicles V0
     v0_vehicle: np.ndarray
     v0_node: np.ndarray
@@ -62,11 +62,11 @@ class RoundState:
     v1_node: np.ndarray
     v1_delta_m: np.ndarray
     v1_pre_m: np.ndarray
-    v1_order: np.ndarray             # passenger A's order index
+    v1_order: np.ndarray  # passenger A's order index
     v1_origin: np.ndarray
     v1_destination: np.ndarray
     v1_solo_m: np.ndarray
-    v1_onboard: np.ndarray           # bool: A already picked up
+    v1_onboard: np.ndarray  # bool: A already picked up
 
     @property
     def n_passengers(self) -> int:

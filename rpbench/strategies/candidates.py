@@ -29,17 +29,17 @@ VALUE_UNIT_M = 1e-3  # utilities enter the model in millimetres
 
 @dataclass(frozen=True)
 class VacantOptions:
-    p: np.ndarray          # passenger position in the state
-    v: np.ndarray          # position in the state's V0 arrays
+    p: np.ndarray  # passenger position in the state
+    v: np.ndarray  # position in the state's V0 arrays
     pickup_m: np.ndarray
 
 
 @dataclass(frozen=True)
 class JoinOptions:
     p: np.ndarray
-    v: np.ndarray          # position in the state's V1 arrays
+    v: np.ndarray  # position in the state's V1 arrays
     pickup_m: np.ndarray
-    saving_m: np.ndarray   # e(v_p', p), Eq. (5)
+    saving_m: np.ndarray  # e(v_p', p), Eq. (5)
     fofo: np.ndarray
 
     @classmethod
@@ -70,9 +70,19 @@ def join_options(state: RoundState, order_rule: str = "min_feasible") -> JoinOpt
     pk = state.v1_pre_m[v] + state.dist[state.v1_node[v], state.p_origin[p]]
     near = pk <= limit
     p, v = p[near], v[near]
-    g = pair_geometry(state.dist, state.v1_origin[v], state.v1_destination[v], state.v1_solo_m[v],
-                      state.p_origin[p], state.p_destination[p], state.p_solo_m[p],
-                      state.v1_node[v], state.v1_delta_m[v], state.v1_pre_m[v], state.params.max_detour_m)
+    g = pair_geometry(
+        state.dist,
+        state.v1_origin[v],
+        state.v1_destination[v],
+        state.v1_solo_m[v],
+        state.p_origin[p],
+        state.p_destination[p],
+        state.p_solo_m[p],
+        state.v1_node[v],
+        state.v1_delta_m[v],
+        state.v1_pre_m[v],
+        state.params.max_detour_m,
+    )
     r = choose_order(g, state.params.max_pickup_m, order_rule)
     ok = r.feasible
     return JoinOptions(p[ok], v[ok], r.pk[ok], r.saving[ok], r.fofo[ok])
@@ -91,8 +101,16 @@ def _within_road_distance(state: RoundState, nodes: np.ndarray, pre_m: np.ndarra
     return np.nonzero(mask)
 
 
-def assignment_round(state: RoundState, vac: VacantOptions, vac_utility_m: np.ndarray, join: JoinOptions,
-                     join_utility_m: np.ndarray, wait_utility_m: np.ndarray, *, name: str) -> RoundModel:
+def assignment_round(
+    state: RoundState,
+    vac: VacantOptions,
+    vac_utility_m: np.ndarray,
+    join: JoinOptions,
+    join_utility_m: np.ndarray,
+    wait_utility_m: np.ndarray,
+    *,
+    name: str,
+) -> RoundModel:
     """Assemble the round's AssignmentModel (Eq. 1-4 / 16) and its column decoding.
 
     Columns are ordered by passenger, then vacant vehicles, then partially
@@ -105,16 +123,31 @@ def assignment_round(state: RoundState, vac: VacantOptions, vac_utility_m: np.nd
     passenger = np.concatenate([vac.p, join.p, wait_p])
     model_vehicle = np.concatenate([vac.v, state.n_v0 + join.v, np.full(n_p, -1)])
     sim_vehicle = np.concatenate([state.v0_vehicle[vac.v], state.v1_vehicle[join.v], np.full(n_p, -1)])
-    kind = np.concatenate([np.full(len(vac.p), Kind.VACANT), np.full(len(join.p), Kind.JOIN),
-                           np.full(n_p, Kind.WAIT)]).astype(np.int8)
+    kind = np.concatenate(
+        [np.full(len(vac.p), Kind.VACANT), np.full(len(join.p), Kind.JOIN), np.full(n_p, Kind.WAIT)]
+    ).astype(np.int8)
     utility = np.concatenate([vac_utility_m, join_utility_m, wait_utility_m]).astype(np.float64)
     pickup = np.concatenate([vac.pickup_m, join.pickup_m, np.full(n_p, np.nan)])
     fofo = np.concatenate([np.zeros(len(vac.p), bool), join.fofo, np.zeros(n_p, bool)])
     # Deterministic column order: passenger, kind (vacant < join < wait), vehicle id.
     order = np.lexsort((sim_vehicle, kind, passenger))
-    model = AssignmentModel(n_p, state.n_v0 + state.n_v1, passenger[order], model_vehicle[order],
-                            quantize(utility[order], VALUE_UNIT_M), unit_m=VALUE_UNIT_M, name=name)
+    model = AssignmentModel(
+        n_p,
+        state.n_v0 + state.n_v1,
+        passenger[order],
+        model_vehicle[order],
+        quantize(utility[order], VALUE_UNIT_M),
+        unit_m=VALUE_UNIT_M,
+        name=name,
+    )
     first = state.p_order[passenger[order]]
-    return RoundModel(model=model, kind=kind[order], vehicle=sim_vehicle[order], first=first,
-                      second=np.full(len(order), -1, dtype=np.int64), fofo=fofo[order],
-                      utility_m=utility[order], pickup_m=pickup[order])
+    return RoundModel(
+        model=model,
+        kind=kind[order],
+        vehicle=sim_vehicle[order],
+        first=first,
+        second=np.full(len(order), -1, dtype=np.int64),
+        fofo=fofo[order],
+        utility_m=utility[order],
+        pickup_m=pickup[order],
+    )

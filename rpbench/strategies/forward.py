@@ -60,22 +60,33 @@ FALLBACK_MEAN_PICKUP_M = 900.0
 class ForwardOptions(PoolingOptions):
     """FL's and FL-no_delay's options (the prediction's among them, :class:`rpbench.predict.PredictConfig`)."""
 
-    rates: str = option("auto", "where λ_w comes from: the scenario's implied demand, the 21-day table, or the "
-                        "scenario's own orders", choices=RATE_SOURCES)
+    rates: str = option(
+        "auto",
+        "where λ_w comes from: the scenario's implied demand, the 21-day table, or the scenario's own orders",
+        choices=RATE_SOURCES,
+    )
     tau0_s: float | tuple[float, ...] | None = option(
-        None, "τ_0 in seconds, one value or one per hour (default: MB calibration run's mean pick-up time, A4)")
+        None, "τ_0 in seconds, one value or one per hour (default: MB calibration run's mean pick-up time, A4)"
+    )
     mean_pickup_m: float | tuple[float, ...] | None = option(
-        None, "l̄ of the waiting utility in metres, one value or one per hour (default: MB calibration run's)")
+        None, "l̄ of the waiting utility in metres, one value or one per hour (default: MB calibration run's)"
+    )
     priority: str | None = option(None, "taker priority of the prediction (§2.4, A7)", choices=PRIORITIES)
     include_origin_state: bool | None = option(None, "taker state k = 0 at the origin (A4)")
     rho_mode: str | None = option(None, "how ρ is formed (A8)", choices=RHO_MODES)
-    accel: str = option("anderson", "fixed-point acceleration (the same fixed point as the damped map, in about "
-                        "half the sweeps)", choices=ACCELERATIONS)
+    accel: str = option(
+        "anderson",
+        "fixed-point acceleration (the same fixed point as the damped map, in about half the sweeps)",
+        choices=ACCELERATIONS,
+    )
 
     def predict_config(self) -> PredictConfig:
         """The prediction options that were set (the rest at :class:`PredictConfig`'s defaults)."""
-        chosen = {k: getattr(self, k) for k in ("priority", "include_origin_state", "rho_mode")
-                  if getattr(self, k) is not None}
+        chosen = {
+            k: getattr(self, k)
+            for k in ("priority", "include_origin_state", "rho_mode")
+            if getattr(self, k) is not None
+        }
         return PredictConfig(accel=self.accel, **chosen)
 
 
@@ -111,8 +122,10 @@ class _ForwardBase(Strategy):
             h = hourly.set_index("hour").reindex(range(hours))
             tau0 = tuple(round(float(x), 3) for x in h["avg_pickup_time_s"])
             pickup = tuple(round(float(x), 3) for x in h["avg_pickup_m"])
-        return options.replace(tau0_s=tau0 if options.tau0_s is None else options.tau0_s,
-                               mean_pickup_m=pickup if options.mean_pickup_m is None else options.mean_pickup_m)
+        return options.replace(
+            tau0_s=tau0 if options.tau0_s is None else options.tau0_s,
+            mean_pickup_m=pickup if options.mean_pickup_m is None else options.mean_pickup_m,
+        )
 
     # ----------------------------------------------------------- predictions
     def prepare(self, scenario: Scenario) -> None:
@@ -128,7 +141,7 @@ class _ForwardBase(Strategy):
     def _options(self, state: RoundState):
         vac = vacant_options(state)
         join = join_options(state, self.options.order_rule)
-        good = join.saving_m > 0                                   # A11
+        good = join.saving_m > 0  # A11
         join = JoinOptions(join.p[good], join.v[good], join.pickup_m[good], join.saving_m[good], join.fofo[good])
         prediction, hour = self.prediction_at(state.t_s)
         e_vac = prediction.lookup(state.p_origin, state.p_destination).e_vacant
@@ -161,8 +174,15 @@ class ForwardLookingNoDelay(_ForwardBase):
 
     def build(self, state: RoundState) -> RoundModel:
         vac, join, _, _, e_vac = self._options(state)
-        return assignment_round(state, vac, e_vac[vac.p] - vac.pickup_m, join, join.saving_m - join.pickup_m,
-                                np.full(state.n_passengers, NO_WAIT_UTILITY_M), name=self.name)
+        return assignment_round(
+            state,
+            vac,
+            e_vac[vac.p] - vac.pickup_m,
+            join,
+            join.saving_m - join.pickup_m,
+            np.full(state.n_passengers, NO_WAIT_UTILITY_M),
+            name=self.name,
+        )
 
 
 def _per_hour(value, hours: int, fallback: float, name: str) -> np.ndarray:

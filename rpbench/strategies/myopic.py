@@ -26,8 +26,9 @@ from rpbench.strategies.options import RunOptions, option
 class PoolingOptions(RunOptions):
     """Options of a strategy that pairs passengers (§1.1)."""
 
-    order_rule: str = option("min_feasible", "drop-off order rule of a pair (ALGORITHMS.md §1.1, A6)",
-                             choices=ORDER_RULES)
+    order_rule: str = option(
+        "min_feasible", "drop-off order rule of a pair (ALGORITHMS.md §1.1, A6)", choices=ORDER_RULES
+    )
 
 
 class NonPooling(Strategy):
@@ -39,8 +40,15 @@ class NonPooling(Strategy):
 
     def build(self, state: RoundState) -> RoundModel:
         vac = vacant_options(state)
-        return assignment_round(state, vac, -vac.pickup_m, JoinOptions.empty(), np.zeros(0),
-                                np.full(state.n_passengers, NO_WAIT_UTILITY_M), name="np")
+        return assignment_round(
+            state,
+            vac,
+            -vac.pickup_m,
+            JoinOptions.empty(),
+            np.zeros(0),
+            np.full(state.n_passengers, NO_WAIT_UTILITY_M),
+            name="np",
+        )
 
 
 class MyopicBatch(Strategy):
@@ -54,5 +62,12 @@ class MyopicBatch(Strategy):
     def build(self, state: RoundState) -> RoundModel:
         vac = vacant_options(state)
         join = join_options(state, self.options.order_rule)
-        return assignment_round(state, vac, -vac.pickup_m, join, join.saving_m - join.pickup_m,
-                                np.full(state.n_passengers, NO_WAIT_UTILITY_M), name="mb")
+        return assignment_round(
+            state,
+            vac,
+            -vac.pickup_m,
+            join,
+            join.saving_m - join.pickup_m,
+            np.full(state.n_passengers, NO_WAIT_UTILITY_M),
+            name="mb",
+        )

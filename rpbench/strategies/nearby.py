@@ -23,7 +23,7 @@ class NearTable:
 
     dist: np.ndarray
     threshold_m: float
-    reach: np.ndarray          # bool (n, n)
+    reach: np.ndarray  # bool (n, n)
 
     #: Source rows compared per block while transposing (bounds the temporary to block x n booleans).
     BLOCK = 256
@@ -32,8 +32,8 @@ class NearTable:
     def build(cls, dist: np.ndarray, threshold_m: float) -> NearTable:
         n = dist.shape[0]
         reach = np.empty((dist.shape[1], n), dtype=bool)
-        for start in range(0, n, cls.BLOCK):     # blockwise: a whole-table bool transpose is 4x slower
-            reach[:, start:start + cls.BLOCK] = (dist[start:start + cls.BLOCK] <= threshold_m).T
+        for start in range(0, n, cls.BLOCK):  # blockwise: a whole-table bool transpose is 4x slower
+            reach[:, start : start + cls.BLOCK] = (dist[start : start + cls.BLOCK] <= threshold_m).T
         return cls(dist, float(threshold_m), reach)
 
     def mask(self, from_nodes: np.ndarray, to_nodes: np.ndarray) -> np.ndarray:

@@ -40,8 +40,10 @@ class RunOptions:
             known = ", ".join(declared) or "none"
             raise ParameterError(f"{owner}: unknown option {unknown[0]!r}; known options: {known}")
         hints = typing.get_type_hints(cls)
-        values = {name: _convert(owner, name, hints[name], declared[name].metadata.get("choices"), value)
-                  for name, value in raw.items()}
+        values = {
+            name: _convert(owner, name, hints[name], declared[name].metadata.get("choices"), value)
+            for name, value in raw.items()
+        }
         return cls(**values)
 
     @classmethod
@@ -103,14 +105,17 @@ def _as(kind: Any, value: Any) -> Any:
         if text is not None:
             return int(text)
     elif kind is float:
-        number = float(value) if (isinstance(value, (int, float)) and not isinstance(value, bool)) or \
-            text is not None else None
+        number = (
+            float(value)
+            if (isinstance(value, (int, float)) and not isinstance(value, bool)) or text is not None
+            else None
+        )
         if number is not None and math.isfinite(number):
             return number
     elif kind is str:
         if isinstance(value, str):
             return value
-    elif typing.get_origin(kind) is tuple:         # tuple[float, ...]: a list, or text "a,b,c"
+    elif typing.get_origin(kind) is tuple:  # tuple[float, ...]: a list, or text "a,b,c"
         (item, _) = typing.get_args(kind)
         items = value.split(",") if isinstance(value, str) else value
         if isinstance(items, (list, tuple)) and items:

@@ -53,8 +53,9 @@ PICKUP_TIE_BREAK = 1e-3
 class RTVOptions(PoolingOptions):
     """RTV's options (ALGORITHMS.md §3.3, A15-A17)."""
 
-    c_ko: float | str | None = option(None, "value of serving a request, metres or 'large' (default R̄, A15)",
-                                      choices=("large",))
+    c_ko: float | str | None = option(
+        None, "value of serving a request, metres or 'large' (default R̄, A15)", choices=("large",)
+    )
     objective: str = option("net", "net: e - pick-up; gross: e - 1e-3 pick-up", choices=("net", "gross"))
     rr_pickup_check: bool = option(True, "size-2 trips need l(o_first, o_second) <= R̄")
     rv_top_k: int | None = option(None, "keep each request's k best vehicle edges (None: all)")
@@ -96,30 +97,49 @@ class RTV(Strategy):
         cols = {
             "kind": [np.full(len(vac.p), Kind.VACANT), np.full(len(join.p), Kind.JOIN)],
             "vehicle_row": [vac.v, state.n_v0 + join.v],
-            "r1": [vac.p, join.p], "r2": [np.full(len(vac.p), -1), np.full(len(join.p), -1)],
-            "first": [vac.p, join.p], "fofo": [np.zeros(len(vac.p), bool), join.fofo],
-            "value": [c_ko + self._net(np.zeros(len(vac.p)), vac.pickup_m),
-                      c_ko + self._net(join.saving_m, join.pickup_m)],
+            "r1": [vac.p, join.p],
+            "r2": [np.full(len(vac.p), -1), np.full(len(join.p), -1)],
+            "first": [vac.p, join.p],
+            "fofo": [np.zeros(len(vac.p), bool), join.fofo],
+            "value": [
+                c_ko + self._net(np.zeros(len(vac.p)), vac.pickup_m),
+                c_ko + self._net(join.saving_m, join.pickup_m),
+            ],
             "pickup": [vac.pickup_m, join.pickup_m],
         }
         self._add_pair_trips(state, vac, c_ko, cols)
         merged = {k: np.concatenate(v) if v else np.zeros(0) for k, v in cols.items()}
         if self.options.rv_top_k is not None:
             merged = _top_k_per_request(merged, int(self.options.rv_top_k))
-        vehicle_sim = np.concatenate([state.v0_vehicle, state.v1_vehicle])[merged["vehicle_row"].astype(int)] \
-            if len(merged["vehicle_row"]) else np.zeros(0, np.int64)
+        vehicle_sim = (
+            np.concatenate([state.v0_vehicle, state.v1_vehicle])[merged["vehicle_row"].astype(int)]
+            if len(merged["vehicle_row"])
+            else np.zeros(0, np.int64)
+        )
         r1, r2 = merged["r1"].astype(np.int64), merged["r2"].astype(np.int64)
-        order = np.lexsort((vehicle_sim, r2, r1))       # deterministic column order
+        order = np.lexsort((vehicle_sim, r2, r1))  # deterministic column order
         first = merged["first"].astype(np.int64)[order]
         second = np.where(r2[order] < 0, -1, np.where(first == r1[order], r2[order], r1[order]))
-        model = TripPackingModel(state.n_passengers, state.n_v0 + state.n_v1,
-                                 merged["vehicle_row"].astype(np.int64)[order], r1[order], r2[order],
-                                 quantize(merged["value"][order], VALUE_UNIT_M), unit_m=VALUE_UNIT_M, name="rtv")
-        return RoundModel(model=model, kind=merged["kind"].astype(np.int8)[order], vehicle=vehicle_sim[order],
-                          first=state.p_order[first],
-                          second=np.where(second >= 0, state.p_order[np.maximum(second, 0)], -1),
-                          fofo=merged["fofo"].astype(bool)[order], utility_m=merged["value"][order],
-                          pickup_m=merged["pickup"][order])
+        model = TripPackingModel(
+            state.n_passengers,
+            state.n_v0 + state.n_v1,
+            merged["vehicle_row"].astype(np.int64)[order],
+            r1[order],
+            r2[order],
+            quantize(merged["value"][order], VALUE_UNIT_M),
+            unit_m=VALUE_UNIT_M,
+            name="rtv",
+        )
+        return RoundModel(
+            model=model,
+            kind=merged["kind"].astype(np.int8)[order],
+            vehicle=vehicle_sim[order],
+            first=state.p_order[first],
+            second=np.where(second >= 0, state.p_order[np.maximum(second, 0)], -1),
+            fofo=merged["fofo"].astype(bool)[order],
+            utility_m=merged["value"][order],
+            pickup_m=merged["pickup"][order],
+        )
 
     def reposition(self, state: RoundState, rm: RoundModel, chosen: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """PNAS step (d): idle vacant vehicles towards unassigned requests, minimum total distance."""
@@ -132,8 +152,10 @@ class RTV(Strategy):
         idle = np.flatnonzero(~busy)
         if len(requests) == 0 or len(idle) == 0:
             return none, none
-        cost = state.v0_pre_m[idle][:, None] + state.dist[state.v0_node[idle][:, None], state.p_origin[requests][None, :]]
-        rows, cols = linear_sum_assignment(cost)     # min(|idle|, |requests|) pairs, minimum total distance
+        cost = (
+            state.v0_pre_m[idle][:, None] + state.dist[state.v0_node[idle][:, None], state.p_origin[requests][None, :]]
+        )
+        rows, cols = linear_sum_assignment(cost)  # min(|idle|, |requests|) pairs, minimum total distance
         return state.v0_vehicle[idle[rows]].astype(np.int64), state.p_origin[requests[cols]].astype(np.int64)
 
     def _add_pair_trips(self, state: RoundState, vac, c_ko: float, cols: dict) -> None:
@@ -150,21 +172,37 @@ class RTV(Strategy):
             return
         fleet, vehicle = _present(vac.v, state.n_v0)
         pk = np.full((len(riders), len(fleet)), np.inf)
-        pk[rider, vehicle] = vac.pickup_m                  # RV edges only (others stay infinite)
+        pk[rider, vehicle] = vac.pickup_m  # RV edges only (others stay infinite)
         reach = np.isfinite(pk)
         reach_f = reach.astype(np.float64)
-        shared = reach_f @ reach_f.T > 0                   # a vehicle both reach (whole counts, exact)
-        a, b = np.nonzero(np.triu(shared, k=1))            # pairs a < b, row-major
+        shared = reach_f @ reach_f.T > 0  # a vehicle both reach (whole counts, exact)
+        a, b = np.nonzero(np.triu(shared, k=1))  # pairs a < b, row-major
         if len(a) == 0:
             return
         i, j = riders[a], riders[b]
         rr_pickup = state.params.max_pickup_m if self.options.rr_pickup_check else np.inf
         # Direction i -> j (i picked up first) and j -> i; drop order chosen by POOL.
-        fwd = pool(state.dist, state.p_origin[i], state.p_destination[i], state.p_origin[j], state.p_destination[j],
-                   max_pickup_m=rr_pickup, max_detour_m=state.params.max_detour_m, order_rule=self.options.order_rule)
-        bwd = pool(state.dist, state.p_origin[j], state.p_destination[j], state.p_origin[i], state.p_destination[i],
-                   max_pickup_m=rr_pickup, max_detour_m=state.params.max_detour_m, order_rule=self.options.order_rule)
-        edge = fwd.feasible | bwd.feasible                # the request-request edge
+        fwd = pool(
+            state.dist,
+            state.p_origin[i],
+            state.p_destination[i],
+            state.p_origin[j],
+            state.p_destination[j],
+            max_pickup_m=rr_pickup,
+            max_detour_m=state.params.max_detour_m,
+            order_rule=self.options.order_rule,
+        )
+        bwd = pool(
+            state.dist,
+            state.p_origin[j],
+            state.p_destination[j],
+            state.p_origin[i],
+            state.p_destination[i],
+            max_pickup_m=rr_pickup,
+            max_detour_m=state.params.max_detour_m,
+            order_rule=self.options.order_rule,
+        )
+        edge = fwd.feasible | bwd.feasible  # the request-request edge
         if not edge.any():
             return
         a, b, i, j = a[edge], b[edge], i[edge], j[edge]
@@ -175,7 +213,7 @@ class RTV(Strategy):
         pk_i, pk_j = pk[a[e], v], pk[b[e], v]
         val_f = np.where(fwd_ok[e], 2 * c_ko + self._net(fwd_e[e], pk_i), -np.inf)
         val_b = np.where(bwd_ok[e], 2 * c_ko + self._net(bwd_e[e], pk_j), -np.inf)
-        take_f = val_f >= val_b                            # tie -> the lower-index request first
+        take_f = val_f >= val_b  # tie -> the lower-index request first
         cols["kind"].append(np.full(len(e), Kind.TRIP2))
         cols["vehicle_row"].append(fleet[v])
         cols["r1"].append(i[e])
@@ -212,8 +250,12 @@ def _top_k_per_request(cols: dict, k: int) -> dict:
     keep[order[rank < k]] = True
     kept_edges = {(int(r), int(v)) for r, v in zip(cols["r1"][keep], cols["vehicle_row"][keep])}
     pair = ~single
-    ok_pair = np.array([(int(a), int(v)) in kept_edges and (int(b), int(v)) in kept_edges
-                        for a, b, v in zip(cols["r1"][pair], cols["r2"][pair], cols["vehicle_row"][pair])],
-                       dtype=bool)
+    ok_pair = np.array(
+        [
+            (int(a), int(v)) in kept_edges and (int(b), int(v)) in kept_edges
+            for a, b, v in zip(cols["r1"][pair], cols["r2"][pair], cols["vehicle_row"][pair])
+        ],
+        dtype=bool,
+    )
     keep[np.flatnonzero(pair)[ok_pair]] = True
     return {name: arr[keep] for name, arr in cols.items()}

@@ -12,7 +12,7 @@ def brute_force(model) -> tuple[float, int] | None:
     or ``None`` when no 0/1 vector is feasible."""
     n = model.n_cols
     assert n <= MAX_COLS, "brute force is for tiny models"
-    X = ((np.arange(2 ** n)[:, None] >> np.arange(n)) & 1).astype(np.int64)
+    X = ((np.arange(2**n)[:, None] >> np.arange(n)) & 1).astype(np.int64)
     cover = X @ model.incidence().T.toarray().astype(np.int64)
     ok = (cover <= 1).all(axis=1) & (cover[:, model.row_exact()] == 1).all(axis=1)
     if not ok.any():

@@ -17,7 +17,7 @@ from rpbench.model import PairingModel, Status
 if not bv.BlossomBackend.is_installed():
     pytest.skip("the blossom extra (OGDF, cppyy) is not installed", allow_module_level=True)
 BACKEND = get_backend("blossom")
-pytestmark = pytest.mark.slow        # loading OGDF and compiling the shim takes 5-14 s once per process
+pytestmark = pytest.mark.slow  # loading OGDF and compiling the shim takes 5-14 s once per process
 OBJECTIVES = ("weight", "cardinality_then_weight")
 
 
@@ -32,8 +32,9 @@ def random_pairing(seed: int, objective: str) -> PairingModel:
 def networkx_optimum(model: PairingModel) -> tuple[float, int]:
     lexi = model.objective == "cardinality_then_weight"
     g = nx.Graph()
-    g.add_weighted_edges_from((a, b, w) for a, b, w in zip(model.col_a.tolist(), model.col_b.tolist(),
-                                                           model.values.tolist()) if lexi or w > 0)
+    g.add_weighted_edges_from(
+        (a, b, w) for a, b, w in zip(model.col_a.tolist(), model.col_b.tolist(), model.values.tolist()) if lexi or w > 0
+    )
     m = nx.max_weight_matching(g, maxcardinality=lexi)
     return float(sum(g.edges[e]["weight"] for e in m)), len(m)
 
@@ -55,7 +56,7 @@ def test_oracle2_keeps_the_maximum_number_of_pairs_at_any_price():
     w = np.where(a % 2 == 1, 100, 1)
     sol = BACKEND.solve(PairingModel(n, a, a + 1, w, objective="cardinality_then_weight"), SolveOptions())
     assert len(sol.chosen) == 9 and sol.objective == 9
-    assert BACKEND.solve(PairingModel(n, a, a + 1, w), SolveOptions()).objective == 800      # Oracle-1: 8 heavy
+    assert BACKEND.solve(PairingModel(n, a, a + 1, w), SolveOptions()).objective == 800  # Oracle-1: 8 heavy
 
 
 def test_doubled_graph_bonus_trades_weight_for_pairs():
@@ -78,7 +79,7 @@ def test_a_graph_without_a_perfect_matching_is_an_error():
 
 def test_costs_beyond_int64_are_refused():
     with pytest.raises(SolverError, match="overflow 64-bit"):
-        bv.max_weight_matching(2, np.array([0]), np.array([1]), np.array([2 ** 59]))
+        bv.max_weight_matching(2, np.array([0]), np.array([1]), np.array([2**59]))
 
 
 def test_time_limit_returns_edmonds_matching_for_oracle2(monkeypatch):
@@ -86,6 +87,7 @@ def test_time_limit_returns_edmonds_matching_for_oracle2(monkeypatch):
 
     def never(*args, **kw):
         raise Timeout()
+
     monkeypatch.setattr(bv, "run_in_child", never)
     sol = BACKEND.solve(model, SolveOptions(time_limit_s=5))
     assert sol.status is Status.TIME_LIMIT and "time limit" in sol.message

@@ -15,8 +15,9 @@ from rpbench.exceptions import SolverError
 @st.composite
 def graphs(draw, max_n=24):
     n = draw(st.integers(1, max_n))
-    edges = draw(st.sets(st.tuples(st.integers(0, n - 1), st.integers(0, n - 1)).filter(lambda e: e[0] < e[1]),
-                         max_size=3 * n))
+    edges = draw(
+        st.sets(st.tuples(st.integers(0, n - 1), st.integers(0, n - 1)).filter(lambda e: e[0] < e[1]), max_size=3 * n)
+    )
     a, b = (np.array(x, np.int64) for x in zip(*sorted(edges))) if edges else (np.zeros(0, np.int64),) * 2
     return n, a, b
 
@@ -52,7 +53,7 @@ def test_matches_networkx_and_certifies_itself(graph):
 def test_augments_any_start_to_the_maximum(graph, rnd):
     n, a, b = graph
     mate = np.full(n, -1, np.int64)
-    for i in rnd.sample(range(len(a)), len(a)):           # a random, not necessarily maximal, matching
+    for i in rnd.sample(range(len(a)), len(a)):  # a random, not necessarily maximal, matching
         if rnd.random() < 0.5 and mate[a[i]] < 0 and mate[b[i]] < 0:
             mate[a[i]], mate[b[i]] = b[i], a[i]
     result = card.maximum_cardinality_matching(n, a, b, start=mate)
@@ -89,7 +90,7 @@ def test_a_wrong_tutte_set_gives_a_weaker_bound():
 def test_start_that_is_not_a_matching_is_rejected():
     a, b = np.array([0, 1]), np.array([1, 2])
     with pytest.raises(ValueError, match="not a matching"):
-        card.maximum_cardinality_matching(3, a, b, start=np.array([2, -1, 0]))   # (0, 2) is no edge
+        card.maximum_cardinality_matching(3, a, b, start=np.array([2, -1, 0]))  # (0, 2) is no edge
     with pytest.raises(ValueError, match="mate array"):
         card.maximum_cardinality_matching(3, a, b, start=np.array([1, 0]))
 

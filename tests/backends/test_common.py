@@ -26,13 +26,16 @@ def test_integral_bound_rounds_down_with_a_tolerance():
     assert integral_bound(float("inf")) is None
 
 
-@pytest.mark.parametrize("state, obj, bound, gap, expected", [
-    (OPTIMAL, 10.0, 10.0, 0.0, Status.OPTIMAL),
-    (OPTIMAL, 10.0, 12.0, 0.1, Status.FEASIBLE),       # stopped by a requested gap
-    (LIMIT, 10.0, 12.0, 0.0, Status.TIME_LIMIT),
-    (LIMIT, 10.0, 10.0, 0.0, Status.OPTIMAL),          # the bound proves the incumbent: integral values
-    (LIMIT, 10.0, None, 0.0, Status.TIME_LIMIT),
-])
+@pytest.mark.parametrize(
+    "state, obj, bound, gap, expected",
+    [
+        (OPTIMAL, 10.0, 10.0, 0.0, Status.OPTIMAL),
+        (OPTIMAL, 10.0, 12.0, 0.1, Status.FEASIBLE),  # stopped by a requested gap
+        (LIMIT, 10.0, 12.0, 0.0, Status.TIME_LIMIT),
+        (LIMIT, 10.0, 10.0, 0.0, Status.OPTIMAL),  # the bound proves the incumbent: integral values
+        (LIMIT, 10.0, None, 0.0, Status.TIME_LIMIT),
+    ],
+)
 def test_classify(state, obj, bound, gap, expected):
     assert classify(state, obj, bound, gap) is expected
 
@@ -56,7 +59,7 @@ def test_time_limit_without_incumbent():
 
 def test_time_limit_returns_the_incumbent_with_bound_and_gap():
     sol = finish(PAIR, Raw(x=np.array([0.0, 1.0, 0.0]), state=LIMIT, bound=10.4), "x", Clock())
-    assert sol.status is Status.OPTIMAL                # floor(10.4) = 10 = objective: proven
+    assert sol.status is Status.OPTIMAL  # floor(10.4) = 10 = objective: proven
     sol = finish(PAIR, Raw(x=np.array([1.0, 0.0, 1.0]), state=LIMIT, bound=10.4), "x", Clock())
     assert sol.status is Status.TIME_LIMIT and sol.objective == 2.0 and sol.bound == 10.0
     assert sol.gap == pytest.approx(4.0)
@@ -73,7 +76,6 @@ def test_program_rows_and_cardinality_row():
     assert prog.lo.tolist() == [1.0, -np.inf] and prog.hi.tolist() == [1.0, 1.0]
     prog = program(PAIR, c=np.ones(3), min_count=2)
     assert prog.A.shape == (5, 3) and prog.lo[-1] == 2 and np.isinf(prog.hi[-1]) and prog.c.tolist() == [1, 1, 1]
-
 
 
 @pytest.mark.parametrize("seed", range(10))
@@ -105,10 +107,11 @@ def test_sorted_within_columns_agrees_with_scipy(seed):
     start = np.concatenate([[0], np.cumsum(counts)])
     rows = rng.integers(0, 6, start[-1]).astype(np.int32)
     A = sp.csc_matrix((np.ones(len(rows)), rows, start), shape=(6, len(counts)))
-    strictly = all((np.diff(rows[start[c]:start[c + 1]]) > 0).all() for c in range(len(counts)))
+    strictly = all((np.diff(rows[start[c] : start[c + 1]]) > 0).all() for c in range(len(counts)))
     assert _sorted_within_columns(start, rows) == strictly
     if strictly:
         assert A.has_sorted_indices
+
 
 class _Scripted(ProgramBackend):
     """A fake MILP backend replaying raw answers, to test the shared drivers."""
@@ -135,7 +138,7 @@ def test_fractional_lp_vertex_is_resolved_as_mip():
 
 def test_failed_lp_is_resolved_as_mip():
     # HiGHS's simplex ended "kUnknown" on a real full-day FL-nd round (wait values of -1e9 beside ~1e6)
-    model = AssignmentModel(1, 2, [0, 0, 0], [0, 1, -1], [3, 1, -10**9])
+    model = AssignmentModel(1, 2, [0, 0, 0], [0, 1, -1], [3, 1, -(10**9)])
     b = _Scripted([SolverError("HiGHS failed with model status kUnknown"), Raw(x=np.array([1.0, 0, 0]), state=OPTIMAL)])
     sol = b.solve(model, SolveOptions())
     assert [c["relax"] for c in b.calls] == [True, False] and sol.objective == 3
@@ -148,8 +151,8 @@ def test_oracle2_stage1_is_combinatorial_and_warm_starts_stage2():
     b = _Scripted([Raw(x=None, state=LIMIT, bound=2.0)])
     sol = b.solve(model, SolveOptions(time_limit_s=10))
     assert len(b.calls) == 1
-    assert b.calls[0]["rows"] == 5 and b.calls[0]["hint"].tolist() == [1, 0, 1]    # degree rows + Σx >= 2
-    assert sol.status is Status.OPTIMAL and sol.chosen.tolist() == [0, 2]   # start adopted, bound proves it
+    assert b.calls[0]["rows"] == 5 and b.calls[0]["hint"].tolist() == [1, 0, 1]  # degree rows + Σx >= 2
+    assert sol.status is Status.OPTIMAL and sol.chosen.tolist() == [0, 2]  # start adopted, bound proves it
 
 
 def test_oracle2_stage2_stopped_early_reports_time_limit():
@@ -166,7 +169,7 @@ MIP_PRESETS = ["highs", "scipy", "ortools", "cvxpy-highs", "pyomo-highs"]
 @pytest.mark.parametrize("name", MIP_PRESETS)
 def test_time_limit_stops_a_hard_pairing_and_returns_a_feasible_incumbent(name):
     backend, options = make(name)
-    model = synthetic.pairing(1500, partners=30)                # several seconds to prove for every MIP
+    model = synthetic.pairing(1500, partners=30)  # several seconds to prove for every MIP
     sol = backend.solve(model, SolveOptions(**{**options.__dict__, "time_limit_s": 0.3}))
     assert sol.status is Status.TIME_LIMIT
     assert model.violations(sol.chosen) == []

@@ -31,14 +31,18 @@ def check(model, backend, options, objective, chosen=None, status=Status.OPTIMAL
 
 
 # ------------------------------------------------------------------ empty models
-@pytest.mark.parametrize("model", [
-    AssignmentModel(0, 0, [], [], []),
-    AssignmentModel(0, 3, [], [], []),
-    TripPackingModel(0, 0, [], [], [], []),
-    TripPackingModel(2, 2, [], [], [], []),
-    PairingModel(0, [], [], []),
-    PairingModel(5, [], [], [], objective="cardinality_then_weight"),
-], ids=["assign-0x0", "assign-0x3", "pack-0x0", "pack-2x2-nocols", "pair-0", "pair-5-nocols"])
+@pytest.mark.parametrize(
+    "model",
+    [
+        AssignmentModel(0, 0, [], [], []),
+        AssignmentModel(0, 3, [], [], []),
+        TripPackingModel(0, 0, [], [], [], []),
+        TripPackingModel(2, 2, [], [], [], []),
+        PairingModel(0, [], [], []),
+        PairingModel(5, [], [], [], objective="cardinality_then_weight"),
+    ],
+    ids=["assign-0x0", "assign-0x3", "pack-0x0", "pack-2x2-nocols", "pair-0", "pair-5-nocols"],
+)
 def test_empty_models_are_solved_by_nothing(preset, model):
     _, backend, options = preset
     check(model, backend, options, 0.0, chosen=[])
@@ -128,16 +132,20 @@ def test_oracle2_breaks_cardinality_ties_by_weight_and_uses_negative_pairs(prese
     # Oracle-1 takes 01 alone (6).  The isolated pair (4, 5) is worth -2: Oracle-2 takes it for the pair
     a, b, v = [0, 1, 2, 0, 4], [1, 2, 3, 3, 5], [6, 4, -3, 1, -2]
     check(PairingModel(6, a, b, v), backend, options, 6.0, chosen=[0])
-    sol = check(PairingModel(6, a, b, v, objective="cardinality_then_weight"), backend, options, 3.0,
-                chosen=[1, 3, 4])
+    sol = check(PairingModel(6, a, b, v, objective="cardinality_then_weight"), backend, options, 3.0, chosen=[1, 3, 4])
     assert sol.cardinality == 3
 
 
 def test_pairing_with_only_negative_values_is_empty_for_oracle1(preset):
     _, backend, options = preset
     check(PairingModel(4, [0, 1, 2], [1, 2, 3], [-1, -5, -2]), backend, options, 0.0, chosen=[])
-    check(PairingModel(4, [0, 1, 2], [1, 2, 3], [-1, -5, -2], objective="cardinality_then_weight"),
-          backend, options, -3.0, chosen=[0, 2])
+    check(
+        PairingModel(4, [0, 1, 2], [1, 2, 3], [-1, -5, -2], objective="cardinality_then_weight"),
+        backend,
+        options,
+        -3.0,
+        chosen=[0, 2],
+    )
 
 
 # ------------------------------------------------------------------ trip packing
@@ -165,15 +173,18 @@ def test_identical_input_gives_identical_output(preset):
     rng = np.random.default_rng(7)
     P, V = 6, 5
     cp, cv = np.repeat(np.arange(P), V), np.tile(np.arange(V), P)
-    values = rng.integers(-3, 1, P * V) * 1000                    # many ties
+    values = rng.integers(-3, 1, P * V) * 1000  # many ties
     m = AssignmentModel(P, V, np.r_[cp, np.arange(P)], np.r_[cv, -np.ones(P, int)], np.r_[values, [-2500] * P])
     first, second = backend.solve(m, options), backend.solve(m, options)
     assert first.chosen.tolist() == second.chosen.tolist() and first.objective == second.objective
 
 
 def test_hand_models_match_brute_force():
-    models = [TRIANGLE, PairingModel(4, [0, 1, 2], [1, 2, 3], [1, 10, 1], objective="cardinality_then_weight"),
-              TripPackingModel(2, 2, [0, 1, 0], [0, 1, 0], [-1, -1, 1], [3, 3, 7]),
-              AssignmentModel(2, 2, [0, 0, 1], [0, 1, 0], [-1, -10, -10])]
+    models = [
+        TRIANGLE,
+        PairingModel(4, [0, 1, 2], [1, 2, 3], [1, 10, 1], objective="cardinality_then_weight"),
+        TripPackingModel(2, 2, [0, 1, 0], [0, 1, 0], [-1, -1, 1], [3, 3, 7]),
+        AssignmentModel(2, 2, [0, 0, 1], [0, 1, 0], [-1, -10, -10]),
+    ]
     assert [brute_force(m)[0] for m in models] == [1.0, 2.0, 7.0, -20.0]
     assert brute_force(AssignmentModel(2, 1, [0, 1], [0, 0], [-1, -2])) is None

@@ -26,15 +26,18 @@ def test_unknown_backend_is_a_preset_error():
         backend_class("gurobi")
 
 
-@pytest.mark.parametrize("text, match", [
-    ("backend = ", "not valid TOML"),
-    ('backend = "highs"\ncolour = 1', "unknown key"),
-    ('backend = "cplex"', "is not one of"),
-    ('backend = "highs"\n[options]\nthreads = "two"', "must be of type int"),
-    ('backend = "highs"\n[options]\ntime_limit_s = -1', "must be > 0"),
-    ('backend = "highs"\n[options]\nmip_rel_gap = -0.1', "mip_rel_gap must be >= 0"),
-    ('backend = "highs"\n[options]\ngap = 0.1', "unknown option"),
-])
+@pytest.mark.parametrize(
+    "text, match",
+    [
+        ("backend = ", "not valid TOML"),
+        ('backend = "highs"\ncolour = 1', "unknown key"),
+        ('backend = "cplex"', "is not one of"),
+        ('backend = "highs"\n[options]\nthreads = "two"', "must be of type int"),
+        ('backend = "highs"\n[options]\ntime_limit_s = -1', "must be > 0"),
+        ('backend = "highs"\n[options]\nmip_rel_gap = -0.1', "mip_rel_gap must be >= 0"),
+        ('backend = "highs"\n[options]\ngap = 0.1', "unknown option"),
+    ],
+)
 def test_malformed_preset_toml(text, match):
     with pytest.raises(PresetError, match=match):
         parse_preset("bad", text, "bad.toml")
@@ -53,14 +56,13 @@ def test_malformed_preset_file_on_disk(tmp_path):
 def test_missing_solver_library_is_reported_by_name(name, monkeypatch):
     cls = backend_class(name)
     real = importlib.util.find_spec
-    monkeypatch.setattr(importlib.util, "find_spec",
-                        lambda mod, *a: None if mod == cls.requires[0] else real(mod, *a))
+    monkeypatch.setattr(importlib.util, "find_spec", lambda mod, *a: None if mod == cls.requires[0] else real(mod, *a))
     # [0]: with an optional extra absent (blossom), its other libraries are missing too
     assert not cls.is_installed() and cls.missing_libraries()[0] == cls.requires[0]
     with pytest.raises(SolverNotInstalledError, match=f"needs the Python package.*{cls.requires[0]}.*--solver"):
         get_backend(name)
     with pytest.raises(SolverNotInstalledError):
-        cls().solve(PAIR, SolveOptions())        # solving checks too, not only get_backend
+        cls().solve(PAIR, SolveOptions())  # solving checks too, not only get_backend
 
 
 def test_missing_library_via_requires(monkeypatch):

@@ -12,8 +12,12 @@ from rpbench.exceptions import SolverError
 
 
 def _models():
-    return [synthetic.assignment(20, 15, seed=1), synthetic.trip_packing(12, 6, seed=2),
-            synthetic.assignment(8, 30, seed=3), synthetic.trip_packing(10, 10, seed=4)]
+    return [
+        synthetic.assignment(20, 15, seed=1),
+        synthetic.trip_packing(12, 6, seed=2),
+        synthetic.assignment(8, 30, seed=3),
+        synthetic.trip_packing(10, 10, seed=4),
+    ]
 
 
 def test_a_kept_instance_answers_as_a_fresh_one(monkeypatch):
@@ -34,7 +38,7 @@ def test_options_of_a_previous_solve_do_not_leak():
     h = kept_instance(lp)
     assert h.getOptionValue("presolve")[1] == "off"
     h = kept_instance(highs_settings(SolveOptions(), None, relax=False))
-    assert h.getOptionValue("presolve")[1] == "choose"        # HiGHS's default again
+    assert h.getOptionValue("presolve")[1] == "choose"  # HiGHS's default again
 
 
 def test_a_rejected_option_is_an_error_and_the_next_solve_starts_clean():

@@ -40,16 +40,23 @@ def test_importing_rpbench_loads_no_solver():
     assert out.strip() == "[]"
 
 
-@pytest.mark.parametrize("order", [LOADED, tuple(reversed(LOADED))],
-                         ids=["highspy-first", "highspy-last"])
+@pytest.mark.parametrize("order", [LOADED, tuple(reversed(LOADED))], ids=["highspy-first", "highspy-last"])
 @pytest.mark.slow
 def test_every_solver_library_loads_and_solves_in_one_process(order):
-    imports = {"highspy": "import highspy",
-               "ortools": "import ortools.sat.python.cp_model, ortools.graph.python.min_cost_flow, "
-                          "ortools.linear_solver.pywraplp",
-               "pyomo": "import pyomo.environ", "cvxpy": "import cvxpy", "pymatching": "import pymatching",
-               "lap": "import lap", "cppyy": "import cppyy", "ogdf_python": "from ogdf_python import ogdf"}
-    out = run_python("\n".join(imports[m] for m in order) + """
+    imports = {
+        "highspy": "import highspy",
+        "ortools": "import ortools.sat.python.cp_model, ortools.graph.python.min_cost_flow, "
+        "ortools.linear_solver.pywraplp",
+        "pyomo": "import pyomo.environ",
+        "cvxpy": "import cvxpy",
+        "pymatching": "import pymatching",
+        "lap": "import lap",
+        "cppyy": "import cppyy",
+        "ogdf_python": "from ogdf_python import ogdf",
+    }
+    out = run_python(
+        "\n".join(imports[m] for m in order)
+        + """
 from rpbench.backends import get_backend
 from rpbench.model import PairingModel, AssignmentModel
 from rpbench.backends.presets import load_preset, preset_names
@@ -61,6 +68,7 @@ for name in preset_names():
         continue
     b = get_backend(p.backend)
     print(name, b.solve(pair, p.options).objective, b.solve(assign, p.options).objective)
-""")
+"""
+    )
     lines = out.strip().splitlines()
     assert len(lines) >= 6 and all(line.split()[1:] == ["2.0", "-8.0"] for line in lines), out

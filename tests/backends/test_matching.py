@@ -59,7 +59,7 @@ def test_pairing_equals_networkx_on_random_graphs(seed, objective):
 
 def test_pairing_is_exact_where_any_rescaling_would_round():
     # path 0-1-2-3 with w(1,2) = w(0,1) + w(2,3) ± 1 near 2^21: a rounded or rescaled weight would tie
-    big = 2 ** 21
+    big = 2**21
     for delta, expected in ((+1, [1]), (-1, [0, 2])):
         v = [big, 2 * big + delta, big]
         sol = BACKEND.solve(PairingModel(4, [0, 1, 2], [1, 2, 3], v), SolveOptions())
@@ -114,8 +114,8 @@ def _alternating_path(m: int, heavy: int):
 def test_oracle2_lagrangian_bound_is_valid_when_the_bonus_falls_short(no_blossom_v):
     n, a, b, w = _alternating_path(8, 100)
     sel, proven, bound = mb.max_weight_max_cardinality(n, a, b, w, Clock())
-    assert not proven and len(sel) == 9 and w[sel].sum() == 9      # the warm start has k* pairs
-    assert bound is not None and bound >= 9                          # 9 is the true optimum
+    assert not proven and len(sel) == 9 and w[sel].sum() == 9  # the warm start has k* pairs
+    assert bound is not None and bound >= 9  # 9 is the true optimum
     sol = BACKEND.solve(PairingModel(n, a, b, w, objective="cardinality_then_weight"), SolveOptions())
     assert sol.status is Status.OPTIMAL and len(sol.chosen) == 9 and "HiGHS MIP" in sol.message
 
@@ -127,7 +127,7 @@ def test_what_pymatching_cannot_prove_goes_to_blossom_v():
     sol = BACKEND.solve(PairingModel(n, a, b, w, objective="cardinality_then_weight"), SolveOptions())
     assert sol.status is Status.OPTIMAL and len(sol.chosen) == 9 and sol.objective == 9
     assert "Blossom V" in sol.message
-    big = PairingModel(4, [0, 1, 2], [1, 2, 3], [20_000_001, 40_000_001, 20_000_001])     # beyond PyMatching's range
+    big = PairingModel(4, [0, 1, 2], [1, 2, 3], [20_000_001, 40_000_001, 20_000_001])  # beyond PyMatching's range
     sol = BACKEND.solve(big, SolveOptions())
     assert sol.status is Status.OPTIMAL and sol.chosen.tolist() == [0, 2] and "Blossom V" in sol.message
 
@@ -164,14 +164,15 @@ def test_oracle2_bound_never_cuts_off_the_optimum(seed):
 @pytest.mark.slow
 def test_pymatching_timeout_falls_back_with_an_honest_status(monkeypatch, no_blossom_v):
     model = synthetic.pairing(400, partners=8, objective="cardinality_then_weight")
-    monkeypatch.setattr(mb, "SMALL_GRAPH", 0)                   # force the forked, deadline-guarded path
+    monkeypatch.setattr(mb, "SMALL_GRAPH", 0)  # force the forked, deadline-guarded path
 
     def never(*args):
         raise mb.Timeout()
+
     monkeypatch.setattr(mb, "_in_child", lambda fn, args, deadline: never())
     sol = BACKEND.solve(model, SolveOptions(time_limit_s=30))
     assert "time limit" in sol.message and model.violations(sol.chosen) == []
-    assert sol.objective == get_backend("highs").solve(model, SolveOptions()).objective    # HiGHS finished
+    assert sol.objective == get_backend("highs").solve(model, SolveOptions()).objective  # HiGHS finished
 
 
 def test_forked_pymatching_gives_the_in_process_answer(monkeypatch):
@@ -199,12 +200,13 @@ def test_lapmod_equals_linear_sum_assignment(seed):
     P, V = int(rng.integers(1, 15)), int(rng.integers(1, 15))
     mask = rng.random((P, V)) < rng.uniform(0.1, 0.9)
     wait = rng.random(P) < 0.8
-    mask[~wait & ~mask.any(axis=1), rng.integers(0, V)] = True           # everyone has an option
-    cost = rng.integers(-10 ** 9, 10 ** 6, (P, V)).astype(float)          # huge values: lap's 1e6 sentinel
-    wait_value = rng.integers(-10 ** 9, 0, P).astype(float)
+    mask[~wait & ~mask.any(axis=1), rng.integers(0, V)] = True  # everyone has an option
+    cost = rng.integers(-(10**9), 10**6, (P, V)).astype(float)  # huge values: lap's 1e6 sentinel
+    wait_value = rng.integers(-(10**9), 0, P).astype(float)
     p, v = np.nonzero(mask)
-    model = AssignmentModel(P, V, np.r_[p, np.flatnonzero(wait)], np.r_[v, -np.ones(wait.sum(), int)],
-                            np.r_[cost[p, v], wait_value[wait]])
+    model = AssignmentModel(
+        P, V, np.r_[p, np.flatnonzero(wait)], np.r_[v, -np.ones(wait.sum(), int)], np.r_[cost[p, v], wait_value[wait]]
+    )
     # dense reference: rows passengers, columns vehicles + own wait slots; forbidden = -inf value
     big = np.full((P, V + P), -np.inf)
     big[p, v] = cost[p, v]

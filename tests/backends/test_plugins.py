@@ -87,31 +87,51 @@ def test_the_example_backend_is_honest_about_what_it_cannot_do(example, monkeypa
     monkeypatch.setattr(sys.modules["rpbench_greedy.backend"], "MAX_CELLS", 100)
     with pytest.raises(SolverError, match="needs a 20 x 28 dense matrix"):
         solve(model, load_preset(preset_file(example, SPEC)))
-    infeasible = synthetic.assignment(10, 2, seed=1, wait=False)            # 10 passengers, 2 vehicles, no waiting
-    monkeypatch.setattr(sys.modules["rpbench_greedy.backend"], "MAX_CELLS", 10 ** 6)
+    infeasible = synthetic.assignment(10, 2, seed=1, wait=False)  # 10 passengers, 2 vehicles, no waiting
+    monkeypatch.setattr(sys.modules["rpbench_greedy.backend"], "MAX_CELLS", 10**6)
     assert solve(infeasible, load_preset(preset_file(example, SPEC))).status is Status.INFEASIBLE
 
 
-@pytest.mark.parametrize("backend, message", [
-    ("nomod_xyz:Thing", "solver preset '.*mine.toml': backend 'nomod_xyz:Thing': cannot import module 'nomod_xyz' "
-                        r"\(No module named 'nomod_xyz'\)"),
-    ("rpbench_greedy.backend:Nope", "module 'rpbench_greedy.backend' has no attribute 'Nope'"),
-    ("rpbench_greedy.backend:SolveOptions", "rpbench_greedy.backend.SolveOptions is a class, not a subclass of "
-                                            "rpbench.backends.base.Backend"),
-    ("rpbench_greedy.backend:Backend", "rpbench_greedy.backend.Backend is abstract; implement solve"),
-    ("rpbench_greedy:PRESET", "rpbench_greedy.PRESET is a PosixPath, not a subclass"),
-    ("cplex", "backend = 'cplex' is not one of highs, .* nor a \"module:Class\" spec"),
-    ("a b:C", "backend 'a b:C' is not MODULE:CLASS"),
-])
+@pytest.mark.parametrize(
+    "backend, message",
+    [
+        (
+            "nomod_xyz:Thing",
+            "solver preset '.*mine.toml': backend 'nomod_xyz:Thing': cannot import module 'nomod_xyz' "
+            r"\(No module named 'nomod_xyz'\)",
+        ),
+        ("rpbench_greedy.backend:Nope", "module 'rpbench_greedy.backend' has no attribute 'Nope'"),
+        (
+            "rpbench_greedy.backend:SolveOptions",
+            "rpbench_greedy.backend.SolveOptions is a class, not a subclass of rpbench.backends.base.Backend",
+        ),
+        ("rpbench_greedy.backend:Backend", "rpbench_greedy.backend.Backend is abstract; implement solve"),
+        ("rpbench_greedy:PRESET", "rpbench_greedy.PRESET is a PosixPath, not a subclass"),
+        ("cplex", "backend = 'cplex' is not one of highs, .* nor a \"module:Class\" spec"),
+        ("a b:C", "backend 'a b:C' is not MODULE:CLASS"),
+    ],
+)
 def test_bad_plugin_backends_in_presets(example, backend, message):
     with pytest.raises(PresetError, match=message):
         load_preset(preset_file(example, backend))
 
 
 def test_cli_reports_a_bad_plugin_preset_on_one_line(example, tmp_path, capsys):
-    code = main(["run", "--scenario", "toy", "--strategies", "mb", "--solver", preset_file(example, "nomod_xyz:T"),
-                 "--out", str(tmp_path / "never"), "--no-progress"])
-    err = capsys.readouterr().err.strip().splitlines()        # the scenario's label comes first, as a note
+    code = main(
+        [
+            "run",
+            "--scenario",
+            "toy",
+            "--strategies",
+            "mb",
+            "--solver",
+            preset_file(example, "nomod_xyz:T"),
+            "--out",
+            str(tmp_path / "never"),
+            "--no-progress",
+        ]
+    )
+    err = capsys.readouterr().err.strip().splitlines()  # the scenario's label comes first, as a note
     errors = [line for line in err if line.startswith("rpbench: error:")]
     assert code == 2 and errors == err[-1:] and "cannot import module 'nomod_xyz'" in err[-1]
 
@@ -122,8 +142,10 @@ def test_backend_entry_points_resolve_and_builtins_win(example):
     assert "lsa" in plugin_names() and "highs" not in plugin_names()
     preset = parse_preset("mine", 'backend = "lsa"\n', "mine.toml")
     assert preset.backend == "lsa" and preset.backend_class() is backend_class(SPEC)
-    with pytest.raises(PresetError, match="unknown backend 'gurobi'; known backends: highs, .*; installed "
-                                          "plug-ins: lsa; or give MODULE:CLASS"):
+    with pytest.raises(
+        PresetError,
+        match="unknown backend 'gurobi'; known backends: highs, .*; installed plug-ins: lsa; or give MODULE:CLASS",
+    ):
         backend_class("gurobi")
     with pytest.raises(PresetError, match="is not one of highs, ortools, pyomo, cvxpy, scipy, matching, blossom, lsa"):
         parse_preset("bad", 'backend = "gurobi"\n', "bad.toml")

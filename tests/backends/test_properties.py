@@ -41,7 +41,7 @@ def assignments(draw):
     cols = [(p, v) for p in range(P) for v in range(V) if draw(st.booleans())]
     waits = [p for p in range(P) if draw(st.integers(0, 3)) > 0 or not any(c[0] == p for c in cols)]
     cols = (cols + [(p, -1) for p in waits])[:MAX_COLS]
-    for p in range(P):                              # truncation must leave every passenger an option
+    for p in range(P):  # truncation must leave every passenger an option
         if not any(c[0] == p for c in cols):
             cols[-1 if cols[-1][0] != p else 0] = (p, -1)
     cols = sorted(set(cols))
@@ -103,13 +103,17 @@ def test_trip_packing_every_preset_equals_brute_force(model):
     assert_all_presets_equal_brute_force(model)
 
 
-@pytest.mark.parametrize("make", [
-    lambda seed: synthetic.assignment(12, 40, seed=seed),
-    lambda seed: synthetic.assignment(30, 25, seed=seed, wait=seed % 2 == 0, density=(0.5, 0.9)),
-    lambda seed: synthetic.pairing(60, partners=8, seed=seed),
-    lambda seed: synthetic.pairing(60, partners=8, seed=seed, objective="cardinality_then_weight"),
-    lambda seed: synthetic.trip_packing(20, 10, seed=seed),
-], ids=["assignment", "assignment-dense-mandatory", "pairing", "pairing-oracle2", "trip-packing"])
+@pytest.mark.parametrize(
+    "make",
+    [
+        lambda seed: synthetic.assignment(12, 40, seed=seed),
+        lambda seed: synthetic.assignment(30, 25, seed=seed, wait=seed % 2 == 0, density=(0.5, 0.9)),
+        lambda seed: synthetic.pairing(60, partners=8, seed=seed),
+        lambda seed: synthetic.pairing(60, partners=8, seed=seed, objective="cardinality_then_weight"),
+        lambda seed: synthetic.trip_packing(20, 10, seed=seed),
+    ],
+    ids=["assignment", "assignment-dense-mandatory", "pairing", "pairing-oracle2", "trip-packing"],
+)
 @pytest.mark.parametrize("seed", [0, 1])
 def test_presets_agree_on_synthetic_models(make, seed):
     model = make(seed)

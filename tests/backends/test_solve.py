@@ -45,7 +45,7 @@ def test_verify_rejects_bad_columns():
 
 
 def test_an_infeasible_assignment_is_an_honest_answer():
-    model = AssignmentModel(1, 1, [0], [0], [1.0])          # no wait option, one vehicle
+    model = AssignmentModel(1, 1, [0], [0], [1.0])  # no wait option, one vehicle
     verify(model, Solution(np.array([], np.int64), 0.0, Status.INFEASIBLE, "x"), "x")
 
 
@@ -58,7 +58,7 @@ def test_solve_checks_support_and_verifies_the_answer():
     with pytest.raises(PresetError, match="does not solve assignment models"):
         solve(assignment, Preset.of(Fixed()))
     empty = PairingModel(2, [], [], [])
-    assert solve(empty, Preset.of(Fixed([7]))).status is Status.OPTIMAL    # nothing to decide: not asked
+    assert solve(empty, Preset.of(Fixed([7]))).status is Status.OPTIMAL  # nothing to decide: not asked
 
 
 def test_preset_of_a_backend_object_keeps_options():

@@ -23,7 +23,7 @@ SETTINGS = dict(deadline=None, suppress_health_check=[HealthCheck.too_slow], der
 def optima(model) -> list[np.ndarray]:
     """Every optimal 0/1 point of a tiny model, as sorted column indices."""
     n = model.n_cols
-    X = ((np.arange(2 ** n)[:, None] >> np.arange(n)) & 1).astype(np.int64)
+    X = ((np.arange(2**n)[:, None] >> np.arange(n)) & 1).astype(np.int64)
     ok = ((X @ model.incidence().T.toarray().astype(np.int64)) <= 1).all(axis=1)
     value = X[ok] @ model.values
     return [np.flatnonzero(x) for x in X[ok][value == value.max()]]
@@ -56,7 +56,7 @@ def test_an_answer_is_the_only_optimum_and_ties_get_none(model):
 
 
 @settings(max_examples=150, **SETTINGS)
-@given(packings(values=st.integers(-10**6, 10**7)))
+@given(packings(values=st.integers(-(10**6), 10**7)))
 def test_the_shortcut_gives_the_mips_plan_on_tie_free_models(model):
     # Wide values: optima are almost always unique, and then the plan must be the full MIP's exactly.
     backend = get_backend("highs")
@@ -87,7 +87,7 @@ def test_disjoint_trips_and_all_negative_values():
     disjoint = TripPackingModel(3, 3, [0, 1, 2], [0, 1, 2], [-1, -1, -1], [5, 7, -2])
     assert list(lp_answer(disjoint)) == [0, 1]
     assert list(lp_answer(TripPackingModel(2, 1, [0, 0], [0, 1], [-1, -1], [-3, -1]))) == []
-    assert lp_answer(TripPackingModel(2, 2, [0, 1], [0, 1], [-1, -1], [4, 0])) is None      # zero value: a tie
+    assert lp_answer(TripPackingModel(2, 2, [0, 1], [0, 1], [-1, -1], [4, 0])) is None  # zero value: a tie
 
 
 def test_a_unique_optimum_needs_no_tie_repair():

@@ -26,7 +26,7 @@ def test_table_has_one_row_per_model_and_preset():
     assert list(table.columns) == COLUMNS and len(table) == 2 * len(MODELS)
     assert (table["status"] == "optimal").all() and table["agrees"].all()
     assert (table["build_s"] >= 0).all() and (table["solve_s"] >= 0).all() and (table["repeats"] == 2).all()
-    assert table["model"].tolist()[:2] == [MODELS[0].name] * 2                   # grouped by model
+    assert table["model"].tolist()[:2] == [MODELS[0].name] * 2  # grouped by model
     text = format_table(table)
     assert "matching" in text and "yes" in text and "NO" not in text
 
@@ -39,8 +39,14 @@ def test_isolated_workers_give_the_same_answers():
 
 
 def test_cross_check_flags_disagreement_and_impossible_values():
-    rows = [("m", "optimal", 5.0), ("m", "optimal", 4.0), ("n", "optimal", 5.0), ("n", "time_limit", 6.0),
-            ("n", "time_limit", 3.0), ("n", "error", np.nan)]
+    rows = [
+        ("m", "optimal", 5.0),
+        ("m", "optimal", 4.0),
+        ("n", "optimal", 5.0),
+        ("n", "time_limit", 6.0),
+        ("n", "time_limit", 3.0),
+        ("n", "error", np.nan),
+    ]
     rows = [dict(zip(("model", "status", "objective"), r)) for r in rows]
     agrees = cross_check(pd.DataFrame(rows))["agrees"].tolist()
     assert agrees[:4] == [False, False, True, False] and pd.isna(agrees[4]) and pd.isna(agrees[5])
@@ -57,8 +63,15 @@ class _Broken(Backend):
 
 def test_errors_and_wrong_answers_are_rows_not_crashes(monkeypatch):
     preset = Preset(name="broken", backend="highs", description="", options=SolveOptions(), path="-")
-    monkeypatch.setattr(Preset, "make_backend", lambda self: _Broken() if self.name == "broken" else
-                        __import__("rpbench.backends", fromlist=["get_backend"]).get_backend(self.backend))
+    monkeypatch.setattr(
+        Preset,
+        "make_backend",
+        lambda self: (
+            _Broken()
+            if self.name == "broken"
+            else __import__("rpbench.backends", fromlist=["get_backend"]).get_backend(self.backend)
+        ),
+    )
     table = run_benchmark(MODELS[1:3], ["matching", preset])
     broken = table[table["preset"] == "broken"]
     assert broken["status"].tolist() == ["error", "error"] and "broken on purpose" in broken["message"].iloc[0]
@@ -78,23 +91,45 @@ def test_bad_repeat():
 
 def test_bench_command_json(capsys, tmp_path):
     csv = tmp_path / "bench.csv"
-    code = main(["bench", "--synthetic", "--sizes", "tiny", "--solver", "matching", "--solver", "scipy",
-                 "--repeat", "1", "--no-isolate", "--json", "--csv", str(csv),
-                 "--objectives", "weight,cardinality_then_weight", "--preset-time-limit", "scipy=20"])
+    code = main(
+        [
+            "bench",
+            "--synthetic",
+            "--sizes",
+            "tiny",
+            "--solver",
+            "matching",
+            "--solver",
+            "scipy",
+            "--repeat",
+            "1",
+            "--no-isolate",
+            "--json",
+            "--csv",
+            str(csv),
+            "--objectives",
+            "weight,cardinality_then_weight",
+            "--preset-time-limit",
+            "scipy=20",
+        ]
+    )
     assert code == 0
     records = json.loads(capsys.readouterr().out)
     assert len(records) == 8 and {r["status"] for r in records} == {"optimal"} and csv.exists()
 
 
-@pytest.mark.parametrize("argv, match", [
-    (["bench"], "pass --synthetic"),
-    (["bench", "no/such/folder"], "does not exist"),
-    (["bench", "--synthetic", "--structures", "assignment,knapsack"], "--structures"),
-    (["bench", "--synthetic", "--objectives", "max"], "--objectives"),
-    (["bench", "--synthetic", "--preset-time-limit", "highs"], "NAME=SECONDS"),
-    (["bench", "--synthetic", "--time-limit", "0"], "must be > 0"),
-    (["bench", "--synthetic", "--sizes", "tiny", "--solver", "nope"], "unknown solver preset"),
-])
+@pytest.mark.parametrize(
+    "argv, match",
+    [
+        (["bench"], "pass --synthetic"),
+        (["bench", "no/such/folder"], "does not exist"),
+        (["bench", "--synthetic", "--structures", "assignment,knapsack"], "--structures"),
+        (["bench", "--synthetic", "--objectives", "max"], "--objectives"),
+        (["bench", "--synthetic", "--preset-time-limit", "highs"], "NAME=SECONDS"),
+        (["bench", "--synthetic", "--time-limit", "0"], "must be > 0"),
+        (["bench", "--synthetic", "--sizes", "tiny", "--solver", "nope"], "unknown solver preset"),
+    ],
+)
 def test_bench_command_errors(argv, match, capsys):
     assert main(argv) == 2
     assert match in capsys.readouterr().err
@@ -105,8 +140,9 @@ EXAMPLES = Path(__file__).resolve().parents[2] / "instances" / "examples"
 
 @pytest.mark.slow
 def test_bench_command_on_the_committed_example_instances(capsys):
-    code = main(["bench", str(EXAMPLES), "--solver", "matching", "--solver", "highs", "--repeat", "1",
-                 "--no-isolate", "--json"])
+    code = main(
+        ["bench", str(EXAMPLES), "--solver", "matching", "--solver", "highs", "--repeat", "1", "--no-isolate", "--json"]
+    )
     records = json.loads(capsys.readouterr().out)
     assert code == 0
     files = sorted(p.stem for p in EXAMPLES.glob("*.npz"))
@@ -127,21 +163,57 @@ def test_a_recorded_optimum_the_solvers_do_not_reach_is_flagged(tmp_path, capsys
 
 
 def test_bench_structures_filter(capsys):
-    assert main(["bench", "--synthetic", "--sizes", "tiny", "--structures", "pairing", "--solver", "matching",
-                 "--repeat", "1", "--no-isolate", "--json"]) == 0
+    assert (
+        main(
+            [
+                "bench",
+                "--synthetic",
+                "--sizes",
+                "tiny",
+                "--structures",
+                "pairing",
+                "--solver",
+                "matching",
+                "--repeat",
+                "1",
+                "--no-isolate",
+                "--json",
+            ]
+        )
+        == 0
+    )
     assert {r["structure"] for r in json.loads(capsys.readouterr().out)} == {"pairing"}
 
 
 def test_bench_plot(tmp_path):
     png = tmp_path / "bench.png"
-    assert main(["bench", "--synthetic", "--sizes", "tiny", "--solver", "matching", "--solver", "scipy",
-                 "--repeat", "1", "--no-isolate", "--plot", str(png)]) == 0
+    assert (
+        main(
+            [
+                "bench",
+                "--synthetic",
+                "--sizes",
+                "tiny",
+                "--solver",
+                "matching",
+                "--solver",
+                "scipy",
+                "--repeat",
+                "1",
+                "--no-isolate",
+                "--plot",
+                str(png),
+            ]
+        )
+        == 0
+    )
     assert png.read_bytes()[:4] == b"\x89PNG"
 
 
 def test_bad_structures_fail_before_the_synthetic_suite_is_built(monkeypatch, capsys):
     def never(*args, **kwargs):
         raise AssertionError("the synthetic suite was built before --structures was checked")
+
     monkeypatch.setattr("rpbench.commands.bench.suite", never)
     assert main(["bench", "--synthetic", "--structures", "knapsack"]) == 2
     assert "--structures 'knapsack'" in capsys.readouterr().err

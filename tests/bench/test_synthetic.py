@@ -16,8 +16,11 @@ def same(m1, m2) -> bool:
 
 
 def test_generators_are_pure_functions_of_their_seed():
-    for make in (lambda s: synthetic.assignment(20, 60, seed=s), lambda s: synthetic.pairing(300, seed=s),
-                 lambda s: synthetic.trip_packing(40, 20, seed=s)):
+    for make in (
+        lambda s: synthetic.assignment(20, 60, seed=s),
+        lambda s: synthetic.pairing(300, seed=s),
+        lambda s: synthetic.trip_packing(40, 20, seed=s),
+    ):
         assert same(make(3), make(3)) and not same(make(3), make(4))
 
 
@@ -26,8 +29,8 @@ def test_assignment_shape():
     wait = m.col_vehicle < 0
     per_passenger = np.bincount(m.col_passenger[~wait], minlength=100) / 500
     assert per_passenger.min() >= 0.05 - 1e-9 and per_passenger.max() <= 0.20 + 1e-9
-    assert np.array_equal(np.sort(m.col_passenger[wait]), np.arange(100))      # one wait option each
-    assert (m.values[~wait] <= 4_000_000).all() and m.unit_m == 1e-3             # -pickup (+ saving) in mm
+    assert np.array_equal(np.sort(m.col_passenger[wait]), np.arange(100))  # one wait option each
+    assert (m.values[~wait] <= 4_000_000).all() and m.unit_m == 1e-3  # -pickup (+ saving) in mm
     no_wait = synthetic.assignment(5, 10, wait=False)
     assert (no_wait.col_vehicle >= 0).all()
 
@@ -37,8 +40,8 @@ def test_pairing_shape():
     degree = np.bincount(np.r_[m.col_a, m.col_b], minlength=2000)
     assert 15 <= degree.mean() <= 35 and (m.values > 0).all() and m.objective == "weight"
     m2 = synthetic.pairing(2000, seed=0, objective="cardinality_then_weight")
-    assert m2.n_cols > m.n_cols and (m2.values <= 0).any()                      # Oracle-2 keeps every feasible pair
-    assert (m.col_b - m.col_a).max() <= 32 * 15                                  # partners are near in time
+    assert m2.n_cols > m.n_cols and (m2.values <= 0).any()  # Oracle-2 keeps every feasible pair
+    assert (m.col_b - m.col_a).max() <= 32 * 15  # partners are near in time
 
 
 def test_trip_packing_shape():

@@ -37,8 +37,10 @@ BY_NAME = {e.name: e for e in REGISTRY}
 PINNED_COMMITS = {
     "yangchen-seu/RL-ridepooling": {"16bdaef446ae9c73c3aa560f8d6081d66bf884f9"},
     "yangchen-seu/ridepooling-simulation-with-sumo": {"ed108f8508e0cadf450849d0774293311049a8a5"},
-    "seanys/Predicting-the-Matching-Probability-and-Expected-Ride-shared-Distance-of-Enroute-Ridepooling-Orders":
-        {"61538880f9ce99ea6a22113ec991e5d454470c91", "ac767e22467c1981f66e70cc5aacf4208c5e27c8"},
+    "seanys/Predicting-the-Matching-Probability-and-Expected-Ride-shared-Distance-of-Enroute-Ridepooling-Orders": {
+        "61538880f9ce99ea6a22113ec991e5d454470c91",
+        "ac767e22467c1981f66e70cc5aacf4208c5e27c8",
+    },
     "bazilong/Traffic-analysis": {"d719311210371f3993582462acfd846532304460"},
     "MYXue/CCF_2019_Haikou_traffic_analysis": {"fdf333be827174e90034f056bbd452170e97a645"},
     "jackye330/ridesharing": {"9003ffd2bcfdd8baad0e7f31e91a6e4762dd7a67"},
@@ -117,7 +119,7 @@ class _QuietHandler(SimpleHTTPRequestHandler):
 
 class _QuietServer(ThreadingHTTPServer):
     def handle_error(self, request, client_address) -> None:
-        pass                    # a client that stops reading a corrupt file breaks the pipe: not news
+        pass  # a client that stops reading a corrupt file breaks the pipe: not news
 
 
 def start_server(root: Path):
@@ -141,7 +143,7 @@ def mirror(served_dir):
 @pytest.fixture(scope="module")
 def fetched_once(pristine, tmp_path_factory) -> Path:
     dest = tmp_path_factory.mktemp("fetched") / "haikou"
-    fetch_mod.fetch(dest, pristine, progress=False)       # a local folder as mirror
+    fetch_mod.fetch(dest, pristine, progress=False)  # a local folder as mirror
     return dest
 
 
@@ -154,10 +156,22 @@ def fetched(fetched_once, tmp_path) -> Path:
 
 # --------------------------------------------------------------------------- the registry
 
+
 def test_registry_covers_every_file_rpbench_reads():
-    read = [NODE_FILE, LINK_FILE, PRED_VERTEX_FILE, PRED_EDGE_FILE, RAW_PEAK_FILE, GAIA_SAMPLE_FILE, TRACE_FILE,
-            MONTH_OD_FILE, DAY_OD_FILE, AUTHORS_PREDICTION_FILE, HOURLY_FILE,
-            *(PEAK_DIR / f"2017-05-{d:02d}.csv.gz" for d in range(1, 15))]
+    read = [
+        NODE_FILE,
+        LINK_FILE,
+        PRED_VERTEX_FILE,
+        PRED_EDGE_FILE,
+        RAW_PEAK_FILE,
+        GAIA_SAMPLE_FILE,
+        TRACE_FILE,
+        MONTH_OD_FILE,
+        DAY_OD_FILE,
+        AUTHORS_PREDICTION_FILE,
+        HOURLY_FILE,
+        *(PEAK_DIR / f"2017-05-{d:02d}.csv.gz" for d in range(1, 15)),
+    ]
     assert {p.as_posix() for p in read} <= set(NAMES)
     assert all(e.transform == ("gzip" if e.name.endswith(".gz") else "none") for e in REGISTRY)
 
@@ -165,8 +179,10 @@ def test_registry_covers_every_file_rpbench_reads():
 def test_urls_without_mirror_are_the_pinned_raw_github_ones():
     urls = dict(source_urls())
     assert list(urls) == NAMES
-    assert urls["network/node.csv"] == ("https://raw.githubusercontent.com/yangchen-seu/RL-ridepooling/"
-                                        "16bdaef446ae9c73c3aa560f8d6081d66bf884f9/input/node.csv")
+    assert urls["network/node.csv"] == (
+        "https://raw.githubusercontent.com/yangchen-seu/RL-ridepooling/"
+        "16bdaef446ae9c73c3aa560f8d6081d66bf884f9/input/node.csv"
+    )
     for name, url in urls.items():
         m = re.match(r"^https://raw\.githubusercontent\.com/([^/]+/[^/]+)/([0-9a-f]{40})/\S+$", url)
         assert m, (name, url)
@@ -184,8 +200,10 @@ def test_dry_run_prints_urls_and_downloads_nothing(capsys, monkeypatch, private_
 
 
 def test_bad_registry_is_a_data_error():
-    good = ('[[file]]\nname = "{name}"\nurl = "https://raw.githubusercontent.com/a/b/' + "0" * 40 + '/x.csv"\n'
-            'transform = "none"\nsize = 1\nsha256 = "' + "a" * 64 + '"\n')
+    good = (
+        '[[file]]\nname = "{name}"\nurl = "https://raw.githubusercontent.com/a/b/' + "0" * 40 + '/x.csv"\n'
+        'transform = "none"\nsize = 1\nsha256 = "' + "a" * 64 + '"\n'
+    )
     assert load_registry(good.format(name="x.csv"))[0].name == "x.csv"
     with pytest.raises(DataError, match="relative path"):
         load_registry(good.format(name="../escape.csv"))
@@ -202,6 +220,7 @@ def test_registry_checksums_match_the_shared_data_folder(data_dir):
 
 # --------------------------------------------------------------------------- fetch
 
+
 def test_fetch_from_mirror_then_again_downloads_nothing(capsys, mirror, tmp_path):
     url, requests, served = mirror
     dest = tmp_path / "dest"
@@ -209,7 +228,7 @@ def test_fetch_from_mirror_then_again_downloads_nothing(capsys, mirror, tmp_path
     assert code == 0
     assert json.loads(out)["downloaded"] == NAMES
     assert sorted(requests) == sorted(f"/{n}" for n in NAMES)
-    for name in NAMES:                                   # a mirror's files are stored as served
+    for name in NAMES:  # a mirror's files are stored as served
         assert (dest / name).read_bytes() == (served / name).read_bytes()
     report = verify(dest)
     assert report.ok == NAMES and not report.bad and not report.missing and not report.extra
@@ -239,14 +258,17 @@ def test_fetch_without_mirror_gzips_the_upstream_content(monkeypatch, served_dir
     assert opened == [e.url for e in few] and report.downloaded == [e.name for e in few]
     assert verify(tmp_path / "dest", entries=few).ok == [e.name for e in few]
     head = (tmp_path / "dest" / "predecessor_trb2021_network" / "all_vertexes.csv.gz").read_bytes()[:10]
-    assert head[:3] == b"\x1f\x8b\x08" and head[3] == 0 and head[4:8] == b"\0\0\0\0"   # `gzip -n`: no name, no time
+    assert head[:3] == b"\x1f\x8b\x08" and head[3] == 0 and head[4:8] == b"\0\0\0\0"  # `gzip -n`: no name, no time
 
 
-@pytest.mark.parametrize("name, damage", [
-    ("network/node.csv", flip_byte),
-    ("demand_0800_0900/orders/2017-05-03.csv.gz", change_content_byte),   # valid gzip, other content
-    ("demand_0800_0900/orders/2017-05-03.csv.gz", flip_byte),             # broken gzip stream
-])
+@pytest.mark.parametrize(
+    "name, damage",
+    [
+        ("network/node.csv", flip_byte),
+        ("demand_0800_0900/orders/2017-05-03.csv.gz", change_content_byte),  # valid gzip, other content
+        ("demand_0800_0900/orders/2017-05-03.csv.gz", flip_byte),  # broken gzip stream
+    ],
+)
 def test_one_byte_change_on_the_server_is_a_checksum_error(capsys, mirror, tmp_path, name, damage):
     url, _, served = mirror
     damage(served / name)
@@ -260,7 +282,7 @@ def test_one_byte_change_on_the_server_is_a_checksum_error(capsys, mirror, tmp_p
 
 
 def test_server_down_is_one_line_and_leaves_no_folder(capsys, tmp_path):
-    with socket.socket() as s:                           # a port nothing listens on
+    with socket.socket() as s:  # a port nothing listens on
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
     dest = tmp_path / "dest"
@@ -307,6 +329,7 @@ def test_a_wrong_file_already_present_is_downloaded_again(pristine, fetched):
 
 # --------------------------------------------------------------------------- verify
 
+
 def test_verify_lists_another_day_and_reports_missing_files(capsys, fetched):
     orders = fetched / "demand_0800_0900" / "orders"
     shutil.copy(orders / "2017-05-01.csv.gz", orders / "2017-05-15.csv.gz")
@@ -329,13 +352,15 @@ def test_verify_detects_a_one_byte_change(capsys, fetched, name):
 
 # --------------------------------------------------------------------------- default data location
 
-def test_default_data_location_picks_up_the_fetch_destination(capsys, monkeypatch, pristine, tmp_path,
-                                                              private_data_home):
+
+def test_default_data_location_picks_up_the_fetch_destination(
+    capsys, monkeypatch, pristine, tmp_path, private_data_home
+):
     # A fresh machine: no $RPBENCH_DATA, no ../shared beside the current folder or the checkout.
     monkeypatch.delenv("RPBENCH_DATA", raising=False)
     monkeypatch.chdir(tmp_path)
     monkeypatch.setattr("rpbench.paths.source_root", lambda: tmp_path / "checkout")
-    monkeypatch.setattr("rpbench.commands.list.preset_names", list)   # no presets: skip importing solver libraries
+    monkeypatch.setattr("rpbench.commands.list.preset_names", list)  # no presets: skip importing solver libraries
     assert find_data_dir() is None
 
     code, _, _ = run_cli(capsys, "data", "fetch", "--mirror", pristine.as_uri(), "--quiet")
@@ -352,20 +377,23 @@ def test_default_data_location_picks_up_the_fetch_destination(capsys, monkeypatc
     assert f"data folder: {expected} (from downloaded by `rpbench data fetch`" in out
 
 
-def test_a_fresh_machine_fetches_from_a_local_mirror_and_runs_the_paper_scenario(capsys, monkeypatch, mirror,
-                                                                               tmp_path, private_data_home):
+def test_a_fresh_machine_fetches_from_a_local_mirror_and_runs_the_paper_scenario(
+    capsys, monkeypatch, mirror, tmp_path, private_data_home
+):
     """The README's path for a machine without ../shared: fetch over HTTP, then `rpbench run` finds the data
     by default and runs the paper's haikou-peak comparison (MB only, a small sample: the path, not the numbers)."""
     monkeypatch.delenv("RPBENCH_DATA", raising=False)
     monkeypatch.chdir(tmp_path)
-    monkeypatch.setattr("rpbench.paths.default_data_candidates",
-                        lambda: [tmp_path / "no-shared", (private_data_home / "haikou")])
+    monkeypatch.setattr(
+        "rpbench.paths.default_data_candidates", lambda: [tmp_path / "no-shared", (private_data_home / "haikou")]
+    )
     url, _, _ = mirror
     code, _, _ = run_cli(capsys, "data", "fetch", "--mirror", url, "--quiet")
     assert code == 0
     out = tmp_path / "run"
-    code, stdout, _ = run_cli(capsys, "run", "--strategies", "mb", "--sample", "0.05", "--out", str(out),
-                              "--no-progress")
+    code, stdout, _ = run_cli(
+        capsys, "run", "--strategies", "mb", "--sample", "0.05", "--out", str(out), "--no-progress"
+    )
     assert code == 0 and "Haikou 2017-05-01 08:00-09:00" in stdout
     meta = json.loads((out / "meta.json").read_text())
     assert meta["scenario"]["name"] == "haikou-peak"

@@ -19,7 +19,7 @@ from rpbench.exceptions import DataError, DataNotFoundError, ParameterError
 
 def test_peak_hour_keeps_departures_inside_the_hour(data_dir):
     frame = read_peak_orders(data_dir, "2017-05-01")
-    assert len(frame) == 2018                       # 2,035 rows, 17 outside [08:00, 09:00)
+    assert len(frame) == 2018  # 2,035 rows, 17 outside [08:00, 09:00)
     assert frame["departure_time"].min() >= pd.Timestamp("2017-05-01 08:00")
     assert frame["departure_time"].max() < pd.Timestamp("2017-05-01 09:00")
     assert frame["departure_time"].is_monotonic_increasing
@@ -47,6 +47,7 @@ def test_bad_date_text(fake_data):
 
 def test_bad_departure_time(fake_data, tmp_path):
     import gzip
+
     path = fake_data / "demand_0800_0900" / "orders" / "2017-05-01.csv.gz"
     with gzip.open(path, "rt") as fh:
         lines = fh.read().splitlines()

@@ -15,7 +15,7 @@ def test_haikou_network_has_both_directions_of_every_link(data_dir):
     tables = read_haikou_network(data_dir)
     assert len(tables.node_id) == 3901
     assert len(tables.arc_from) == 2 * 5458
-    net = RoadNetwork.from_tables(tables)      # checks strong connectivity
+    net = RoadNetwork.from_tables(tables)  # checks strong connectivity
     assert net.n_nodes == 3901 and net.n_arcs == 10916
     assert (net.arc_length_m > 0).all()
 

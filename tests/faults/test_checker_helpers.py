@@ -28,8 +28,9 @@ RUNS = ["mb", "rtv", "fl", "bound", "oracle1", "oracle2"]
 
 def build(out: Path, runs=RUNS, *, sample: float = 0.25, seed: int = 3, run_options=None, **overrides) -> Path:
     scenario = build_scenario("toy", sample=sample, seed=seed, param_overrides=overrides or None)
-    folder, _ = run_comparison(scenario, list(runs), "highs", out=out, progress=False, oracle_solver="matching",
-                               run_options=run_options)
+    folder, _ = run_comparison(
+        scenario, list(runs), "highs", out=out, progress=False, oracle_solver="matching", run_options=run_options
+    )
     return folder
 
 
@@ -42,9 +43,16 @@ def base(tmp_path_factory) -> Path:
 def enroute(tmp_path_factory) -> Path:
     """Oracles with en-route pairs (the second order joins the first one's ride), both pick-up orders and
     the pick-up test: every branch of the oracle rules."""
-    return build(tmp_path_factory.mktemp("enroute") / "toy", ["mb", "oracle1", "oracle2"], sample=0.5, seed=1,
-                 run_options={"oracle1": {"allow_enroute": "true", "both_pickup_orders": "true"},
-                              "oracle2": {"allow_enroute": "true", "pickup_check": "true"}})
+    return build(
+        tmp_path_factory.mktemp("enroute") / "toy",
+        ["mb", "oracle1", "oracle2"],
+        sample=0.5,
+        seed=1,
+        run_options={
+            "oracle1": {"allow_enroute": "true", "both_pickup_orders": "true"},
+            "oracle2": {"allow_enroute": "true", "pickup_check": "true"},
+        },
+    )
 
 
 @pytest.fixture
@@ -80,11 +88,13 @@ def edit_meta(folder: Path, fn) -> None:
 
 def set_kpi(folder: Path, run: str, kpi: str, fn) -> None:
     """Replace a reported KPI value by ``fn(value)`` (the column becomes text where fn returns text)."""
+
     def edit(table):
         table["value"] = table["value"].astype(object)
         sel = (table["run"] == run) & (table["kpi"] == kpi)
         assert sel.sum() == 1, (run, kpi)
         table.loc[sel, "value"] = fn(table.loc[sel, "value"].iloc[0])
+
     edit_csv(folder / "kpis.csv", edit)
 
 
@@ -139,8 +149,9 @@ def assert_fails(folder: Path, check: str, fragment: str, run: str | None = None
 
 def assert_passes(folder: Path, capsys=None) -> list:
     results = check_tree(folder)
-    bad = {r.folder: r.error or {c.run: c.violations for c in r.checks if not c.ok} for r in results
-           if r.status != "ok"}
+    bad = {
+        r.folder: r.error or {c.run: c.violations for c in r.checks if not c.ok} for r in results if r.status != "ok"
+    }
     assert not bad, bad
     if capsys is not None:
         capsys.readouterr()

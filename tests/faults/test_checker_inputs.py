@@ -18,7 +18,7 @@ from faults.test_checker_helpers import (
     violations,
 )
 
-base, folder = helpers.base, helpers.folder    # fixtures (clean folders built once per module)
+base, folder = helpers.base, helpers.folder  # fixtures (clean folders built once per module)
 
 
 def orders_edit(fn):
@@ -32,8 +32,10 @@ def first_pooled_order(folder) -> int:
 
 def request_later(folder):
     o = first_pooled_order(folder)
-    edit_csv(folder / "orders.csv.gz", lambda t: t.assign(request_s=np.where(t.index == o, t["request_s"] + 30.0,
-                                                                               t["request_s"])))
+    edit_csv(
+        folder / "orders.csv.gz",
+        lambda t: t.assign(request_s=np.where(t.index == o, t["request_s"] + 30.0, t["request_s"])),
+    )
 
 
 def patience(value):
@@ -57,9 +59,10 @@ def arc_length(folder):
 
 
 def fleet_moved(folder):
-    edit_csv(folder / "fleet.csv.gz", lambda t: t.assign(initial_node=np.where(t["vehicle"] == 2,
-                                                                               (t["initial_node"] + 1) % 144,
-                                                                               t["initial_node"])))
+    edit_csv(
+        folder / "fleet.csv.gz",
+        lambda t: t.assign(initial_node=np.where(t["vehicle"] == 2, (t["initial_node"] + 1) % 144, t["initial_node"])),
+    )
 
 
 def param(name, value):
@@ -71,36 +74,67 @@ def rule(run, name, value):
 
 
 CASES = {
-    "a request time": (request_later, [("inputs-digest", "orders.csv.gz is not the file the run wrote"),
-                                      ("event-log", "request events are not at the order's request time")]),
+    "a request time": (
+        request_later,
+        [
+            ("inputs-digest", "orders.csv.gz is not the file the run wrote"),
+            ("event-log", "request events are not at the order's request time"),
+        ],
+    ),
     "a longer patience": (patience(500.0), [("inputs-digest", "orders.csv.gz is not the file the run wrote")]),
-    "a shorter patience": (patience(0.5), [("within-patience", "s after its request"),
-                                           ("inputs-digest", "orders.csv.gz")]),
-    "an origin": (orders_edit(origin_moved), [("orders", "stored solo distances differ from the shortest paths"),
-                                              ("inputs-digest", "orders.csv.gz")]),
+    "a shorter patience": (
+        patience(0.5),
+        [("within-patience", "s after its request"), ("inputs-digest", "orders.csv.gz")],
+    ),
+    "an origin": (
+        orders_edit(origin_moved),
+        [("orders", "stored solo distances differ from the shortest paths"), ("inputs-digest", "orders.csv.gz")],
+    ),
     "a stored solo distance": (orders_edit(solo_edited), [("orders", "stored solo distances differ")]),
     "the request order": (orders_edit(out_of_order), [("orders", "not in request-time order")]),
-    "an arc length": (arc_length, [("movement", "steps' odometer differs from the arc length"),
-                                   ("inputs-digest", "network.npz is not the file the run wrote")]),
-    "an initial vehicle position": (fleet_moved, [("movement", "vehicle 2 does not start at its initial node"),
-                                                  ("inputs-digest", "fleet.csv.gz is not the file the run wrote")]),
+    "an arc length": (
+        arc_length,
+        [
+            ("movement", "steps' odometer differs from the arc length"),
+            ("inputs-digest", "network.npz is not the file the run wrote"),
+        ],
+    ),
+    "an initial vehicle position": (
+        fleet_moved,
+        [
+            ("movement", "vehicle 2 does not start at its initial node"),
+            ("inputs-digest", "fleet.csv.gz is not the file the run wrote"),
+        ],
+    ),
     "D̄ raised to hide a detour": (param("max_detour_m", 1e6), [("inputs-digest", "meta.json's params are not")]),
-    "D̄ lowered": (param("max_detour_m", 100.0), [("max-detour", "m > D̄ = 100 m"),
-                                                 ("inputs-digest", "meta.json's params")]),
+    "D̄ lowered": (
+        param("max_detour_m", 100.0),
+        [("max-detour", "m > D̄ = 100 m"), ("inputs-digest", "meta.json's params")],
+    ),
     "R̄ lowered": (param("max_pickup_m", 200.0), [("max-pickup", "m > R̄ = 200 m")]),
     "a lower speed": (param("speed_mps", 5.0), [("movement", "arcs driven faster than 5.0000 m/s")]),
-    "a higher fare": (param("fare_solo_cny_per_km", 6.0), [("kpi", "KPI platform_profit_cny: reported"),
-                                                         ("inputs-digest", "meta.json's params")]),
-    "a strategy option": (lambda f: edit_meta(f, lambda m: m["runs"]["rtv"]["options"].__setitem__("c_ko", 9)),
-                          [("inputs-digest", "run 'rtv': its options/rules in meta.json are not those of the run")]),
-    "an oracle rule relaxed": (rule("oracle1", "max_detour_m", 1e6),
-                               [("oracle-rules", "rule max_detour_m = 1000000.0 is not the folder's parameter"),
-                                ("inputs-digest", "run 'oracle1'")]),
+    "a higher fare": (
+        param("fare_solo_cny_per_km", 6.0),
+        [("kpi", "KPI platform_profit_cny: reported"), ("inputs-digest", "meta.json's params")],
+    ),
+    "a strategy option": (
+        lambda f: edit_meta(f, lambda m: m["runs"]["rtv"]["options"].__setitem__("c_ko", 9)),
+        [("inputs-digest", "run 'rtv': its options/rules in meta.json are not those of the run")],
+    ),
+    "an oracle rule relaxed": (
+        rule("oracle1", "max_detour_m", 1e6),
+        [
+            ("oracle-rules", "rule max_detour_m = 1000000.0 is not the folder's parameter"),
+            ("inputs-digest", "run 'oracle1'"),
+        ],
+    ),
     "an oracle flag": (rule("oracle1", "allow_enroute", True), [("inputs-digest", "run 'oracle1'")]),
     "the bound's window": (rule("oracle1", "window", "bound"), [("oracle-rules", "the upper bound's rules are fixed")]),
     "an unknown order rule": (rule("oracle2", "order_rule", "cheapest"), [("oracle-rules", "unknown order rule")]),
-    "the bound's status": (lambda f: edit_meta(f, lambda m: m["runs"]["bound"].__setitem__("status", "time_limit")),
-                           [("inputs-digest", "run 'bound'")]),
+    "the bound's status": (
+        lambda f: edit_meta(f, lambda m: m["runs"]["bound"].__setitem__("status", "time_limit")),
+        [("inputs-digest", "run 'bound'")],
+    ),
 }
 
 
@@ -142,6 +176,7 @@ def test_a_run_erased_from_everything_but_the_digest_fails(folder):
         del m["runs"]["fl"]
         m["manifest"]["runs"].remove("fl")
         m["strategies"].remove("fl")
+
     edit_meta(folder, forget)
     assert_fails(folder, "inputs-digest", "run 'fl': its options/rules in meta.json are not those of the run")
 

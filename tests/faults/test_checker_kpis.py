@@ -19,7 +19,7 @@ from faults.test_checker_helpers import (
 )
 from rpbench.results.check import check_tree
 
-base, folder = helpers.base, helpers.folder    # fixtures (clean folders built once per module)
+base, folder = helpers.base, helpers.folder  # fixtures (clean folders built once per module)
 
 
 def nudge(value):
@@ -27,11 +27,27 @@ def nudge(value):
     return 1.0 if pd.isna(value) else float(value) * 1.01 + 1.0
 
 
-SIMULATION_KPIS = ["orders", "served", "cancelled", "pooled_passengers", "pairs", "response_rate", "pairing_ratio",
-                   "pairing_ratio_of_orders", "platform_profit_cny", "platform_profit_alt_cny",
-                   "avg_response_time_s", "avg_pickup_time_s", "avg_pickup_distance_m", "avg_detour_m",
-                   "avg_shared_m", "total_occupied_km", "total_solo_served_km", "total_saving_km",
-                   "competitive_ratio_bound"]
+SIMULATION_KPIS = [
+    "orders",
+    "served",
+    "cancelled",
+    "pooled_passengers",
+    "pairs",
+    "response_rate",
+    "pairing_ratio",
+    "pairing_ratio_of_orders",
+    "platform_profit_cny",
+    "platform_profit_alt_cny",
+    "avg_response_time_s",
+    "avg_pickup_time_s",
+    "avg_pickup_distance_m",
+    "avg_detour_m",
+    "avg_shared_m",
+    "total_occupied_km",
+    "total_solo_served_km",
+    "total_saving_km",
+    "competitive_ratio_bound",
+]
 
 
 @pytest.mark.parametrize("kpi", SIMULATION_KPIS)
@@ -40,10 +56,23 @@ def test_every_strategy_kpi_edited_fails_by_name(folder, kpi):
     assert_fails(folder, "kpi", f"KPI {kpi}: reported", run="mb")
 
 
-@pytest.mark.parametrize("run, kpi", [("oracle1", k) for k in ("orders", "pairs", "pooled_passengers",
-                                                                "pairing_ratio", "avg_detour_m", "avg_shared_m",
-                                                                "total_saving_km", "objective_m")]
-                         + [("oracle2", "avg_detour_m"), ("bound", "avg_shared_m"), ("bound", "pairs")])
+@pytest.mark.parametrize(
+    "run, kpi",
+    [
+        ("oracle1", k)
+        for k in (
+            "orders",
+            "pairs",
+            "pooled_passengers",
+            "pairing_ratio",
+            "avg_detour_m",
+            "avg_shared_m",
+            "total_saving_km",
+            "objective_m",
+        )
+    ]
+    + [("oracle2", "avg_detour_m"), ("bound", "avg_shared_m"), ("bound", "pairs")],
+)
 def test_every_oracle_kpi_edited_fails_by_name(folder, run, kpi):
     set_kpi(folder, run, kpi, nudge)
     assert_fails(folder, "kpi", f"KPI {kpi}: reported", run=run)
@@ -96,14 +125,16 @@ def test_a_duplicated_kpi_row_fails(folder):
 
 
 def test_an_invented_kpi_fails(folder):
-    edit_csv(folder / "kpis.csv", lambda t: pd.concat([t, pd.DataFrame([{"run": "mb", "kpi": "happiness",
-                                                                         "value": 1.0}])]))
+    edit_csv(
+        folder / "kpis.csv", lambda t: pd.concat([t, pd.DataFrame([{"run": "mb", "kpi": "happiness", "value": 1.0}])])
+    )
     assert_fails(folder, "kpi", "KPI happiness in kpis.csv is not a KPI rpbench reports", run="mb")
 
 
 def test_kpis_of_a_run_that_is_not_in_the_folder_fail(folder):
-    edit_csv(folder / "kpis.csv", lambda t: pd.concat([t, pd.DataFrame([{"run": "ghost", "kpi": "orders",
-                                                                         "value": 1.0}])]))
+    edit_csv(
+        folder / "kpis.csv", lambda t: pd.concat([t, pd.DataFrame([{"run": "ghost", "kpi": "orders", "value": 1.0}])])
+    )
     assert_fails(folder, "manifest", "kpis.csv reports run(s) 'ghost'")
 
 
@@ -118,11 +149,23 @@ def edit_hourly(folder, run, column, fn, hour=0):
         t[column] = t[column].astype(object)
         sel = (t["run"] == run) & (t["hour"] == hour)
         t.loc[sel, column] = fn(t.loc[sel, column].iloc[0])
+
     edit_csv(folder / "hourly.csv", edit)
 
 
-@pytest.mark.parametrize("column", ["orders", "response_rate", "pairing_ratio", "avg_detour_m", "avg_shared_m",
-                                    "total_saving_km", "avg_pickup_m", "avg_pickup_time_s"])
+@pytest.mark.parametrize(
+    "column",
+    [
+        "orders",
+        "response_rate",
+        "pairing_ratio",
+        "avg_detour_m",
+        "avg_shared_m",
+        "total_saving_km",
+        "avg_pickup_m",
+        "avg_pickup_time_s",
+    ],
+)
 def test_every_hourly_figure_edited_fails(folder, column):
     edit_hourly(folder, "fl", column, nudge)
     assert_fails(folder, "hourly", f"hour 0: {column} reported", run="fl")
@@ -142,6 +185,7 @@ def test_an_invented_hour_fails(folder):
     def add(t):
         row = t[t["run"] == "mb"].iloc[[0]].assign(hour=5)
         return pd.concat([t, row])
+
     edit_csv(folder / "hourly.csv", add)
     assert_fails(folder, "hourly", "hourly.csv has hours", run="mb")
 
@@ -165,9 +209,12 @@ def test_a_number_edited_in_report_md_alone_fails(folder):
 
 def test_a_row_deleted_from_report_md_is_reported_as_not_compared(folder):
     path = folder / "report.md"
-    path.write_text("\n".join(line for line in path.read_text().splitlines()
-                              if not line.startswith("| Pairing ratio")) + "\n")
-    assert "report" not in violations(folder)                  # nothing false is shown: said, not failed
+    path.write_text(
+        "\n".join(line for line in path.read_text().splitlines() if not line.startswith("| Pairing ratio")) + "\n"
+    )
+    assert "report" not in violations(folder)  # nothing false is shown: said, not failed
     (found,) = check_tree(folder)
-    assert "report.md rows not compared" in found.folder_check.skipped["report"] and "Pairing ratio" in \
-        found.folder_check.skipped["report"]
+    assert (
+        "report.md rows not compared" in found.folder_check.skipped["report"]
+        and "Pairing ratio" in found.folder_check.skipped["report"]
+    )

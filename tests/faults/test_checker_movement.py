@@ -14,7 +14,7 @@ from faults.test_checker_helpers import (
 )
 from rpbench import results
 
-base, folder = helpers.base, helpers.folder    # fixtures (clean folders built once per module)
+base, folder = helpers.base, helpers.folder  # fixtures (clean folders built once per module)
 
 
 def traj_path(folder, run="mb"):
@@ -37,7 +37,7 @@ def shift_rest_of_odometer(z):
 
 
 def arrive_early(z):
-    z["t_s"][5:] -= 3.0                        # arrive at entry 5 three seconds too early
+    z["t_s"][5:] -= 3.0  # arrive at entry 5 three seconds too early
 
 
 def time_backwards(z):
@@ -59,6 +59,7 @@ def nan_at(key):
     def fn(z):
         k, _ = middle_of_vehicle(z, 5)
         z[key][k] = np.nan
+
     return fn
 
 
@@ -110,8 +111,10 @@ def test_a_shortened_shared_ride_fails_the_bound_certificate(folder):
     last = drops.sort_values("t_s").iloc[-1]
     traj = results.load_trajectories(traj_path(folder))
     lo, hi = traj["vehicle_offsets"][int(last["vehicle"])], traj["vehicle_offsets"][int(last["vehicle"]) + 1]
-    k = lo + np.flatnonzero((np.abs(traj["t_s"][lo:hi] - last["t_s"]) < 1e-6)
-                            & (traj["node"][lo:hi] == last["node"]))[0]
+    k = (
+        lo
+        + np.flatnonzero((np.abs(traj["t_s"][lo:hi] - last["t_s"]) < 1e-6) & (traj["node"][lo:hi] == last["node"]))[0]
+    )
     traj["odo_m"][k:hi] -= 5000.0
     results.save_trajectories(traj_path(folder), traj)
     found = assert_fails(folder, "bound-certificate", "exceeds the bound's edge weight", run="mb")

@@ -17,7 +17,7 @@ from faults.test_checker_helpers import (
     set_kpi,
 )
 
-base, enroute, folder = helpers.base, helpers.enroute, helpers.folder    # fixtures (built once per module)
+base, enroute, folder = helpers.base, helpers.enroute, helpers.folder  # fixtures (built once per module)
 
 
 def pairs_path(folder, run):
@@ -31,6 +31,7 @@ def edit_pairs(folder, run, fn):
 def add_to(column, amount, row=0):
     def fn(t):
         t.loc[row, column] += amount
+
     return fn
 
 
@@ -38,29 +39,44 @@ def unpaired_order(folder, run, after_s: float, before_s: float = np.inf) -> tup
     """(id, request time) of an order in no pair of the run, requested in [after_s, before_s)."""
     orders = pd.read_csv(folder / "orders.csv.gz")
     pairs = pd.read_csv(pairs_path(folder, run))
-    free = orders[~orders["order_id"].isin(pairs["first_id"]) & ~orders["order_id"].isin(pairs["second_id"])
-                  & (orders["request_s"] >= after_s) & (orders["request_s"] < before_s)]
+    free = orders[
+        ~orders["order_id"].isin(pairs["first_id"])
+        & ~orders["order_id"].isin(pairs["second_id"])
+        & (orders["request_s"] >= after_s)
+        & (orders["request_s"] < before_s)
+    ]
     return int(free["order_id"].iloc[0]), float(free["request_s"].iloc[0])
 
 
 def rejoin(folder, run, row, partner, t):
     """Pair the first order of ``row`` with ``partner`` instead."""
+
     def fn(p):
         p.loc[row, "second_id"] = partner
         p.loc[row, "second_request_s"] = t
+
     edit_pairs(folder, run, fn)
 
 
-STORED = {"saving_m": 100.0, "length_m": -100.0, "detour_first_m": 50.0, "detour_second_m": 50.0,
-          "shared_m": 75.0, "pickup_m": 10.0}
+STORED = {
+    "saving_m": 100.0,
+    "length_m": -100.0,
+    "detour_first_m": 50.0,
+    "detour_second_m": 50.0,
+    "shared_m": 75.0,
+    "pickup_m": 10.0,
+}
 
 
 @pytest.mark.parametrize("run", ["oracle1", "oracle2", "bound"])
 @pytest.mark.parametrize("column", list(STORED))
 def test_every_stored_pair_figure_edited_fails(folder, run, column):
     edit_pairs(folder, run, add_to(column, STORED[column]))
-    fragment = ("stored weights differ from the largest realisable savings" if (run, column) == ("bound", "saving_m")
-                else f"pairs' stored {column} differ from the recomputed ones")
+    fragment = (
+        "stored weights differ from the largest realisable savings"
+        if (run, column) == ("bound", "saving_m")
+        else f"pairs' stored {column} differ from the recomputed ones"
+    )
     assert_fails(folder, "oracle-pairs", fragment, run=run)
 
 
@@ -115,6 +131,7 @@ def test_pairs_beyond_a_lowered_pickup_radius_fail(enroute, tmp_path):
     def lower(m):
         m["params"]["max_pickup_m"] = 100.0
         m["runs"]["oracle2"]["rules"]["max_pickup_m"] = 100.0
+
     edit_meta(folder, lower)
     assert_fails(folder, "oracle-pairs", "are not feasible under the rules", run="oracle2")
 
@@ -124,15 +141,21 @@ def test_the_later_order_picked_up_first_fails_where_the_rules_forbid_it(folder)
         k = int(np.flatnonzero((p["second_request_s"] > p["first_request_s"]).to_numpy())[0])
         p.loc[k, ["first_id", "second_id"]] = p.loc[k, ["second_id", "first_id"]].to_numpy()
         p.loc[k, ["first_request_s", "second_request_s"]] = p.loc[k, ["second_request_s", "first_request_s"]].to_numpy()
+
     edit_pairs(folder, "oracle1", swap)
     assert_fails(folder, "oracle-pairs", "pick the later order up first, which the rules do not allow", run="oracle1")
 
 
 def test_a_flipped_service_order_fails(folder):
-    edit_pairs(folder, "oracle2", lambda p: p.assign(service_order=np.where(p.index == 0,
-                                                                            np.where(p["service_order"] == "FOFO",
-                                                                                     "FOLO", "FOFO"),
-                                                                            p["service_order"])))
+    edit_pairs(
+        folder,
+        "oracle2",
+        lambda p: p.assign(
+            service_order=np.where(
+                p.index == 0, np.where(p["service_order"] == "FOFO", "FOLO", "FOFO"), p["service_order"]
+            )
+        ),
+    )
     assert_fails(folder, "oracle-pairs", "differ from the recomputed ones", run="oracle2")
 
 
@@ -144,6 +167,7 @@ def test_an_unknown_service_order_fails(folder):
 def test_an_order_in_two_pairs_fails(folder):
     def dup(p):
         p.loc[1, "first_id"] = p.loc[0, "first_id"]
+
     edit_pairs(folder, "oracle1", dup)
     assert_fails(folder, "oracle-pairs", "appears in 2 pairs", run="oracle1")
 
@@ -161,6 +185,7 @@ def test_a_pair_of_an_unknown_order_fails(folder):
 def test_an_order_paired_with_itself_fails(folder):
     def same(p):
         p.loc[0, "second_id"] = p.loc[0, "first_id"]
+
     edit_pairs(folder, "oracle1", same)
     assert_fails(folder, "oracle-pairs", "pair an order with itself", run="oracle1")
 

@@ -18,7 +18,7 @@ from faults.test_checker_helpers import (
     truncate,
 )
 
-base, folder = helpers.base, helpers.folder    # fixtures (clean folders built once per module)
+base, folder = helpers.base, helpers.folder  # fixtures (clean folders built once per module)
 
 
 def trunc(rel, keep=0.5):
@@ -38,7 +38,9 @@ def text_in(rel, column, row=3, text="abc"):
         def edit(t):
             t[column] = t[column].astype(object)
             t.loc[row, column] = text
+
         edit_csv(f / rel, edit)
+
     return fn
 
 
@@ -52,10 +54,12 @@ def meta(fn):
 
 def disconnect(f):
     """Remove every arc leaving node 0: the network is no longer strongly connected."""
+
     def fn(z):
         keep = z["arc_tail"] != 0
         for key in ("arc_tail", "arc_head", "arc_length_m", "arc_link_id"):
             z[key] = z[key][keep]
+
     edit_npz(f / "network.npz", fn)
 
 
@@ -67,12 +71,16 @@ CASES = {
     "truncated network": (trunc("network.npz", 0.7), "network.npz' is corrupt or not an npz archive"),
     "truncated oracle pairs": (trunc(PAIRS, 0.4), "pairs.csv.gz' is corrupt or not a CSV table"),
     "truncated orders": (trunc("orders.csv.gz", 0.6), "orders.csv.gz' is corrupt or not a CSV table"),
-    "garbage instead of an npz": (lambda f: (f / TRAJ).write_bytes(b"not a zip archive"),
-                                  "trajectories.npz' is corrupt or not an npz archive"),
+    "garbage instead of an npz": (
+        lambda f: (f / TRAJ).write_bytes(b"not a zip archive"),
+        "trajectories.npz' is corrupt or not an npz archive",
+    ),
     "an empty events file": (lambda f: (f / EVENTS).write_bytes(b""), "events.csv.gz' is empty (not even a header"),
     "a missing trajectory array": (drop_array(TRAJ, "odo_m"), "trajectories.npz' lacks the array(s) odo_m"),
-    "a missing network array": (drop_array("network.npz", "arc_length_m"), "network.npz' lacks the array(s) "
-                                                                           "arc_length_m"),
+    "a missing network array": (
+        drop_array("network.npz", "arc_length_m"),
+        "network.npz' lacks the array(s) arc_length_m",
+    ),
     "a missing events column": (drop_column(EVENTS, "partner"), "events.csv.gz' lacks the column(s) partner"),
     "a missing orders column": (drop_column("orders.csv.gz", "patience_s"), "lacks the column(s) patience_s"),
     "a missing pairs column": (drop_column(PAIRS, "saving_m"), "pairs.csv.gz' lacks the column(s) saving_m"),
@@ -81,24 +89,38 @@ CASES = {
     "text in a request time": (text_in("orders.csv.gz", "request_s"), "column 'request_s' holds 'abc'"),
     "text in a pair saving": (text_in(PAIRS, "saving_m", row=1), "column 'saving_m' holds 'abc'"),
     "a fractional order id": (text_in(EVENTS, "order", text=2.5), "column 'order' holds missing or non-integer"),
-    "a missing request time": (text_in("orders.csv.gz", "request_s", text=np.nan),
-                               "column 'request_s' holds NaN or infinite values"),
-    "an origin outside the network": (text_in("orders.csv.gz", "origin", text=5000),
-                                      "column 'origin' names a node outside the network's 0..143"),
-    "an arc to a node that does not exist": (lambda f: edit_npz(f / "network.npz", lambda z: z["arc_head"].__setitem__(
-        0, 999)), "an arc ends at a node index outside 0..143"),
+    "a missing request time": (
+        text_in("orders.csv.gz", "request_s", text=np.nan),
+        "column 'request_s' holds NaN or infinite values",
+    ),
+    "an origin outside the network": (
+        text_in("orders.csv.gz", "origin", text=5000),
+        "column 'origin' names a node outside the network's 0..143",
+    ),
+    "an arc to a node that does not exist": (
+        lambda f: edit_npz(f / "network.npz", lambda z: z["arc_head"].__setitem__(0, 999)),
+        "an arc ends at a node index outside 0..143",
+    ),
     "a disconnected network": (disconnect, "is not strongly connected"),
     "meta.json without params": (meta(lambda m: m.pop("params")), "has no params"),
-    "meta.json with an extra param": (meta(lambda m: m["params"].__setitem__("surge", 2.0)),
-                                      "params hold unknown parameter(s) surge"),
-    "meta.json missing a param": (meta(lambda m: m["params"].pop("max_detour_m")),
-                                  "params lack max_detour_m (the checker assumes no default)"),
-    "a param that is text": (meta(lambda m: m["params"].__setitem__("max_detour_m", "far")),
-                             "parameter max_detour_m = 'far' is not a finite number"),
+    "meta.json with an extra param": (
+        meta(lambda m: m["params"].__setitem__("surge", 2.0)),
+        "params hold unknown parameter(s) surge",
+    ),
+    "meta.json missing a param": (
+        meta(lambda m: m["params"].pop("max_detour_m")),
+        "params lack max_detour_m (the checker assumes no default)",
+    ),
+    "a param that is text": (
+        meta(lambda m: m["params"].__setitem__("max_detour_m", "far")),
+        "parameter max_detour_m = 'far' is not a finite number",
+    ),
     "meta.json without runs": (meta(lambda m: m.pop("runs")), "has no runs record"),
-    "an oracle without its rules": (meta(lambda m: m["runs"]["oracle2"].pop("rules")),
-                                    "oracle run 'oracle2' lacks its pair rules"),
-    "meta.json that is not JSON": (lambda f: (f / "meta.json").write_text("{\"params\": "), "is not valid JSON"),
+    "an oracle without its rules": (
+        meta(lambda m: m["runs"]["oracle2"].pop("rules")),
+        "oracle run 'oracle2' lacks its pair rules",
+    ),
+    "meta.json that is not JSON": (lambda f: (f / "meta.json").write_text('{"params": '), "is not valid JSON"),
     "meta.json holding a list": (lambda f: (f / "meta.json").write_text("[1, 2]"), "does not hold a JSON object"),
     "kpis.csv missing": (delete("kpis.csv"), "kpis.csv' is missing"),
     "meta.json missing": (delete("meta.json"), "is not an rpbench results folder (no meta.json)"),
@@ -130,10 +152,13 @@ def test_json_reports_the_unreadable_folder_and_still_checks_the_others(base, fo
 
 def test_unreadable_wins_over_failed_and_both_are_reported(base, folder, tmp_path, capsys):
     import shutil
+
     failing = tmp_path / "failing"
     shutil.copytree(base, failing)
-    edit_csv(failing / "kpis.csv", lambda t: t.assign(value=np.where((t["run"] == "mb") & (t["kpi"] == "served"),
-                                                                     1.0, t["value"])))
+    edit_csv(
+        failing / "kpis.csv",
+        lambda t: t.assign(value=np.where((t["run"] == "mb") & (t["kpi"] == "served"), 1.0, t["value"])),
+    )
     delete("kpis.csv")(folder)
     code, out, err = cli(["check", str(failing), str(folder)], capsys)
     assert code == 2 and "[kpi]" in out and f"== {folder}" in out and "kpis.csv' is missing" in err
@@ -157,6 +182,7 @@ def test_reading_a_kpi_file_of_text_is_not_a_crash(folder, capsys):
 
 def test_a_published_light_copy_says_where_its_verdict_is(base, tmp_path, capsys):
     from rpbench.harness.publish import publish
+
     dest = publish(base, tmp_path / "published")
     line = assert_unreadable(dest, "is a published light copy without event logs or inputs", capsys)
     assert "check.txt holds the verdict" in line

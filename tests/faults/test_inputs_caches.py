@@ -46,12 +46,12 @@ def resave(path: Path, change) -> None:
 
 
 def bump(a: np.ndarray) -> np.ndarray:
-    a[1, 2] += 1           # one distance (or predecessor) off by one: same shape, same dtype
+    a[1, 2] += 1  # one distance (or predecessor) off by one: same shape, same dtype
     return a
 
 
 def shorten(a: np.ndarray) -> np.ndarray:
-    a[0, -1] = a[0, 1]     # a plausible but wrong (too short) distance
+    a[0, -1] = a[0, 1]  # a plausible but wrong (too short) distance
     return a
 
 
@@ -69,30 +69,33 @@ APSP_DAMAGE = {
     "digest missing": lambda f: f["digest"].unlink(),
     "digest garbage": lambda f: f["digest"].write_bytes(b"\xff\xfe not a digest"),
     "digest of other arrays": lambda f: f["digest"].write_text(
-        apsp_digest(np.zeros((2, 2)), np.zeros((2, 2), np.int32))),
+        apsp_digest(np.zeros((2, 2)), np.zeros((2, 2), np.int32))
+    ),
     "distance file truncated": lambda f: truncate(f["dist"]),
     "distance file empty": lambda f: f["dist"].write_bytes(b""),
     "distance file not npy": lambda f: f["dist"].write_text("dist,pred\n1,2\n"),
     "predecessor file missing": lambda f: f["pred"].unlink(),
     "distance file missing": lambda f: f["dist"].unlink(),
     "float32 distances with a matching digest": lambda f: matching_digest_for(
-        f, np.load(f["dist"]).astype(np.float32), np.load(f["pred"])),
+        f, np.load(f["dist"]).astype(np.float32), np.load(f["pred"])
+    ),
     "wrong shape with a matching digest": lambda f: matching_digest_for(
-        f, np.load(f["dist"])[:3, :3].copy(), np.load(f["pred"])[:3, :3].copy()),
+        f, np.load(f["dist"])[:3, :3].copy(), np.load(f["pred"])[:3, :3].copy()
+    ),
 }
 
 
 @pytest.mark.parametrize("damage", APSP_DAMAGE)
 def test_damaged_distance_cache_is_rebuilt_to_the_fresh_table(cache, capsys, damage):
     fresh = DistanceOracle.build(grid_network(5))
-    assert not DistanceOracle.load_or_build(grid_network(5)).from_cache        # writes the cache
+    assert not DistanceOracle.load_or_build(grid_network(5)).from_cache  # writes the cache
     APSP_DAMAGE[damage](apsp_files(cache))
     rebuilt = DistanceOracle.load_or_build(grid_network(5))
     assert not rebuilt.from_cache
     assert np.array_equal(rebuilt.dist, fresh.dist) and np.array_equal(rebuilt.pred, fresh.pred)
     notes = capsys.readouterr().err.splitlines()
     assert len(notes) == 1 and notes[0].startswith("rpbench: note:") and "rebuilding" in notes[0]
-    again = DistanceOracle.load_or_build(grid_network(5))                      # the rebuilt cache verifies
+    again = DistanceOracle.load_or_build(grid_network(5))  # the rebuilt cache verifies
     assert again.from_cache and np.array_equal(again.dist, fresh.dist)
     assert not leftovers(cache)
 
@@ -106,7 +109,7 @@ def test_first_build_writes_a_digest_and_no_note(cache, capsys):
 
 def test_tampered_distance_cache_gives_the_fresh_scenario_summary(cache, capsys):
     fresh = scenario_json(capsys, "toy", "--sample", "0.2")
-    resave(apsp_files(cache)["dist"], lambda a: a * 0.5)                       # every distance halved
+    resave(apsp_files(cache)["dist"], lambda a: a * 0.5)  # every distance halved
     rebuilt = scenario_json(capsys, "toy", "--sample", "0.2")
     assert rebuilt == fresh
 
@@ -134,7 +137,7 @@ def test_cache_path_that_cannot_be_created(capsys, monkeypatch):
 def test_read_only_cache_folder(cache, capsys, monkeypatch):
     cache.mkdir()
     cache.chmod(0o500)
-    if os.geteuid() == 0:      # root may write anyway: let access() answer as it would for a user
+    if os.geteuid() == 0:  # root may write anyway: let access() answer as it would for a user
         real_access = os.access
         monkeypatch.setattr(os, "access", lambda p, mode, **kw: Path(p) != cache and real_access(p, mode, **kw))
     try:
@@ -148,15 +151,15 @@ def test_disk_full_while_writing_the_distance_cache(cache, capsys, monkeypatch):
     real_save = np.save
 
     def save_then_fail(fh, array, *a, **kw):
-        real_save(fh, array[: len(array) // 2], *a, **kw)                   # half the bytes, then the disk is full
+        real_save(fh, array[: len(array) // 2], *a, **kw)  # half the bytes, then the disk is full
         raise OSError(errno.ENOSPC, "No space left on device")
 
     monkeypatch.setattr(np, "save", save_then_fail)
     line = cli_error(capsys, "scenario", "toy", "--json")
     assert "cannot write the cache file" in line and "No space left on device" in line
-    assert not leftovers(cache) and not list(cache.glob("apsp-*"))            # nothing half-written
+    assert not leftovers(cache) and not list(cache.glob("apsp-*"))  # nothing half-written
     monkeypatch.setattr(np, "save", real_save)
-    cli_ok(capsys, "scenario", "toy", "--json")                                # and the next run works
+    cli_ok(capsys, "scenario", "toy", "--json")  # and the next run works
 
 
 # -------------------------------------------------------------------- prediction cache
@@ -164,8 +167,9 @@ def small_prediction_inputs():
     net = grid_network(4, seed=3)
     rng = np.random.default_rng(3)
     o, d = rng.integers(0, net.n_nodes, 8), rng.integers(0, net.n_nodes, 8)
-    rates = OdRates.from_arrays(o, d, rng.uniform(0.5, 1.5, 8) / 600.0, np.arange(8), n_nodes=net.n_nodes,
-                                source="fault test")
+    rates = OdRates.from_arrays(
+        o, d, rng.uniform(0.5, 1.5, 8) / 600.0, np.arange(8), n_nodes=net.n_nodes, source="fault test"
+    )
     return net, rates, Params(max_pickup_m=1500.0, max_detour_m=1500.0), PredictConfig()
 
 
@@ -240,7 +244,7 @@ PREDICT_DAMAGE = {
 def test_damaged_prediction_cache_is_deleted_and_recomputed(cache, capsys, damage):
     inputs = small_prediction_inputs()
     fresh = predict(*inputs, use_cache=False)
-    assert not predict(*inputs).from_cache                                     # writes the entry
+    assert not predict(*inputs).from_cache  # writes the entry
     path = entry_path(inputs)
     PREDICT_DAMAGE[damage](path)
     again = predict(*inputs)
@@ -249,7 +253,7 @@ def test_damaged_prediction_cache_is_deleted_and_recomputed(cache, capsys, damag
     np.testing.assert_array_equal(again.rho, fresh.rho)
     notes = [line for line in capsys.readouterr().err.splitlines() if "cached prediction" in line]
     assert len(notes) == 1 and "recomputing" in notes[0]
-    hit = predict(*inputs)                                                     # rewritten, readable again
+    hit = predict(*inputs)  # rewritten, readable again
     assert hit.from_cache
     np.testing.assert_array_equal(hit.od.pairing_prob, fresh.od.pairing_prob)
     assert not leftovers(cache)
@@ -266,7 +270,7 @@ def test_prediction_entry_written_before_the_manifest_is_still_used(cache, capsy
 
 def test_disk_full_while_writing_a_prediction(cache, monkeypatch):
     inputs = small_prediction_inputs()
-    DistanceOracle.load_or_build(inputs[0])                                    # the distances are cached already
+    DistanceOracle.load_or_build(inputs[0])  # the distances are cached already
 
     def fail(*a, **kw):
         raise OSError(errno.ENOSPC, "No space left on device")

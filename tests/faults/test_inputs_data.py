@@ -29,49 +29,78 @@ def private_cache(tmp_path: Path, monkeypatch) -> None:
 def run_fails(capsys, tmp_path: Path, data: Path, *extra: str, scenario: str = "haikou-peak") -> str:
     """``rpbench run`` on ``data``: one error line, and no results folder."""
     out = tmp_path / "results"
-    line = cli_error(capsys, "run", "--scenario", scenario, "--data", data, "--strategies", "np", "--no-progress",
-                     "--out", out, *extra)
+    line = cli_error(
+        capsys,
+        "run",
+        "--scenario",
+        scenario,
+        "--data",
+        data,
+        "--strategies",
+        "np",
+        "--no-progress",
+        "--out",
+        out,
+        *extra,
+    )
     assert not out.exists()
     return line
 
 
 def test_the_undamaged_fake_folder_runs(capsys, tmp_path, fake_data):
-    cli_ok(capsys, "run", "--scenario", "haikou-peak", "--data", fake_data, "--strategies", "np", "--no-progress",
-           "--out", tmp_path / "results", "--json")
+    cli_ok(
+        capsys,
+        "run",
+        "--scenario",
+        "haikou-peak",
+        "--data",
+        fake_data,
+        "--strategies",
+        "np",
+        "--no-progress",
+        "--out",
+        tmp_path / "results",
+        "--json",
+    )
     assert (tmp_path / "results").is_dir()
 
 
 # --------------------------------------------------------------------- integer ids
-@pytest.mark.parametrize("file, column, value, message", [
-    (PEAK, PRE + "order_id", "99999999999999999999", "not an exact integer"),
-    (PEAK, PRE + "order_id", "1e30", "not an exact integer"),
-    (PEAK, PRE + "order_id", "18446744073709551615", "within the 64-bit range"),
-    (PEAK, PRE + "order_id", "9223372036854775808", "within the 64-bit range"),
-    (PEAK, PRE + "order_id", "1000.5", "not a whole number"),
-    (PEAK, "origin_id", "1e30", "not an exact integer"),
-    (NODES, "node_id", "99999999999999999999", "not an exact integer"),
-    (LINKS, "to_node_id", "18446744073709551615", "within the 64-bit range"),
-])
+@pytest.mark.parametrize(
+    "file, column, value, message",
+    [
+        (PEAK, PRE + "order_id", "99999999999999999999", "not an exact integer"),
+        (PEAK, PRE + "order_id", "1e30", "not an exact integer"),
+        (PEAK, PRE + "order_id", "18446744073709551615", "within the 64-bit range"),
+        (PEAK, PRE + "order_id", "9223372036854775808", "within the 64-bit range"),
+        (PEAK, PRE + "order_id", "1000.5", "not a whole number"),
+        (PEAK, "origin_id", "1e30", "not an exact integer"),
+        (NODES, "node_id", "99999999999999999999", "not an exact integer"),
+        (LINKS, "to_node_id", "18446744073709551615", "within the 64-bit range"),
+    ],
+)
 def test_id_that_does_not_fit_an_int64(capsys, tmp_path, fake_data, file, column, value, message):
     edit_csv_cell(fake_data / file, 3, column, value)
     line = run_fails(capsys, tmp_path, fake_data)
     assert message in line and repr(column) in line and str(fake_data / file) in line
-    assert "not a node" not in line                   # not the misleading message of a wrapped-around id
+    assert "not a node" not in line  # not the misleading message of a wrapped-around id
 
 
 # ---------------------------------------------------------------------- gzip streams
 def bad_deflate(path: Path) -> None:
-    flip_byte(path, len(path.read_bytes()) // 2)     # a byte inside the deflate stream
+    flip_byte(path, len(path.read_bytes()) // 2)  # a byte inside the deflate stream
 
 
 def bad_crc(path: Path) -> None:
     data = path.read_bytes()
-    path.write_bytes(data[:-8] + bytes(8))             # CRC-32 and length trailer zeroed
+    path.write_bytes(data[:-8] + bytes(8))  # CRC-32 and length trailer zeroed
 
 
-@pytest.mark.parametrize("damage", [truncate, bad_deflate, bad_crc,
-                                    lambda p: p.write_text(read_gz(p))],        # plain text under a .gz name
-                         ids=["truncated", "deflate byte flipped", "crc trailer", "not gzipped"])
+@pytest.mark.parametrize(
+    "damage",
+    [truncate, bad_deflate, bad_crc, lambda p: p.write_text(read_gz(p))],  # plain text under a .gz name
+    ids=["truncated", "deflate byte flipped", "crc trailer", "not gzipped"],
+)
 def test_damaged_gzip_stream(capsys, tmp_path, fake_data, damage):
     damage(fake_data / PEAK)
     line = run_fails(capsys, tmp_path, fake_data)
@@ -133,17 +162,20 @@ def test_absurd_link_length(capsys, tmp_path, fake_data):
 
 
 def test_coordinates_that_are_not_degrees(capsys, tmp_path, fake_data):
-    edit_csv_cell(fake_data / NODES, 4, "x_coord", "12345678.9")       # metres where degrees belong
+    edit_csv_cell(fake_data / NODES, 4, "x_coord", "12345678.9")  # metres where degrees belong
     line = run_fails(capsys, tmp_path, fake_data)
     assert "are not WGS84 degrees" in line and str(fake_data / NODES) in line
 
 
-@pytest.mark.parametrize("hours, total, message", [
-    ([10] * 23 + [10 ** 8], 10 ** 8 + 230, "not plausible"),
-    ([10] * 23 + [10 ** 20], 230, "is not a list of 24 integers"),              # beyond int64
-    ([10] * 23, 230, "must hold 24 non-negative integers"),
-    ([10] * 24, 10 ** 30, "not an exact integer"),
-])
+@pytest.mark.parametrize(
+    "hours, total, message",
+    [
+        ([10] * 23 + [10**8], 10**8 + 230, "not plausible"),
+        ([10] * 23 + [10**20], 230, "is not a list of 24 integers"),  # beyond int64
+        ([10] * 23, 230, "must hold 24 non-negative integers"),
+        ([10] * 24, 10**30, "not an exact integer"),
+    ],
+)
 def test_absurd_hourly_counts(capsys, tmp_path, fake_data, hours, total, message):
     (fake_data / HOURLY).write_text(f'date,day_count,hour_count\n05/01,{total},"{hours}"\n')
     line = run_fails(capsys, tmp_path, fake_data, scenario="haikou-day")
@@ -163,14 +195,20 @@ def trace_data(fake_data: Path) -> Path:
     folder = fake_data / "predecessor_trb2021_network"
     folder.mkdir()
     square = [(0, 1), (1, 2), (2, 3), (3, 0)]
-    write_gz(folder / "all_vertexes.csv.gz", "id,coor\n" + "".join(
-        f'{i},"[{110.3 + 0.01 * (i % 2)}, {20.0 + 0.01 * (i // 2)}]"\n' for i in range(4)))
+    write_gz(
+        folder / "all_vertexes.csv.gz",
+        "id,coor\n" + "".join(f'{i},"[{110.3 + 0.01 * (i % 2)}, {20.0 + 0.01 * (i // 2)}]"\n' for i in range(4)),
+    )
     edges = [(a, b) for a, b in square] + [(b, a) for a, b in square]
-    write_gz(folder / "all_edges.csv.gz", "id,length,head_ver,tail_ver\n" + "".join(
-        f"{k},{900.0 + k},{a},{b}\n" for k, (a, b) in enumerate(edges)))
-    write_gz(folder / "SIMULATION_RESULTS_ALL_DIDI_CHUXING_HAIKOU_2017-07-01.csv.gz",
-             "passenger_id,real_start_time,start_ver,end_ver\n" + "".join(
-                 f"{p},2017-07-01 0{p}:1{p}:00,{p % 4},{(p + 2) % 4}\n" for p in range(6)))
+    write_gz(
+        folder / "all_edges.csv.gz",
+        "id,length,head_ver,tail_ver\n" + "".join(f"{k},{900.0 + k},{a},{b}\n" for k, (a, b) in enumerate(edges)),
+    )
+    write_gz(
+        folder / "SIMULATION_RESULTS_ALL_DIDI_CHUXING_HAIKOU_2017-07-01.csv.gz",
+        "passenger_id,real_start_time,start_ver,end_ver\n"
+        + "".join(f"{p},2017-07-01 0{p}:1{p}:00,{p % 4},{(p + 2) % 4}\n" for p in range(6)),
+    )
     return fake_data
 
 

@@ -89,8 +89,8 @@ def drop(name: str):
 
 BAD_FILES = {
     # case: (structure, damage, what the line says)
-    "2e9 passengers declared": ("assignment", replace("n_passengers", np.array(2 * 10 ** 9)), "must be an integer in"),
-    "1e12 vehicles declared": ("assignment", replace("n_vehicles", np.array(10 ** 12)), "must be an integer in"),
+    "2e9 passengers declared": ("assignment", replace("n_passengers", np.array(2 * 10**9)), "must be an integer in"),
+    "1e12 vehicles declared": ("assignment", replace("n_vehicles", np.array(10**12)), "must be an integer in"),
     "more passengers than columns": ("assignment", replace("n_passengers", np.array(5000)), "exceeds the 5 columns"),
     "negative order count": ("pairing", replace("n_orders", np.array(-1)), "n_orders = -1 must be an integer"),
     "fractional request count": ("trip_packing", replace("n_requests", np.array(3.0)), "n_requests = 3.0 must be"),
@@ -104,7 +104,7 @@ BAD_FILES = {
     "a Python object inside": ("assignment", with_pickled_member, "holds Python objects"),
     "column array missing": ("assignment", drop("col_vehicle"), "missing array(s) col_vehicle"),
     "values missing": ("pairing", drop("values"), "missing array(s) values"),
-    "index beyond int32": ("pairing", replace("col_b", np.array([1, 2, 2 ** 32 + 3])), "holds an index outside"),
+    "index beyond int32": ("pairing", replace("col_b", np.array([1, 2, 2**32 + 3])), "holds an index outside"),
     "index beyond the declared count": ("pairing", replace("col_b", np.array([1, 2, 9])), "outside [0, 3]"),
     "float column indices": ("pairing", replace("col_a", np.array([0.0, 1.0, 2.0])), "must be an integer array"),
     "column arrays of another length": ("pairing", replace("col_a", np.array([0, 1])), "must be an integer array of 3"),
@@ -133,7 +133,7 @@ def test_bad_instance_file_is_one_line(capsys, tmp_path, case):
         tracemalloc.stop()
     assert message in line and str(path) in line, line
     assert not csv.exists()
-    assert peak < 200 * 2 ** 20                        # nothing allocated from what the file merely declares
+    assert peak < 200 * 2**20  # nothing allocated from what the file merely declares
 
 
 def test_total_array_bytes_are_capped(capsys, tmp_path, monkeypatch):

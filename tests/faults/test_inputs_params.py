@@ -60,13 +60,20 @@ def test_paper_defaults_and_every_sweep_value_pass():
             Params().replace(**point.overrides)
 
 
-@pytest.mark.parametrize("name, values", [
-    ("dt_s", (0.1, 2, 10, 30, 60, 3600)), ("speed_mps", (0.1, 30 / 3.6, 100)),
-    ("max_detour_m", (1e-3, 500.0, 3000.0, 1e6)), ("max_pickup_m", (400.0, 700.0, 1e6)),
-    ("patience_mean_s", (1, 40, 60, 300, 600, 86400)), ("planner_patience_s", (1, 30, 180, 86400)),
-    ("response_rate", (0.0, 0.1, 0.9, 1.0)), ("vehicles_per_100_orders", (10, 25, 1000)),
-    ("alpha", (1.01, 2.0, 10.0)),
-])
+@pytest.mark.parametrize(
+    "name, values",
+    [
+        ("dt_s", (0.1, 2, 10, 30, 60, 3600)),
+        ("speed_mps", (0.1, 30 / 3.6, 100)),
+        ("max_detour_m", (1e-3, 500.0, 3000.0, 1e6)),
+        ("max_pickup_m", (400.0, 700.0, 1e6)),
+        ("patience_mean_s", (1, 40, 60, 300, 600, 86400)),
+        ("planner_patience_s", (1, 30, 180, 86400)),
+        ("response_rate", (0.0, 0.1, 0.9, 1.0)),
+        ("vehicles_per_100_orders", (10, 25, 1000)),
+        ("alpha", (1.01, 2.0, 10.0)),
+    ],
+)
 def test_values_the_tests_and_the_paper_use_stay_valid(name, values):
     for value in values:
         assert getattr(Params().replace(**{name: value}), name) == value

@@ -28,9 +28,8 @@ def bench_with(capsys, tmp_path: Path, preset: bytes | str) -> str:
     path = tmp_path / "bad.toml"
     path.write_bytes(preset.encode() if isinstance(preset, str) else preset)
     csv = tmp_path / "out.csv"
-    line = cli_error(capsys, "bench", "--synthetic", "--sizes", "tiny", "--solver", path, "--csv", csv,
-                     "--no-isolate")
-    assert str(path) in line, line            # the line names the file
+    line = cli_error(capsys, "bench", "--synthetic", "--sizes", "tiny", "--solver", path, "--csv", csv, "--no-isolate")
+    assert str(path) in line, line  # the line names the file
     assert not csv.exists()
     return line
 
@@ -82,9 +81,15 @@ def test_preset_that_is_a_folder(capsys, tmp_path):
 
 
 def test_valid_preset_values_still_parse():
-    text = (GOOD + 'method = "lp"\n[options.extra]\npresolve = "off"\nmip_feasibility_tolerance = 1e-7\n'
-            "random_seed = 3\nlog_to_console = false\n")
+    text = (
+        GOOD + 'method = "lp"\n[options.extra]\npresolve = "off"\nmip_feasibility_tolerance = 1e-7\n'
+        "random_seed = 3\nlog_to_console = false\n"
+    )
     preset = parse_preset("good", text, "good.toml")
-    assert preset.options.extra == {"presolve": "off", "mip_feasibility_tolerance": 1e-7, "random_seed": 3,
-                                    "log_to_console": False}
+    assert preset.options.extra == {
+        "presolve": "off",
+        "mip_feasibility_tolerance": 1e-7,
+        "random_seed": 3,
+        "log_to_console": False,
+    }
     assert (preset.options.threads, preset.options.time_limit_s, preset.options.mip_rel_gap) == (1, 60.0, 0.0)

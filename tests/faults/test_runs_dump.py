@@ -36,6 +36,7 @@ def cache(tmp_path, monkeypatch) -> Path:
 def broken_highs(monkeypatch):
     def broken(self, model, options, **kw):
         raise SolverError("HiGHS failed with model status kUnknown")
+
     monkeypatch.setattr(HighsBackend, "solve", broken)
 
 
@@ -100,6 +101,7 @@ def test_no_room_for_the_dump_still_gives_the_solver_error(cache, broken_highs):
 
 def test_a_plug_in_name_makes_a_safe_file_name(cache, broken_highs, monkeypatch):
     from rpbench.sim.simulator import _new_dump_file
+
     path = _new_dump_file("mypkg.rules:Greedy/../x-round00003")
     assert path.parent == cache / "failed-rounds" and "/" not in path.name and ":" not in path.name
 

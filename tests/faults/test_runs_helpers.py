@@ -109,7 +109,16 @@ def read_only_folder(folder: Path) -> Path:
 
 def rpbench_process(*argv, cwd: Path, env: dict | None = None) -> subprocess.Popen:
     """``rpbench ARGV`` as a child process (stdout/stderr piped)."""
-    environ = {**os.environ, "PYTHONPATH": os.pathsep.join([str(TESTS), os.environ.get("PYTHONPATH", "")]),
-               **(env or {})}
-    return subprocess.Popen([sys.executable, "-m", "rpbench.cli", *map(str, argv)], cwd=cwd, env=environ,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    environ = {
+        **os.environ,
+        "PYTHONPATH": os.pathsep.join([str(TESTS), os.environ.get("PYTHONPATH", "")]),
+        **(env or {}),
+    }
+    return subprocess.Popen(
+        [sys.executable, "-m", "rpbench.cli", *map(str, argv)],
+        cwd=cwd,
+        env=environ,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )

@@ -38,8 +38,10 @@ def a_file(tmp_path):
 @pytest.fixture
 def no_simulation(monkeypatch):
     """A bad --out must fail before any simulation: simulating is an error here."""
+
     def refuse(*args, **kwargs):
         raise AssertionError("simulated despite a bad --out")
+
     monkeypatch.setattr("rpbench.harness.comparison.simulate_strategy", refuse)
     monkeypatch.setattr("rpbench.bench.snapshot.simulate_strategy", refuse)
 
@@ -53,11 +55,14 @@ def toy_run(capsys, tmp_path):
 
 
 # ------------------------------------------------------------ results folders, checked up front
-@pytest.mark.parametrize("command", [
-    ("run", *TOY, *MB),
-    ("sweep", "--over", "dt=20,30", *MB, *TOY, "--workers", "1"),
-    ("snapshot", *TOY, *MB),
-])
+@pytest.mark.parametrize(
+    "command",
+    [
+        ("run", *TOY, *MB),
+        ("sweep", "--over", "dt=20,30", *MB, *TOY, "--workers", "1"),
+        ("snapshot", *TOY, *MB),
+    ],
+)
 def test_out_under_a_file_fails_before_simulating(capsys, tmp_path, a_file, no_simulation, command):
     out = a_file / "out"
     code, stdout, err = run_cli(capsys, *command, "--out", out)
@@ -66,8 +71,9 @@ def test_out_under_a_file_fails_before_simulating(capsys, tmp_path, a_file, no_s
     assert_nothing_written(tmp_path)
 
 
-@pytest.mark.parametrize("command", [("run", *TOY, *MB), ("sweep", "--over", "dt=20", *MB, *TOY),
-                                     ("snapshot", *TOY, *MB)])
+@pytest.mark.parametrize(
+    "command", [("run", *TOY, *MB), ("sweep", "--over", "dt=20", *MB, *TOY), ("snapshot", *TOY, *MB)]
+)
 def test_out_under_proc_fails_before_simulating(capsys, no_simulation, command):
     code, _, err = run_cli(capsys, *command, "--out", "/proc/rpbench-test/out")
     assert_one_error(code, err, "--out '/proc/rpbench-test/out': cannot create a folder in '/proc'")
@@ -124,23 +130,26 @@ def test_missing_parents_are_created_on_success(capsys, tmp_path):
 def _raise(exc):
     def fail(folder, *args, **kwargs):
         raise exc(folder) if callable(exc) else exc
+
     return fail
 
 
 def test_a_full_disk_while_writing_is_one_line_and_leaves_nothing(capsys, tmp_path, monkeypatch):
-    monkeypatch.setattr("rpbench.harness.comparison.write_report",
-                        _raise(OSError(errno.ENOSPC, "No space left on device")))
+    monkeypatch.setattr(
+        "rpbench.harness.comparison.write_report", _raise(OSError(errno.ENOSPC, "No space left on device"))
+    )
     out = tmp_path / "new" / "deeper" / "out"
     code, stdout, err = run_cli(capsys, "run", *TOY, *MB, "--out", out)
-    assert_one_error(code, err, f"cannot write results folder '{out}' (No space left on device); nothing was "
-                                "written")
+    assert_one_error(code, err, f"cannot write results folder '{out}' (No space left on device); nothing was written")
     assert stdout == ""
-    assert_nothing_written(tmp_path, out, tmp_path / "new")     # the parents it created are gone too
+    assert_nothing_written(tmp_path, out, tmp_path / "new")  # the parents it created are gone too
 
 
 def test_a_write_error_names_the_file_inside_the_folder(capsys, tmp_path, monkeypatch):
-    monkeypatch.setattr("rpbench.harness.comparison.write_report", _raise(
-        lambda folder: PermissionError(errno.EACCES, "Permission denied", str(folder / "report.md"))))
+    monkeypatch.setattr(
+        "rpbench.harness.comparison.write_report",
+        _raise(lambda folder: PermissionError(errno.EACCES, "Permission denied", str(folder / "report.md"))),
+    )
     out = tmp_path / "out"
     code, _, err = run_cli(capsys, "run", *TOY, *MB, "--out", out)
     assert_one_error(code, err, f"cannot write results folder '{out}' (report.md: Permission denied)")
@@ -151,7 +160,8 @@ def test_a_folder_appearing_at_out_during_the_run_is_not_overwritten(capsys, tmp
     out = tmp_path / "out"
 
     def squatter(folder, *args, **kwargs):
-        out.mkdir()                          # another run took the name meanwhile
+        out.mkdir()  # another run took the name meanwhile
+
     monkeypatch.setattr("rpbench.harness.comparison.write_report", squatter)
     code, _, err = run_cli(capsys, "run", *TOY, *MB, "--out", out)
     assert_one_error(code, err, "appeared while this run was writing it")
@@ -161,6 +171,7 @@ def test_a_folder_appearing_at_out_during_the_run_is_not_overwritten(capsys, tmp
 def test_an_unforeseen_os_error_is_still_one_line_naming_the_path(capsys, monkeypatch):
     def handler(args):
         raise PermissionError(errno.EACCES, "Permission denied", "/some/where.csv")
+
     monkeypatch.setattr("rpbench.commands.scenario.run", handler)
     code, _, err = run_cli(capsys, "scenario", "toy")
     assert_one_error(code, err, "'/some/where.csv': permission denied")
@@ -172,12 +183,15 @@ def test_os_error_lines_name_both_paths_of_a_rename():
 
 
 # ------------------------------------------------------------ file outputs
-@pytest.mark.parametrize("command, option", [
-    (("report", "RUN"), "--out"),
-    (("predict",), "--out"),
-    (("oracle", *TOY), "--pairs"),
-    (("bench", "--synthetic"), "--csv"),
-])
+@pytest.mark.parametrize(
+    "command, option",
+    [
+        (("report", "RUN"), "--out"),
+        (("predict",), "--out"),
+        (("oracle", *TOY), "--pairs"),
+        (("bench", "--synthetic"), "--csv"),
+    ],
+)
 def test_a_file_output_in_a_missing_folder_fails_first(capsys, tmp_path, toy_run, command, option):
     target = tmp_path / "missing" / "file.csv"
     argv = [str(toy_run) if a == "RUN" else a for a in command]
@@ -218,11 +232,12 @@ def test_a_failed_file_write_leaves_neither_the_file_nor_its_staging(capsys, tmp
 
     real_write_text = Path.write_text
 
-    def full_disk(self, *args, **kwargs):       # the disk fills up halfway through the --out file only
+    def full_disk(self, *args, **kwargs):  # the disk fills up halfway through the --out file only
         if self.parent != tmp_path:
             return real_write_text(self, *args, **kwargs)
         real_write_text(self, "# rpbench res")
         raise OSError(errno.ENOSPC, "No space left on device")
+
     monkeypatch.setattr(Path, "write_text", full_disk)
     target = tmp_path / "report.md"
     code, _, err = run_cli(capsys, "report", toy_run, "--out", target)
@@ -251,11 +266,13 @@ def test_publish_over_an_existing_folder_fails(capsys, tmp_path, toy_run):
 
 def test_a_copy_failing_midway_leaves_no_staging_folder(capsys, tmp_path, toy_run, monkeypatch):
     import shutil
+
     real_copytree = shutil.copytree
 
     def copy_then_fail(src, dst, *args, **kwargs):
         real_copytree(src, dst, *args, **kwargs)
         raise OSError(errno.ENOSPC, "No space left on device", str(dst))
+
     monkeypatch.setattr("rpbench.harness.publish.shutil.copytree", copy_then_fail)
     dest = tmp_path / "published"
     code, _, err = run_cli(capsys, "publish", toy_run, dest)

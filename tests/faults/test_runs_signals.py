@@ -23,8 +23,20 @@ from rpbench.results import store
 
 def test_sigterm_mid_sweep_in_a_child_process_removes_the_partial_folder(tmp_path):
     out = tmp_path / "sweep"
-    child = rpbench_process("sweep", "--over", "dt=10,20,30,40,50,60", "--strategies", "mb", *TOY,
-                            "--workers", "1", "--out", out, cwd=tmp_path, env={"RPBENCH_CACHE": str(tmp_path)})
+    child = rpbench_process(
+        "sweep",
+        "--over",
+        "dt=10,20,30,40,50,60",
+        "--strategies",
+        "mb",
+        *TOY,
+        "--workers",
+        "1",
+        "--out",
+        out,
+        cwd=tmp_path,
+        env={"RPBENCH_CACHE": str(tmp_path)},
+    )
     partial = tmp_path / f".sweep.partial-{child.pid}"
     deadline = time.monotonic() + 60
     while not partial.exists() and child.poll() is None and time.monotonic() < deadline:
@@ -34,14 +46,15 @@ def test_sigterm_mid_sweep_in_a_child_process_removes_the_partial_folder(tmp_pat
     stdout, stderr = child.communicate(timeout=60)
     assert child.returncode == 143, stderr
     assert [line for line in stderr.splitlines() if line.startswith("rpbench: ")] == [
-        "rpbench: terminated (SIGTERM); nothing half-written was left"]
+        "rpbench: terminated (SIGTERM); nothing half-written was left"
+    ]
     assert "Traceback" not in stderr
     assert_nothing_written(tmp_path, out)
 
 
 def _send_sigterm_to_self(*args, **kwargs):
     os.kill(os.getpid(), signal.SIGTERM)
-    time.sleep(1)                        # the handler raises here, at the latest
+    time.sleep(1)  # the handler raises here, at the latest
     raise AssertionError("SIGTERM did not interrupt")
 
 
@@ -67,8 +80,9 @@ def test_a_second_sigterm_does_not_interrupt_the_cleanup(capsys, tmp_path, monke
     real_rmtree = store.shutil.rmtree
 
     def rmtree_under_fire(path, *args, **kwargs):
-        os.kill(os.getpid(), signal.SIGTERM)      # ignored: the first one's cleanup must finish
+        os.kill(os.getpid(), signal.SIGTERM)  # ignored: the first one's cleanup must finish
         real_rmtree(path, *args, **kwargs)
+
     monkeypatch.setattr("rpbench.harness.comparison.write_report", _send_sigterm_to_self)
     monkeypatch.setattr(store.shutil, "rmtree", rmtree_under_fire)
     out = tmp_path / "out"
@@ -86,6 +100,7 @@ def test_the_previous_sigterm_handler_is_restored(capsys, tmp_path):
 def test_ctrl_c_during_the_final_write_removes_the_partial_folder(capsys, tmp_path, monkeypatch):
     def interrupt(*args, **kwargs):
         raise KeyboardInterrupt
+
     monkeypatch.setattr("rpbench.harness.comparison.write_report", interrupt)
     out = tmp_path / "out"
     code, _, err = run_cli(capsys, "run", *TOY, "--strategies", "mb", "--out", out)

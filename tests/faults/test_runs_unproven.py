@@ -48,7 +48,8 @@ def test_unproven_rounds_give_one_note_line_per_run_and_marked_columns(capsys, t
         f"rpbench: note: NP {n['np']} of {n['np']} rounds ended unproven (time_limit {n['np']}); its numbers are "
         "not proven optimal (--strict makes this an error)",
         f"rpbench: note: MB {n['mb']} of {n['mb']} rounds ended unproven (time_limit {n['mb']}); its numbers are "
-        "not proven optimal (--strict makes this an error)"]
+        "not proven optimal (--strict makes this an error)",
+    ]
     header = next(line for line in stdout.splitlines() if line.startswith("Metric"))
     assert header.split()[-2:] == ["NP*", "MB*"]
     assert "* not proven optimal" in stdout
@@ -59,8 +60,9 @@ def test_the_report_marks_unproven_columns_and_says_why(capsys, tmp_path, unprov
     assert run_cli(capsys, "run", *TOY, "--strategies", "mb", "--solver", unproven, "--out", out)[0] == 0
     report = (out / "report.md").read_text()
     assert "| Metric | MB\\* |" in report
-    assert re.search(r"\\\* \*\*Not proven optimal\.\*\* MB: (\d+) of \1 rounds ended unproven \(time_limit \1\)",
-                     report)
+    assert re.search(
+        r"\\\* \*\*Not proven optimal\.\*\* MB: (\d+) of \1 rounds ended unproven \(time_limit \1\)", report
+    )
     assert "--strict" in report
 
 
@@ -72,8 +74,10 @@ def test_partly_unproven_rounds_are_counted_by_status(capsys, tmp_path):
     status = pd.read_csv(out / "rounds.csv.gz")["status"]
     bad = int((status == "feasible").sum())
     assert 0 < bad < len(status)
-    assert notes(err) == [f"rpbench: note: MB {bad} of {len(status)} rounds ended unproven (feasible {bad}); its "
-                          "numbers are not proven optimal (--strict makes this an error)"]
+    assert notes(err) == [
+        f"rpbench: note: MB {bad} of {len(status)} rounds ended unproven (feasible {bad}); its "
+        "numbers are not proven optimal (--strict makes this an error)"
+    ]
 
 
 def test_a_proven_run_has_no_note_and_no_mark(capsys, tmp_path):
@@ -87,16 +91,18 @@ def test_a_proven_run_has_no_note_and_no_mark(capsys, tmp_path):
 
 def test_strict_run_fails_at_the_first_unproven_round_and_writes_nothing(capsys, tmp_path, unproven):
     out = tmp_path / "out"
-    code, stdout, err = run_cli(capsys, "run", *TOY, "--strategies", "mb", "--solver", unproven, "--strict",
-                                "--out", out)
+    code, stdout, err = run_cli(
+        capsys, "run", *TOY, "--strategies", "mb", "--solver", unproven, "--strict", "--out", out
+    )
     assert_one_error(code, err, "mb round", "stopped with status time_limit, not proven optimal (--strict)")
     assert stdout == ""
     assert_nothing_written(tmp_path, out)
 
 
 def test_strict_run_saves_the_unproven_round_for_rpbench_bench(capsys, tmp_path, unproven):
-    code, _, err = run_cli(capsys, "run", *TOY, "--strategies", "mb", "--solver", unproven, "--strict",
-                           "--out", tmp_path / "out")
+    code, _, err = run_cli(
+        capsys, "run", *TOY, "--strategies", "mb", "--solver", unproven, "--strict", "--out", tmp_path / "out"
+    )
     line = assert_one_error(code, err)
     [dump] = (tmp_path / "cache" / "failed-rounds").glob("mb-round*.npz")
     assert str(dump) in line
@@ -104,20 +110,23 @@ def test_strict_run_saves_the_unproven_round_for_rpbench_bench(capsys, tmp_path,
 
 def test_strict_fails_on_an_unproven_oracle_before_writing(capsys, tmp_path, unproven):
     out = tmp_path / "out"
-    code, _, err = run_cli(capsys, "run", *TOY, "--strategies", "mb,oracle1", "--oracle-solver", unproven,
-                           "--strict", "--out", out)
-    assert_one_error(code, err, "Oracle-1 (solver preset 'unprovenhighs') stopped with status time_limit",
-                     "(--strict)")
+    code, _, err = run_cli(
+        capsys, "run", *TOY, "--strategies", "mb,oracle1", "--oracle-solver", unproven, "--strict", "--out", out
+    )
+    assert_one_error(code, err, "Oracle-1 (solver preset 'unprovenhighs') stopped with status time_limit", "(--strict)")
     assert_nothing_written(tmp_path, out)
 
 
 def test_an_unproven_oracle_is_noted_and_marked_alone(capsys, tmp_path, unproven):
     out = tmp_path / "out"
-    code, stdout, err = run_cli(capsys, "run", *TOY, "--strategies", "mb,oracle1", "--oracle-solver", unproven,
-                                "--out", out)
+    code, stdout, err = run_cli(
+        capsys, "run", *TOY, "--strategies", "mb,oracle1", "--oracle-solver", unproven, "--out", out
+    )
     assert code == 0, err
-    assert notes(err) == ["rpbench: note: Oracle-1 stopped with status time_limit (gap unknown); its numbers are "
-                          "not proven optimal (--strict makes this an error)"]
+    assert notes(err) == [
+        "rpbench: note: Oracle-1 stopped with status time_limit (gap unknown); its numbers are "
+        "not proven optimal (--strict makes this an error)"
+    ]
     header = next(line for line in stdout.splitlines() if line.startswith("Metric"))
     assert header.split()[-2:] == ["MB", "Oracle-1*"]
     assert "Oracle-1\\*" in (out / "report.md").read_text()
@@ -133,13 +142,15 @@ def test_a_time_limited_upper_bound_is_marked(capsys, tmp_path):
     # HiGHS may or may not have a dual bound by then: the gap is a number or unknown
     [(run, why)] = unproven_runs(out).items()
     assert run == "bound" and re.fullmatch(r"stopped with status time_limit \(gap (unknown|[0-9.e+-]+)\)", why)
-    assert notes(err) == [f"rpbench: note: Upper bound {why}; its numbers are not proven optimal (--strict makes "
-                          "this an error)"]
+    assert notes(err) == [
+        f"rpbench: note: Upper bound {why}; its numbers are not proven optimal (--strict makes this an error)"
+    ]
 
 
 def test_json_output_stays_one_object_and_names_the_unproven_runs(capsys, tmp_path, unproven):
-    code, stdout, err = run_cli(capsys, "run", *TOY, "--strategies", "mb", "--solver", unproven, "--json",
-                                "--out", tmp_path / "out")
+    code, stdout, err = run_cli(
+        capsys, "run", *TOY, "--strategies", "mb", "--solver", unproven, "--json", "--out", tmp_path / "out"
+    )
     assert code == 0, err
     doc = json.loads(stdout)
     assert list(doc["unproven"]) == ["mb"] and "rounds ended unproven" in doc["unproven"]["mb"]
@@ -158,8 +169,10 @@ def test_rerendering_a_report_keeps_the_marks(capsys, tmp_path, unproven):
 def test_oracle_command_notes_and_marks_an_unproven_oracle(capsys, tmp_path, unproven):
     code, stdout, err = run_cli(capsys, "oracle", *TOY, "--variant", "1", "--solver", unproven)
     assert code == 0, err
-    assert notes(err) == ["rpbench: note: Oracle-1 stopped with status time_limit (gap unknown); its value is not "
-                          "proven optimal (--strict makes this an error)"]
+    assert notes(err) == [
+        "rpbench: note: Oracle-1 stopped with status time_limit (gap unknown); its value is not "
+        "proven optimal (--strict makes this an error)"
+    ]
     assert "Oracle-1 (unprovenhighs)*" in stdout and "* not proven optimal" in stdout
 
 
@@ -172,26 +185,54 @@ def test_oracle_command_strict_fails_and_writes_no_pairs(capsys, tmp_path, unpro
 
 
 def test_oracle_command_strict_with_a_real_time_limit(capsys, tmp_path):
-    code, _, err = run_cli(capsys, "oracle", *TOY, "--variant", "bound", "--solver", "highs", "--time-limit",
-                           "1e-6", "--strict")
-    assert_one_error(code, err, "Upper bound (solver preset 'highs') stopped with status time_limit",
-                     "not proven optimal (--strict)")
+    code, _, err = run_cli(
+        capsys, "oracle", *TOY, "--variant", "bound", "--solver", "highs", "--time-limit", "1e-6", "--strict"
+    )
+    assert_one_error(
+        code, err, "Upper bound (solver preset 'highs') stopped with status time_limit", "not proven optimal (--strict)"
+    )
 
 
 def test_sweep_notes_every_unproven_run_of_every_point(capsys, tmp_path, unproven):
     out = tmp_path / "sweep"
-    code, _, err = run_cli(capsys, "sweep", "--over", "dt=20,30", "--strategies", "mb", *TOY, "--solver", unproven,
-                           "--workers", "1", "--out", out)
+    code, _, err = run_cli(
+        capsys,
+        "sweep",
+        "--over",
+        "dt=20,30",
+        "--strategies",
+        "mb",
+        *TOY,
+        "--solver",
+        unproven,
+        "--workers",
+        "1",
+        "--out",
+        out,
+    )
     assert code == 0, err
-    assert [line.split(" rounds")[0].split(" ")[2:4] for line in notes(err)] == [["dt=20:", "MB"],
-                                                                                   ["dt=30:", "MB"]]
+    assert [line.split(" rounds")[0].split(" ")[2:4] for line in notes(err)] == [["dt=20:", "MB"], ["dt=30:", "MB"]]
     assert "MB\\*" in (out / "dt=20" / "report.md").read_text()
 
 
 def test_strict_sweep_fails_and_leaves_no_sweep_folder(capsys, tmp_path, unproven):
     out = tmp_path / "sweep"
-    code, _, err = run_cli(capsys, "sweep", "--over", "dt=20,30", "--strategies", "mb", *TOY, "--solver", unproven,
-                           "--workers", "1", "--strict", "--out", out)
+    code, _, err = run_cli(
+        capsys,
+        "sweep",
+        "--over",
+        "dt=20,30",
+        "--strategies",
+        "mb",
+        *TOY,
+        "--solver",
+        unproven,
+        "--workers",
+        "1",
+        "--strict",
+        "--out",
+        out,
+    )
     assert_one_error(code, err, "not proven optimal (--strict)")
     assert_nothing_written(tmp_path, out)
 

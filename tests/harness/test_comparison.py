@@ -27,9 +27,10 @@ def test_fl_is_calibrated_by_one_mb_run_shared_with_the_mb_column(toy_request, t
         return real(scenario, name, preset, **kw)
 
     monkeypatch.setattr(comparison, "simulate_strategy", counting)
-    folder, table = run_comparison(toy_request.build(), ["fl", "mb"], "highs", out=tmp_path / "r",
-                                   progress=False, request=toy_request)
-    assert [name for name, _ in calls] == ["mb", "fl"]        # the calibration run is the MB column
+    folder, table = run_comparison(
+        toy_request.build(), ["fl", "mb"], "highs", out=tmp_path / "r", progress=False, request=toy_request
+    )
+    assert [name for name, _ in calls] == ["mb", "fl"]  # the calibration run is the MB column
     fl_options = calls[1][1]
     mb = table["mb"]
     assert fl_options.tau0_s == pytest.approx(mb["avg_pickup_time_s"])
@@ -37,18 +38,28 @@ def test_fl_is_calibrated_by_one_mb_run_shared_with_the_mb_column(toy_request, t
     meta = json.loads((folder / "meta.json").read_text())
     recorded = meta["runs"]["fl"]["options"]
     assert recorded["tau0_s"] == pytest.approx(fl_options.tau0_s) and recorded["rates"] == "auto"
-    assert set(recorded) == set(ForwardOptions().as_dict())   # every option, defaults included
+    assert set(recorded) == set(ForwardOptions().as_dict())  # every option, defaults included
     assert meta["scenario"]["args"] == toy_request.meta()
 
 
 def test_user_options_are_kept_and_an_mb_column_with_options_is_its_own_run(toy_request, tmp_path, monkeypatch):
     calls = []
     real = comparison.simulate_strategy
-    monkeypatch.setattr(comparison, "simulate_strategy",
-                        lambda sc, name, preset, **kw: calls.append(name) or real(sc, name, preset, **kw))
+    monkeypatch.setattr(
+        comparison,
+        "simulate_strategy",
+        lambda sc, name, preset, **kw: calls.append(name) or real(sc, name, preset, **kw),
+    )
     options = parse_run_options(["fl.tau0_s=60", "mb.order_rule=min_then_check"], ["mb", "fl"])
-    run_comparison(toy_request.build(), ["mb", "fl"], "highs", out=tmp_path / "r", run_options=options,
-                   progress=False, request=toy_request)
+    run_comparison(
+        toy_request.build(),
+        ["mb", "fl"],
+        "highs",
+        out=tmp_path / "r",
+        run_options=options,
+        progress=False,
+        request=toy_request,
+    )
     # MB with options is not the default calibration run: MB(options), MB(default) for l̄, FL
     assert calls == ["mb", "mb", "fl"]
 
@@ -56,8 +67,11 @@ def test_user_options_are_kept_and_an_mb_column_with_options_is_its_own_run(toy_
 def test_fully_specified_fl_needs_no_calibration(toy_request, tmp_path, monkeypatch):
     calls = []
     real = comparison.simulate_strategy
-    monkeypatch.setattr(comparison, "simulate_strategy",
-                        lambda sc, name, preset, **kw: calls.append(name) or real(sc, name, preset, **kw))
+    monkeypatch.setattr(
+        comparison,
+        "simulate_strategy",
+        lambda sc, name, preset, **kw: calls.append(name) or real(sc, name, preset, **kw),
+    )
     options = parse_run_options(["fl.tau0_s=60", "fl.mean_pickup_m=500"], ["fl"])
     run_comparison(toy_request.build(), ["fl"], "highs", out=tmp_path / "r", run_options=options, progress=False)
     assert calls == ["fl"]

@@ -62,11 +62,11 @@ def test_a_failing_task_stops_the_other_workers(tmp_path):
         run_tasks(sleep_or_fail, [("sleep", str(tmp_path)), ("fail", str(tmp_path))], workers=2, progress=False)
     pid = int((tmp_path / "sleeper.pid").read_text())
     with pytest.raises(ProcessLookupError):
-        os.kill(pid, 0)                              # terminated and reaped
+        os.kill(pid, 0)  # terminated and reaped
 
 
 def test_scheduler_without_dask_is_one_clear_error(monkeypatch):
-    monkeypatch.setitem(sys.modules, "dask.distributed", None)       # import fails as if not installed
+    monkeypatch.setitem(sys.modules, "dask.distributed", None)  # import fails as if not installed
     with pytest.raises(ParameterError, match=r"--scheduler needs Dask.*rpbench\[dask\]"):
         run_tasks(square, [1, 2], scheduler="tcp://127.0.0.1:1")
 
@@ -74,6 +74,7 @@ def test_scheduler_without_dask_is_one_clear_error(monkeypatch):
 @pytest.mark.slow
 def test_on_an_existing_dask_cluster():
     distributed = pytest.importorskip("dask.distributed")
-    with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
-                                  dashboard_address=None) as cluster:
+    with distributed.LocalCluster(
+        n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None
+    ) as cluster:
         assert run_tasks(square, [3, 1, 2], scheduler=cluster.scheduler_address, progress=False) == [9, 1, 4]

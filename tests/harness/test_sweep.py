@@ -48,6 +48,7 @@ def test_out_of_range_and_repeated_values():
 
 def test_sweep_cli_rejects_unknown_parameter(capsys):
     from rpbench.cli import main
+
     assert main(["sweep", "--over", "colour=1,2", "--scenario", "toy"]) == 2
     assert "unknown sweep parameter 'colour'" in capsys.readouterr().err
 
@@ -57,10 +58,20 @@ def test_sweep_runs_end_to_end_on_the_toy_city(tmp_path):
     from rpbench.harness.render import render
     from rpbench.harness.sweep import SweepSpec, run_sweep
     from rpbench.scenarios import ScenarioRequest
+
     spec = SweepSpec("dt", "dt", (10, 30), ("mb",), ("total_saving_km", "response_rate"))
     request = ScenarioRequest("toy", sample=0.1, seed=1)
-    folder = run_sweep(spec, expand("dt", spec.values), request=request, preset="highs", run_options={},
-                       out=str(tmp_path / "sw"), workers=1, scheduler=None, command="test")
+    folder = run_sweep(
+        spec,
+        expand("dt", spec.values),
+        request=request,
+        preset="highs",
+        run_options={},
+        out=str(tmp_path / "sw"),
+        workers=1,
+        scheduler=None,
+        command="test",
+    )
     assert (folder / "dt=10").is_dir() and (folder / "dt=30").is_dir()
     assert (folder / "sweep.png").is_file()
     text, _ = render([folder])

@@ -22,12 +22,15 @@ STRATEGIES = ["np", "mb", "rtv", "fl-nd", "fl"]
 
 def _frame(scenario) -> pd.DataFrame:
     o = scenario.orders
-    return pd.DataFrame({"request_s": o.request_s, "patience_s": o.patience_s, "origin": o.origin,
-                         "destination": o.destination})
+    return pd.DataFrame(
+        {"request_s": o.request_s, "patience_s": o.patience_s, "origin": o.origin, "destination": o.destination}
+    )
 
 
-@pytest.mark.parametrize("seed, overrides", [(0, {}), (5, {}), (1, {"max_pickup_m": 700.0}),
-                                             (2, {"max_pickup_m": 400.0, "patience_mean_s": 40.0})])
+@pytest.mark.parametrize(
+    "seed, overrides",
+    [(0, {}), (5, {}), (1, {"max_pickup_m": 700.0}), (2, {"max_pickup_m": 400.0, "patience_mean_s": 40.0})],
+)
 def test_enumeration_equals_a_brute_force_over_all_pairs(seed, overrides):
     """Every pair whose checker-computed bound weight is finite is a candidate, with that weight (a small R̄
     makes the vehicle turn further along the first passenger's path: the walk is exercised)."""
@@ -48,8 +51,9 @@ def test_the_bound_contains_the_paper_oracle_pairs():
     """Oracle-1's pairs (requests within K̄, h = o_A) are bound edges: the bound is at least Oracle-1."""
     sc = build_scenario("toy", sample=0.3, seed=1)
     one = solve_oracle(sc, 1, "matching")
-    bound = solve_oracle(sc, 1, "matching", candidates=find_candidates(sc.network.distances(), sc.orders,
-                                                                       bound_rules(sc.params)))
+    bound = solve_oracle(
+        sc, 1, "matching", candidates=find_candidates(sc.network.distances(), sc.orders, bound_rules(sc.params))
+    )
     assert bound.is_upper_bound and not one.is_upper_bound
     assert bound.kpis()["total_saving_km"] >= one.kpis()["total_saving_km"] > 0
 
@@ -60,6 +64,7 @@ def test_every_exact_preset_proves_the_same_bound():
     values = {}
     for preset in ("matching", "highs", "scipy", "cvxpy-highs", "pyomo-highs", "blossom-v"):
         from rpbench.backends import load_preset
+
         if not load_preset(preset).is_installed():
             continue
         r = solve_oracle(sc, 1, preset, candidates=cands)
@@ -72,7 +77,7 @@ def test_rounding_up_keeps_it_a_bound():
     """The model's values are savings rounded up to the unit: its optimum is >= the unrounded one."""
     sc = build_scenario("toy", sample=0.2, seed=3)
     cands = find_candidates(sc.network.distances(), sc.orders, bound_rules(sc.params))
-    r = solve_oracle(sc, 1, "matching", candidates=cands, unit_m=100.0)       # a coarse unit on purpose
+    r = solve_oracle(sc, 1, "matching", candidates=cands, unit_m=100.0)  # a coarse unit on purpose
     assert r.upper_bound_m >= r.total_saving_m
     exact = solve_oracle(sc, 1, "matching", candidates=cands)
     assert r.upper_bound_m >= exact.total_saving_m - 1e-6
@@ -82,32 +87,40 @@ def test_the_bound_rules_cannot_be_relaxed_or_tightened():
     with pytest.raises(ParameterError, match="cannot be changed"):
         PairRules(window="bound", pickup_check=True, both_pickup_orders=True)
     with pytest.raises(ParameterError, match="cannot be changed"):
-        PairRules(window="bound")                                   # one pick-up order only
+        PairRules(window="bound")  # one pick-up order only
     with pytest.raises(ParameterError, match="window 'weekly'"):
         PairRules(window="weekly")
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("seed, sample, overrides", [
-    (0, 0.5, {}), (1, 0.4, {"dt_s": 30.0}), (2, 0.6, {"max_detour_m": 1500.0}),
-    (3, 0.5, {"vehicles_per_100_orders": 10.0}), (4, 0.7, {"patience_mean_s": 300.0, "planner_patience_s": 300.0}),
-])
+@pytest.mark.parametrize(
+    "seed, sample, overrides",
+    [
+        (0, 0.5, {}),
+        (1, 0.4, {"dt_s": 30.0}),
+        (2, 0.6, {"max_detour_m": 1500.0}),
+        (3, 0.5, {"vehicles_per_100_orders": 10.0}),
+        (4, 0.7, {"patience_mean_s": 300.0, "planner_patience_s": 300.0}),
+    ],
+)
 def test_certificate_holds_for_every_strategy_on_random_toy_scenarios(tmp_path, seed, sample, overrides):
     sc = build_scenario("toy", sample=sample, seed=seed, param_overrides=overrides)
-    folder, table = run_comparison(sc, STRATEGIES + ["bound"], "highs", out=tmp_path / "r", progress=False,
-                                   oracle_solver="matching")
+    folder, table = run_comparison(
+        sc, STRATEGIES + ["bound"], "highs", out=tmp_path / "r", progress=False, oracle_solver="matching"
+    )
     checks = {rc.run: rc for rc in check_folder(folder)}
     assert all(rc.ok for rc in checks.values()), {k: v.violations for k, v in checks.items() if not v.ok}
     assert sum(checks[s].checked["certified_pairs"] for s in STRATEGIES) > 0
     ratios = table.loc["competitive_ratio_bound", STRATEGIES]
-    assert (ratios <= 1.0).all() and (ratios >= -1e-9).all()        # NP saves 0 up to float rounding
+    assert (ratios <= 1.0).all() and (ratios >= -1e-9).all()  # NP saves 0 up to float rounding
 
 
 @pytest.fixture(scope="module")
 def bounded_run(tmp_path_factory):
     sc = build_scenario("toy", sample=0.4, seed=7)
-    folder, _ = run_comparison(sc, ["mb", "bound"], "highs", out=tmp_path_factory.mktemp("b") / "run",
-                               progress=False, oracle_solver="matching")
+    folder, _ = run_comparison(
+        sc, ["mb", "bound"], "highs", out=tmp_path_factory.mktemp("b") / "run", progress=False, oracle_solver="matching"
+    )
     return folder
 
 
@@ -141,9 +154,11 @@ def test_an_inflated_pair_saving_fails_the_certificate(bounded_run, tmp_path):
     path = run / "runs" / "mb" / "trajectories.npz"
     traj = results.load_trajectories(path)
     lo, hi = traj["vehicle_offsets"][int(last["vehicle"])], traj["vehicle_offsets"][int(last["vehicle"]) + 1]
-    k = lo + np.flatnonzero((np.abs(traj["t_s"][lo:hi] - last["t_s"]) < 1e-6)
-                            & (traj["node"][lo:hi] == last["node"]))[0]
-    traj["odo_m"][k:hi] -= 5000.0                                    # 5 km less occupied driving
+    k = (
+        lo
+        + np.flatnonzero((np.abs(traj["t_s"][lo:hi] - last["t_s"]) < 1e-6) & (traj["node"][lo:hi] == last["node"]))[0]
+    )
+    traj["odo_m"][k:hi] -= 5000.0  # 5 km less occupied driving
     results.save_trajectories(path, traj)
     found = _violations(run)
     assert "bound-certificate" in found and "exceeds the bound's edge weight" in " ".join(found["bound-certificate"])
@@ -156,7 +171,7 @@ def test_a_lowered_bound_fails_by_name(bounded_run, tmp_path):
     kpis.loc[sel, "value"] = 0.001
     kpis.to_csv(run / "kpis.csv", index=False)
     found = _violations(run)
-    assert "kpi" in found and "bound-certificate" in found      # the bound's KPI, and mb's saving above it
+    assert "kpi" in found and "bound-certificate" in found  # the bound's KPI, and mb's saving above it
 
 
 def test_a_pair_outside_the_window_is_not_an_edge(bounded_run, tmp_path):

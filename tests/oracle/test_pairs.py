@@ -33,9 +33,13 @@ def make_orders(origin, destination, request_s, order_id=None) -> Orders:
     n = len(origin)
     ids = np.arange(n) if order_id is None else np.asarray(order_id)
     srt = np.lexsort((ids, np.asarray(request_s, float)))
-    return Orders(order_id=np.asarray(ids, np.int64)[srt], request_s=np.asarray(request_s, float)[srt],
-                  origin=np.asarray(origin, np.int32)[srt], destination=np.asarray(destination, np.int32)[srt],
-                  patience_s=np.full(n, 90.0))
+    return Orders(
+        order_id=np.asarray(ids, np.int64)[srt],
+        request_s=np.asarray(request_s, float)[srt],
+        origin=np.asarray(origin, np.int32)[srt],
+        destination=np.asarray(destination, np.int32)[srt],
+        patience_s=np.full(n, 90.0),
+    )
 
 
 def random_orders(rng: np.random.Generator, n: int, n_nodes: int, span_s: float) -> Orders:
@@ -88,8 +92,9 @@ def brute_force(net, dist_oracle, orders: Orders, rules: PairRules) -> dict:
     for i, j in itertools.permutations(range(len(orders)), 2):
         if (orders.request_s[i], orders.order_id[i]) > (orders.request_s[j], orders.order_id[j]):
             continue  # i must be the earlier order (ties by id)
-        oi, di, oj, dj = (int(x) for x in (orders.origin[i], orders.destination[i],
-                                            orders.origin[j], orders.destination[j]))
+        oi, di, oj, dj = (
+            int(x) for x in (orders.origin[i], orders.destination[i], orders.origin[j], orders.destination[j])
+        )
         dt = orders.request_s[j] - orders.request_s[i]
         if dt <= rules.planner_patience_s:
             best = pool_scalar(dist, oi, di, oj, dj, oi, 0.0, 0.0, rules)
@@ -119,13 +124,25 @@ def assert_same(cands, ref: dict):
     for key, k in got.items():
         first, second, enroute, fofo, saving, length, det_a, det_b, shared, pk = ref[key]
         assert (cands.first[k], cands.second[k], cands.enroute[k], cands.fofo[k]) == (first, second, enroute, fofo)
-        np.testing.assert_allclose([cands.saving_m[k], cands.length_m[k], cands.detour_first_m[k],
-                                    cands.detour_second_m[k], cands.shared_m[k], cands.pickup_m[k]],
-                                   [saving, length, det_a, det_b, shared, pk], rtol=1e-9, atol=1e-6)
+        np.testing.assert_allclose(
+            [
+                cands.saving_m[k],
+                cands.length_m[k],
+                cands.detour_first_m[k],
+                cands.detour_second_m[k],
+                cands.shared_m[k],
+                cands.pickup_m[k],
+            ],
+            [saving, length, det_a, det_b, shared, pk],
+            rtol=1e-9,
+            atol=1e-6,
+        )
 
 
-FLAG_SETS = [dict(both_pickup_orders=b, pickup_check=p, allow_enroute=e)
-             for b, p, e in itertools.product((False, True), repeat=3)]
+FLAG_SETS = [
+    dict(both_pickup_orders=b, pickup_check=p, allow_enroute=e)
+    for b, p, e in itertools.product((False, True), repeat=3)
+]
 
 
 # ----------------------------------------------------------------- the tests
@@ -150,8 +167,13 @@ def test_enumeration_min_then_check_rule(grid):
 
 
 @settings(max_examples=25, deadline=None, database=None)
-@given(seed=st.integers(0, 2**32 - 1), n=st.integers(0, 14), span=st.sampled_from([0.0, 60.0, 200.0, 900.0]),
-       detour=st.sampled_from([0.0, 700.0, 3000.0]), flags=st.sampled_from(FLAG_SETS))
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    n=st.integers(0, 14),
+    span=st.sampled_from([0.0, 60.0, 200.0, 900.0]),
+    detour=st.sampled_from([0.0, 700.0, 3000.0]),
+    flags=st.sampled_from(FLAG_SETS),
+)
 def test_enumeration_property(grid, seed, n, span, detour, flags):
     net, dist = grid
     orders = random_orders(np.random.default_rng(seed), n, net.n_nodes, span_s=span)
@@ -176,8 +198,8 @@ def test_time_window_is_inclusive_and_ties_go_by_id(grid):
     orders = make_orders([0, 0, 0, 0], [63, 63, 63, 63], [10.0, 10.0, 100.0, 100.0 + 1e-6], [7, 3, 9, 1])
     cands = find_candidates(dist, orders, PairRules(planner_patience_s=90.0))
     ids = {(int(orders.order_id[a]), int(orders.order_id[b])) for a, b in zip(cands.first, cands.second)}
-    assert (3, 7) in ids and (7, 3) not in ids   # the tie: smaller id picked up first
-    assert (3, 9) in ids and (7, 9) in ids       # dt = K̄ exactly is allowed
+    assert (3, 7) in ids and (7, 3) not in ids  # the tie: smaller id picked up first
+    assert (3, 9) in ids and (7, 9) in ids  # dt = K̄ exactly is allowed
     assert (3, 1) not in ids and (7, 1) not in ids
     assert (9, 1) in ids
 
@@ -187,7 +209,7 @@ def test_identical_orders_save_a_whole_trip(grid):
     orders = make_orders([5, 5], [40, 40], [0.0, 0.0])
     cands = find_candidates(dist, orders, PairRules())
     assert len(cands) == 1
-    assert cands.saving_m[0] == pytest.approx(dist.dist[5, 40])        # G3
+    assert cands.saving_m[0] == pytest.approx(dist.dist[5, 40])  # G3
     assert cands.detour_first_m[0] == pytest.approx(0) and cands.detour_second_m[0] == pytest.approx(0)
 
 
@@ -195,8 +217,7 @@ def test_pickup_is_not_tested_by_default(grid):
     net, dist = grid
     far = int(np.argmax(dist.dist[0]))
     orders = make_orders([0, far], [far, 0], [0.0, 1.0])
-    assert not len(find_candidates(dist, orders, PairRules(max_detour_m=1e9, pickup_check=True,
-                                                           max_pickup_m=100.0)))
+    assert not len(find_candidates(dist, orders, PairRules(max_detour_m=1e9, pickup_check=True, max_pickup_m=100.0)))
     assert len(find_candidates(dist, orders, PairRules(max_detour_m=1e9))) == 1
 
 
@@ -215,7 +236,7 @@ def test_enroute_boundaries(grid):
     assert {(int(a), int(b)) for a, b in zip(cands.first, cands.second)} == {(0, 1), (1, 2)}
     row = int(np.flatnonzero(cands.second == 1)[0])
     assert cands.enroute[row]
-    assert cands.pickup_m[row] == pytest.approx(dist.dist[nodes[k], 9])   # pre = 0 at the node itself
+    assert cands.pickup_m[row] == pytest.approx(dist.dist[nodes[k], 9])  # pre = 0 at the node itself
     assert cands.length_m[row] >= at_node + dist.dist[nodes[k], 9]
 
 
@@ -224,11 +245,13 @@ def test_enroute_needs_the_distance_oracle(grid):
     orders = make_orders([0, 1], [10, 11], [0.0, 200.0])
     with pytest.raises(ParameterError, match="DistanceOracle"):
         find_candidates(dist.dist, orders, PairRules(allow_enroute=True))
-    assert len(find_candidates(dist.dist, orders, PairRules())) == 0   # a bare matrix is fine otherwise
+    assert len(find_candidates(dist.dist, orders, PairRules())) == 0  # a bare matrix is fine otherwise
 
 
-@pytest.mark.parametrize("bad", [dict(max_detour_m=-1.0), dict(planner_patience_s=float("nan")),
-                                 dict(speed_mps=0.0), dict(order_rule="shortest")])
+@pytest.mark.parametrize(
+    "bad",
+    [dict(max_detour_m=-1.0), dict(planner_patience_s=float("nan")), dict(speed_mps=0.0), dict(order_rule="shortest")],
+)
 def test_bad_rules(bad):
     with pytest.raises(ParameterError):
         PairRules(**bad)

@@ -44,8 +44,9 @@ class NetworkxBackend(Backend):
         for c, (a, b, v) in enumerate(zip(model.col_a.tolist(), model.col_b.tolist(), model.values.tolist())):
             g.add_edge(a, b, weight=v, col=c)
         m = nx.max_weight_matching(g, maxcardinality=model.objective == "cardinality_then_weight")
-        return make_solution(model, [g[a][b]["col"] for a, b in m], Status.OPTIMAL, self.name,
-                             solve_s=time.perf_counter() - t0)
+        return make_solution(
+            model, [g[a][b]["col"] for a, b in m], Status.OPTIMAL, self.name, solve_s=time.perf_counter() - t0
+        )
 
 
 class AssignmentOnlyBackend(NetworkxBackend):
@@ -75,7 +76,8 @@ def _preset_available(name: str) -> bool:
 PRESETS = ["highs", "matching"]
 SOLVERS = [pytest.param(NetworkxBackend(), id="networkx-ref")] + [
     pytest.param(p, id=p, marks=pytest.mark.skipif(not _preset_available(p), reason=f"preset {p} not available"))
-    for p in PRESETS]
+    for p in PRESETS
+]
 ALL_PRESETS = ["highs", "matching", "blossom-v", "ortools", "scipy", "pyomo-highs", "cvxpy-highs"]
 
 
@@ -89,9 +91,13 @@ def with_orders(scenario, origin, destination, request_s, order_id=None):
     n = len(origin)
     ids = np.arange(n) if order_id is None else np.asarray(order_id)
     srt = np.lexsort((ids, np.asarray(request_s, float)))
-    orders = Orders(order_id=np.asarray(ids, np.int64)[srt], request_s=np.asarray(request_s, float)[srt],
-                    origin=np.asarray(origin, np.int32)[srt], destination=np.asarray(destination, np.int32)[srt],
-                    patience_s=np.full(n, 90.0))
+    orders = Orders(
+        order_id=np.asarray(ids, np.int64)[srt],
+        request_s=np.asarray(request_s, float)[srt],
+        origin=np.asarray(origin, np.int32)[srt],
+        destination=np.asarray(destination, np.int32)[srt],
+        patience_s=np.full(n, 90.0),
+    )
     return dataclasses.replace(scenario, orders=orders)
 
 
@@ -125,6 +131,7 @@ def all_matchings(n, edges):
             if u in rest:
                 for m in rec(rest - {u}):
                     yield [k] + m
+
     yield from rec(frozenset(range(n)))
 
 
@@ -144,37 +151,44 @@ def test_o_t1_o_t3_matching_is_valid_and_variants_order(toy, solver):
     cands = find_candidates(toy.network.distances(), toy.orders, PairRules.from_params(toy.params))
     r1 = solve_oracle(toy, 1, solver, candidates=cands)
     r2 = solve_oracle(toy, 2, solver, candidates=cands)
-    feasible = {tuple(sorted((int(toy.orders.order_id[a]), int(toy.orders.order_id[b]))))
-                for a, b in zip(cands.first, cands.second)}
+    feasible = {
+        tuple(sorted((int(toy.orders.order_id[a]), int(toy.orders.order_id[b]))))
+        for a, b in zip(cands.first, cands.second)
+    }
     for r in (r1, r2):
         assert r.status is Status.OPTIMAL
         ids = np.concatenate([r.pairs["first_id"], r.pairs["second_id"]])
-        assert len(np.unique(ids)) == len(ids)                       # each order at most once
-        assert chosen_pairs(r) <= feasible                             # only feasible edges
+        assert len(np.unique(ids)) == len(ids)  # each order at most once
+        assert chosen_pairs(r) <= feasible  # only feasible edges
         # The model rounds each saving to UNIT_M; S is the unrounded sum.
         assert r.total_saving_m == pytest.approx(r.kpis()["objective_m"], abs=UNIT_M / 2 * len(r.pairs) + 1e-9)
     assert len(r1.pairs) > 5
-    assert len(r2.pairs) >= len(r1.pairs)                              # O-T3
+    assert len(r2.pairs) >= len(r1.pairs)  # O-T3
     assert r1.total_saving_m >= r2.total_saving_m - 1e-6
-    assert (r1.pairs["saving_m"] > 0).all()                            # Oracle-1 uses e > 0 only
+    assert (r1.pairs["saving_m"] > 0).all()  # Oracle-1 uses e > 0 only
 
 
 # ---------------------------------------------------------------------- O-T2
 @settings(max_examples=30, deadline=None, database=None)
-@given(seed=st.integers(0, 2**31), n=st.integers(0, 10), span=st.sampled_from([0.0, 100.0, 300.0]),
-       both=st.booleans(), enroute=st.booleans())
+@given(
+    seed=st.integers(0, 2**31),
+    n=st.integers(0, 10),
+    span=st.sampled_from([0.0, 100.0, 300.0]),
+    both=st.booleans(),
+    enroute=st.booleans(),
+)
 def test_o_t2_small_instances_equal_exhaustive_search(toy, seed, n, span, both, enroute):
     sc = random_scenario(toy, seed, n, span)
     rules = PairRules.from_params(sc.params, both_pickup_orders=both, allow_enroute=enroute)
     cands = find_candidates(sc.network.distances(), sc.orders, rules)
     edges = list(zip(cands.low.tolist(), cands.high.tolist(), cands.saving_m.tolist()))
     matchings = list(all_matchings(n, edges))
-    best1 = max(sum(max(edges[k][2], 0.0) for k in m) for m in matchings)   # drop e <= 0 edges
+    best1 = max(sum(max(edges[k][2], 0.0) for k in m) for m in matchings)  # drop e <= 0 edges
     best2 = max((len(m), sum(edges[k][2] for k in m)) for m in matchings)
     for solver in [NetworkxBackend()] + [p for p in PRESETS if _preset_available(p)]:
         r1 = solve_oracle(sc, 1, solver, candidates=cands)
         r2 = solve_oracle(sc, 2, solver, candidates=cands)
-        tol = UNIT_M * (n + 1)   # the optimum of the rounded savings, measured unrounded
+        tol = UNIT_M * (n + 1)  # the optimum of the rounded savings, measured unrounded
         assert r1.total_saving_m == pytest.approx(best1, abs=tol)
         assert r1.total_saving_m >= greedy_saving(cands) - tol
         assert len(r2.pairs) == best2[0]
@@ -187,9 +201,13 @@ def test_o_t2_small_instances_equal_exhaustive_search(toy, seed, n, span, both, 
 def test_o_t4_wider_rules_never_lower_the_optima(solver):
     toy = build_scenario("toy", sample=0.3, seed=1)
     base = PairRules.from_params(toy.params)
-    wider = [base.replace(planner_patience_s=180.0), base.replace(max_detour_m=6000.0),
-             base.replace(both_pickup_orders=True), base.replace(allow_enroute=True),
-             base.replace(both_pickup_orders=True, allow_enroute=True)]
+    wider = [
+        base.replace(planner_patience_s=180.0),
+        base.replace(max_detour_m=6000.0),
+        base.replace(both_pickup_orders=True),
+        base.replace(allow_enroute=True),
+        base.replace(both_pickup_orders=True, allow_enroute=True),
+    ]
     narrower = [base.replace(planner_patience_s=30.0), base.replace(max_detour_m=1000.0)]
 
     def optima(rules):
@@ -204,7 +222,7 @@ def test_o_t4_wider_rules_never_lower_the_optima(solver):
     for rules in narrower:
         s, m = optima(rules)
         assert s <= s0 + 1e-6 and m <= m0, rules
-    assert optima(wider[0])[0] > s0          # the toy city is rich enough for the test to bite
+    assert optima(wider[0])[0] > s0  # the toy city is rich enough for the test to bite
 
 
 # ---------------------------------------------------------------------- O-T5
@@ -223,7 +241,7 @@ def test_o_t5_trivial_instances(toy, solver):
     for v in (1, 2):
         r = solve_oracle(sc, v, solver)
         assert len(r.pairs) == 1
-        assert r.total_saving_m == pytest.approx(solo)                # G3: S = l
+        assert r.total_saving_m == pytest.approx(solo)  # G3: S = l
         assert r.kpis()["pairing_ratio"] == 1.0 and r.kpis()["avg_detour_m"] == pytest.approx(0.0)
 
 
@@ -241,13 +259,15 @@ def test_o_t6_triangle_is_integral(toy, solver):
     assert model.n_cols == 3 and set(model.values) == {1.0}
     from rpbench.backends import solve
     from rpbench.oracle.solve import resolve_preset
+
     assert solve(model, resolve_preset(solver)).objective == 1.0
 
 
 def test_o_t6_lp_relaxation_of_the_triangle_is_fractional():
     """Guard that the triangle discriminates: its LP relaxation is 1.5 (§4.1)."""
     from scipy.optimize import linprog
-    a_ub = np.array([[1, 1, 0], [1, 0, 1], [0, 1, 1]])   # vertex x edge incidence
+
+    a_ub = np.array([[1, 1, 0], [1, 0, 1], [0, 1, 1]])  # vertex x edge incidence
     lp = linprog(-np.ones(3), A_ub=a_ub, b_ub=np.ones(3), bounds=(0, 1))
     assert -lp.fun == pytest.approx(1.5)
 
@@ -256,16 +276,24 @@ def test_o_t6_lp_relaxation_of_the_triangle_is_fractional():
 def seed_ip(n: int, weight: np.ndarray, feasible: np.ndarray) -> float:
     """The paper's IP (Eqs. 18-22) solved literally: x_ij for all i, j; rows/columns sum to 1; x = x^T."""
     from scipy.optimize import Bounds, LinearConstraint, milp
-    e = np.where(feasible, weight, -1e4)          # infeasible pairs get -10^4, as the authors' script
-    np.fill_diagonal(e, 0.0)                      # x_ii = 1 means unpaired
+
+    e = np.where(feasible, weight, -1e4)  # infeasible pairs get -10^4, as the authors' script
+    np.fill_diagonal(e, 0.0)  # x_ii = 1 means unpaired
     idx = np.arange(n * n).reshape(n, n)
     rows = []
     for i in range(n):
-        r = np.zeros(n * n); r[idx[i, :]] = 1; rows.append(r)
-        c = np.zeros(n * n); c[idx[:, i]] = 1; rows.append(c)
+        r = np.zeros(n * n)
+        r[idx[i, :]] = 1
+        rows.append(r)
+        c = np.zeros(n * n)
+        c[idx[:, i]] = 1
+        rows.append(c)
     sym = []
     for i, j in itertools.combinations(range(n), 2):
-        s = np.zeros(n * n); s[idx[i, j]] = 1; s[idx[j, i]] = -1; sym.append(s)
+        s = np.zeros(n * n)
+        s[idx[i, j]] = 1
+        s[idx[j, i]] = -1
+        sym.append(s)
     cons = [LinearConstraint(np.array(rows), 1, 1)] + ([LinearConstraint(np.array(sym), 0, 0)] if sym else [])
     res = milp(-e.ravel(), constraints=cons, integrality=np.ones(n * n), bounds=Bounds(0, 1))
     assert res.status == 0
@@ -302,10 +330,10 @@ def test_o_t7_saving_is_half_the_seed_objective(toy, seed):
 @pytest.mark.parametrize("solver", SOLVERS)
 def test_o_t8_relabelling_invariance(toy, solver):
     o, d, t = toy.orders.origin, toy.orders.destination, toy.orders.request_s
-    assert len(np.unique(t)) == len(t)      # distinct times: relabelling cannot change who is first
+    assert len(np.unique(t)) == len(t)  # distinct times: relabelling cannot change who is first
     results = []
     for seed in (0, 1):
-        ids = np.random.default_rng(seed).permutation(10 * len(t))[:len(t)] + 5
+        ids = np.random.default_rng(seed).permutation(10 * len(t))[: len(t)] + 5
         sc = with_orders(toy, o, d, t, ids)
         results.append((solve_oracle(sc, 1, solver), solve_oracle(sc, 2, solver)))
     (a1, a2), (b1, b2) = results
@@ -316,7 +344,7 @@ def test_o_t8_relabelling_invariance(toy, solver):
 
 def test_o_t8_all_exact_solvers_agree():
     """|M_2| is unique and, with the A20 tie-break, so is Oracle-2's saving (model units, exactly)."""
-    toy = build_scenario("toy", sample=0.25, seed=2)     # small: CP-SAT's two-stage Oracle-2 takes seconds
+    toy = build_scenario("toy", sample=0.25, seed=2)  # small: CP-SAT's two-stage Oracle-2 takes seconds
     cands = find_candidates(toy.network.distances(), toy.orders, PairRules.from_params(toy.params))
     ref = {v: solve_oracle(toy, v, NetworkxBackend(), candidates=cands) for v in (1, 2)}
     checked = 0
@@ -341,7 +369,7 @@ def test_result_frame_kpis_and_determinism(toy):
     again = solve_oracle(toy, 1, NetworkxBackend())
     assert r.pairs.equals(again.pairs)
     k = r.kpis()
-    assert list(k)[:len(KPI_KEYS)] == list(KPI_KEYS)
+    assert list(k)[: len(KPI_KEYS)] == list(KPI_KEYS)
     p = r.pairs
     assert k["pairs"] == len(p) and k["pooled_passengers"] == 2 * len(p)
     assert k["pairing_ratio"] == pytest.approx(2 * len(p) / len(toy.orders))
@@ -349,7 +377,7 @@ def test_result_frame_kpis_and_determinism(toy):
     assert k["avg_shared_m"] == pytest.approx(p["shared_m"].mean())
     assert k["total_saving_km"] == pytest.approx(p["saving_m"].sum() / 1000)
     assert set(p["service_order"]) <= {"FOFO", "FOLO"}
-    assert (p["first_request_s"] <= p["second_request_s"]).all()       # default: the earlier order first
+    assert (p["first_request_s"] <= p["second_request_s"]).all()  # default: the earlier order first
     assert (p["detour_first_m"] <= toy.params.max_detour_m + 1e-6).all()
     assert (p["detour_second_m"] >= -1e-9).all()
     for key in ("candidates_s", "model_s", "solve_s", "total_s"):
@@ -405,17 +433,36 @@ def test_cli_json_and_table(capsys, tmp_path):
     if solver is None:
         pytest.skip("no pairing preset installed yet")
     csv = tmp_path / "pairs.csv"
-    assert main(["oracle", "--scenario", "toy", "--sample", "0.3", "--solver", solver, "--json",
-                 "--pairs", str(csv)]) == 0
+    assert (
+        main(["oracle", "--scenario", "toy", "--sample", "0.3", "--solver", solver, "--json", "--pairs", str(csv)]) == 0
+    )
     out = json.loads(capsys.readouterr().out)
     assert out["oracle1"]["status"] == "optimal" and out["oracle2"]["pairs"] >= out["oracle1"]["pairs"]
     assert set(KPI_KEYS) <= set(out["oracle1"])
     import pandas as pd
+
     written = pd.read_csv(csv)
     assert (written["variant"] == 1).sum() == out["oracle1"]["pairs"]
     assert (written["variant"] == 2).sum() == out["oracle2"]["pairs"]
-    assert main(["oracle", "--scenario", "toy", "--sample", "0.3", "--solver", solver, "--variant", "1",
-                 "--allow-enroute", "--both-pickup-orders", "--pickup-check"]) == 0
+    assert (
+        main(
+            [
+                "oracle",
+                "--scenario",
+                "toy",
+                "--sample",
+                "0.3",
+                "--solver",
+                solver,
+                "--variant",
+                "1",
+                "--allow-enroute",
+                "--both-pickup-orders",
+                "--pickup-check",
+            ]
+        )
+        == 0
+    )
     text = capsys.readouterr().out
     assert "Oracle-1" in text and "Oracle-2" not in text and "allow_enroute" in text
 
@@ -456,12 +503,14 @@ def test_haikou_peak_is_solved_to_optimality():
 def test_maximum_pairs_is_the_matching_number():
     """Oracle-2's pairs_bound is the proven maximum: the triangle gives 1 (its fractional matching: 1.5)."""
     from rpbench.oracle.solve import maximum_pairs
+
     triangle = PairingModel(3, [0, 0, 1], [1, 2, 2], [1, 1, 1])
     assert maximum_pairs(triangle) == 1
     two_triangles = PairingModel(6, [0, 0, 1, 3, 3, 4, 2], [1, 2, 2, 4, 5, 5, 3], [1] * 7)
     assert maximum_pairs(two_triangles) == 3
     assert maximum_pairs(PairingModel(4, [], [], [])) == 0
     import networkx as nx
+
     rng = np.random.default_rng(0)
     for _ in range(20):
         n = int(rng.integers(2, 30))

@@ -36,9 +36,16 @@ class Instance:
         return model, solve_model(model)
 
 
-def make_instance(seed: int = 0, size: int = 5, n_od: int = 12, rate_per_h: float = 6.0,
-                  max_pickup_m: float = 1500.0, max_detour_m: float = 1500.0, grid_seed: int | None = None,
-                  **config) -> Instance:
+def make_instance(
+    seed: int = 0,
+    size: int = 5,
+    n_od: int = 12,
+    rate_per_h: float = 6.0,
+    max_pickup_m: float = 1500.0,
+    max_detour_m: float = 1500.0,
+    grid_seed: int | None = None,
+    **config,
+) -> Instance:
     """A seeded grid city with ``n_od`` random OD pairs at random rates (mean ``rate_per_h`` per OD)."""
     net = grid_network(size, seed=seed if grid_seed is None else grid_seed)
     rng = np.random.default_rng(seed)
@@ -47,8 +54,7 @@ def make_instance(seed: int = 0, size: int = 5, n_od: int = 12, rate_per_h: floa
     d = rng.integers(0, n, n_od)
     rate = rng.uniform(0.2, 1.8, n_od) * rate_per_h / 3600.0
     rates = OdRates.from_arrays(o, d, rate, np.arange(n_od), n_nodes=n, source=f"grid seed {seed}")
-    return Instance(net, rates, Params(max_pickup_m=max_pickup_m, max_detour_m=max_detour_m),
-                    PredictConfig(**config))
+    return Instance(net, rates, Params(max_pickup_m=max_pickup_m, max_detour_m=max_detour_m), PredictConfig(**config))
 
 
 @pytest.fixture

@@ -23,7 +23,7 @@ class StackedAnderson:
         if self.x_prev is not None:
             self.dx.append(x - self.x_prev)
             self.df.append(f - self.f_prev)
-            del self.dx[:-self.depth], self.df[:-self.depth]
+            del self.dx[: -self.depth], self.df[: -self.depth]
         self.x_prev, self.f_prev = x, f
         if not self.df:
             return damped
@@ -62,13 +62,13 @@ def test_steps_match_the_stacked_least_squares(depth, moves, seed):
             prev_f = prev_df = None
         x = rng.standard_normal(n)
         f = _residual(move, rng, prev_f, prev_df, n)
-        beta = 0.5 if i < 10 else 0.25                  # β may change within a history
+        beta = 0.5 if i < 10 else 0.25  # β may change within a history
         got = mixing.step(x, f, beta * f, beta)
         want = reference.step(x, f, beta * f, beta)
         scale = max(1.0, float(np.abs(want).max()))
         assert np.abs(got - want).max() <= 1e-9 * scale, (i, move)
         if mixing.size:
-            q = mixing._q[:, :mixing.size]
+            q = mixing._q[:, : mixing.size]
             assert np.abs(q.T @ q - np.eye(mixing.size)).max() <= 1e-12, (i, move)
         prev_df = None if prev_f is None else f - prev_f
         prev_f = f
@@ -87,7 +87,7 @@ def test_factorisation_stays_orthonormal_and_reproduces_the_differences(depth):
     q, r = mixing._q[:, :m], mixing._r[:m, :m]
     np.testing.assert_allclose(q.T @ q, np.eye(m), atol=1e-12)
     assert np.allclose(np.tril(r, -1), 0.0)
-    differences = np.stack([b - a for a, b in zip(fs[-m - 1:-1], fs[-m:])], axis=1)
+    differences = np.stack([b - a for a, b in zip(fs[-m - 1 : -1], fs[-m:])], axis=1)
     np.testing.assert_allclose(q @ r, differences, atol=1e-12)
 
 

@@ -27,11 +27,11 @@ def test_local_numbers_name_the_classes_and_blocks_respect_the_limit(seed, limit
     assert np.all(np.diff(blocks.seeker_off) >= 0)
     for b in range(blocks.n_blocks):
         s0, s1 = blocks.seeker_off[b], blocks.seeker_off[b + 1]
-        table = blocks.cls[blocks.cls_off[b]:blocks.cls_off[b + 1]]
-        assert len(np.unique(table)) == len(table)                       # each class once per block
+        table = blocks.cls[blocks.cls_off[b] : blocks.cls_off[b + 1]]
+        assert len(np.unique(table)) == len(table)  # each class once per block
         longest = int(np.diff(off)[s0:s1].max(initial=0))
-        assert len(table) <= max(limit, longest)                         # only a long list overflows it
-        pairs = local[off[s0]:off[s1]].astype(np.int64)
+        assert len(table) <= max(limit, longest)  # only a long list overflows it
+        pairs = local[off[s0] : off[s1]].astype(np.int64)
         assert pairs.max(initial=-1) < len(table)
         # numbered in order of first use
         first = np.unique(pairs, return_index=True)[1]
@@ -45,7 +45,7 @@ def test_appending_in_pieces_cuts_the_same_blocks_as_at_once():
     localizer = Localizer(50, limit=12)
     lens = np.diff(off)
     for a, b in ((0, 7), (7, 8), (8, 40), (40, 80)):
-        localizer.append(lens[a:b], cls[off[a]:off[b]])
+        localizer.append(lens[a:b], cls[off[a] : off[b]])
     pieces = localizer.finish()
     np.testing.assert_array_equal(localizer.local(), whole_local)
     for name in ("seeker_off", "cls", "cls_off"):
@@ -54,7 +54,7 @@ def test_appending_in_pieces_cuts_the_same_blocks_as_at_once():
 
 def test_a_list_longer_than_16_bits_allow_widens_what_was_written(tmp_path, monkeypatch):
     monkeypatch.setattr(blocks_module, "NARROW_LIMIT", 5)
-    off, cls = random_lists(3, n_od=30, longest=4)             # fits 16 "bits" (here: 5 classes)
+    off, cls = random_lists(3, n_od=30, longest=4)  # fits 16 "bits" (here: 5 classes)
     long_list = np.arange(9, dtype=np.int32)
     path = tmp_path / "local.bin"
     with open(path, "w+b") as fh:
@@ -67,8 +67,9 @@ def test_a_list_longer_than_16_bits_allow_widens_what_was_written(tmp_path, monk
     np.testing.assert_array_equal(written, np.concatenate([first, second]))
     blocks = localizer.finish()
     all_off = np.concatenate([off, [off[-1] + 9]])
-    np.testing.assert_array_equal(blocks.classes(written, all_off, 0, len(all_off) - 1),
-                                  np.concatenate([cls, long_list]))
+    np.testing.assert_array_equal(
+        blocks.classes(written, all_off, 0, len(all_off) - 1), np.concatenate([cls, long_list])
+    )
 
 
 def test_inconsistent_blocks_are_refused(tmp_path):

@@ -17,11 +17,14 @@ def test_cache_round_trip_and_keys():
     assert not first.from_cache
     second = predict(inst.network, inst.rates, inst.params, inst.config)
     assert second.from_cache
-    for a, b in ((first.od.pairing_prob, second.od.pairing_prob), (first.rho, second.rho),
-                 (first.od.e_vacant, second.od.e_vacant)):
+    for a, b in (
+        (first.od.pairing_prob, second.od.pairing_prob),
+        (first.rho, second.rho),
+        (first.od.e_vacant, second.od.e_vacant),
+    ):
         np.testing.assert_array_equal(a, b)
     assert second.summary()["iterations"] == first.summary()["iterations"]
-    assert str(cache_dir()).find("rpbench-cache") >= 0                          # never the repository
+    assert str(cache_dir()).find("rpbench-cache") >= 0  # never the repository
     key = cache_key(inst.network, inst.rates, inst.params, inst.config)
     assert key != cache_key(inst.network, inst.rates.scaled(2.0), inst.params, inst.config)
     assert key != cache_key(inst.network, inst.rates, inst.params.replace(max_detour_m=999.0), inst.config)

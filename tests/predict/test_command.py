@@ -29,26 +29,55 @@ def test_predict_month_json_and_csv(fake_data, tmp_path, capsys):
 
 def test_predict_day_default_csv_name_and_options(fake_data, tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
-    r = run_json(capsys, "--rates", "day", "--date", "2017-05-01", "--data", str(fake_data), "--tau0", "60",
-                 "--param", "max_detour_m=1000", "--accel", "anderson", "--no-cache")
+    r = run_json(
+        capsys,
+        "--rates",
+        "day",
+        "--date",
+        "2017-05-01",
+        "--data",
+        str(fake_data),
+        "--tau0",
+        "60",
+        "--param",
+        "max_detour_m=1000",
+        "--accel",
+        "anderson",
+        "--no-cache",
+    )
     assert (tmp_path / "prediction-day-2017-05-01.csv").is_file()
     assert r["config"]["tau0_s"] == 60 and r["params"]["max_detour_m"] == 1000 and r["config"]["accel"] == "anderson"
 
 
 def test_predict_validate_fcfs(fake_data, tmp_path, capsys):
-    r = run_json(capsys, "--rates", "month", "--data", str(fake_data), "--out", str(tmp_path / "p.csv"),
-                 "--validate-fcfs", "--hours", "20", "--min-samples", "5")
+    r = run_json(
+        capsys,
+        "--rates",
+        "month",
+        "--data",
+        str(fake_data),
+        "--out",
+        str(tmp_path / "p.csv"),
+        "--validate-fcfs",
+        "--hours",
+        "20",
+        "--min-samples",
+        "5",
+    )
     f = r["fcfs"]
     assert f["hours"] == 20 and f["ods_compared"] >= 1 and "mape_pct" in f["pairing_prob"]
 
 
-@pytest.mark.parametrize("argv, message", [
-    (["--rates", "weekly"], "--rates 'weekly'"),
-    (["--rates", "day", "--date", "2017-05-02"], "no peak-hour order file for 2017-05-02"),
-    (["--rates", "month", "--date", "2017-05-01"], "--date only applies"),
-    (["--rates", "month", "--param", "max_detour_m=-3"], "max_detour_m"),
-    (["--rates", "month", "--tau0", "-1"], "tau0_s"),
-])
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--rates", "weekly"], "--rates 'weekly'"),
+        (["--rates", "day", "--date", "2017-05-02"], "no peak-hour order file for 2017-05-02"),
+        (["--rates", "month", "--date", "2017-05-01"], "--date only applies"),
+        (["--rates", "month", "--param", "max_detour_m=-3"], "max_detour_m"),
+        (["--rates", "month", "--tau0", "-1"], "tau0_s"),
+    ],
+)
 def test_bad_input_is_one_line_exit_2(fake_data, tmp_path, capsys, argv, message):
     code = main(["predict", "--data", str(fake_data), "--out", str(tmp_path / "x.csv"), *argv])
     out, err = capsys.readouterr()

@@ -28,7 +28,7 @@ def reference_map(model, rho):
         running = lam[w]
         survive = 1.0
         for t in states:
-            eta[t] += running                   # η_t^{s(w)} = λ_w Π_{t' ≻ t} (1 - ρ_t')
+            eta[t] += running  # η_t^{s(w)} = λ_w Π_{t' ≻ t} (1 - ρ_t')
             running *= 1.0 - rho[t]
             survive *= 1.0 - rho[t]
         p_s[w] = 1.0 - survive
@@ -61,6 +61,7 @@ def test_vectorised_map_equals_reference(seed, rate, tau0):
 def test_evaluation_does_not_depend_on_the_thread_count():
     """The per-class and per-state passes run on one range of classes / ODs per thread."""
     from numba import get_num_threads, set_num_threads
+
     model = make_instance(seed=5, size=5, n_od=30, rate_per_h=60.0, tau0_s=60.0).model()
     rho = np.random.default_rng(5).uniform(0, 0.6, model.space.n_states)
     before = get_num_threads()
@@ -79,6 +80,7 @@ def test_evaluation_does_not_depend_on_the_thread_count():
 @pytest.mark.parametrize("threads", [1, 2, 3, 8])
 def test_cut_covers_every_group_once_in_order(sizes, threads):
     from numba import get_num_threads, set_num_threads
+
     offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
     before = get_num_threads()
     try:
@@ -93,8 +95,11 @@ def test_cut_covers_every_group_once_in_order(sizes, threads):
 
 # ---------------------------------------------------------------- invariants
 @settings(max_examples=15, deadline=None)
-@given(seed=st.integers(0, 10_000), rate=st.sampled_from([1.0, 10.0, 60.0, 300.0]),
-       priority=st.sampled_from(["net_saving", "pickup", "vehicle_distance", "authors_feng_grid"]))
+@given(
+    seed=st.integers(0, 10_000),
+    rate=st.sampled_from([1.0, 10.0, 60.0, 300.0]),
+    priority=st.sampled_from(["net_saving", "pickup", "vehicle_distance", "authors_feng_grid"]),
+)
 def test_invariants_at_the_fixed_point(seed, rate, priority):
     inst = make_instance(seed=seed, size=5, n_od=14, rate_per_h=rate, priority=priority)
     model, pred = inst.solve()
@@ -123,10 +128,11 @@ def test_invariants_at_the_fixed_point(seed, rate, priority):
         if lam[w] > 0 and s.stop > s.start:
             last = s.stop - 1
             assert pred.od.pairing_prob[w] == pytest.approx(
-                1 - ev.lam_taker[last] * (1 - ev.p_taker[last]) / lam[w], abs=1e-10)
+                1 - ev.lam_taker[last] * (1 - ev.p_taker[last]) / lam[w], abs=1e-10
+            )
 
 
-def test_opportunity_rates_bounded_and_telescoping():       # I1 (η^s <= λ), I2
+def test_opportunity_rates_bounded_and_telescoping():  # I1 (η^s <= λ), I2
     model, pred = make_instance(seed=8, size=5, n_od=14, rate_per_h=30).solve()
     lam = model.rates.rate_per_s
     sums = PairSums.zeros(model.space.n_classes, len(lam))
@@ -150,8 +156,16 @@ def test_l1_zero_demand():
     inst.rates = inst.rates.scaled(0.0)
     model, pred = inst.solve()
     assert pred.info["iterations"] == 1 and pred.info["converged"]
-    for arr in (pred.rho, pred.p_taker, pred.eta, pred.od.pairing_prob, pred.od.p_seeker, pred.od.e_vacant,
-                pred.od.e_seeker, pred.od.e_taker):
+    for arr in (
+        pred.rho,
+        pred.p_taker,
+        pred.eta,
+        pred.od.pairing_prob,
+        pred.od.p_seeker,
+        pred.od.e_vacant,
+        pred.od.e_seeker,
+        pred.od.e_taker,
+    ):
         assert np.all(arr == 0)
 
 
@@ -160,7 +174,7 @@ def test_l2_no_feasible_pairs():
     # earlier order of its own OD still waiting at the same node (pk = 0, detours 0, E = l_w by G3).
     inst = make_instance(seed=2, size=6, n_od=12, max_pickup_m=1e-6)
     inst.rates = OdRates.from_arrays(np.arange(12), (np.arange(12) + 7) % 36, np.full(12, 1e-3), n_nodes=36)
-    assert inst.model().matching.n_pairs == len(inst.rates)           # exactly the own-origin pairs
+    assert inst.model().matching.n_pairs == len(inst.rates)  # exactly the own-origin pairs
     model, pred = inst.solve(include_origin_state=False)
     assert model.matching.n_pairs == 0
     assert np.all(pred.od.p_seeker == 0) and np.all(pred.p_taker == 0) and np.all(pred.od.pairing_prob == 0)
@@ -194,14 +208,14 @@ def test_l3_monotone_limits_and_slope():
     p_w = [p.od.pairing_prob[0] for p in preds]
     assert np.all(np.diff(p_s) > 0) and np.all(np.diff(p_w) > 0)
     assert p_w[-1] == pytest.approx(1.0, abs=1e-9) and p_s[-1] == pytest.approx(0.5, abs=1e-9)
-    assert p_w[0] == pytest.approx(2 * loads[0], rel=1e-3)               # small-demand slope P ≈ 2λτ
+    assert p_w[0] == pytest.approx(2 * loads[0], rel=1e-3)  # small-demand slope P ≈ 2λτ
 
 
 def test_l4_time_unit_invariance():
     a = make_instance(seed=6, size=5, n_od=15, rate_per_h=20)
     b = make_instance(seed=6, size=5, n_od=15, rate_per_h=20, tau0_s=60.0)
     b.rates = b.rates.scaled(2.0)
-    b.params = b.params.replace(speed_mps=a.params.speed_mps * 2)        # every τ halves, every λ doubles
+    b.params = b.params.replace(speed_mps=a.params.speed_mps * 2)  # every τ halves, every λ doubles
     _, pa = a.solve()
     _, pb = b.solve()
     for x, y in ((pa.od.pairing_prob, pb.od.pairing_prob), (pa.od.p_seeker, pb.od.p_seeker), (pa.rho, pb.rho)):
@@ -209,10 +223,19 @@ def test_l4_time_unit_invariance():
 
 
 def scaled_network(net: RoadNetwork, factor: float) -> RoadNetwork:
-    return RoadNetwork.from_tables(NetworkTables(
-        name=f"{net.name} x{factor:g}", node_id=net.node_id, lon=net.lon, lat=net.lat, arc_from=net.node_id[net.arc_tail],
-        arc_to=net.node_id[net.arc_head], arc_length_m=net.arc_length_m * factor, arc_link_id=net.arc_link_id,
-        source="scaled"))
+    return RoadNetwork.from_tables(
+        NetworkTables(
+            name=f"{net.name} x{factor:g}",
+            node_id=net.node_id,
+            lon=net.lon,
+            lat=net.lat,
+            arc_from=net.node_id[net.arc_tail],
+            arc_to=net.node_id[net.arc_head],
+            arc_length_m=net.arc_length_m * factor,
+            arc_link_id=net.arc_link_id,
+            source="scaled",
+        )
+    )
 
 
 def test_l5_distance_unit_invariance():
@@ -243,8 +266,9 @@ def test_l6_symmetry_and_relabelling():
     inst = make_instance(seed=9, size=5, n_od=12)
     perm = np.random.default_rng(0).permutation(len(inst.rates))
     r = inst.rates
-    shuffled = OdRates.from_arrays(r.origin[perm], r.destination[perm], r.rate_per_s[perm], r.od_id[perm],
-                                   n_nodes=inst.network.n_nodes)
+    shuffled = OdRates.from_arrays(
+        r.origin[perm], r.destination[perm], r.rate_per_s[perm], r.od_id[perm], n_nodes=inst.network.n_nodes
+    )
     _, pa = inst.solve()
     inst.rates = shuffled
     _, pb = inst.solve()

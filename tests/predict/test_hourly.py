@@ -15,8 +15,8 @@ def test_hours_are_slim_and_equal_hours_are_shared(tmp_path, monkeypatch):
     preds = scenario_predictions(scenario, "scenario", np.array([60.0, 60.0]), PredictConfig())
     assert len(preds) == 2
     for pred in preds:
-        assert len(pred.rho) == 0 and len(pred.od.e_taker) == 0            # per-state arrays dropped
-        assert len(pred.od.pairing_prob) == len(pred.rates)                  # per-OD values kept
+        assert len(pred.rho) == 0 and len(pred.od.e_taker) == 0  # per-state arrays dropped
+        assert len(pred.od.pairing_prob) == len(pred.rates)  # per-OD values kept
     full = cached_prediction(scenario.network, preds[0].rates, scenario.params, PredictConfig(tau0_s=60.0))
     assert len(full.rho) > 0
     look_full = full.lookup(full.rates.origin, full.rates.destination)

@@ -22,7 +22,7 @@ def random_lists(seed: int, n_od: int = 40, n_classes: int = 30, empty_share: fl
     n = len(cls)
     cols = [rng.uniform(0, 3000, n).astype(np.float32) for _ in range(3)]
     matching = Matching.from_lists(off, cls, cols[0], cols[1], cols[2], n_classes=n_classes, limit=block_classes)
-    lam = rng.uniform(0, 0.01, n_od) * (rng.random(n_od) > 0.1)          # some λ = 0
+    lam = rng.uniform(0, 0.01, n_od) * (rng.random(n_od) > 0.1)  # some λ = 0
     log_q = np.log1p(-rng.uniform(0, 0.9, n_classes))
     return matching, lam, log_q
 
@@ -33,7 +33,7 @@ def reference_sweep(matching: Matching, lam: np.ndarray, log_q: np.ndarray):
     owner = np.repeat(np.arange(len(lam)), np.diff(off))
     v = log_q[cls]
     with np.errstate(divide="ignore"):
-        weight = lam[owner] * np.exp(segment_exclusive_cumsum(v, off))   # λ_s Π_{c' ≻ c} Q_c'
+        weight = lam[owner] * np.exp(segment_exclusive_cumsum(v, off))  # λ_s Π_{c' ≻ c} Q_c'
     pair = weight * -np.expm1(v)
     values = [np.ones(len(cls)), matching.saving_m, matching.shared_m, matching.seeker_detour_m]
     by_class = np.stack([np.bincount(cls, weights=weight * x, minlength=len(log_q)) for x in values], axis=1)
@@ -63,6 +63,7 @@ def test_sweep_equals_the_log_space_reference(seed, chunk_pairs, block_classes):
 def test_sweep_does_not_depend_on_the_thread_count(savings):
     """The plain sweep and the savings pass (whose chunks run in parts) give the same bits on 1 and n threads."""
     from numba import get_num_threads, set_num_threads
+
     matching, lam, log_q = random_lists(7, n_od=400, n_classes=200)
     system = System.build(None, matching, lam, PredictConfig())
     before = get_num_threads()
@@ -98,26 +99,25 @@ def test_group_counts_equal_a_brute_force_count(seed):
     rng = np.random.default_rng(seed)
     sizes = rng.integers(1, 9, 12)
     start = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64)
-    a = np.concatenate([np.sort(rng.integers(-5, 6, k).astype(np.float64)) for k in sizes])   # many ties
+    a = np.concatenate([np.sort(rng.integers(-5, 6, k).astype(np.float64)) for k in sizes])  # many ties
     u = rng.integers(0, len(sizes), 400).astype(np.int64)
     threshold = rng.integers(-7, 8, 400) + rng.choice([0.0, 0.5], 400)
     threshold[::37] = np.inf
     threshold[5::37] = -np.inf
     threshold[9::37] = np.nan
     got = [count_at_most(a, start[g], sizes[g], t) for g, t in zip(u, threshold)]
-    values = [a[start[g]:start[g] + sizes[g]] for g in u]
+    values = [a[start[g] : start[g] + sizes[g]] for g in u]
     assert [k for k, _ in got] == [int(np.sum(v <= t)) for v, t in zip(values, threshold)]
     assert [s for _, s in got] == [int(v[0] <= t < v[-1]) for v, t in zip(values, threshold)]
 
 
-def reference_runs(from_b, to_b, solo_b, group_dest, group_d_oa, a, start, size, d_lim, keep_nonpositive,
-                   min_feasible):
+def reference_runs(from_b, to_b, solo_b, group_dest, group_d_oa, a, start, size, d_lim, keep_nonpositive, min_feasible):
     """The runs of :func:`feasible_runs` cell by cell, counting by comparison (no binary search)."""
     runs = []
     for r, l_b in enumerate(solo_b):
         fofo = []
         for u, d_a in enumerate(group_dest):
-            values = a[start[u]:start[u] + size[u]]
+            values = a[start[u] : start[u] + size[u]]
             d_ba, d_ab, d_oa = from_b[r, d_a], to_b[r, d_a], group_d_oa[u]
             f_ok = d_oa + d_ab - l_b <= d_lim
             g_f, g_l, thr_l = l_b - d_oa - d_ab, -d_ba, d_lim - l_b - d_ba
@@ -168,11 +168,11 @@ def test_feasible_runs_equal_a_cell_by_cell_reference(seed, keep_nonpositive, mi
     args = (from_b, to_b, solo_b, group_dest, group_d_oa, a, start, size, d_lim, keep_nonpositive, min_feasible)
     want = reference_runs(*args)
     assert want, "the instance should have runs"
-    short = [np.empty(len(want) - 1, dtype=t) for t in (np.int64, np.int64, np.int64, np.float64, np.float32,
-                                                         np.float32)]
+    short = [
+        np.empty(len(want) - 1, dtype=t) for t in (np.int64, np.int64, np.int64, np.float64, np.float32, np.float32)
+    ]
     assert feasible_runs(*args, *short) == (-1, 0)
-    out = [np.empty(2 * m * n_u, dtype=t) for t in (np.int64, np.int64, np.int64, np.float64, np.float32,
-                                                    np.float32)]
+    out = [np.empty(2 * m * n_u, dtype=t) for t in (np.int64, np.int64, np.int64, np.float64, np.float32, np.float32)]
     k, _ = feasible_runs(*args, *out)
     got = list(zip(*(col[:k].tolist() for col in out)))
     assert got == [tuple(float(x) if i >= 3 else int(x) for i, x in enumerate(run)) for run in want]

@@ -24,7 +24,7 @@ def test_from_arrays_sorts_and_merges_duplicates():
     r = OdRates.from_arrays([3, 1, 3, 0], [2, 5, 2, 4], [0.1, 0.2, 0.3, 0.4], [7, 8, 9, 10], n_nodes=6)
     assert r.origin.tolist() == [0, 1, 3] and r.destination.tolist() == [4, 5, 2]
     np.testing.assert_allclose(r.rate_per_s, [0.4, 0.2, 0.4])
-    assert r.od_id.tolist() == [10, 8, 7]          # first id of a merged OD is kept
+    assert r.od_id.tolist() == [10, 8, 7]  # first id of a merged OD is kept
 
 
 def test_bad_rates_are_one_clear_error():
@@ -59,16 +59,16 @@ def test_table_rates_rejects_negative_lambda(tmp_path):
     with pytest.raises(DataError, match="negative rate"):
         table_rates(net, path)
     path.write_text("OD_id,origin_id,destination_id,lambda\n0,0,1,0.6\n")
-    assert table_rates(net, path).rate_per_s.tolist() == [pytest.approx(0.01)]   # per minute -> per second
+    assert table_rates(net, path).rate_per_s.tolist() == [pytest.approx(0.01)]  # per minute -> per second
 
 
 def test_haikou_rate_sources(data_dir):
     net = haikou_network(data_dir)
     month = month_rates(net, data_dir)
     assert len(month) == 39_510
-    assert month.total_per_s * 60 == pytest.approx(51.83, abs=0.01)     # SOURCE.md: Σλ = 51.83 / min
+    assert month.total_per_s * 60 == pytest.approx(51.83, abs=0.01)  # SOURCE.md: Σλ = 51.83 / min
     day = peak_order_rates(net, data_dir, "2017-05-01")
-    assert day.total_per_s * 3600 == pytest.approx(2018)                # orders inside 08:00-09:00
+    assert day.total_per_s * 3600 == pytest.approx(2018)  # orders inside 08:00-09:00
     table = day_table_rates(net, data_dir)
     assert len(table) == 1698 and table.total_per_s * 3600 == pytest.approx(1766)
     with pytest.raises(DataNotFoundError, match="2017-06-30"):

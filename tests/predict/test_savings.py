@@ -28,7 +28,7 @@ def test_i7_convex_combinations(solved):
             continue
         np.minimum.at(lo, cls, e)
         np.maximum.at(hi, cls, e)
-        if pred.od.p_seeker[w] > 0:                     # ē(s) between min and max E over T_s
+        if pred.od.p_seeker[w] > 0:  # ē(s) between min and max E over T_s
             assert e.min() - 1e-6 <= pred.od.e_seeker[w] <= e.max() + 1e-6
     c = sp.cls
     matched = np.isfinite(lo[c]) & (pred.eta > 0)
@@ -57,12 +57,12 @@ def test_i8_waiting_saving(solved):
     params = Params()
     o, d = model.rates.origin, model.rates.destination
     bracket = pred.od.p_seeker * pred.od.e_seeker + (1 - pred.od.p_seeker) * pred.od.e_vacant
-    rounds = int(params.planner_patience_s // params.dt_s)          # 9 with the paper's K̄ = 90 s, Δt = 10 s
+    rounds = int(params.planner_patience_s // params.dt_s)  # 9 with the paper's K̄ = 90 s, Δt = 10 s
     values = [pred.e_wait(o, d, np.full(len(o), k), params) for k in range(1, rounds + 2)]
     for v in values:
         assert np.all(v >= 0) and np.all(v <= bracket + 1e-9)
-    assert np.all(values[rounds - 1] == 0) and np.all(values[rounds] == 0)       # n_rem = 0
-    assert all(np.all(a >= b - 1e-12) for a, b in zip(values, values[1:]))         # more rounds left, more saving
+    assert np.all(values[rounds - 1] == 0) and np.all(values[rounds] == 0)  # n_rem = 0
+    assert all(np.all(a >= b - 1e-12) for a, b in zip(values, values[1:]))  # more rounds left, more saving
     low = pred.e_wait(o, d, 1, params.replace(response_rate=0.3))
     high = pred.e_wait(o, d, 1, params.replace(response_rate=0.9))
     assert np.all(high >= low)
@@ -75,7 +75,7 @@ def test_lookup_known_and_unknown(solved):
     model, pred = solved
     r = model.rates
     o = np.concatenate([r.origin, [0]])
-    d = np.concatenate([r.destination, [0]])                         # (0, 0) is not in the table
+    d = np.concatenate([r.destination, [0]])  # (0, 0) is not in the table
     look = pred.lookup(o, d)
     assert look.known.tolist() == [True] * len(r) + [False]
     np.testing.assert_array_equal(look.e_vacant[:-1], pred.od.e_vacant)
@@ -89,10 +89,19 @@ def test_per_od_table_and_summary(solved):
     model, pred = solved
     table = pred.per_od_table()
     assert len(table) == len(model.rates)
-    for col in ("matching_prob", "p_seeker", "e_vacant", "e_seeker", "ride_distance", "shared_distance",
-                "detour_distance", "saved_distance_for_seeker", "saved_distance_for_taker"):
+    for col in (
+        "matching_prob",
+        "p_seeker",
+        "e_vacant",
+        "e_seeker",
+        "ride_distance",
+        "shared_distance",
+        "detour_distance",
+        "saved_distance_for_seeker",
+        "saved_distance_for_taker",
+    ):
         assert col in table and np.all(np.isfinite(table[col]))
-    assert np.all(table["ride_distance"] >= table["solo_distance"] - 1e-6)        # detours are >= 0 (G1)
+    assert np.all(table["ride_distance"] >= table["solo_distance"] - 1e-6)  # detours are >= 0 (G1)
     assert np.all(table["shared_distance"] <= table["ride_distance"] + 1e-6)
     s = pred.summary()
     for key in ("ods", "states", "candidate_pairs", "iterations", "residual", "converged", "clip_count"):

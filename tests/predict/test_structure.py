@@ -39,17 +39,22 @@ def entries(folder: Path) -> list[Path]:
 def test_key_follows_the_structure_inputs_only():
     inst = make_instance(seed=1)
     key = structure.structure_key(inst.network, inst.rates, inst.params, inst.config)
-    same = [(inst.rates.scaled(3.0), inst.params, inst.config.replace(tau0_s=77.0, beta=0.25, tol=1e-8)),
-            (inst.rates, inst.params.replace(response_rate=0.5), inst.config.replace(accel="anderson"))]
+    same = [
+        (inst.rates.scaled(3.0), inst.params, inst.config.replace(tau0_s=77.0, beta=0.25, tol=1e-8)),
+        (inst.rates, inst.params.replace(response_rate=0.5), inst.config.replace(accel="anderson")),
+    ]
     for rates, params, config in same:
         assert structure.structure_key(inst.network, rates, params, config) == key
-    other_ods = OdRates.from_arrays(inst.rates.origin[1:], inst.rates.destination[1:], inst.rates.rate_per_s[1:],
-                                    n_nodes=inst.network.n_nodes)
-    changed = [(other_ods, inst.params, inst.config),
-               (inst.rates, inst.params.replace(max_pickup_m=999.0), inst.config),
-               (inst.rates, inst.params.replace(speed_mps=9.0), inst.config),
-               (inst.rates, inst.params, inst.config.replace(priority="pickup")),
-               (inst.rates, inst.params, inst.config.replace(include_origin_state=False))]
+    other_ods = OdRates.from_arrays(
+        inst.rates.origin[1:], inst.rates.destination[1:], inst.rates.rate_per_s[1:], n_nodes=inst.network.n_nodes
+    )
+    changed = [
+        (other_ods, inst.params, inst.config),
+        (inst.rates, inst.params.replace(max_pickup_m=999.0), inst.config),
+        (inst.rates, inst.params.replace(speed_mps=9.0), inst.config),
+        (inst.rates, inst.params, inst.config.replace(priority="pickup")),
+        (inst.rates, inst.params, inst.config.replace(include_origin_state=False)),
+    ]
     keys = {structure.structure_key(inst.network, r, p, c) for r, p, c in changed}
     assert key not in keys and len(keys) == len(changed)
 
@@ -58,7 +63,7 @@ def test_built_once_then_mapped_from_the_cache(cache):
     inst = make_instance(seed=2, size=6, n_od=40, max_pickup_m=3000, max_detour_m=3000)
     first = load(inst)
     assert first.build_s["matching_s"] > 0 and entries(cache) == [first.directory]
-    structure._RECENT.clear()                                  # a new process: reopened from disk
+    structure._RECENT.clear()  # a new process: reopened from disk
     again = load(inst, tau0_s=300.0)
     assert again.build_s["matching_s"] == 0 and again.directory == first.directory
     assert isinstance(again.matching.local, np.memmap) and again.matching.local.dtype == np.uint16
@@ -69,8 +74,7 @@ def test_built_once_then_mapped_from_the_cache(cache):
     np.testing.assert_array_equal(sp.tau_s[sp.k > 0], first.space.tau_s[first.space.k > 0])
 
 
-@pytest.mark.parametrize("name", ["local.bin", "piece.bin", "saving_m.bin", "piece_shared_m.bin",
-                                  "piece_detour_m.bin"])
+@pytest.mark.parametrize("name", ["local.bin", "piece.bin", "saving_m.bin", "piece_shared_m.bin", "piece_detour_m.bin"])
 def test_a_damaged_entry_is_rebuilt_with_a_note(cache, capsys, name):
     inst = make_instance(seed=3, size=6, n_od=40, max_pickup_m=3000, max_detour_m=3000)
     good = load(inst).matching.arrays()
@@ -134,13 +138,18 @@ def test_a_second_builder_waits_for_the_first_and_reuses_its_entry(cache):
     cache.mkdir(parents=True, exist_ok=True)
     tests = str(Path(__file__).resolve().parents[1])
     with open(cache / f"predict-structure-{key}.lock", "a+") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)                      # we are "the first builder"
-        other = subprocess.Popen([sys.executable, "-c", BUILDER.format(tests=tests)], env=dict(os.environ),
-                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        note = other.stderr.readline()                         # it finds the lock held and says so
+        fcntl.flock(lock, fcntl.LOCK_EX)  # we are "the first builder"
+        other = subprocess.Popen(
+            [sys.executable, "-c", BUILDER.format(tests=tests)],
+            env=dict(os.environ),
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        note = other.stderr.readline()  # it finds the lock held and says so
         assert "waiting" in note
         time.sleep(0.2)
-        assert other.poll() is None                            # and waits
+        assert other.poll() is None  # and waits
         tmp = cache / ".manual"
         tmp.mkdir()
         mine = structure._build_into(tmp, inst.network, inst.rates, inst.params, inst.config)
@@ -155,6 +164,7 @@ def test_a_failed_build_leaves_no_half_entry_and_says_so_in_one_line(cache, monk
     import errno
 
     from rpbench.exceptions import CacheError
+
     inst = make_instance(seed=6)
 
     def disk_full(directory, *args):
@@ -164,4 +174,4 @@ def test_a_failed_build_leaves_no_half_entry_and_says_so_in_one_line(cache, monk
     monkeypatch.setattr(structure, "_build_into", disk_full)
     with pytest.raises(CacheError, match="No space left on device"):
         load(inst)
-    assert not [p for p in cache.iterdir() if p.is_dir()]          # neither the entry nor its temporary folder
+    assert not [p for p in cache.iterdir() if p.is_dir()]  # neither the entry nor its temporary folder

@@ -18,8 +18,21 @@ def run_cli(capsys, *argv):
 
 
 def test_replicate_json_contract_fast(capsys, data_dir, tmp_path):
-    code, out, _ = run_cli(capsys, "replicate", "--data", str(data_dir), "--date", "2017-05-01", "--strategies", "mb",
-                           "--no-ablation", "--no-rpbench", "--json", "--out", str(tmp_path / "rep"))
+    code, out, _ = run_cli(
+        capsys,
+        "replicate",
+        "--data",
+        str(data_dir),
+        "--date",
+        "2017-05-01",
+        "--strategies",
+        "mb",
+        "--no-ablation",
+        "--no-rpbench",
+        "--json",
+        "--out",
+        str(tmp_path / "rep"),
+    )
     assert code == 0
     runs = json.loads(out)["runs"]
     assert [r["engine"] for r in runs] == ["authors"]
@@ -33,8 +46,19 @@ def test_replicate_json_contract_fast(capsys, data_dir, tmp_path):
 
 @pytest.mark.slow
 def test_replicate_json_contract_full(capsys, data_dir, tmp_path):
-    code, out, _ = run_cli(capsys, "replicate", "--data", str(data_dir), "--date", "2017-05-01", "--strategies", "mb",
-                           "--json", "--out", str(tmp_path / "rep"))
+    code, out, _ = run_cli(
+        capsys,
+        "replicate",
+        "--data",
+        str(data_dir),
+        "--date",
+        "2017-05-01",
+        "--strategies",
+        "mb",
+        "--json",
+        "--out",
+        str(tmp_path / "rep"),
+    )
     assert code == 0
     runs = json.loads(out)["runs"]
     engines = [r["engine"] for r in runs]
@@ -42,11 +66,14 @@ def test_replicate_json_contract_full(capsys, data_dir, tmp_path):
     assert all(CONTRACT <= set(r) for r in runs)
 
 
-@pytest.mark.parametrize("argv, message", [
-    (["--strategies", "xyz"], "--strategies 'xyz'"),
-    (["--date", "2017-13-01"], "is not of the form YYYY-MM-DD"),
-    (["--solver", "nope"], "unknown solver preset 'nope'"),
-])
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--strategies", "xyz"], "--strategies 'xyz'"),
+        (["--date", "2017-13-01"], "is not of the form YYYY-MM-DD"),
+        (["--solver", "nope"], "unknown solver preset 'nope'"),
+    ],
+)
 def test_bad_input_is_one_line_and_exit_2(capsys, data_dir, tmp_path, argv, message):
     code, out, err = run_cli(capsys, "replicate", "--data", str(data_dir), *argv, "--out", str(tmp_path / "x"))
     assert code == 2 and out == ""

@@ -38,7 +38,7 @@ def test_all_on_is_the_authors_and_the_ablation_is_one_off_at_a_time():
     assert [name for name, _ in steps] == ["authors"] + [f"no-{n}" for n in NAMES] + ["all-off"]
     assert all(len(sw.off()) == 1 for _, sw in steps[1:-1])
     cumulative = steps_for("cumulative")
-    assert [len(sw.off()) for _, sw in cumulative] == list(range(len(NAMES) + 1))      # 1..k off, k = 0..8
+    assert [len(sw.off()) for _, sw in cumulative] == list(range(len(NAMES) + 1))  # 1..k off, k = 0..8
     assert cumulative[-1][1] == Switches.none()
     with pytest.raises(ParameterError, match="--ablation 'some'"):
         steps_for("some")
@@ -59,9 +59,9 @@ def test_teleport_jumps_to_the_last_node_of_the_route_in_one_round():
     sc = scenario_of(net, [(5.0, 3, 6)], [0])
     eng = engine(sc)
     veh = _taker(eng, net.index_of([0])[0], 0)
-    eng._move_taker(0, veh, 130.0)          # 130 s > 120 s for the first link
+    eng._move_taker(0, veh, 130.0)  # 130 s > 120 s for the first link
     assert veh.node == net.index_of([3])[0]  # 3,000 m in one step
-    assert veh.p0_pickup_m == 1000.0        # MB's ledger keeps only the last link
+    assert veh.p0_pickup_m == 1000.0  # MB's ledger keeps only the last link
 
 
 def test_without_teleport_the_vehicle_is_where_the_clock_says():
@@ -70,7 +70,7 @@ def test_without_teleport_the_vehicle_is_where_the_clock_says():
     eng = engine(sc, teleport=False)
     leg = eng._leg(0.0, [int(net.index_of([0])[0]), int(net.index_of([3])[0])])
     assert isinstance(leg, Leg)
-    assert leg.node_at(130.0) == net.index_of([1])[0]     # one link after 120 s
+    assert leg.node_at(130.0) == net.index_of([1])[0]  # one link after 120 s
     assert leg.node_at(359.0) == net.index_of([2])[0]
     assert leg.end_s == pytest.approx(360.0)
 
@@ -81,9 +81,9 @@ def test_early_release_frees_a_solo_vehicle_before_its_real_arrival(early, vacan
     net = line_network(7)
     sc = scenario_of(net, [(5.0, 1, 4)], [0])
     eng = engine(sc, early_release=early)
-    veh = _taker(eng, net.index_of([4])[0], 0)      # it has already jumped to the destination
-    veh.picked, veh.assign_node = True, int(net.index_of([0])[0])    # assigned at node 0 at t = 0
-    eng._move_taker(0, veh, 300.0)                  # at the destination: delivered this round
+    veh = _taker(eng, net.index_of([4])[0], 0)  # it has already jumped to the destination
+    veh.picked, veh.assign_node = True, int(net.index_of([0])[0])  # assigned at node 0 at t = 0
+    eng._move_taker(0, veh, 300.0)  # at the destination: delivered this round
     assert veh.p0 == -1
     assert veh.active_at == pytest.approx(vacant_at)
 
@@ -93,24 +93,31 @@ def _four_node_network() -> RoadNetwork:
     # Node 0 comes first so the authors' min/max scan finds the true minimum (see cells.py).
     ids = np.array([0, 1, 2, 3])
     a, b = np.array([0, 1, 2]), np.array([3, 2, 3])
-    tables = NetworkTables(name="cells", node_id=ids, lon=np.array([110.09, 110.00, 110.01, 110.06]),
-                           lat=np.array([20.02, 20.00, 20.01, 20.01]),
-                           arc_from=np.concatenate([a, b]), arc_to=np.concatenate([b, a]),
-                           arc_length_m=np.full(6, 1000.0), arc_link_id=np.arange(6), source="tests")
+    tables = NetworkTables(
+        name="cells",
+        node_id=ids,
+        lon=np.array([110.09, 110.00, 110.01, 110.06]),
+        lat=np.array([20.02, 20.00, 20.01, 20.01]),
+        arc_from=np.concatenate([a, b]),
+        arc_to=np.concatenate([b, a]),
+        arc_length_m=np.full(6, 1000.0),
+        arc_link_id=np.arange(6),
+        source="tests",
+    )
     return RoadNetwork.from_tables(tables)
 
 
 def test_cells_follow_the_authors_grid():
     net = _four_node_network()
     cells = node_cells(net.lon, net.lat)
-    assert cells[1] == NO_CELL                       # on the grid's edge: in no cell
+    assert cells[1] == NO_CELL  # on the grid's edge: in no cell
     assert cells[2] != cells[3] and cells[0] == cells[3]
 
 
 @pytest.mark.parametrize("cells, expected", [(True, set()), (False, {0})])
 def test_grid_cells_hide_a_vehicle_in_the_next_cell(cells, expected):
     net = _four_node_network()
-    sc = scenario_of(net, [(5.0, 2, 1)], [3])        # vehicle 1,000 m away, but in another cell
+    sc = scenario_of(net, [(5.0, 2, 1)], [3])  # vehicle 1,000 m away, but in another cell
     out = engine(sc, grid_cells=cells).run()
     # Assigned, not served: with no later passenger the authors' loop never moves the vehicle again.
     assert {order for order, _v, _t in out.assigned} == expected
@@ -123,9 +130,9 @@ def test_second_pickup_measured_from_the_first_origin(first_origin, lead, saving
     sc = scenario_of(net, [(5.0, 0, 6), (6.0, 1, 6)], [2])
     eng = engine(sc, pickup_from_first_origin=first_origin)
     veh = _taker(eng, net.index_of([2])[0], 0)
-    veh.picked = True                                # p0 boarded at node 0 and rode to node 2
+    veh.picked = True  # p0 boarded at node 0 and rode to node 2
     g = eng._taker_geometry(veh, np.array([1]))
-    assert float(g["lead"][0]) == lead               # from O_a: 1,000 m; from the vehicle: 2,000 + 1,000 m
+    assert float(g["lead"][0]) == lead  # from O_a: 1,000 m; from the vehicle: 2,000 + 1,000 m
     assert float(g["saving"][0]) == saving
 
 
@@ -136,8 +143,8 @@ def test_idle_vehicles_jump_to_order_origins(jumps, moved):
     sc = scenario_of(net, [(5.0, 5, 6)], [0])
     eng = engine(sc, idle_jumps=jumps)
     veh: Vehicle = eng.vehicles[0]
-    eng._idle(veh, 10.0)                             # picks a random order origin (the only one: node 5)
-    eng._idle(veh, 1000.0)                           # first link's time has passed: the jump
+    eng._idle(veh, 10.0)  # picks a random order origin (the only one: node 5)
+    eng._idle(veh, 1000.0)  # first link's time has passed: the jump
     assert bool(veh.node == net.index_of([5])[0]) is moved
 
 
@@ -159,8 +166,8 @@ def test_authors_np_prefers_the_long_trip_rpbench_np_the_near_one():
     # (grid cells off: the line's nodes share one latitude, so the authors' grid has no cell at all)
     authors = engine(sc, "np", grid_cells=False).run()
     rpbench = engine(sc, "np", authors_weights=False, grid_cells=False).run()
-    assert served(authors) == {1}                   # (3000 - 2000) + 3000 beats (1000 - 1000) + 3000
-    assert served(rpbench) == {0}                   # -1000 beats -2000
+    assert served(authors) == {1}  # (3000 - 2000) + 3000 beats (1000 - 1000) + 3000
+    assert served(rpbench) == {0}  # -1000 beats -2000
 
 
 def test_weight_formulas():
@@ -195,8 +202,8 @@ def test_fl_parameters_follow_the_ledger_switch():
     k = np.array([1.0])
     doubled = W.wait_values("fl", True, np.array([100.0]), k, W.fl_params(True))[0]
     plain = W.wait_values("fl", True, np.array([100.0]), k, W.fl_params(False))[0]
-    assert doubled == pytest.approx(100 * (1 - 0.2 ** 8) / 2)       # times 1/(k+1)
-    assert plain == pytest.approx(100 * (1 - 0.25 ** 8))
+    assert doubled == pytest.approx(100 * (1 - 0.2**8) / 2)  # times 1/(k+1)
+    assert plain == pytest.approx(100 * (1 - 0.25**8))
 
 
 # ---------------------------------------------------------------- RTV

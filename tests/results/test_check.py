@@ -19,8 +19,9 @@ from rpbench.scenarios import build_scenario
 @pytest.fixture(scope="module")
 def clean_run(tmp_path_factory):
     scenario = build_scenario("toy", sample=0.25, seed=3)
-    folder, _ = run_comparison(scenario, ["mb", "rtv", "oracle1"], "highs",
-                               out=tmp_path_factory.mktemp("runs") / "clean", progress=False)
+    folder, _ = run_comparison(
+        scenario, ["mb", "rtv", "oracle1"], "highs", out=tmp_path_factory.mktemp("runs") / "clean", progress=False
+    )
     return folder
 
 
@@ -56,6 +57,7 @@ def test_pickup_time_tampering_is_caught(run, capsys):
         i = ev.index[ev["event"] == "pickup"][0]
         ev.loc[i, "t_s"] += 7.0
         return ev
+
     edit_events(run, "mb", shift)
     assert "service" in violations(run)
     assert main(["check", str(run)]) == 1
@@ -87,7 +89,7 @@ def test_thresholds_are_rechecked(run):
 def test_teleporting_vehicle_is_caught(run):
     path = run / "runs" / "mb" / "trajectories.npz"
     z = dict(np.load(path))
-    z["t_s"][5:] -= 3.0                        # arrive at node 5 three seconds too early
+    z["t_s"][5:] -= 3.0  # arrive at node 5 three seconds too early
     np.savez_compressed(path, **z)
     assert "movement" in violations(run)
 
@@ -102,7 +104,7 @@ def test_assignment_after_patience_is_caught(run):
 def test_oracle_pair_tampering_is_caught(run):
     path = run / "runs" / "oracle1" / "pairs.csv.gz"
     pairs = pd.read_csv(path)
-    pairs.loc[1, "first_id"] = pairs.loc[0, "first_id"]     # one order in two pairs
+    pairs.loc[1, "first_id"] = pairs.loc[0, "first_id"]  # one order in two pairs
     pairs.to_csv(path, index=False)
     assert "oracle-pairs" in violations(run)
 

@@ -41,40 +41,52 @@ NAN = float("nan")
 def event_log(rows: list[tuple]) -> pd.DataFrame:
     """Rows (t_s, event, order, vehicle, node, kind, partner, fofo) in the simulator's format and order."""
     full = [(t, ev, o, v, node, kind, NAN, NAN, partner, fofo) for t, ev, o, v, node, kind, partner, fofo in rows]
-    return pd.DataFrame(full, columns=EVENT_COLUMNS).astype(EVENT_DTYPES).sort_values(
-        ["t_s", "order", "event"], kind="stable").reset_index(drop=True)
+    return (
+        pd.DataFrame(full, columns=EVENT_COLUMNS)
+        .astype(EVENT_DTYPES)
+        .sort_values(["t_s", "order", "event"], kind="stable")
+        .reset_index(drop=True)
+    )
 
 
 def trajectories(per_vehicle: list[list[tuple[int, float, float]]]) -> dict[str, np.ndarray]:
     """The simulator's trajectory dict from per-vehicle lists of (node, t_s, odo_m)."""
     offsets = np.concatenate([[0], np.cumsum([len(v) for v in per_vehicle])]).astype(np.int64)
     flat = [p for v in per_vehicle for p in v]
-    return {"vehicle_offsets": offsets, "node": np.array([p[0] for p in flat], np.int32),
-            "t_s": np.array([p[1] for p in flat], float), "odo_m": np.array([p[2] for p in flat], float)}
+    return {
+        "vehicle_offsets": offsets,
+        "node": np.array([p[0] for p in flat], np.int32),
+        "t_s": np.array([p[1] for p in flat], float),
+        "odo_m": np.array([p[2] for p in flat], float),
+    }
 
 
-EVENTS = event_log([
-    # t_s    event       order veh node  kind     partner fofo
-    (0.0, "request", 0, -1, 10, "", -1, False),
-    (10.0, "request", 1, -1, 20, "", -1, False),
-    (10.0, "assign", 0, 0, -1, "vacant", -1, False),
-    (20.0, "request", 2, -1, 21, "", -1, False),
-    (30.0, "assign", 1, 1, -1, "vacant", -1, False),
-    (40.0, "pickup", 0, 0, 10, "", -1, False),
-    (50.0, "assign", 2, 1, -1, "join", 1, True),
-    (60.0, "pickup", 1, 1, 20, "", -1, False),
-    (110.0, "pickup", 2, 1, 21, "", -1, False),
-    (190.0, "dropoff", 0, 0, 11, "", -1, False),
-    (200.0, "reposition", -1, 0, 12, "", -1, False),      # not a passenger event: ignored
-    (210.0, "dropoff", 1, 1, 22, "", -1, False),
-    (260.0, "dropoff", 2, 1, 23, "", -1, False),
-    (3700.0, "request", 3, -1, 30, "", -1, False),
-    (3790.0, "cancel", 3, -1, 30, "", -1, False),
-])
-TRAJ = trajectories([
-    [(1, 0.0, 0.0), (10, 40.0, 400.0), (11, 190.0, 1900.0), (12, 290.0, 2900.0)],
-    [(2, 0.0, 0.0), (20, 60.0, 600.0), (21, 110.0, 1100.0), (22, 210.0, 2100.0), (23, 260.0, 2600.0)],
-])
+EVENTS = event_log(
+    [
+        # t_s    event       order veh node  kind     partner fofo
+        (0.0, "request", 0, -1, 10, "", -1, False),
+        (10.0, "request", 1, -1, 20, "", -1, False),
+        (10.0, "assign", 0, 0, -1, "vacant", -1, False),
+        (20.0, "request", 2, -1, 21, "", -1, False),
+        (30.0, "assign", 1, 1, -1, "vacant", -1, False),
+        (40.0, "pickup", 0, 0, 10, "", -1, False),
+        (50.0, "assign", 2, 1, -1, "join", 1, True),
+        (60.0, "pickup", 1, 1, 20, "", -1, False),
+        (110.0, "pickup", 2, 1, 21, "", -1, False),
+        (190.0, "dropoff", 0, 0, 11, "", -1, False),
+        (200.0, "reposition", -1, 0, 12, "", -1, False),  # not a passenger event: ignored
+        (210.0, "dropoff", 1, 1, 22, "", -1, False),
+        (260.0, "dropoff", 2, 1, 23, "", -1, False),
+        (3700.0, "request", 3, -1, 30, "", -1, False),
+        (3790.0, "cancel", 3, -1, 30, "", -1, False),
+    ]
+)
+TRAJ = trajectories(
+    [
+        [(1, 0.0, 0.0), (10, 40.0, 400.0), (11, 190.0, 1900.0), (12, 290.0, 2900.0)],
+        [(2, 0.0, 0.0), (20, 60.0, 600.0), (21, 110.0, 1100.0), (22, 210.0, 2100.0), (23, 260.0, 2600.0)],
+    ]
+)
 SOLO_M = np.array([1500.0, 1200.0, 1500.0, 2000.0])
 REQUEST_S = np.array([0.0, 10.0, 20.0, 3700.0])
 
@@ -126,7 +138,7 @@ def test_passenger_table_distances(tab):
     # shared: both on board from B's pick-up (110 s, 1100 m) to A's drop-off (210 s, 2100 m) = 1000
     assert np.isnan(tab["shared_m"][0]) and np.isnan(tab["shared_m"][3])
     assert tab["shared_m"][1:3].to_numpy() == pytest.approx([1000.0, 1000.0])
-    assert np.isnan(tab["ride_m"][3])                      # the cancelled order rode nothing
+    assert np.isnan(tab["ride_m"][3])  # the cancelled order rode nothing
 
 
 def test_pair_length(tab):
@@ -143,8 +155,14 @@ def test_occupied_distance(tab):
 def test_occupied_distance_skips_empty_legs():
     # One vehicle, two solo trips: X rides 0 -> 1000 m, the vehicle drives empty to 1500 m, Y rides 1500 -> 2500 m.
     # Occupied = 1000 + 1000 = 2000 (not 2500).  A second vehicle with no passengers drives 0 m occupied.
-    events = event_log([(0.0, "pickup", 0, 0, 1, "", -1, False), (100.0, "dropoff", 0, 0, 2, "", -1, False),
-                        (150.0, "pickup", 1, 0, 3, "", -1, False), (250.0, "dropoff", 1, 0, 4, "", -1, False)])
+    events = event_log(
+        [
+            (0.0, "pickup", 0, 0, 1, "", -1, False),
+            (100.0, "dropoff", 0, 0, 2, "", -1, False),
+            (150.0, "pickup", 1, 0, 3, "", -1, False),
+            (250.0, "dropoff", 1, 0, 4, "", -1, False),
+        ]
+    )
     traj = trajectories([[(1, 0.0, 0.0), (4, 250.0, 2500.0)], [(5, 0.0, 0.0), (6, 300.0, 3000.0)]])
     assert occupied_distance_m(events, traj) == pytest.approx([2000.0, 0.0])
     # No pick-ups or drop-offs at all: zeros.
@@ -154,8 +172,8 @@ def test_occupied_distance_skips_empty_legs():
 def test_counts_and_ratios(kpi):
     assert set(KPI_ORDER + EXTRA_KPIS) == set(kpi)
     assert (kpi["orders"], kpi["served"], kpi["cancelled"], kpi["pooled_passengers"], kpi["pairs"]) == (4, 3, 1, 2, 1)
-    assert kpi["response_rate"] == pytest.approx(3 / 4)            # served 3 of 4 orders
-    assert kpi["pairing_ratio"] == pytest.approx(2 / 3)            # 2 pooled of 3 served
+    assert kpi["response_rate"] == pytest.approx(3 / 4)  # served 3 of 4 orders
+    assert kpi["pairing_ratio"] == pytest.approx(2 / 3)  # 2 pooled of 3 served
     assert kpi["pairing_ratio_of_orders"] == pytest.approx(2 / 4)  # 2 pooled of 4 orders
 
 
@@ -169,10 +187,10 @@ def test_times(kpi):
 
 
 def test_distances(kpi):
-    assert kpi["avg_detour_m"] == pytest.approx(150.0)             # pooled: (300 + 0) / 2
-    assert kpi["avg_shared_m"] == pytest.approx(1000.0)            # pooled: (1000 + 1000) / 2
-    assert kpi["total_occupied_km"] == pytest.approx(3.5)          # 1500 + 2000 m
-    assert kpi["total_solo_served_km"] == pytest.approx(4.2)       # 1500 + 1200 + 1500 m (not the cancelled 2000)
+    assert kpi["avg_detour_m"] == pytest.approx(150.0)  # pooled: (300 + 0) / 2
+    assert kpi["avg_shared_m"] == pytest.approx(1000.0)  # pooled: (1000 + 1000) / 2
+    assert kpi["total_occupied_km"] == pytest.approx(3.5)  # 1500 + 2000 m
+    assert kpi["total_solo_served_km"] == pytest.approx(4.2)  # 1500 + 1200 + 1500 m (not the cancelled 2000)
     # saving = 4.2 - 3.5 = 0.7 km = the pair's l_A + l_B - L = 1200 + 1500 - 2000 m
     assert kpi["total_saving_km"] == pytest.approx(0.7)
 
@@ -205,12 +223,12 @@ def test_no_pooling_gives_nan_pool_averages():
     assert out["response_rate"] == 1.0 and out["pairing_ratio"] == 0.0
     assert np.isnan(out["avg_detour_m"]) and np.isnan(out["avg_shared_m"])
     assert out["total_saving_km"] == pytest.approx(0.0)
-    assert out["platform_profit_cny"] == pytest.approx(7.5 - 2 * 1.5)     # fare 5 · 1.5, pay 2 · 1.5
+    assert out["platform_profit_cny"] == pytest.approx(7.5 - 2 * 1.5)  # fare 5 · 1.5, pay 2 · 1.5
 
 
 def test_hourly(tab):
     h = hourly(tab, start_hour=8)
-    assert h["hour"].tolist() == [8, 9]                    # orders 0-2 requested in 8:00-9:00, order 3 at 9:01:40
+    assert h["hour"].tolist() == [8, 9]  # orders 0-2 requested in 8:00-9:00, order 3 at 9:01:40
     assert h["orders"].tolist() == [3, 1]
     assert h["response_rate"].tolist() == pytest.approx([1.0, 0.0])
     first, second = h.iloc[0], h.iloc[1]

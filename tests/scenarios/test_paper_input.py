@@ -26,7 +26,7 @@ def test_the_2017_05_01_input_is_the_arrive_time_selection(data_dir):
 
 def test_other_days_sample_the_whole_order_file(data_dir):
     paper = load_paper_input(data_dir, date="2017-05-02")
-    assert paper.response_denominator == 928          # = the committed MB denominator (888 / 928)
+    assert paper.response_denominator == 928  # = the committed MB denominator (888 / 928)
     assert len(paper.scenario.fleet) == 232
 
 
@@ -42,6 +42,7 @@ def test_grouping_by_first_appearance_is_stable():
 
 def test_fleet_and_patience_use_the_authors_seeds():
     import random
+
     origins = np.array([7, 3, 7, 9])
     random.seed(2)
     assert authors_fleet(origins, 3)[2] == random.choice([7, 3, 9])

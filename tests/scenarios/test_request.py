@@ -34,10 +34,17 @@ def test_build_meta_and_overrides():
     request = ScenarioRequest("toy", sample=0.2, seed=3, params=(("dt_s", 30.0),))
     scenario = request.build()
     assert scenario.params.dt_s == 30.0 and scenario.seed == 3
-    assert request.meta() == {"date": None, "sample": 0.2, "seed": 3, "params": {"dt_s": 30.0},
-                              "fleet_placement": "order_origins"}
+    assert request.meta() == {
+        "date": None,
+        "sample": 0.2,
+        "seed": 3,
+        "params": {"dt_s": 30.0},
+        "fleet_placement": "order_origins",
+    }
     more = request.with_overrides({"dt_s": 10.0, "max_detour_m": 2000.0})
     assert more.overrides == {"dt_s": 10.0, "max_detour_m": 2000.0} and request.overrides == {"dt_s": 30.0}
-    assert pickle.loads(pickle.dumps(more)) == more          # crosses to worker processes
+    assert pickle.loads(pickle.dumps(more)) == more  # crosses to worker processes
     # overrides are kept sorted, so the same overrides make equal requests
-    assert ScenarioRequest("toy", params=(("b", 1.0), ("a", 2.0))) == ScenarioRequest("toy", params=(("a", 2.0), ("b", 1.0)))
+    assert ScenarioRequest("toy", params=(("b", 1.0), ("a", 2.0))) == ScenarioRequest(
+        "toy", params=(("a", 2.0), ("b", 1.0))
+    )

@@ -11,15 +11,16 @@ from rpbench.scenarios.base import Params
 
 
 def _same(a, b) -> bool:
-    return all(np.array_equal(getattr(a.orders, f), getattr(b.orders, f))
-               for f in ("order_id", "request_s", "origin", "destination", "patience_s")) and \
-        np.array_equal(a.fleet.initial_node, b.fleet.initial_node)
+    return all(
+        np.array_equal(getattr(a.orders, f), getattr(b.orders, f))
+        for f in ("order_id", "request_s", "origin", "destination", "patience_s")
+    ) and np.array_equal(a.fleet.initial_node, b.fleet.initial_node)
 
 
 def test_peak_default_sample(data_dir):
     s = build_scenario("haikou-peak", data_dir=data_dir)
     assert len(s.orders) == round(0.3 * 2018) == 605
-    assert len(s.fleet) == 151                        # 25 per 100 sampled orders
+    assert len(s.fleet) == 151  # 25 per 100 sampled orders
     assert s.network.n_nodes == 3901
     assert set(s.fleet.initial_node) <= set(s.orders.origin)
     assert (s.orders.patience_s >= 30).all()
@@ -81,8 +82,9 @@ def test_sample_outside_unit_interval(sample):
         build_scenario("toy", sample=sample)
 
 
-@pytest.mark.parametrize("name", ["dt_s", "planner_patience_s", "patience_mean_s", "max_pickup_m", "max_detour_m",
-                                  "speed_mps"])
+@pytest.mark.parametrize(
+    "name", ["dt_s", "planner_patience_s", "patience_mean_s", "max_pickup_m", "max_detour_m", "speed_mps"]
+)
 @pytest.mark.parametrize("value", [0.0, -5.0])
 def test_non_positive_parameters(name, value):
     with pytest.raises(ParameterError, match=f"{name} = .* must be > 0"):
@@ -110,11 +112,12 @@ def test_explicit_missing_folder():
 
 def test_unknown_node_in_orders(fake_data):
     import gzip
+
     path = fake_data / "demand_0800_0900" / "orders" / "2017-05-01.csv.gz"
     with gzip.open(path, "rt") as fh:
         lines = fh.read().splitlines()
     parts = lines[1].split(",")
-    parts[6] = "4242"                                # origin_id
+    parts[6] = "4242"  # origin_id
     lines[1] = ",".join(parts)
     with gzip.open(path, "wt") as fh:
         fh.write("\n".join(lines) + "\n")

@@ -24,7 +24,7 @@ from helpers import line_network, network_from_edges
 from rpbench.sim.fleet import CRUISE_ARCS, DROPOFF, PICKUP, FleetState, Plan, Stop
 
 SPEED = 10.0
-BOUNCE = [0, 1, 2, 3, 4, 5, 4, 3, 2, 1]     # a cruise on the line from node 0: no U-turns except at the ends
+BOUNCE = [0, 1, 2, 3, 4, 5, 4, 3, 2, 1]  # a cruise on the line from node 0: no U-turns except at the ends
 
 
 @pytest.fixture(scope="module")
@@ -34,8 +34,7 @@ def line():
 
 @pytest.fixture(scope="module")
 def tee():
-    return network_from_edges([(0, 1, 400.0), (1, 2, 600.0), (2, 3, 500.0), (1, 4, 300.0), (0, 3, 5000.0)],
-                              name="tee")
+    return network_from_edges([(0, 1, 400.0), (1, 2, 600.0), (2, 3, 500.0), (1, 4, 300.0), (0, 3, 5000.0)], name="tee")
 
 
 @pytest.fixture(scope="module")
@@ -75,7 +74,7 @@ def test_route_through_and_replan_times(tee):
     # 4 -> 0: 4-1-0 (300 + 400); 0 -> 3: 0-1-2-3 (400 + 600 + 500 = 1500 < the 5000 m road)
     tail, reach = fl.route_through([4, 0, 3])
     assert tail.tolist() == [1, 0, 1, 2, 3]
-    assert reach == [2, 5]                                 # plan index of node 0 and of node 3
+    assert reach == [2, 5]  # plan index of node 0 and of node 3
     # Stops come in any order and are sorted by plan index.
     fl.replan(0, 0, tail, [Stop(reach[1], DROPOFF, 7), Stop(reach[0], PICKUP, 7)])
     plan = fl.plans[0]
@@ -98,34 +97,44 @@ def test_stops_at_one_node_put_pickups_first(line):
     assert fl.plans[0].stops == [Stop(1, DROPOFF, 4), Stop(2, PICKUP, 6), Stop(2, DROPOFF, 5)]
 
 
-@pytest.mark.parametrize("t, k, node, pre", [
-    (0.0, 0, 0, 0.0),          # at the start node
-    (150.0, 2, 2, 500.0),      # half-way between node 1 (100 s) and node 2 (200 s): 50 s · 10 m/s before node 2
-    (200.0, 2, 2, 0.0),        # exactly at node 2
-    (420.0, 5, 5, 800.0),      # node 5 is reached at 500 s
-    (600.0, 5, 5, 0.0),        # the route is over: standing at node 5
-])
+@pytest.mark.parametrize(
+    "t, k, node, pre",
+    [
+        (0.0, 0, 0, 0.0),  # at the start node
+        (150.0, 2, 2, 500.0),  # half-way between node 1 (100 s) and node 2 (200 s): 50 s · 10 m/s before node 2
+        (200.0, 2, 2, 0.0),  # exactly at node 2
+        (420.0, 5, 5, 800.0),  # node 5 is reached at 500 s
+        (600.0, 5, 5, 0.0),  # the route is over: standing at node 5
+    ],
+)
 def test_position_along_a_route(line, t, k, node, pre):
     fl = fleet(line, [0, 3])
     tail, _ = fl.route_through([0, 5])
-    fl.replan(0, 0, tail, [])                              # node i at 100·i s, odometer 1000·i m
+    fl.replan(0, 0, tail, [])  # node i at 100·i s, odometer 1000·i m
     assert fl.position(0, t) == (k, node, pytest.approx(pre))
     ks, nodes, pres = fl.positions(np.array([0, 1]), t)
     assert ks.tolist() == [k, 0] and nodes.tolist() == [node, 3]
-    assert pres == pytest.approx([pre, 0.0])               # vehicle 1 never moves
+    assert pres == pytest.approx([pre, 0.0])  # vehicle 1 never moves
 
 
 def test_positions_over_successive_rounds(line):
     # The cached next node must follow the vehicle as time advances.
     fl = fleet(line, [0])
     fl.replan(0, 0, fl.route_through([0, 5])[0], [])
-    expected = {10.0: (1, 1, 900.0), 90.0: (1, 1, 100.0), 100.0: (1, 1, 0.0), 110.0: (2, 2, 900.0),
-                350.0: (4, 4, 500.0), 499.0: (5, 5, 10.0), 700.0: (5, 5, 0.0), 900.0: (5, 5, 0.0)}
+    expected = {
+        10.0: (1, 1, 900.0),
+        90.0: (1, 1, 100.0),
+        100.0: (1, 1, 0.0),
+        110.0: (2, 2, 900.0),
+        350.0: (4, 4, 500.0),
+        499.0: (5, 5, 10.0),
+        700.0: (5, 5, 0.0),
+        900.0: (5, 5, 0.0),
+    }
     for t, (k, node, pre) in expected.items():
         ks, nodes, pres = fl.positions(np.array([0]), t)
         assert (int(ks[0]), int(nodes[0])) == (k, node), t
         assert float(pres[0]) == pytest.approx(pre), t
-
 
 
 def test_next_odometers_follow_positions(line):
@@ -135,6 +144,7 @@ def test_next_odometers_follow_positions(line):
     for t, odo in {0.0: 0.0, 150.0: 2000.0, 420.0: 5000.0, 900.0: 5000.0}.items():
         fl.positions(np.array([0, 1]), t)
         assert fl.next_odometers(np.array([0, 1])).tolist() == [odo, 0.0], t
+
 
 def test_replan_at_an_anchor_keeps_the_history(tee):
     fl = fleet(tee, [4])
@@ -148,7 +158,7 @@ def test_replan_at_an_anchor_keeps_the_history(tee):
     assert tail.tolist() == [4, 1, 2, 3] and reach == [1, 4]
     fl.replan(0, 3, tail, [Stop(reach[0], PICKUP, 8), Stop(reach[1], DROPOFF, 7), Stop(reach[1], DROPOFF, 8)])
     old = fl.history[0][-1]
-    assert old.nodes.tolist() == [4, 1, 0, 1]              # the old plan up to and including the anchor
+    assert old.nodes.tolist() == [4, 1, 0, 1]  # the old plan up to and including the anchor
     assert old.tt.tolist() == [0.0, 30.0, 70.0, 110.0]
     assert old.odo.tolist() == [0.0, 300.0, 700.0, 1100.0]
     plan = fl.plans[0]
@@ -175,7 +185,7 @@ def test_replan_past_an_unserved_stop_is_refused(tee):
     tail, reach = fl.route_through([4, 0, 3])
     fl.replan(0, 0, tail, [Stop(reach[0], PICKUP, 7), Stop(reach[1], DROPOFF, 7)])
     with pytest.raises(RuntimeError, match="unserved stop"):
-        fl.replan(0, 3, np.array([4]), [])                 # the pick-up at index 2 has not been handled
+        fl.replan(0, 3, np.array([4]), [])  # the pick-up at index 2 has not been handled
 
 
 def test_due_stops_in_time_order(line):
@@ -189,10 +199,12 @@ def test_due_stops_in_time_order(line):
 
     assert list(fl.due_stops(99.0)) == []
     # (time, vehicle, stop, node, odometer)
-    assert list(fl.due_stops(250.0)) == [(100.0, 1, Stop(1, PICKUP, 2), 4, 1000.0),
-                                         (200.0, 0, Stop(2, PICKUP, 1), 2, 2000.0)]
-    assert list(fl.due_stops(250.0)) == []                 # each stop is produced once
-    due = list(fl.due_stops(400.0))                        # both at 400 s (inclusive): lower vehicle first
+    assert list(fl.due_stops(250.0)) == [
+        (100.0, 1, Stop(1, PICKUP, 2), 4, 1000.0),
+        (200.0, 0, Stop(2, PICKUP, 1), 2, 2000.0),
+    ]
+    assert list(fl.due_stops(250.0)) == []  # each stop is produced once
+    due = list(fl.due_stops(400.0))  # both at 400 s (inclusive): lower vehicle first
     assert due == [(400.0, 0, Stop(4, DROPOFF, 1), 4, 4000.0), (400.0, 1, Stop(4, DROPOFF, 2), 1, 4000.0)]
     assert fl.plans[0].stops == [] and fl.plans[1].stops == []
 
@@ -200,8 +212,8 @@ def test_due_stops_in_time_order(line):
 def test_due_stops_forget_replaced_plans(line):
     # A stop of a replaced plan is never produced; the new plan's stop is.
     fl = fleet(line, [0])
-    fl.replan(0, 0, fl.route_through([0, 3])[0], [Stop(3, PICKUP, 1)])        # at node 3, 300 s
-    fl.replan(0, 1, fl.route_through([1, 0])[0], [Stop(1, PICKUP, 2)])        # turn back at node 1: node 0 at 200 s
+    fl.replan(0, 0, fl.route_through([0, 3])[0], [Stop(3, PICKUP, 1)])  # at node 3, 300 s
+    fl.replan(0, 1, fl.route_through([1, 0])[0], [Stop(1, PICKUP, 2)])  # turn back at node 1: node 0 at 200 s
     assert list(fl.due_stops(1000.0)) == [(200.0, 0, Stop(1, PICKUP, 2), 0, 2000.0)]
 
 
@@ -216,7 +228,7 @@ def test_cruise_from_a_dead_end(line):
     # It waits at node 0 until 50 s, then drives 100 s per arc.
     assert plan.tt.tolist() == [50.0 + 100.0 * i for i in range(CRUISE_ARCS + 1)]
     assert plan.odo.tolist() == [1000.0 * i for i in range(CRUISE_ARCS + 1)]
-    assert fl.position(0, 75.0) == (1, 1, pytest.approx(750.0))     # node 1 at 150 s
+    assert fl.position(0, 75.0) == (1, 1, pytest.approx(750.0))  # node 1 at 150 s
     # Past the 24 planned arcs (plan ends at 2450 s) the cruise is extended on demand:
     # at 2500 s the vehicle is heading to plan index 25 (2550 s), node BOUNCE[25 % 10] = 5, 500 m before it.
     assert fl.position(0, 2500.0) == (25, 5, pytest.approx(500.0))
@@ -231,7 +243,7 @@ def test_cruise_from_a_dead_end(line):
 def test_random_walk_follows_arcs(grid):
     for seed in range(5):
         fl = fleet(grid, [4], seed=seed)
-        walk = fl.random_walk_from(4, 1)                   # at the centre, having come from node 1
+        walk = fl.random_walk_from(4, 1)  # at the centre, having come from node 1
         assert len(walk) == CRUISE_ARCS
         path = [1, 4] + walk.tolist()
         for a, b in zip(path[:-1], path[1:]):
@@ -245,14 +257,14 @@ def test_random_walk_follows_arcs(grid):
 
 def test_cruise_after_a_drop_off_on_the_grid(grid):
     fl = fleet(grid, [0], seed=3)
-    tail, reach = fl.route_through([0, 2])                 # 0 -> 1 -> 2, drop-off at node 2 (200 s)
+    tail, reach = fl.route_through([0, 2])  # 0 -> 1 -> 2, drop-off at node 2 (200 s)
     fl.replan(0, 0, tail, [Stop(reach[0], DROPOFF, 0)])
     [(_, _, stop, _, _)] = list(fl.due_stops(200.0))
     fl.start_cruise(0, stop.index)
     plan = fl.plans[0]
     assert plan.nodes[0] == 2 and plan.tt[0] == 200.0 and plan.odo[0] == 2000.0
-    assert plan.nodes[1] == 5                              # from the corner 2, not back to 1: only 5 is left
-    fl.position(0, 200.0 + 100.0 * CRUISE_ARCS + 30.0)     # forces an extension
+    assert plan.nodes[1] == 5  # from the corner 2, not back to 1: only 5 is left
+    fl.position(0, 200.0 + 100.0 * CRUISE_ARCS + 30.0)  # forces an extension
     nodes, tt, odo = fl.trajectory(0)
     assert nodes[:3].tolist() == [0, 1, 2]
     assert_drivable(grid, nodes, tt, odo)
@@ -261,14 +273,14 @@ def test_cruise_after_a_drop_off_on_the_grid(grid):
 
 def test_park_stands_still(line):
     fl = fleet(line, [0])
-    fl.start_cruise(0, 0)                                  # cruising 0 -> 1 -> 2 ... from 0 s
-    k, node, pre = fl.position(0, 30.0)                    # 700 m before node 1
+    fl.start_cruise(0, 0)  # cruising 0 -> 1 -> 2 ... from 0 s
+    k, node, pre = fl.position(0, 30.0)  # 700 m before node 1
     assert (k, node) == (1, 1) and pre == pytest.approx(700.0)
-    fl.park(0, k)                                          # stop at node 1 (100 s, 1000 m)
+    fl.park(0, k)  # stop at node 1 (100 s, 1000 m)
     plan = fl.plans[0]
     assert plan.nodes.tolist() == [1] and plan.tt.tolist() == [100.0] and plan.odo.tolist() == [1000.0]
     assert not plan.cruising
-    assert fl.position(0, 60.0) == (0, 1, pytest.approx(400.0))     # still driving in
+    assert fl.position(0, 60.0) == (0, 1, pytest.approx(400.0))  # still driving in
     for t in (100.0, 1000.0, 1e5):
         assert fl.position(0, t) == (0, 1, 0.0)
         ks, nodes, pres = fl.positions(np.array([0]), t)

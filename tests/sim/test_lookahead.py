@@ -23,7 +23,7 @@ def test_find_answers_as_searchsorted_or_declines(seed):
     windows = PlanWindows(n)
     plans = [_plan(rng, int(rng.integers(1, 3 * WIDTH))) for _ in range(n)]
     for v, (nodes, tt, odo) in enumerate(plans):
-        if v % 5 != 4:                                  # some vehicles have no window at all
+        if v % 5 != 4:  # some vehicles have no window at all
             windows.fill(v, nodes, tt, odo, bool(v % 2), int(rng.integers(0, len(tt))))
     for before in rng.uniform(-10.0, 40.0 * WIDTH, 30):
         found = windows.find(np.arange(n), float(before))
@@ -33,7 +33,7 @@ def test_find_answers_as_searchsorted_or_declines(seed):
             k = int(np.searchsorted(tt, before, side="left"))
             assert (found.k[i], found.node[i], found.tt[i], found.odo[i]) == (k, nodes[k], tt[k], odo[k])
             assert found.at_end[i] == (k == len(tt) - 1 and v % 2 == 0)
-        for v in found.missed.tolist():                 # declined only when the window cannot tell
+        for v in found.missed.tolist():  # declined only when the window cannot tell
             nodes, tt, odo = plans[v]
             k = int(np.searchsorted(tt, before, side="left"))
             inside = windows.length[v] > 0 and windows.base[v] <= k < windows.base[v] + windows.length[v]

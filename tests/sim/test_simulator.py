@@ -30,7 +30,7 @@ def test_pooled_pair_fofo(preset):
     assert run.kpis["total_saving_km"] == pytest.approx(2.0)
     assert tab["detour_m"].to_numpy() == pytest.approx([0.0, 0.0], abs=1e-6)
     assert tab["shared_m"].to_numpy() == pytest.approx([2000.0, 2000.0])
-    assert tab["dropoff_s"][0] < tab["dropoff_s"][1]           # A dropped first
+    assert tab["dropoff_s"][0] < tab["dropoff_s"][1]  # A dropped first
     join = run.sim.events.query("event == 'assign' and order == 1").iloc[0]
     assert join["kind"] == "join" and bool(join["fofo"])
 
@@ -42,7 +42,7 @@ def test_pooled_pair_folo(preset):
     tab = passengers(run)
     assert tab["pooled"].all()
     assert run.kpis["total_saving_km"] == pytest.approx(2.0)
-    assert tab["dropoff_s"][1] < tab["dropoff_s"][0]           # B dropped first (A last)
+    assert tab["dropoff_s"][1] < tab["dropoff_s"][0]  # B dropped first (A last)
     assert not bool(run.sim.events.query("event == 'assign' and order == 1").iloc[0]["fofo"])
 
 
@@ -55,7 +55,7 @@ def test_detour_threshold(preset, spur, pooled):
     run = simulate_strategy(sc, "mb", preset, progress=False)
     tab = passengers(run)
     assert bool(tab["pooled"].all()) is pooled
-    assert tab["served"].all()                                  # the second vehicle serves B alone otherwise
+    assert tab["served"].all()  # the second vehicle serves B alone otherwise
     if pooled:
         assert tab["detour_m"][0] == pytest.approx(2 * spur)
 
@@ -79,12 +79,13 @@ def test_join_while_driving_to_the_first_passenger(preset):
     join = ev.query("event == 'assign' and order == 1").iloc[0]
     assert join["kind"] == "join" and join["t_s"] == 20.0
     assert ev.query("event == 'pickup' and order == 0")["t_s"].iloc[0] == pytest.approx(2000 / (30 / 3.6))
-    assert tab["pickup_s"][0] == pytest.approx(tab["pickup_s"][1])   # both collected at o_A
+    assert tab["pickup_s"][0] == pytest.approx(tab["pickup_s"][1])  # both collected at o_A
     assert tab["pooled"].all() and tab["pickup_m"][1] == pytest.approx(0.0)
 
 
 def test_same_seed_same_kpis(preset):
     from rpbench.scenarios import build_scenario
+
     a = simulate_strategy(build_scenario("toy", sample=0.25, seed=5), "mb", preset, progress=False)
     b = simulate_strategy(build_scenario("toy", sample=0.25, seed=5), "mb", preset, progress=False)
     ka = {k: v for k, v in a.kpis.items() if k != "wall_s"}
@@ -95,6 +96,7 @@ def test_same_seed_same_kpis(preset):
 
 def test_vehicles_respect_capacity_and_thresholds(preset):
     from rpbench.scenarios import build_scenario
+
     sc = build_scenario("toy", sample=0.5, seed=2)
     for name in ("mb", "rtv"):
         tab = simulate_strategy(sc, name, preset, progress=False).passengers
@@ -112,8 +114,9 @@ def test_a_solver_failure_names_the_round_and_saves_its_model(monkeypatch, tmp_p
 
     def broken(self, model, options, **kw):
         raise SolverError("HiGHS failed with model status kUnknown")
+
     monkeypatch.setattr(HighsBackend, "solve", broken)
-    monkeypatch.setenv("RPBENCH_CACHE", str(tmp_path))      # dumps go to <cache>/failed-rounds, never /tmp
+    monkeypatch.setenv("RPBENCH_CACHE", str(tmp_path))  # dumps go to <cache>/failed-rounds, never /tmp
     sc = scenario_of(line_network(6), [(0.0, 0, 3), (10.0, 1, 5)], vehicles=[0])
     with pytest.raises(SolverError, match=r"mb round 0 \(t=0 s\): solver preset 'highs': HiGHS failed .*rpbench bench"):
         simulate_strategy(sc, "mb", load_preset("highs"), progress=False)

@@ -11,7 +11,7 @@ from rpbench.harness.comparison import simulate_strategy
 from rpbench.scenarios import build_scenario
 from rpbench.strategies import strategy_class
 
-pytestmark = pytest.mark.slow      # every installed preset simulates three strategies
+pytestmark = pytest.mark.slow  # every installed preset simulates three strategies
 
 STRATEGIES = ("np", "mb", "rtv")
 

@@ -22,7 +22,7 @@ def test_interchangeable_vehicles_go_to_passengers_in_order():
     m = AssignmentModel(2, 3, cp, cv, vals)
     for start in ([2, 5], [1, 6], [2, 4], [0, 5]):
         fixed, _ = canonicalize(m, optimal(m, start))
-        assert fixed.chosen.tolist() == [0, 5]           # p0 -> v0, p1 -> v1
+        assert fixed.chosen.tolist() == [0, 5]  # p0 -> v0, p1 -> v1
         assert fixed.objective == optimal(m, start).objective
 
 
@@ -30,8 +30,8 @@ def test_swap_between_two_passengers():
     # p0 and p1 share an origin: vehicles 0 and 1 are worth the same to both, so swapping is value-neutral.
     cp = [0, 0, 1, 1]
     cv = [0, 1, 0, 1]
-    m = AssignmentModel(2, 2, cp, cv, [-3, -4, -3, -4] )
-    fixed, moves = canonicalize(m, optimal(m, [1, 2]))   # p0 -> v1, p1 -> v0
+    m = AssignmentModel(2, 2, cp, cv, [-3, -4, -3, -4])
+    fixed, moves = canonicalize(m, optimal(m, [1, 2]))  # p0 -> v1, p1 -> v0
     assert fixed.chosen.tolist() == [0, 3] and moves == 1
 
 
@@ -54,7 +54,7 @@ def test_trip_packing_vehicle_swap_and_replace():
     r1 = [0, 2, 0, 2]
     r2 = [1, -1, 1, -1]
     m = TripPackingModel(3, 2, cv, r1, r2, [10, 4, 10, 4])
-    fixed, _ = canonicalize(m, optimal(m, [1, 2]))       # {2} on v0, {0,1} on v1
+    fixed, _ = canonicalize(m, optimal(m, [1, 2]))  # {2} on v0, {0,1} on v1
     assert fixed.chosen.tolist() == [0, 3]
 
 
@@ -123,7 +123,7 @@ def test_swaps_match_a_pairwise_reference_with_waiting_columns_among_the_chosen(
         n_p, n_v = 6, 4
         cp, cv, vals = [], [], []
         for p in range(n_p):
-            rank = rng.permutation(n_v) if p % 2 else np.arange(n_v)   # equal rankings make swaps value-neutral
+            rank = rng.permutation(n_v) if p % 2 else np.arange(n_v)  # equal rankings make swaps value-neutral
             for v in range(n_v):
                 cp.append(p), cv.append(v), vals.append(-10 * int(rank[v]) - p)
             cp.append(p), cv.append(-1), vals.append(-1000 - p)

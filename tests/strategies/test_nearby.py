@@ -19,9 +19,9 @@ def test_mask_matches_the_distance_test(seed):
     rng = np.random.default_rng(seed)
     n = int(rng.integers(1, 20))
     dist = rng.integers(0, 10, size=(n, n)).astype(float)
-    dist[rng.random((n, n)) < 0.1] = np.inf                     # unreachable pairs
+    dist[rng.random((n, n)) < 0.1] = np.inf  # unreachable pairs
     frm, to = rng.integers(0, n, int(rng.integers(0, 12))), rng.integers(0, n, int(rng.integers(0, 12)))
-    table = NearTable.build(dist, 5.0)                          # 5.0 itself is within (<=)
+    table = NearTable.build(dist, 5.0)  # 5.0 itself is within (<=)
     assert np.array_equal(table.mask(frm, to), dist[frm[None, :], to[:, None]] <= 5.0)
 
 
@@ -51,9 +51,19 @@ def _reference_join(state):
     pk = state.v1_pre_m[v] + state.dist[state.v1_node[v], state.p_origin[p]]
     near = pk <= state.params.max_pickup_m + TOLERANCE_M
     p, v = p[near], v[near]
-    g = pair_geometry(state.dist, state.v1_origin[v], state.v1_destination[v], state.v1_solo_m[v],
-                      state.p_origin[p], state.p_destination[p], state.p_solo_m[p],
-                      state.v1_node[v], state.v1_delta_m[v], state.v1_pre_m[v], state.params.max_detour_m)
+    g = pair_geometry(
+        state.dist,
+        state.v1_origin[v],
+        state.v1_destination[v],
+        state.v1_solo_m[v],
+        state.p_origin[p],
+        state.p_destination[p],
+        state.p_solo_m[p],
+        state.v1_node[v],
+        state.v1_delta_m[v],
+        state.v1_pre_m[v],
+        state.params.max_detour_m,
+    )
     r = choose_order(g, state.params.max_pickup_m, "min_feasible")
     return p[r.feasible], v[r.feasible], r.pk[r.feasible], r.saving[r.feasible]
 
@@ -69,9 +79,17 @@ def test_candidates_equal_the_exhaustive_search(seed):
 
     passengers = list(zip(pick(8), pick(8)))
     vacant = [(node, float(pre)) for node, pre in zip(pick(6), rng.choice([0.0, 150.0, 399.5], 6))]
-    occupied = [{"node": a, "origin": b, "destination": c, "delta": float(rng.integers(0, 300)),
-                 "pre": float(rng.choice([0.0, 200.0])), "onboard": bool(rng.random() < 0.5)}
-                for a, b, c in zip(pick(5), pick(5), pick(5))]
+    occupied = [
+        {
+            "node": a,
+            "origin": b,
+            "destination": c,
+            "delta": float(rng.integers(0, 300)),
+            "pre": float(rng.choice([0.0, 200.0])),
+            "onboard": bool(rng.random() < 0.5),
+        }
+        for a, b, c in zip(pick(5), pick(5), pick(5))
+    ]
     params = Params(max_pickup_m=float(rng.choice([400.0, 800.0, 1600.0])), max_detour_m=900.0)
     state = round_state(net, passengers, vacant, occupied=occupied, params=params)
     vac = vacant_options(state)
@@ -86,8 +104,9 @@ def test_candidates_equal_the_exhaustive_search(seed):
 def test_a_negative_lead_distance_searches_every_pair():
     # pre < 0 is outside the simulator's states; the filter must then not drop anything.
     net = _grid()
-    state = round_state(net, [(net.node_id[0], net.node_id[24])], [(net.node_id[24], 0.0)],
-                        params=Params(max_pickup_m=500.0))
+    state = round_state(
+        net, [(net.node_id[0], net.node_id[24])], [(net.node_id[24], 0.0)], params=Params(max_pickup_m=500.0)
+    )
     state = replace(state, v0_pre_m=np.array([-5000.0]))
     vac = vacant_options(state)
     p, v, pk = _reference_vacant(state)

@@ -18,8 +18,9 @@ RUNS = list(REGISTRY) + list(ORACLE_RUNS)
 @pytest.mark.parametrize("name", RUNS)
 def test_every_run_refuses_an_unknown_option_naming_the_known_ones(name):
     known = list(options_class(name)().as_dict())
-    with pytest.raises(ParameterError, match=f"{name}: unknown option 'rebalence'; known options: "
-                                             f"{', '.join(known) or 'none'}$"):
+    with pytest.raises(
+        ParameterError, match=f"{name}: unknown option 'rebalence'; known options: {', '.join(known) or 'none'}$"
+    ):
         parse_run_options([f"{name}.rebalence=true"], [name])
 
 
@@ -28,7 +29,7 @@ def test_every_strategy_declares_label_and_defaults(name):
     cls = strategy_class(name)
     assert cls.label and cls.name == name
     options = cls.Options()
-    assert cls(options).options == cls().options == options       # defaults parse to the same object
+    assert cls(options).options == cls().options == options  # defaults parse to the same object
     assert set(cls.Options.help()) == set(options.as_dict())
 
 
@@ -41,16 +42,19 @@ def test_text_is_converted_by_the_declared_type():
     assert f.tau0_s == (120.0, 130.0) and f.mean_pickup_m == 900.0
 
 
-@pytest.mark.parametrize("raw, message", [
-    ({"rebalance": "maybe"}, "option rebalance = 'maybe' must be true/false"),
-    ({"rebalance": 1}, "option rebalance = 1 must be true/false"),
-    ({"rv_top_k": "2.5"}, "option rv_top_k = '2.5' must be an integer or none"),
-    ({"rv_top_k": 0}, "rv_top_k 0 must be a positive integer"),
-    ({"c_ko": "huge"}, "option c_ko = 'huge' must be a finite number or none or one of large"),
-    ({"c_ko": "nan"}, "option c_ko = 'nan' must be"),
-    ({"objective": "profit"}, "option objective = 'profit' must be one of net, gross"),
-    ({"reassign": True}, "reassign is not supported"),
-])
+@pytest.mark.parametrize(
+    "raw, message",
+    [
+        ({"rebalance": "maybe"}, "option rebalance = 'maybe' must be true/false"),
+        ({"rebalance": 1}, "option rebalance = 1 must be true/false"),
+        ({"rv_top_k": "2.5"}, "option rv_top_k = '2.5' must be an integer or none"),
+        ({"rv_top_k": 0}, "rv_top_k 0 must be a positive integer"),
+        ({"c_ko": "huge"}, "option c_ko = 'huge' must be a finite number or none or one of large"),
+        ({"c_ko": "nan"}, "option c_ko = 'nan' must be"),
+        ({"objective": "profit"}, "option objective = 'profit' must be one of net, gross"),
+        ({"reassign": True}, "reassign is not supported"),
+    ],
+)
 def test_bad_values_are_refused_by_name(raw, message):
     with pytest.raises(ParameterError, match=message.replace("(", r"\(")):
         RTVOptions.parse("rtv", raw)
@@ -65,8 +69,20 @@ def test_opt_must_name_a_run_in_the_list():
 
 def test_cli_typo_exits_2_with_one_line(capsys, tmp_path):
     out = tmp_path / "never"
-    code = main(["run", "--scenario", "toy", "--strategies", "mb,rtv", "--opt", "rtv.rebalence=true",
-                 "--out", str(out), "--no-progress"])
+    code = main(
+        [
+            "run",
+            "--scenario",
+            "toy",
+            "--strategies",
+            "mb,rtv",
+            "--opt",
+            "rtv.rebalence=true",
+            "--out",
+            str(out),
+            "--no-progress",
+        ]
+    )
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1 and "unknown option 'rebalence'" in err[0] and "rebalance" in err[0]
     assert not out.exists()

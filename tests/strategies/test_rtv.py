@@ -47,8 +47,7 @@ def random_state(rng, net, n_pass, n_vac, n_occ=0, params=None):
     occ = []
     for _ in range(n_occ):
         o, d = rng.choice(nodes, size=2, replace=False)
-        occ.append({"node": int(o), "origin": int(o), "destination": int(d), "delta": 0.0, "pre": 0.0,
-                    "onboard": True})
+        occ.append({"node": int(o), "origin": int(o), "destination": int(d), "delta": 0.0, "pre": 0.0, "onboard": True})
     return round_state(net, pas, vac, occupied=occ, params=params)
 
 
@@ -83,8 +82,9 @@ def test_r3_ilp_beats_greedy_and_equals_brute_force(solve):
     rng = np.random.default_rng(0)
     net = grid()
     for _ in range(12):
-        state = random_state(rng, net, n_pass=int(rng.integers(1, 6)), n_vac=int(rng.integers(1, 4)),
-                             n_occ=int(rng.integers(0, 2)))
+        state = random_state(
+            rng, net, n_pass=int(rng.integers(1, 6)), n_vac=int(rng.integers(1, 4)), n_occ=int(rng.integers(0, 2))
+        )
         rm = make_strategy("rtv").build(state)
         sol = solve(rm.model)
         assert rm.model.violations(sol.chosen) == []
@@ -126,11 +126,26 @@ def test_r5_large_c_ko_serves_as_many_as_possible(solve):
 
 def _rr_edge(state, a: int, b: int) -> bool:
     from rpbench.geometry import pool
+
     p = state.params
-    fwd = pool(state.dist, state.p_origin[a], state.p_destination[a], state.p_origin[b], state.p_destination[b],
-               max_pickup_m=p.max_pickup_m, max_detour_m=p.max_detour_m)
-    bwd = pool(state.dist, state.p_origin[b], state.p_destination[b], state.p_origin[a], state.p_destination[a],
-               max_pickup_m=p.max_pickup_m, max_detour_m=p.max_detour_m)
+    fwd = pool(
+        state.dist,
+        state.p_origin[a],
+        state.p_destination[a],
+        state.p_origin[b],
+        state.p_destination[b],
+        max_pickup_m=p.max_pickup_m,
+        max_detour_m=p.max_detour_m,
+    )
+    bwd = pool(
+        state.dist,
+        state.p_origin[b],
+        state.p_destination[b],
+        state.p_origin[a],
+        state.p_destination[a],
+        max_pickup_m=p.max_pickup_m,
+        max_detour_m=p.max_detour_m,
+    )
     return bool(fwd.feasible or bwd.feasible)
 
 
@@ -191,8 +206,9 @@ def test_r7_rebalancing_moves_min_idle_unserved_at_minimum_distance(solve):
     rng = np.random.default_rng(6)
     net = grid()
     for n_pass, n_vac in [(6, 2), (3, 5), (5, 5)]:
-        state = random_state(rng, net, n_pass=n_pass, n_vac=n_vac,
-                             params=Params(max_pickup_m=500.0))   # a short R̄ leaves requests unassigned
+        state = random_state(
+            rng, net, n_pass=n_pass, n_vac=n_vac, params=Params(max_pickup_m=500.0)
+        )  # a short R̄ leaves requests unassigned
         strategy = make_strategy("rtv", rebalance=True)
         rm = strategy.build(state)
         chosen = solve(rm.model).chosen if rm.model.n_cols else np.zeros(0, np.int64)
@@ -204,21 +220,32 @@ def test_r7_rebalancing_moves_min_idle_unserved_at_minimum_distance(solve):
         # minimum total distance, by brute force over assignments of idle vehicles to unserved origins
         idle_v = np.flatnonzero(idle)
         unserved = np.flatnonzero(~served)
-        cost = state.v0_pre_m[idle_v][:, None] + state.dist[state.v0_node[idle_v][:, None],
-                                                               state.p_origin[unserved][None, :]]
+        cost = (
+            state.v0_pre_m[idle_v][:, None]
+            + state.dist[state.v0_node[idle_v][:, None], state.p_origin[unserved][None, :]]
+        )
         k = len(vehicles)
-        best = min(sum(cost[i, j] for i, j in zip(rows, cols))
-                   for rows in itertools.permutations(range(len(idle_v)), k)
-                   for cols in itertools.combinations(range(len(unserved)), k)) if k else 0.0
-        got = sum(state.v0_pre_m[np.flatnonzero(state.v0_vehicle == v)[0]]
-                  + state.dist[state.v0_node[np.flatnonzero(state.v0_vehicle == v)[0]], node]
-                  for v, node in zip(vehicles, targets))
+        best = (
+            min(
+                sum(cost[i, j] for i, j in zip(rows, cols))
+                for rows in itertools.permutations(range(len(idle_v)), k)
+                for cols in itertools.combinations(range(len(unserved)), k)
+            )
+            if k
+            else 0.0
+        )
+        got = sum(
+            state.v0_pre_m[np.flatnonzero(state.v0_vehicle == v)[0]]
+            + state.dist[state.v0_node[np.flatnonzero(state.v0_vehicle == v)[0]], node]
+            for v, node in zip(vehicles, targets)
+        )
         assert got == pytest.approx(best, abs=1e-6)
-    assert not make_strategy("rtv").reposition(state, rm, chosen)[0].size   # off by default
+    assert not make_strategy("rtv").reposition(state, rm, chosen)[0].size  # off by default
 
 
 def test_reassign_is_refused():
     from rpbench.exceptions import ParameterError
+
     with pytest.raises(ParameterError, match="reassign is not supported"):
         make_strategy("rtv", reassign=True)
 

@@ -38,7 +38,7 @@ class DenseLSABackend(Backend):
 
     def solve(self, model: Model, options: SolveOptions) -> Solution:
         _refuse_unsupported(options)
-        if model.structure is not Structure.ASSIGNMENT:      # rpbench.backends.solve checks this first
+        if model.structure is not Structure.ASSIGNMENT:  # rpbench.backends.solve checks this first
             raise SolverError(f"backend {self.name!r} solves assignment models only, not {model.structure.value}")
         # the solver library loads only when solving: `import rpbench_greedy.backend` stays cheap
         from scipy.optimize import linear_sum_assignment
@@ -46,8 +46,10 @@ class DenseLSABackend(Backend):
         t0 = time.perf_counter()
         P, V = model.n_passengers, model.n_vehicles
         if P * (V + P) > MAX_CELLS:
-            raise SolverError(f"backend {self.name!r}: round {model.name!r} needs a {P} x {V + P} dense matrix, "
-                              f"more than {MAX_CELLS:,} cells; use a sparse preset (matching, scipy, highs)")
+            raise SolverError(
+                f"backend {self.name!r}: round {model.name!r} needs a {P} x {V + P} dense matrix, "
+                f"more than {MAX_CELLS:,} cells; use a sparse preset (matching, scipy, highs)"
+            )
         slot = np.where(model.col_vehicle >= 0, model.col_vehicle, V + model.col_passenger)
         cost = np.full((P, V + P), np.inf)
         cost[model.col_passenger, slot] = -model.values
@@ -65,20 +67,28 @@ class DenseLSABackend(Backend):
             raise SolverError(f"backend {self.name!r}: linear_sum_assignment failed on {model.name!r}: {outcome}")
         times = {"build_s": t1 - t0, "solve_s": t2 - t1}
         if status is Status.INFEASIBLE:
-            return make_solution(model, np.zeros(0, np.int64), status, self.name,
-                                 message="no assignment serves every passenger", **times)
+            return make_solution(
+                model, np.zeros(0, np.int64), status, self.name, message="no assignment serves every passenger", **times
+            )
         chosen = column[rows, cols]
         objective = model.objective_of(chosen)
-        return make_solution(model, chosen, status, self.name, bound=objective, gap=0.0,
-                             extract_s=time.perf_counter() - t2, **times)
+        return make_solution(
+            model, chosen, status, self.name, bound=objective, gap=0.0, extract_s=time.perf_counter() - t2, **times
+        )
 
 
 def _refuse_unsupported(options: SolveOptions) -> None:
     """Options this solver cannot honour are an error, never silently ignored."""
-    unsupported = {"threads": options.threads not in (None, 1), "time_limit_s": options.time_limit_s is not None,
-                   "method": options.method is not None, "solver": options.solver is not None,
-                   "extra": bool(options.extra)}
+    unsupported = {
+        "threads": options.threads not in (None, 1),
+        "time_limit_s": options.time_limit_s is not None,
+        "method": options.method is not None,
+        "solver": options.solver is not None,
+        "extra": bool(options.extra),
+    }
     given = [key for key, bad in unsupported.items() if bad]
     if given:
-        raise PresetError(f"backend 'dense-lsa' cannot honour option(s) {', '.join(given)} (linear_sum_assignment "
-                          "is single-threaded, has no time limit and no variants); remove them from the preset")
+        raise PresetError(
+            f"backend 'dense-lsa' cannot honour option(s) {', '.join(given)} (linear_sum_assignment "
+            "is single-threaded, has no time limit and no variants); remove them from the preset"
+        )

@@ -38,8 +38,9 @@ class GreedyOptions(RunOptions):
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.pickup_weight <= MAX_WEIGHT:
-            raise ParameterError(f"greedy: option pickup_weight = {self.pickup_weight!r} must lie in "
-                                 f"[0, {MAX_WEIGHT:g}]")
+            raise ParameterError(
+                f"greedy: option pickup_weight = {self.pickup_weight!r} must lie in [0, {MAX_WEIGHT:g}]"
+            )
         if self.max_pickup_m is not None and self.max_pickup_m <= 0:
             raise ParameterError(f"greedy: option max_pickup_m = {self.max_pickup_m!r} must be > 0")
 
@@ -59,8 +60,9 @@ class GreedyPickup(Strategy):
             vac, join = _within(vac, limit), _within(join, limit)
         # Waiting must stay worse than any feasible vehicle, however heavily pick-ups weigh (as in MB, A13).
         wait = np.full(state.n_passengers, NO_WAIT_UTILITY_M * max(1.0, w))
-        return assignment_round(state, vac, -w * vac.pickup_m, join, join.saving_m - w * join.pickup_m, wait,
-                                name="greedy")
+        return assignment_round(
+            state, vac, -w * vac.pickup_m, join, join.saving_m - w * join.pickup_m, wait, name="greedy"
+        )
 
 
 def _within(options, limit_m: float):
