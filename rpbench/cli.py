@@ -18,7 +18,7 @@ import importlib
 import signal
 import sys
 import threading
-from typing import Iterator
+from collections.abc import Iterator
 
 from rpbench import __version__
 from rpbench.exceptions import RpbenchError

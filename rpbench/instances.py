@@ -248,7 +248,7 @@ def load_instances(paths: list[str | Path]) -> tuple[list, dict[str, float]]:
     files = list(dict.fromkeys(find_instances(paths)))  # a file named twice is solved once
     stems = [f.stem for f in files]
     models, recorded, used = [], {}, set()
-    for f, stem in zip(files, stems):
+    for f, stem in zip(files, stems, strict=True):
         label = stem if stems.count(stem) == 1 else f"{f.parent.name}/{stem}"
         label = label if label not in used else str(f)
         used.add(label)

@@ -44,13 +44,13 @@ from rpbench.exceptions import ModelError
 MAX_EXACT_TOTAL = float(2**53)
 
 
-class Structure(str, enum.Enum):
+class Structure(str, enum.Enum):  # noqa: UP042 (str() of a str-mixin enum stays the member name)
     ASSIGNMENT = "assignment"
     TRIP_PACKING = "trip_packing"
     PAIRING = "pairing"
 
 
-class Status(str, enum.Enum):
+class Status(str, enum.Enum):  # noqa: UP042 (as Structure)
     OPTIMAL = "optimal"  # proven optimal
     FEASIBLE = "feasible"  # feasible, stopped with a gap (gap/bound say how far)
     TIME_LIMIT = "time_limit"  # stopped by the time limit; the incumbent is returned
@@ -74,7 +74,7 @@ def _distinct_rows(table: np.ndarray) -> bool:
     if np.prod(radix.astype(np.float64)) >= 2.0**62:
         return len(np.unique(table, axis=0)) == len(table)
     key = np.zeros(len(table), dtype=np.int64)
-    for col, base in zip(table.T, radix):
+    for col, base in zip(table.T, radix, strict=True):
         key = key * base + (col + 1)
     key.sort()
     return not (key[1:] == key[:-1]).any()
@@ -126,7 +126,7 @@ class _Model:
         data = np.ones(len(rows), dtype=np.float64)
         return sp.csc_matrix((data, rows, start), shape=(self.n_rows, self.n_cols))
 
-    def renamed(self, name: str) -> "_Model":
+    def renamed(self, name: str) -> _Model:
         """The same model under another name (arrays shared, no re-validation)."""
         twin = copy.copy(self)
         object.__setattr__(twin, "name", name)
@@ -450,7 +450,7 @@ class Solution:
 
     @property
     def cardinality(self) -> int:
-        return int(len(self.chosen))
+        return len(self.chosen)
 
     def objective_m(self, model: _Model) -> float:
         return self.objective * model.unit_m

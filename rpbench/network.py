@@ -63,7 +63,7 @@ class RoadNetwork:
 
     # ----------------------------------------------------------------- build
     @classmethod
-    def from_tables(cls, tables: NetworkTables) -> "RoadNetwork":
+    def from_tables(cls, tables: NetworkTables) -> RoadNetwork:
         """Build from reader output, checking ids and strong connectivity."""
         order = np.argsort(tables.node_id, kind="stable")
         node_id = tables.node_id[order].astype(np.int64)
@@ -163,7 +163,7 @@ class RoadNetwork:
         return h.hexdigest()[:20]
 
     # ------------------------------------------------------------ distances
-    def distances(self, *, use_cache: bool = True) -> "DistanceOracle":
+    def distances(self, *, use_cache: bool = True) -> DistanceOracle:
         """The all-pairs distance oracle (built once per network object)."""
         oracle = self._index.get("oracle")
         if oracle is None:
@@ -183,7 +183,7 @@ class DistanceOracle:
     from_cache: bool = False
 
     @classmethod
-    def build(cls, network: RoadNetwork) -> "DistanceOracle":
+    def build(cls, network: RoadNetwork) -> DistanceOracle:
         t0 = time.perf_counter()
         dist, pred = shortest_path(network.csr, method="D", directed=True, return_predecessors=True)
         pred = pred.astype(np.int32)
@@ -191,7 +191,7 @@ class DistanceOracle:
         return cls(network, dist, pred, build_s=time.perf_counter() - t0)
 
     @classmethod
-    def load_or_build(cls, network: RoadNetwork, *, use_cache: bool = True) -> "DistanceOracle":
+    def load_or_build(cls, network: RoadNetwork, *, use_cache: bool = True) -> DistanceOracle:
         """The oracle from the disk cache when its content checks out, else built and cached.
 
         The cache holds ``apsp-<hash>-dist.npy``, ``-pred.npy`` and
@@ -291,7 +291,7 @@ class _ApspFiles:
     stem: Path
 
     @classmethod
-    def of(cls, network: RoadNetwork) -> "_ApspFiles":
+    def of(cls, network: RoadNetwork) -> _ApspFiles:
         return cls(cache_dir() / f"apsp-{network.content_hash}")
 
     @property

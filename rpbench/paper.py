@@ -105,7 +105,13 @@ _K = (60, 90, 120, 180, 240, 300, 400, 500, 600)
 #: Table 3: sensitivity to the mean patience K (s); per K: {strategy: {kpi: value}}.
 TABLE3_K = {
     k: {
-        s: dict(zip(("avg_detour_m", "total_saving_km", "avg_response_time_s", "response_rate", "pairing_ratio"), vals))
+        s: dict(
+            zip(
+                ("avg_detour_m", "total_saving_km", "avg_response_time_s", "response_rate", "pairing_ratio"),
+                vals,
+                strict=True,
+            )
+        )
         for s, vals in row.items()
     }
     for k, row in zip(
@@ -121,6 +127,7 @@ TABLE3_K = {
             {"mb": (874, 143, 14, 0.93, 0.19), "rtv": (834, 155, 7, 0.95, 0.15), "fl": (763, 207, 51, 0.92, 0.31)},
             {"mb": (883, 147, 15, 0.93, 0.18), "rtv": (834, 155, 7, 0.95, 0.15), "fl": (728, 207, 54, 0.92, 0.31)},
         ],
+        strict=True,
     )
 }
 
@@ -137,6 +144,7 @@ TABLE4_RW = {
                 "pairing_ratio",
             ),
             vals,
+            strict=True,
         )
     )
     for rw, vals in [
@@ -155,7 +163,13 @@ TABLE4_RW = {
 #: Table 5: sensitivity to the batch interval Δt (s).
 TABLE5_DT = {
     dt: {
-        s: dict(zip(("avg_detour_m", "total_saving_km", "avg_response_time_s", "response_rate", "pairing_ratio"), vals))
+        s: dict(
+            zip(
+                ("avg_detour_m", "total_saving_km", "avg_response_time_s", "response_rate", "pairing_ratio"),
+                vals,
+                strict=True,
+            )
+        )
         for s, vals in row.items()
     }
     for dt, row in [
@@ -180,6 +194,7 @@ TABLE6_RATIO = {
                     "pairing_ratio",
                 ),
                 vals,
+                strict=True,
             )
         )
         for s, vals in row.items()

@@ -13,7 +13,7 @@ from rpbench.paths import find_data_dir
 # Let test modules in sub-folders import tests/helpers.py as `helpers`.
 sys.path.insert(0, str(Path(__file__).parent))
 
-from helpers import write_fake_haikou, write_gz  # noqa: E402  (tests/ is on sys.path from here)
+from helpers import write_fake_haikou, write_gz
 
 
 @pytest.fixture(scope="session")

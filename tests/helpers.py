@@ -9,7 +9,7 @@ import numpy as np
 
 from rpbench.data.road import NetworkTables
 from rpbench.network import RoadNetwork
-from rpbench.scenarios.base import Fleet, Orders, Params, Scenario
+from rpbench.scenarios.base import Fleet, Params, Scenario
 from rpbench.scenarios.common import make_orders
 from rpbench.strategies.base import RoundState
 

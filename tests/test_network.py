@@ -97,7 +97,7 @@ def test_arc_index_finds_each_arc_and_only_arcs(seed):
     rng = np.random.default_rng(seed)
     tail, head = rng.integers(0, net.n_nodes, 40), rng.integers(0, net.n_nodes, 40)
     tail[:10], head[:10] = net.arc_tail[:10], net.arc_head[:10]  # some real arcs among them
-    arcs = {(int(a), int(b)): i for i, (a, b) in enumerate(zip(net.arc_tail, net.arc_head))}
-    expected = [arcs.get((int(a), int(b)), -1) for a, b in zip(tail, head)]
+    arcs = {(int(a), int(b)): i for i, (a, b) in enumerate(zip(net.arc_tail, net.arc_head, strict=True))}
+    expected = [arcs.get((int(a), int(b)), -1) for a, b in zip(tail, head, strict=True)]
     assert net.arc_index(tail, head).tolist() == expected
     assert int(net.arc_index(int(tail[0]), int(head[0]))) == expected[0]

@@ -116,7 +116,7 @@ def min_cost_perfect_matching(n: int, a: np.ndarray, b: np.ndarray, cost: np.nda
     mate = np.empty(n, np.int32)
     ok = fn(
         int(n),
-        int(len(a)),
+        len(a),
         np.ascontiguousarray(a, np.int32),
         np.ascontiguousarray(b, np.int32),
         np.ascontiguousarray(cost, np.int64),

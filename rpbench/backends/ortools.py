@@ -106,7 +106,7 @@ class OrtoolsBackend(ProgramBackend):
                     model.add(cp_model.LinearExpr.sum(members) >= int(lo))
             model.maximize(cp_model.LinearExpr.weighted_sum(x, coeffs.tolist()))
             if hint is not None:
-                for var, value in zip(x, np.round(hint).astype(int).tolist()):
+                for var, value in zip(x, np.round(hint).astype(int).tolist(), strict=True):
                     model.add_hint(var, value)
             solver = cp_model.CpSolver()
             params = solver.parameters

@@ -63,7 +63,7 @@ class Preset:
     instance: Backend | None = field(default=None, compare=False, repr=False)
 
     @classmethod
-    def of(cls, backend: Backend, options: SolveOptions | None = None) -> "Preset":
+    def of(cls, backend: Backend, options: SolveOptions | None = None) -> Preset:
         """An unnamed preset around a backend object (e.g. one that is not registered)."""
         return cls(
             name=backend.name,
@@ -234,7 +234,7 @@ def _extra(extra, where: str) -> dict[str, str | int | float | bool]:
         )
     for key, value in extra.items():
         # Lists, tables and TOML dates would reach the solver as odd options: only scalars are settings.
-        if isinstance(value, bool) or isinstance(value, (str, int)):
+        if isinstance(value, (bool, str, int)):
             continue
         if isinstance(value, float) and math.isfinite(value):
             continue

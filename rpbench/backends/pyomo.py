@@ -66,7 +66,7 @@ def build_model(prog: Program, relax: bool):
 
     m.row = pyo.Constraint(range(A.shape[0]), rule=row)
     m.objective = pyo.Objective(
-        expr=pyo.quicksum(float(c) * xj for c, xj in zip(prog.c, x) if c != 0), sense=pyo.maximize
+        expr=pyo.quicksum(float(c) * xj for c, xj in zip(prog.c, x, strict=True) if c != 0), sense=pyo.maximize
     )
     return m, x
 
@@ -116,7 +116,7 @@ class PyomoBackend(ProgramBackend):
             ):
                 setattr(uc, flag, False)
             if hint is not None and not relax:
-                for var, value in zip(x, np.round(hint).tolist()):
+                for var, value in zip(x, np.round(hint).tolist(), strict=True):
                     var.set_value(value)
                 opt.config.warmstart = True
             opt.set_instance(m)

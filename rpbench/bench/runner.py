@@ -26,11 +26,12 @@ pairings) check their time limit too rarely to stop on time.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import multiprocessing
 import time
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import replace
-from typing import Callable, Iterable, Sequence
 
 import numpy as np
 import pandas as pd
@@ -209,10 +210,8 @@ def _failure(status: str, message: str) -> dict:
 def _warm_up(preset: Preset) -> None:
     """Import the solver library and touch its code paths outside the timings."""
     for model in (assignment(3, 4, seed=1), pairing(12, partners=4, seed=1), trip_packing(4, 3, seed=1)):
-        try:
+        with contextlib.suppress(RpbenchError):
             solve(model, preset)
-        except RpbenchError:
-            pass
 
 
 class _Inline:
@@ -299,14 +298,14 @@ class _Worker:
 def format_table(table: pd.DataFrame) -> str:
     """A plain-text table: one line per (model, preset) with the model's size, times in milliseconds."""
     w = max([len("model"), *map(len, table["model"])])
-    sizes = [f"{r:,} x {c:,}" for r, c in zip(table["rows"], table["cols"])]
+    sizes = [f"{r:,} x {c:,}" for r, c in zip(table["rows"], table["cols"], strict=True)]
     sw = max([len("rows x cols"), *map(len, sizes)])
     head = (
         f"{'model':<{w}} {'rows x cols':>{sw}} {'preset':<12} {'status':<10} {'objective':>16} {'gap':>8} "
         f"{'build ms':>10} {'solve ms':>10} {'total ms':>10}  agrees"
     )
     lines = [head, "-" * len(head)]
-    for size, (_, r) in zip(sizes, table.iterrows()):
+    for size, (_, r) in zip(sizes, table.iterrows(), strict=True):
 
         def ms(x):
             return "-" if x is None or (isinstance(x, float) and np.isnan(x)) else f"{1000 * x:,.1f}"

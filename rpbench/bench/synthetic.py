@@ -164,7 +164,7 @@ def pairing(
         i, j, saving = i[order], j[order], saving[order]
         keep = (np.arange(len(i)) - np.searchsorted(i, i)) < half
         parts.append((i[keep], j[keep], saving[keep]))
-    i, j, saving = (np.concatenate(p) for p in zip(*parts)) if parts else (np.zeros(0),) * 3
+    i, j, saving = (np.concatenate(p) for p in zip(*parts, strict=True)) if parts else (np.zeros(0),) * 3
     return PairingModel(
         n,
         i,

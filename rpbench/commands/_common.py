@@ -9,8 +9,9 @@ import secrets
 import shlex
 import sys
 import tempfile
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 from rpbench.exceptions import ParameterError, RpbenchError
 from rpbench.results import run_folders, to_jsonable

@@ -110,7 +110,7 @@ def run(args: argparse.Namespace) -> int:
         v: solve_oracle(scenario, v, preset, candidates=candidates, options=options, unit_m=args.unit_m)
         for v in variants
     }
-    for v, r in results.items():
+    for r in results.values():
         require_proven(f"{_name(r)} (solver preset {r.solver!r})", r.status.value, strict=args.strict)
         if r.status.value != "optimal":
             gap = r.kpis()["gap"]

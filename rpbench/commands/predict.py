@@ -159,7 +159,7 @@ def _print_human(r: dict) -> None:
         f"{r['candidate_pairs']:,} candidate seeker-taker pairs"
     )
     state = "converged" if r["converged"] else "NOT converged"
-    took = "from cache" if r["from_cache"] else "%.1f s" % r.get("time_s", r["wall_s"])
+    took = "from cache" if r["from_cache"] else "{:.1f} s".format(r.get("time_s", r["wall_s"]))
     print(
         f"fixed point: {state} in {r['iterations']} iterations, residual {r['residual']:.2e}, "
         f"{r['clip_count']} clipped; {took}"

@@ -25,7 +25,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     metrics = [m.strip() for m in args.metrics.split(",")] if args.metrics else None
     out = check_out_file(args.out, "--out") if args.out else None  # before rendering anything
-    text, written = render([Path(f) for f in args.folders], metrics)
+    text, _ = render([Path(f) for f in args.folders], metrics)
     if out is not None:
         write_out_file(out, "--out", lambda tmp: tmp.write_text(text))
         print(f"report written to {args.out}")

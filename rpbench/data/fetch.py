@@ -262,10 +262,8 @@ def fetch(
         # A fetch that stored nothing leaves no empty folder behind: an empty
         # fetched folder would otherwise be picked as the default data folder.
         for path in reversed(created):
-            try:
+            with contextlib.suppress(OSError):
                 path.rmdir()
-            except OSError:
-                pass
         raise
     return report
 

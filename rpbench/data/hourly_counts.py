@@ -28,7 +28,9 @@ def read_hourly_counts(data_dir: Path) -> dict[str, np.ndarray]:
     path = data_dir / HOURLY_FILE
     frame = read_table(path, "hourly counts", {"date": TEXT, "day_count": INT, "hour_count": TEXT})
     out: dict[str, np.ndarray] = {}
-    for row, (date, total, hours) in enumerate(zip(frame["date"], frame["day_count"], frame["hour_count"])):
+    for row, (date, total, hours) in enumerate(
+        zip(frame["date"], frame["day_count"], frame["hour_count"], strict=True)
+    ):
         where = f"hourly counts file {str(path)!r}, data row {row + 1}"
         try:
             month, day = (int(x) for x in str(date).split("/"))

@@ -365,7 +365,7 @@ def write_folder(
             "options": r.options.as_dict(),
             "wall_s": r.sim.wall_s,
             "end_s": r.sim.end_s,
-            "rounds_solved": int(len(r.sim.rounds)),
+            "rounds_solved": len(r.sim.rounds),
         }
     bound = oracle_results.get("bound")
     if bound is not None:  # the competitive ratio of every strategy run (docs/bound.md)

@@ -17,7 +17,7 @@ the workers.
 from __future__ import annotations
 
 import contextlib
-from typing import Iterator
+from collections.abc import Iterator
 
 from rpbench.exceptions import SolverError
 

@@ -93,7 +93,7 @@ class PairRules:
             )
 
     @classmethod
-    def from_params(cls, params: Params, **flags) -> "PairRules":
+    def from_params(cls, params: Params, **flags) -> PairRules:
         """K̄, D̄, R̄ and v from a scenario's parameters, plus the flags."""
         return cls(
             planner_patience_s=params.planner_patience_s,
@@ -103,7 +103,7 @@ class PairRules:
             **flags,
         )
 
-    def replace(self, **changes) -> "PairRules":
+    def replace(self, **changes) -> PairRules:
         return replace(self, **changes)
 
     def as_dict(self) -> dict:
@@ -146,7 +146,7 @@ class CandidatePairs:
     def high(self) -> np.ndarray:
         return np.maximum(self.first, self.second)
 
-    def take(self, rows) -> "CandidatePairs":
+    def take(self, rows) -> CandidatePairs:
         """The subset of rows ``rows`` (indices or a boolean mask)."""
         pick = {
             f.name: getattr(self, f.name)[rows] for f in fields(self) if isinstance(getattr(self, f.name), np.ndarray)
@@ -250,7 +250,7 @@ def _pair_blocks(count: np.ndarray, block_pairs: int):
         yield ii, ii + 1 + np.arange(len(ii)) - np.repeat(starts, count[i0:i1])
 
 
-def _assemble(parts: list[dict], rank, n: int, rules: PairRules, evaluated: int, t0: float) -> "CandidatePairs":
+def _assemble(parts: list[dict], rank, n: int, rules: PairRules, evaluated: int, t0: float) -> CandidatePairs:
     """The evaluated blocks as one CandidatePairs, in scenario row positions and a canonical row order."""
     cols = {k: np.concatenate([p[k] for p in parts]) if parts else np.zeros(0, dtype) for k, dtype in _COLUMNS.items()}
     first, second = rank[cols.pop("first")].astype(np.int64), rank[cols.pop("second")].astype(np.int64)
@@ -274,7 +274,7 @@ def bound_rules(params: Params) -> PairRules:
 
 def _bound_candidates(
     distances: DistanceOracle, dist, orders: Orders, rules: PairRules, rank, t, o, d, solo, block_pairs: int, t0: float
-) -> "CandidatePairs":
+) -> CandidatePairs:
     """Every pair the simulator can form, weighted by the largest saving it can realise (docs/bound.md)."""
     n = len(orders)
     patience = orders.patience_s[rank]

@@ -81,7 +81,7 @@ class ClassBlocks:
         np.savez(directory / "blocks.npz", seeker_off=self.seeker_off, cls=self.cls, cls_off=self.cls_off)
 
     @classmethod
-    def load(cls, directory: Path, n_od: int, n_classes: int | None = None) -> "ClassBlocks":
+    def load(cls, directory: Path, n_od: int, n_classes: int | None = None) -> ClassBlocks:
         with np.load(directory / "blocks.npz", allow_pickle=False) as data:
             blocks = cls(seeker_off=data["seeker_off"], cls=data["cls"], cls_off=data["cls_off"])
         so, co = blocks.seeker_off, blocks.cls_off

@@ -75,9 +75,9 @@ def compare(prediction: Prediction, data_dir: Path) -> tuple[dict, pd.DataFrame]
         )
     table = pd.DataFrame(rows)
     summary = {
-        "ods_joined": int(len(frame)),
-        "ods_ours": int(len(prediction.rates)),
-        "ods_authors": int(len(read_authors_predictions(data_dir))),
+        "ods_joined": len(frame),
+        "ods_ours": len(prediction.rates),
+        "ods_authors": len(read_authors_predictions(data_dir)),
         "columns": table.to_dict(orient="records"),
     }
     return summary, frame

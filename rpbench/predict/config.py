@@ -67,7 +67,7 @@ class PredictConfig:
         if not 0 < self.rho_cap < 1:
             raise ParameterError(f"rho_cap = {self.rho_cap!r} must lie in (0, 1)")
 
-    def replace(self, **changes: Any) -> "PredictConfig":
+    def replace(self, **changes: Any) -> PredictConfig:
         unknown = set(changes) - {f.name for f in dataclasses.fields(self)}
         if unknown:
             raise ParameterError(

@@ -129,7 +129,7 @@ def simulate(model: PredictionModel, *, hours: float, seed: int = 0, warmup_s: f
         ride_m=sums[3],
         shared_m=sums[4],
         saving_m=sums[5],
-        simulated_orders=int(len(od_of)),
+        simulated_orders=len(od_of),
         time_s=time.perf_counter() - t_start,
     )
 
@@ -203,7 +203,7 @@ def validate(prediction: Prediction, result: FcfsResult, *, min_samples: int = 2
     sel = table[table["orders"] >= min_samples]
     metrics: dict = {
         "min_samples": int(min_samples),
-        "ods_compared": int(len(sel)),
+        "ods_compared": len(sel),
         "orders_compared": int(sel["orders"].sum()),
         "hours": result.hours,
         "simulated_orders": result.simulated_orders,

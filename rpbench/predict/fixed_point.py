@@ -31,9 +31,9 @@ consistent.  ρ' is clipped to ``[0, rho_cap]`` (A8) and the clips counted.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 from numba import get_num_threads
@@ -56,7 +56,7 @@ class System:
     work: dict = field(default_factory=dict, repr=False)  # sweep buffers, reused across iterations
 
     @classmethod
-    def build(cls, space: StateSpace, matching: Matching, rate_per_s: np.ndarray, config: PredictConfig) -> "System":
+    def build(cls, space: StateSpace, matching: Matching, rate_per_s: np.ndarray, config: PredictConfig) -> System:
         return cls(space, matching, np.asarray(rate_per_s, dtype=np.float64), config)
 
     def scratch(self, rows: int, n_classes: int) -> np.ndarray:
@@ -224,7 +224,7 @@ class PairSums:
     by_seeker: np.ndarray  # (ODs, 4)
 
     @classmethod
-    def zeros(cls, n_classes: int, n_od: int) -> "PairSums":
+    def zeros(cls, n_classes: int, n_od: int) -> PairSums:
         return cls(np.zeros((n_classes, 4)), np.zeros((n_od, 4)))
 
 

@@ -133,7 +133,7 @@ class Matching:
         *,
         n_classes: int | None = None,
         limit: int = BLOCK_CLASSES,
-    ) -> "Matching":
+    ) -> Matching:
         """A matching held in memory, from global class lists and per-pair distances, one piece per pair
         (tests and small models)."""
         seeker_off = np.asarray(seeker_off, dtype=np.int64)
@@ -254,7 +254,7 @@ class Matching:
         return self.cls, np.array(self.saving_m), self.piece_shared_m[pieces], self.piece_detour_m[pieces]
 
     @classmethod
-    def open(cls, directory: Path, seeker_off: np.ndarray, stats: dict, dtypes: dict) -> "Matching":
+    def open(cls, directory: Path, seeker_off: np.ndarray, stats: dict, dtypes: dict) -> Matching:
         """The matching whose columns lie in ``directory`` (read-only memory maps); ``dtypes`` names the
         dtypes of the ``local`` and ``piece`` numbers."""
         n, n_od = int(seeker_off[-1]), len(seeker_off) - 1
@@ -312,12 +312,12 @@ def build_matching(
             bounds = np.flatnonzero(np.diff(origin)) + 1
             starts = np.concatenate([[0], bounds]).astype(np.int64)
             ends = np.concatenate([bounds, [len(origin)]]).astype(np.int64)
-            tasks = [(int(origin[w0]), int(w0), int(w1)) for w0, w1 in zip(starts, ends)]
+            tasks = [(int(origin[w0]), int(w0), int(w1)) for w0, w1 in zip(starts, ends, strict=True)]
             bar = tqdm(
                 total=len(origin), desc="prediction structure", unit="OD", file=sys.stderr, leave=False, disable=None
             )  # off when stderr is not a terminal
             with bar, ThreadPoolExecutor(max(1, get_num_threads())) as pool:
-                for (_, w0, w1), lists in zip(tasks, _in_order(pool, builder.origin_lists, tasks)):
+                for (_, w0, w1), lists in zip(tasks, _in_order(pool, builder.origin_lists, tasks), strict=True):
                     writer.append(w0, lists.lens, lists.columns, lists.pieces)
                     for key, value in lists.stats.items():
                         stats[key] += value
@@ -362,10 +362,10 @@ class _ColumnWriter:
         self.n_od = n_od
         self.directory = directory
         self.piece_dtype = np.dtype(piece_dtype)
-        self.files = {name: open(directory / f"{name}.bin", "wb") for name, _ in COLUMNS}
-        self.files["piece"] = open(directory / "piece.bin", "wb")
-        self.files.update({f"piece_{name}": open(directory / f"piece_{name}.bin", "wb") for name, _ in PIECE_COLUMNS})
-        self.files["local"] = open(directory / "local.bin", "w+b")
+        self.files = {name: open(directory / f"{name}.bin", "wb") for name, _ in COLUMNS}  # noqa: SIM115 (closed by close())
+        self.files["piece"] = open(directory / "piece.bin", "wb")  # noqa: SIM115 (closed by close())
+        self.files.update({f"piece_{name}": open(directory / f"piece_{name}.bin", "wb") for name, _ in PIECE_COLUMNS})  # noqa: SIM115 (closed by close())
+        self.files["local"] = open(directory / "local.bin", "w+b")  # noqa: SIM115 (closed by close())
         self.localizer = Localizer(len(class_size), self.files["local"], class_size=class_size)
         self.next = 0  # next seeker expected
         self.lens: list[np.ndarray] = []
@@ -386,7 +386,7 @@ class _ColumnWriter:
         self.files["piece"].write(memoryview(np.ascontiguousarray(piece, dtype=self.piece_dtype)))
         counts, *table = pieces or (np.zeros(len(lens), dtype=np.int64), np.zeros(0), np.zeros(0))
         self.piece_counts.append(np.asarray(counts, dtype=np.int64))
-        for (name, dtype), values in zip(PIECE_COLUMNS, table):
+        for (name, dtype), values in zip(PIECE_COLUMNS, table, strict=True):
             self.files[f"piece_{name}"].write(memoryview(np.ascontiguousarray(values, dtype=dtype)))
 
     def finish(self) -> tuple[np.ndarray, dict]:
@@ -455,7 +455,7 @@ class _Builder:
         return _OriginLists(lens, columns, table, stats)
 
     # ------------------------------------------------------------------ stage 2
-    def _pieces(self, g: "_Group", w0: int, w1: int) -> "_Pieces":
+    def _pieces(self, g: _Group, w0: int, w1: int) -> _Pieces:
         """Runs of feasible classes per (seeker, d_A group, service order), grouped by seeker (compiled:
         :func:`.kernels.feasible_runs`)."""
         m, n_u = w1 - w0, len(g.dest)
@@ -489,7 +489,7 @@ class _Builder:
                 return out.head(k, searches)
             capacity = 2 * m * n_u  # at most two runs (FOLO, FOFO) per cell
 
-    def _emit(self, g: "_Group", w0: int, w1: int, pc: "_Pieces") -> tuple[np.ndarray, tuple[np.ndarray, ...]]:
+    def _emit(self, g: _Group, w0: int, w1: int, pc: _Pieces) -> tuple[np.ndarray, tuple[np.ndarray, ...]]:
         """Pairs per seeker and the sorted columns: pieces expanded, prioritised and sorted a batch at a time."""
         m = w1 - w0
         per_row = np.bincount(pc.row, weights=pc.n, minlength=m).astype(np.int64)
@@ -508,7 +508,7 @@ class _Builder:
             r0 = r1
         return per_row, columns
 
-    def _sorted_entries(self, g: "_Group", pc: "_Pieces", i0: int, i1: int, r0: int, w0: int, out) -> None:
+    def _sorted_entries(self, g: _Group, pc: _Pieces, i0: int, i1: int, r0: int, w0: int, out) -> None:
         """Pieces ``i0..i1-1`` (seeker rows from ``r0``) expanded, sorted and written into ``out``.
 
         The sort key (row | descending priority | tie rank) is unique and names
@@ -570,7 +570,7 @@ class _Pieces:
     searches: int = 0  # binary searches the runs took
 
     @classmethod
-    def empty(cls, capacity: int) -> "_Pieces":
+    def empty(cls, capacity: int) -> _Pieces:
         return cls(
             row=np.empty(capacity, dtype=np.int64),
             start=np.empty(capacity, dtype=np.int64),
@@ -580,7 +580,7 @@ class _Pieces:
             det=np.empty(capacity, dtype=np.float32),
         )
 
-    def head(self, k: int, searches: int) -> "_Pieces":
+    def head(self, k: int, searches: int) -> _Pieces:
         """The first ``k`` runs (copies: the rest of the buffers is freed)."""
         return _Pieces(
             row=self.row[:k].copy(),

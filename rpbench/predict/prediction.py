@@ -92,7 +92,7 @@ class Prediction:
     @classmethod
     def from_arrays(
         cls, stored: tuple[dict[str, np.ndarray], dict], *, node_id: np.ndarray, rates: OdRates, config: PredictConfig
-    ) -> "Prediction":
+    ) -> Prediction:
         """A prediction from the disk cache's (arrays, facts)."""
         arrays, info = stored
         empty = np.zeros(0)  # per-state arrays not read (a slim load) stay empty
@@ -113,7 +113,7 @@ class Prediction:
         """The disk cache's per-state members (skipped by a slim load)."""
         return frozenset(cls.STATE_FIELDS) | {f"od_{name}" for name in Outcome.STATE_FIELDS}
 
-    def slim(self) -> "Prediction":
+    def slim(self) -> Prediction:
         """The same prediction without its per-state arrays (what a dispatcher needs: per-OD values)."""
         empty = np.zeros(0)
         od = dataclasses.replace(self.od, **{name: empty for name in Outcome.STATE_FIELDS})

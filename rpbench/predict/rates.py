@@ -81,7 +81,7 @@ class OdRates:
         return float(self.rate_per_s.sum())
 
     @classmethod
-    def from_arrays(cls, origin, destination, rate_per_s, od_id=None, *, n_nodes: int, source: str = "") -> "OdRates":
+    def from_arrays(cls, origin, destination, rate_per_s, od_id=None, *, n_nodes: int, source: str = "") -> OdRates:
         """Canonical rates from unsorted arrays; repeated ODs are merged (rates summed, first id kept)."""
         origin = np.asarray(origin, dtype=np.int64)
         destination = np.asarray(destination, dtype=np.int64)
@@ -114,7 +114,7 @@ class OdRates:
             source=source,
         )
 
-    def scaled(self, factor: float) -> "OdRates":
+    def scaled(self, factor: float) -> OdRates:
         """The same ODs with every rate multiplied by ``factor`` (>= 0)."""
         if not np.isfinite(factor) or factor < 0:
             raise ParameterError(f"rate scale factor {factor!r} must be finite and >= 0")

@@ -24,6 +24,7 @@ size, an unreadable manifest) is deleted and rebuilt, with a note.
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import dataclasses
 import fcntl
@@ -58,7 +59,7 @@ STRUCTURE_CONFIG = ("include_origin_state", "priority", "keep_nonpositive", "ord
 
 #: The structure this process used last (one: the month table's maps 1 GB of class lists when swept),
 #: so the hours of a day and the points of a sweep do not reopen it.
-_RECENT: dict[str, "Structure"] = {}
+_RECENT: dict[str, Structure] = {}
 
 
 @dataclass(frozen=True, eq=False)
@@ -189,10 +190,8 @@ def _build_into(
 def _release_free_heap() -> None:
     """Hand the build's freed temporaries back to the system (glibc keeps them in its per-thread arenas
     otherwise, and the sweeps that follow would add the mapped lists on top of them)."""
-    try:
+    with contextlib.suppress(OSError, AttributeError):  # not glibc: nothing to do
         ctypes.CDLL("libc.so.6").malloc_trim(0)
-    except (OSError, AttributeError):  # not glibc: nothing to do
-        pass
 
 
 def _open_entry(directory: Path, n_od: int) -> Structure | None:
@@ -225,7 +224,7 @@ def _open_entry(directory: Path, n_od: int) -> Structure | None:
 def _build_lock(path: Path, n_od: int):
     """Exclusive lock of one entry's builders (released by the kernel if the process dies)."""
     try:
-        fh = open(path, "a+")
+        fh = open(path, "a+")  # noqa: SIM115 (held for the lock's lifetime, closed below)
     except OSError as exc:
         raise cache_write_error(path, exc) from None
     with fh:

@@ -20,7 +20,7 @@ NO_CELL = -1
 def _authors_bounds(lon: np.ndarray, lat: np.ndarray) -> tuple[float, float, float, float]:
     min_x = min_y = 8888.0
     max_x = max_y = 0.0
-    for x, y in zip(lon.tolist(), lat.tolist()):
+    for x, y in zip(lon.tolist(), lat.tolist(), strict=True):
         if y > max_y:
             max_y = y
         elif y < min_y:

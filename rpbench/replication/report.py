@@ -27,14 +27,14 @@ def _rel(a, b) -> float:
 def agreement(frame: pd.DataFrame) -> pd.DataFrame:
     """Per date and strategy: the authors' engine beside the committed output, with relative differences."""
     a = frame[frame["engine"] == "authors"].copy()
-    a["rel_pairing"] = [_rel(x, y) for x, y in zip(a["pairing_ratio"], a["committed_pairing_ratio"])]
-    a["rel_saving"] = [_rel(x, y) for x, y in zip(a["total_saving_km"], a["committed_total_saving_km"])]
+    a["rel_pairing"] = [_rel(x, y) for x, y in zip(a["pairing_ratio"], a["committed_pairing_ratio"], strict=True)]
+    a["rel_saving"] = [_rel(x, y) for x, y in zip(a["total_saving_km"], a["committed_total_saving_km"], strict=True)]
     a["diff_response"] = a["response_rate"] - a["committed_response_rate"].astype(float)
     a["within"] = [
         (abs(rp) <= REL_TOL and abs(rs) <= REL_TOL)
         if s in CRITERION_STRATEGIES
         else (abs(dr) <= NP_RESPONSE_TOL if s == "np" else np.nan)
-        for s, rp, rs, dr in zip(a["strategy"], a["rel_pairing"], a["rel_saving"], a["diff_response"])
+        for s, rp, rs, dr in zip(a["strategy"], a["rel_pairing"], a["rel_saving"], a["diff_response"], strict=True)
     ]
     return a
 

@@ -83,7 +83,7 @@ def build_round(engine, t: float, seekers: list[int], active: list[int]) -> tupl
     for c, vi in enumerate(active):
         veh = engine.vehicles[vi]
         pk = dist[veh.node, o[np.asarray(s)]]
-        near = [r for r, k in zip(s, pk) if _within(k, p.max_pickup_m, True)]
+        near = [r for r, k in zip(s, pk, strict=True) if _within(k, p.max_pickup_m, True)]
         if veh.p0 < 0:
             for r in near:
                 pk_w = dist[o[r], veh.node] if sw.pickup_from_first_origin else dist[veh.node, o[r]]

@@ -315,7 +315,7 @@ def _check_comparison(folder: Path) -> tuple[RunCheck, list[RunCheck]]:
     return fc, runs
 
 
-def _check_run(f: "_Folder", name: str, bound_km: float | None) -> tuple[RunCheck, pd.DataFrame | None]:
+def _check_run(f: _Folder, name: str, bound_km: float | None) -> tuple[RunCheck, pd.DataFrame | None]:
     """One run's checks, and its expected rows of hourly.csv (None: an oracle without any).  A malformation
     this module did not foresee makes the run unreadable (exit status 2), never a traceback."""
     run_dir = f.path / "runs" / name
@@ -743,7 +743,7 @@ def _check_movement(rc: RunCheck, traj, network, initial: np.ndarray, params: Pa
         too_fast = dt[move] < length / params.speed_mps - TOL_S
         if too_fast.any():
             rc.fail("movement", f"{int(too_fast.sum())} arcs driven faster than {params.speed_mps:.4f} m/s")
-    rc.checked["trajectory_steps"] = int(len(i))
+    rc.checked["trajectory_steps"] = len(i)
     return True
 
 
@@ -947,7 +947,7 @@ def _check_events(rc: RunCheck, events: pd.DataFrame, f: _Folder, traj) -> pd.Da
     for o in np.flatnonzero(far)[:5]:
         rc.fail("max-pickup", f"order {o}: pick-up distance {pickup[o]:.1f} m > R̄ = {params.max_pickup_m:g} m")
     _check_capacity(rc, v_assign, t_assign, t_pick, t_drop, served)
-    rc.checked["events"] = int(len(events))
+    rc.checked["events"] = len(events)
     return pd.DataFrame(
         {
             "request_s": request,
@@ -1096,7 +1096,7 @@ def _compare_kpis(
     """Every recomputed KPI is reported and equal; every reported one is recomputed, a solver claim that
     passed its consistency test (``claims``: key -> failure message or None) or listed as unverifiable."""
     seen: dict[str, float | None] = {}
-    for key, value in zip(reported["kpi"].to_numpy(), reported["value"].to_numpy()):
+    for key, value in zip(reported["kpi"].to_numpy(), reported["value"].to_numpy(), strict=True):
         if key in seen:
             rc.fail("kpi", f"KPI {key} is reported twice")
         seen[key] = _as_number(value)
@@ -1107,7 +1107,7 @@ def _compare_kpis(
             rc.fail("kpi", f"KPI {key} is not reported in kpis.csv")
         elif seen[key] is not None and not _same(seen[key], float(value)):
             rc.fail("kpi", f"KPI {key}: reported {seen[key]!r}, recomputed {float(value)!r}")
-    for key, message in (claims or {}).items():
+    for message in (claims or {}).values():
         if message is not None:
             rc.fail("kpi", message)
     allowed = set(recomputed) | set(claims or {}) | UNVERIFIED_KPIS[kind]
@@ -1231,7 +1231,7 @@ def _check_report(fc: RunCheck, f: _Folder) -> None:
     unmatched = set()
     if len(found) != len(expected):
         unmatched.add(f"({len(found)} KPI tables in report.md, {len(expected)} rendered)")
-    for want, have in zip(expected, found):
+    for want, have in zip(expected, found, strict=True):
         shown = dict(have)
         for label, cells in want:
             if label not in shown:
@@ -1291,7 +1291,7 @@ class _Geometry:
     l_y: np.ndarray
 
     @classmethod
-    def of(cls, f: _Folder, x, y, h, delta, pre, max_detour_m: float) -> "_Geometry":
+    def of(cls, f: _Folder, x, y, h, delta, pre, max_detour_m: float) -> _Geometry:
         dist, o, d, solo = f.distances.dist, f.col("origin"), f.col("destination"), f.solo
         p = dist[h, o[y]]
         l_oy_dx, l_dx_dy, l_dy_dx = dist[o[y], d[x]], dist[d[x], d[y]], dist[d[y], d[x]]
@@ -1699,7 +1699,7 @@ def _oracle_kpis(
         "avg_shared_m": float(route["shared"].mean()) if count else float("nan"),
         "objective_m": objective,
     }
-    have = {k: _as_number(v) for k, v in zip(reported["kpi"], reported["value"])}
+    have = {k: _as_number(v) for k, v in zip(reported["kpi"], reported["value"], strict=True)}
     optimal = rec.get("status", "optimal") == "optimal"
     claims = {}
     if not bound:

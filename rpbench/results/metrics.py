@@ -28,6 +28,8 @@ and paired with another passenger in the same vehicle):
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pandas as pd
 
@@ -147,7 +149,7 @@ def occupied_distance_m(events: pd.DataFrame, traj: dict[str, np.ndarray]) -> np
     t = ev["t_s"].to_numpy()
     load = np.zeros(len(ev), dtype=np.int64)
     starts = np.r_[0, np.flatnonzero(np.diff(veh)) + 1, len(ev)]
-    for a, b in zip(starts[:-1], starts[1:]):
+    for a, b in itertools.pairwise(starts):
         load[a:b] = np.cumsum(ev["delta"].to_numpy()[a:b])
     odo = odometer_at(traj, veh, t)
     # Distance between consecutive events of a vehicle counts when the load after the first is > 0.

@@ -44,7 +44,7 @@ def hourly_figure(hourly: pd.DataFrame, path: Path, title: str) -> Path:
     """The paper's 24-hour comparison: four panels, one line per run (``hourly.csv`` layout)."""
     plt = _pyplot()
     fig, axes = plt.subplots(2, 2, figsize=(11, 7), sharex=True)
-    for ax, (col, name) in zip(axes.ravel(), HOURLY_PANELS):
+    for ax, (col, name) in zip(axes.ravel(), HOURLY_PANELS, strict=True):
         for run, g in hourly.groupby("run", sort=False):
             label, color = _label(run)
             ax.plot(g["hour"], g[col], marker="o", ms=3, label=label, color=color)
@@ -85,7 +85,7 @@ def sweep_figure(table: pd.DataFrame, parameter: str, kpis: list[str], path: Pat
     plt = _pyplot()
     fig, axes = plt.subplots(1, len(kpis), figsize=(3.6 * len(kpis), 3.4))
     axes = [axes] if len(kpis) == 1 else list(axes)
-    for ax, kpi in zip(axes, kpis):
+    for ax, kpi in zip(axes, kpis, strict=True):
         sel = table[table["kpi"] == kpi]
         for run, g in sel.groupby("run", sort=False):
             label, color = _label(run)
@@ -109,7 +109,7 @@ def bench_figure(table: pd.DataFrame, path: Path, title: str) -> Path:
     done = table[table["status"] == "optimal"]
     structures = list(dict.fromkeys(table["structure"]))
     fig, axes = plt.subplots(1, len(structures), figsize=(4.2 * len(structures), 3.8), squeeze=False)
-    for ax, structure in zip(axes[0], structures):
+    for ax, structure in zip(axes[0], structures, strict=True):
         for preset, g in done[done["structure"] == structure].groupby("preset", sort=True):
             g = g.sort_values("cols")
             ax.plot(g["cols"], g["total_s"] * 1e3, marker="o", ms=3, label=preset)

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -79,7 +79,7 @@ class Params:
         "driver_pay_cny_per_km",
     )
     #: Upper bounds (and, where above 0, lower bounds) of the class docstring's table: name -> (low, high, unit).
-    _RANGE = {
+    _RANGE: ClassVar[dict[str, tuple[float, float, str]]] = {
         "dt_s": (0.1, 3600.0, "s"),
         "speed_mps": (0.1, 100.0, "m/s"),
         "max_pickup_m": (0.0, 1e6, "m"),
@@ -128,7 +128,7 @@ class Params:
                     f"(the paper uses {getattr(Params, name):g})"
                 )
 
-    def replace(self, **changes: Any) -> "Params":
+    def replace(self, **changes: Any) -> Params:
         """A copy with some fields changed (validated); unknown names are an error."""
         unknown = set(changes) - {f.name for f in dataclasses.fields(self)}
         if unknown:
@@ -256,11 +256,11 @@ class Scenario:
             "scenario": self.name,
             "label": self.label,
             "synthetic": self.synthetic,
-            "orders": int(len(o)),
-            "vehicles": int(len(self.fleet)),
+            "orders": len(o),
+            "vehicles": len(self.fleet),
             "nodes": int(self.network.n_nodes),
             "arcs": int(self.network.n_arcs),
-            "distinct_od_pairs": int(len(od)),
+            "distinct_od_pairs": len(od),
             "mean_solo_trip_m": float(solo.mean()) if len(o) else 0.0,
             "first_request_s": float(o.request_s[0]) if len(o) else 0.0,
             "last_request_s": float(o.request_s[-1]) if len(o) else 0.0,

@@ -38,7 +38,7 @@ class Streams:
 
     def __init__(self, seed: int):
         children = np.random.SeedSequence(int(seed)).spawn(len(self.NAMES))
-        self._rng = {name: np.random.default_rng(s) for name, s in zip(self.NAMES, children)}
+        self._rng = {name: np.random.default_rng(s) for name, s in zip(self.NAMES, children, strict=True)}
 
     def __getattr__(self, name: str) -> np.random.Generator:
         try:
@@ -89,7 +89,7 @@ def make_orders(order_id, request_s, origin, destination, patience_s) -> Orders:
 
 def fleet_size(n_orders: int, params: Params) -> int:
     """Vehicles for ``n_orders`` at the order-driver ratio (at least one)."""
-    return max(1, int(round(n_orders * params.vehicles_per_100_orders / 100.0)))
+    return max(1, round(n_orders * params.vehicles_per_100_orders / 100.0))
 
 
 def place_fleet(

@@ -50,7 +50,7 @@ def build_peak(
     origin = network.index_of(frame["origin_id"], what=f"origin node id in the {day} orders")
     destination = network.index_of(frame["destination_id"], what=f"destination node id in the {day} orders")
     rng = Streams(seed)
-    n_keep = int(round(sample * len(frame)))
+    n_keep = round(sample * len(frame))
     require_orders(n_keep, len(frame), sample, f"the {day} 08:00-09:00 hour of {str(peak_order_path(data_dir, day))!r}")
     keep = np.sort(rng.sample.choice(len(frame), size=n_keep, replace=False)) if sample < 1 else np.arange(len(frame))
     start = pd.Timestamp(day) + pd.Timedelta(hours=8)
@@ -82,7 +82,7 @@ def build_peak(
             "date": day,
             "data_dir": str(data_dir),
             "sample": sample,
-            "rows_in_hour": int(len(frame)),
+            "rows_in_hour": len(frame),
             "fleet_placement": fleet_placement,
         },
         demand=Demand(table="month", data_dir=str(data_dir)),

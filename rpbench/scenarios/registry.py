@@ -9,9 +9,10 @@ is what ``--dates`` runs over.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 from rpbench.data import available_peak_dates, read_hourly_counts
 from rpbench.exceptions import ParameterError

@@ -41,13 +41,13 @@ class ScenarioRequest:
     def overrides(self) -> dict[str, float]:
         return dict(self.params)
 
-    def replace(self, **changes: Any) -> "ScenarioRequest":
+    def replace(self, **changes: Any) -> ScenarioRequest:
         """A copy with some fields changed; ``params`` may be given as a dict."""
         if isinstance(changes.get("params"), dict):
             changes["params"] = tuple(changes["params"].items())
         return dataclasses.replace(self, **changes)
 
-    def with_overrides(self, overrides: dict[str, float]) -> "ScenarioRequest":
+    def with_overrides(self, overrides: dict[str, float]) -> ScenarioRequest:
         """This request with more parameter overrides (they win over the present ones)."""
         return self.replace(params={**self.overrides, **overrides})
 

@@ -85,7 +85,7 @@ def build_toy(
     sample, seed = check_sample(sample), check_seed(seed)
     network = grid_network(size, seed=0)  # the city stays the same across seeds; demand varies
     rng = Streams(seed)
-    n = int(round(sample * BASE_ORDERS))
+    n = round(sample * BASE_ORDERS)
     require_orders(n, BASE_ORDERS, sample, "the toy city")
     homes = np.array([1 * size + 1, (size - 2) * size + 2, (size // 2) * size + size - 2])
     work = np.array([(size // 2) * size + size // 2, 2 * size + size - 3])

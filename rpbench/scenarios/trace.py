@@ -60,7 +60,7 @@ def build_trace(
     origin = network.index_of(frame["origin_id"], what="start_ver in the 2017-07-01 trace")
     destination = network.index_of(frame["destination_id"], what="end_ver in the 2017-07-01 trace")
     rng = Streams(seed)
-    n_keep = int(round(sample * len(frame)))
+    n_keep = round(sample * len(frame))
     require_orders(n_keep, len(frame), sample, f"the {TRACE_DATE} trace")
     keep = np.sort(rng.sample.choice(len(frame), size=n_keep, replace=False)) if sample < 1 else np.arange(len(frame))
     start = pd.Timestamp(TRACE_DATE)

@@ -19,6 +19,7 @@ verifies (consecutive nodes joined by arcs, driven at the set speed).
 from __future__ import annotations
 
 import heapq
+import itertools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -109,7 +110,7 @@ class FleetState:
         tail: list[np.ndarray] = []
         reach: list[int] = []
         length = 0
-        for a, b in zip(waypoints[:-1], waypoints[1:]):
+        for a, b in itertools.pairwise(waypoints):
             path = self.distances.path_nodes(a, b)[1:]
             tail.append(path)
             length += len(path)
@@ -255,7 +256,7 @@ class FleetState:
         next one is produced.
         """
         while self._heap and self._heap[0][0] <= t + _EPS_S:
-            time, v, version = heapq.heappop(self._heap)
+            _, v, version = heapq.heappop(self._heap)
             if version != self._version[v]:
                 continue
             plan = self.plans[v]

@@ -235,7 +235,7 @@ class Simulator:
             solution, moves = canonicalize(model, solution)
         assigned = self._commit(rm, solution.chosen, t)
         vehicles, targets = self.strategy.reposition(state, rm, solution.chosen)
-        for v, node in zip(vehicles, targets):
+        for v, node in zip(vehicles, targets, strict=True):
             self._reposition(int(v), int(node), t)
         size = model.size
         self.rounds.append(

@@ -71,8 +71,8 @@ def make_strategy(name: str, **options: Any) -> Strategy:
 
 __all__ = [
     "ENTRY_POINT_GROUP",
-    "Kind",
     "REGISTRY",
+    "Kind",
     "RoundModel",
     "RoundState",
     "Strategy",

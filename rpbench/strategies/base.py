@@ -147,7 +147,7 @@ class Strategy(ABC):
         """``options`` completed from the calibration run's KPIs (whole run) and ``hourly`` table."""
         return options
 
-    def prepare(self, scenario: Scenario) -> None:
+    def prepare(self, scenario: Scenario) -> None:  # noqa: B027 (a hook: doing nothing is the default)
         """Called once before the first round (e.g. to load predictions)."""
 
     @abstractmethod

@@ -43,7 +43,7 @@ class JoinOptions:
     fofo: np.ndarray
 
     @classmethod
-    def empty(cls) -> "JoinOptions":
+    def empty(cls) -> JoinOptions:
         none = np.zeros(0, np.int64)
         return cls(none, none, np.zeros(0), np.zeros(0), np.zeros(0, bool))
 

@@ -31,7 +31,7 @@ class RunOptions:
     """Base of every options class (a strategy without options uses it as is)."""
 
     @classmethod
-    def parse(cls, owner: str, raw: dict[str, Any] | None = None) -> "RunOptions":
+    def parse(cls, owner: str, raw: dict[str, Any] | None = None) -> RunOptions:
         """The options named in ``raw`` (Python values or text), the rest at their defaults."""
         raw = dict(raw or {})
         declared = {f.name: f for f in dataclasses.fields(cls)}
@@ -59,7 +59,7 @@ class RunOptions:
         """Every option, defaults included (as recorded in meta.json)."""
         return {f.name: _plain(getattr(self, f.name)) for f in dataclasses.fields(self)}
 
-    def replace(self, **changes: Any) -> "RunOptions":
+    def replace(self, **changes: Any) -> RunOptions:
         return dataclasses.replace(self, **changes)
 
 

@@ -248,12 +248,12 @@ def _top_k_per_request(cols: dict, k: int) -> dict:
         rank = np.arange(len(order)) - np.repeat(starts, np.diff(np.r_[starts, len(order)]))
     keep = np.zeros(len(single), dtype=bool)
     keep[order[rank < k]] = True
-    kept_edges = {(int(r), int(v)) for r, v in zip(cols["r1"][keep], cols["vehicle_row"][keep])}
+    kept_edges = {(int(r), int(v)) for r, v in zip(cols["r1"][keep], cols["vehicle_row"][keep], strict=True)}
     pair = ~single
     ok_pair = np.array(
         [
             (int(a), int(v)) in kept_edges and (int(b), int(v)) in kept_edges
-            for a, b, v in zip(cols["r1"][pair], cols["r2"][pair], cols["vehicle_row"][pair])
+            for a, b, v in zip(cols["r1"][pair], cols["r2"][pair], cols["vehicle_row"][pair], strict=True)
         ],
         dtype=bool,
     )

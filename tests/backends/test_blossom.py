@@ -33,7 +33,9 @@ def networkx_optimum(model: PairingModel) -> tuple[float, int]:
     lexi = model.objective == "cardinality_then_weight"
     g = nx.Graph()
     g.add_weighted_edges_from(
-        (a, b, w) for a, b, w in zip(model.col_a.tolist(), model.col_b.tolist(), model.values.tolist()) if lexi or w > 0
+        (a, b, w)
+        for a, b, w in zip(model.col_a.tolist(), model.col_b.tolist(), model.values.tolist(), strict=True)
+        if lexi or w > 0
     )
     m = nx.max_weight_matching(g, maxcardinality=lexi)
     return float(sum(g.edges[e]["weight"] for e in m)), len(m)

@@ -18,21 +18,21 @@ def graphs(draw, max_n=24):
     edges = draw(
         st.sets(st.tuples(st.integers(0, n - 1), st.integers(0, n - 1)).filter(lambda e: e[0] < e[1]), max_size=3 * n)
     )
-    a, b = (np.array(x, np.int64) for x in zip(*sorted(edges))) if edges else (np.zeros(0, np.int64),) * 2
+    a, b = (np.array(x, np.int64) for x in zip(*sorted(edges), strict=True)) if edges else (np.zeros(0, np.int64),) * 2
     return n, a, b
 
 
 def _networkx_matching_number(n, a, b) -> int:
     g = nx.Graph()
     g.add_nodes_from(range(n))
-    g.add_edges_from(zip(a.tolist(), b.tolist()))
+    g.add_edges_from(zip(a.tolist(), b.tolist(), strict=True))
     return len(nx.max_weight_matching(g, maxcardinality=True))
 
 
 def _assert_matching(n, a, b, mate):
     v = np.flatnonzero(mate >= 0)
     assert np.all(mate[mate[v]] == v)
-    edges = set(zip(a.tolist(), b.tolist())) | set(zip(b.tolist(), a.tolist()))
+    edges = set(zip(a.tolist(), b.tolist(), strict=True)) | set(zip(b.tolist(), a.tolist(), strict=True))
     assert all((x, int(mate[x])) in edges for x in v)
 
 

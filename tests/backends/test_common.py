@@ -85,8 +85,8 @@ def test_program_arrays_are_the_sorted_incidence_matrix(seed):
     n_req, n_veh, n = 6, 4, int(rng.integers(1, 15))
     r1 = rng.integers(0, n_req - 1, n)
     r2 = np.where(rng.random(n) < 0.5, -1, r1 + 1 + rng.integers(0, n_req - 1 - r1))
-    keys = {(int(v), int(a), int(b)) for v, a, b in zip(rng.integers(0, n_veh, n), r1, r2)}
-    v, a, b = (np.array(x) for x in zip(*sorted(keys)))
+    keys = {(int(v), int(a), int(b)) for v, a, b in zip(rng.integers(0, n_veh, n), r1, r2, strict=True)}
+    v, a, b = (np.array(x) for x in zip(*sorted(keys), strict=True))
     model = TripPackingModel(n_req, n_veh, v, a, b, rng.integers(-5, 5, len(v)).astype(float))
     for min_count in (None, 1):
         prog = program(model, min_count=min_count)
@@ -95,7 +95,7 @@ def test_program_arrays_are_the_sorted_incidence_matrix(seed):
             expected = sp.vstack([expected, sp.csr_matrix(np.ones((1, model.n_cols)))], format="csc")
         expected.sort_indices()
         assert np.array_equal(prog.indptr, expected.indptr) and np.array_equal(prog.indices, expected.indices)
-        assert (prog.A != expected).nnz == 0 and prog.n_rows == expected.shape[0] and prog.n == model.n_cols
+        assert (expected != prog.A).nnz == 0 and prog.n_rows == expected.shape[0] and prog.n == model.n_cols
 
 
 @pytest.mark.parametrize("seed", range(20))

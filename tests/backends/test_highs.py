@@ -30,7 +30,7 @@ def test_a_kept_instance_answers_as_a_fresh_one(monkeypatch):
     for m in _models():
         monkeypatch.setattr(highs, "_kept", highs._Kept())
         fresh.append(backend.solve(m, options).chosen)
-    assert all(np.array_equal(a, b) for a, b in zip(kept, fresh))
+    assert all(np.array_equal(a, b) for a, b in zip(kept, fresh, strict=True))
 
 
 def test_options_of_a_previous_solve_do_not_leak():

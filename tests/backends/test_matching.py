@@ -31,7 +31,7 @@ def no_blossom_v(monkeypatch):
 def networkx_optimum(model: PairingModel) -> tuple[float, int]:
     g = nx.Graph()
     lexi = model.objective == "cardinality_then_weight"
-    for a, b, w in zip(model.col_a.tolist(), model.col_b.tolist(), model.values.tolist()):
+    for a, b, w in zip(model.col_a.tolist(), model.col_b.tolist(), model.values.tolist(), strict=True):
         if lexi or w > 0:
             g.add_edge(a, b, weight=w)
     m = nx.max_weight_matching(g, maxcardinality=lexi)
@@ -148,10 +148,10 @@ def test_oracle2_bound_never_cuts_off_the_optimum(seed):
     rng = np.random.default_rng(seed)
     n = int(rng.integers(6, 40))
     edges = sorted({tuple(sorted(rng.choice(n, 2, replace=False))) for _ in range(int(rng.integers(n, 3 * n)))})
-    a, b = (np.array(x) for x in zip(*edges))
+    a, b = (np.array(x) for x in zip(*edges, strict=True))
     w = rng.integers(-50, 400, len(a))
     g = nx.Graph()
-    g.add_weighted_edges_from(zip(a.tolist(), b.tolist(), w.tolist()))
+    g.add_weighted_edges_from(zip(a.tolist(), b.tolist(), w.tolist(), strict=True))
     best = nx.max_weight_matching(g, maxcardinality=True)
     opt = sum(g.edges[e]["weight"] for e in best)
     sel, proven, bound = mb.max_weight_max_cardinality(n, a, b, w, Clock())

@@ -33,8 +33,11 @@ def lp_answer(model):
     return unique_optimum(model, kept_instance(highs_settings(SolveOptions(), None, relax=True), role="test"))
 
 
+VALUES = st.integers(-6, 12)
+
+
 @st.composite
-def packings(draw, values=st.integers(-6, 12)):
+def packings(draw, values=VALUES):
     R, V = draw(st.integers(1, 5)), draw(st.integers(1, 4))
     singles = [(r, -1, v) for r in range(R) for v in range(V) if draw(st.integers(0, 2)) == 0]
     pairs = [(a, b, v) for a in range(R) for b in range(a + 1, R) for v in range(V) if draw(st.integers(0, 4)) == 0]

@@ -47,7 +47,7 @@ def test_cross_check_flags_disagreement_and_impossible_values():
         ("n", "time_limit", 3.0),
         ("n", "error", np.nan),
     ]
-    rows = [dict(zip(("model", "status", "objective"), r)) for r in rows]
+    rows = [dict(zip(("model", "status", "objective"), r, strict=True)) for r in rows]
     agrees = cross_check(pd.DataFrame(rows))["agrees"].tolist()
     assert agrees[:4] == [False, False, True, False] and pd.isna(agrees[4]) and pd.isna(agrees[5])
 

@@ -64,6 +64,6 @@ def test_unknown_node_in_links(fake_data):
 
 def test_network_not_strongly_connected(fake_data):
     # Drop every link touching node 8: it becomes unreachable.
-    _rewrite_links(fake_data, lambda ls: [ls[0]] + [l for l in ls[1:] if ",8," not in l])
+    _rewrite_links(fake_data, lambda ls: [ls[0]] + [line for line in ls[1:] if ",8," not in line])
     with pytest.raises(DataError, match="not strongly connected"):
         RoadNetwork.from_tables(read_haikou_network(fake_data))

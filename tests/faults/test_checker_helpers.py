@@ -15,8 +15,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-
 from helpers import write_fake_haikou as _write_fake_haikou
+
 from rpbench.cli import main
 from rpbench.harness.comparison import run_comparison
 from rpbench.results.check import check_tree

@@ -174,7 +174,7 @@ def test_check_folder_lists_the_runs_and_the_folder_only_when_it_failed(base, tm
     assert [c.run for c in check_folder(base)] == ["mb", "rtv", "fl", "bound", "oracle1", "oracle2"]
     folder = copy(base, tmp_path)
     shutil.rmtree(folder / "runs" / "oracle2")
-    assert [c.run for c in check_folder(folder)][0] == FOLDER
+    assert next(c.run for c in check_folder(folder)) == FOLDER
 
 
 def test_the_help_states_the_exit_statuses(capsys):

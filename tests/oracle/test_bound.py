@@ -41,8 +41,8 @@ def test_enumeration_equals_a_brute_force_over_all_pairs(seed, overrides):
     a, b = np.triu_indices(n, k=1)
     solo = dist[sc.orders.origin, sc.orders.destination]
     weight, edge = bound_weights(sc.network.distances(), _frame(sc), solo, sc.params, a, b)
-    expected = {(int(x), int(y)): w for x, y, w in zip(a[edge], b[edge], weight[edge])}
-    found = {(int(lo), int(hi)): w for lo, hi, w in zip(cands.low, cands.high, cands.saving_m)}
+    expected = {(int(x), int(y)): w for x, y, w in zip(a[edge], b[edge], weight[edge], strict=True)}
+    found = {(int(lo), int(hi)): w for lo, hi, w in zip(cands.low, cands.high, cands.saving_m, strict=True)}
     assert found.keys() == expected.keys() and len(found) > 20
     assert all(found[k] == pytest.approx(expected[k], abs=1e-9) for k in found)
 

@@ -119,7 +119,7 @@ def brute_force(net, dist_oracle, orders: Orders, rules: PairRules) -> dict:
 
 
 def assert_same(cands, ref: dict):
-    got = {(int(a), int(b)): k for k, (a, b) in enumerate(zip(cands.low, cands.high))}
+    got = {(int(a), int(b)): k for k, (a, b) in enumerate(zip(cands.low, cands.high, strict=True))}
     assert set(got) == set(ref)
     for key, k in got.items():
         first, second, enroute, fofo, saving, length, det_a, det_b, shared, pk = ref[key]
@@ -197,7 +197,7 @@ def test_time_window_is_inclusive_and_ties_go_by_id(grid):
     # Same OD; orders 7 and 3 request at the same time, order 9 exactly K̄ later, order 1 just after.
     orders = make_orders([0, 0, 0, 0], [63, 63, 63, 63], [10.0, 10.0, 100.0, 100.0 + 1e-6], [7, 3, 9, 1])
     cands = find_candidates(dist, orders, PairRules(planner_patience_s=90.0))
-    ids = {(int(orders.order_id[a]), int(orders.order_id[b])) for a, b in zip(cands.first, cands.second)}
+    ids = {(int(orders.order_id[a]), int(orders.order_id[b])) for a, b in zip(cands.first, cands.second, strict=True)}
     assert (3, 7) in ids and (7, 3) not in ids  # the tie: smaller id picked up first
     assert (3, 9) in ids and (7, 9) in ids  # dt = K̄ exactly is allowed
     assert (3, 1) not in ids and (7, 1) not in ids
@@ -233,7 +233,7 @@ def test_enroute_boundaries(grid):
     rules = PairRules(planner_patience_s=0.0, speed_mps=1.0, max_detour_m=1e9, allow_enroute=True)
     orders = make_orders([o_i, 9, 9], [d_i, 60, 60], [0.0, at_node, l_i], [0, 1, 2])
     cands = find_candidates(dist, orders, rules)
-    assert {(int(a), int(b)) for a, b in zip(cands.first, cands.second)} == {(0, 1), (1, 2)}
+    assert {(int(a), int(b)) for a, b in zip(cands.first, cands.second, strict=True)} == {(0, 1), (1, 2)}
     row = int(np.flatnonzero(cands.second == 1)[0])
     assert cands.enroute[row]
     assert cands.pickup_m[row] == pytest.approx(dist.dist[nodes[k], 9])  # pre = 0 at the node itself

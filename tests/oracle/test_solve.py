@@ -41,7 +41,9 @@ class NetworkxBackend(Backend):
     def solve(self, model, options):
         t0 = time.perf_counter()
         g = nx.Graph()
-        for c, (a, b, v) in enumerate(zip(model.col_a.tolist(), model.col_b.tolist(), model.values.tolist())):
+        for c, (a, b, v) in enumerate(
+            zip(model.col_a.tolist(), model.col_b.tolist(), model.values.tolist(), strict=True)
+        ):
             g.add_edge(a, b, weight=v, col=c)
         m = nx.max_weight_matching(g, maxcardinality=model.objective == "cardinality_then_weight")
         return make_solution(
@@ -110,7 +112,7 @@ def random_scenario(toy, seed: int, n: int, span_s: float = 200.0):
 
 
 def chosen_pairs(result: OracleResult) -> set:
-    return {tuple(sorted(x)) for x in zip(result.pairs["first_id"], result.pairs["second_id"])}
+    return {tuple(sorted(x)) for x in zip(result.pairs["first_id"], result.pairs["second_id"], strict=True)}
 
 
 def all_matchings(n, edges):
@@ -153,7 +155,7 @@ def test_o_t1_o_t3_matching_is_valid_and_variants_order(toy, solver):
     r2 = solve_oracle(toy, 2, solver, candidates=cands)
     feasible = {
         tuple(sorted((int(toy.orders.order_id[a]), int(toy.orders.order_id[b]))))
-        for a, b in zip(cands.first, cands.second)
+        for a, b in zip(cands.first, cands.second, strict=True)
     }
     for r in (r1, r2):
         assert r.status is Status.OPTIMAL
@@ -181,7 +183,7 @@ def test_o_t2_small_instances_equal_exhaustive_search(toy, seed, n, span, both, 
     sc = random_scenario(toy, seed, n, span)
     rules = PairRules.from_params(sc.params, both_pickup_orders=both, allow_enroute=enroute)
     cands = find_candidates(sc.network.distances(), sc.orders, rules)
-    edges = list(zip(cands.low.tolist(), cands.high.tolist(), cands.saving_m.tolist()))
+    edges = list(zip(cands.low.tolist(), cands.high.tolist(), cands.saving_m.tolist(), strict=True))
     matchings = list(all_matchings(n, edges))
     best1 = max(sum(max(edges[k][2], 0.0) for k in m) for m in matchings)  # drop e <= 0 edges
     best2 = max((len(m), sum(edges[k][2] for k in m)) for m in matchings)
@@ -314,7 +316,7 @@ def test_o_t7_saving_is_half_the_seed_objective(toy, seed):
     # The seed's double sum over our matching, written out: Σ_i Σ_j e(i,j) x_ij = 2 S.
     pos = {int(x): k for k, x in enumerate(sc.orders.order_id)}
     x = np.eye(n)
-    for a, b in zip(r1.pairs["first_id"], r1.pairs["second_id"]):
+    for a, b in zip(r1.pairs["first_id"], r1.pairs["second_id"], strict=True):
         i, j = pos[int(a)], pos[int(b)]
         x[i, j] = x[j, i] = 1
         x[i, i] = x[j, j] = 0
@@ -515,7 +517,7 @@ def test_maximum_pairs_is_the_matching_number():
     for _ in range(20):
         n = int(rng.integers(2, 30))
         pairs = {tuple(sorted(rng.choice(n, 2, replace=False))) for _ in range(int(rng.integers(1, 3 * n)))}
-        a, b = map(np.array, zip(*sorted(pairs)))
+        a, b = map(np.array, zip(*sorted(pairs), strict=True))
         model = PairingModel(n, a, b, np.ones(len(a)))
-        g = nx.Graph(list(zip(a.tolist(), b.tolist())))
+        g = nx.Graph(list(zip(a.tolist(), b.tolist(), strict=True)))
         assert maximum_pairs(model) == len(nx.max_weight_matching(g, maxcardinality=True))

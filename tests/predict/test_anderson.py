@@ -87,7 +87,7 @@ def test_factorisation_stays_orthonormal_and_reproduces_the_differences(depth):
     q, r = mixing._q[:, :m], mixing._r[:m, :m]
     np.testing.assert_allclose(q.T @ q, np.eye(m), atol=1e-12)
     assert np.allclose(np.tril(r, -1), 0.0)
-    differences = np.stack([b - a for a, b in zip(fs[-m - 1 : -1], fs[-m:])], axis=1)
+    differences = np.stack([b - a for a, b in zip(fs[-m - 1 : -1], fs[-m:], strict=True)], axis=1)
     np.testing.assert_allclose(q @ r, differences, atol=1e-12)
 
 

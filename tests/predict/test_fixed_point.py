@@ -258,9 +258,11 @@ def test_l6_symmetry_and_relabelling():
     net = line_network([250.0, 610.0, 430.0, 610.0, 250.0])
     rates = OdRates.from_arrays([0, 5, 1, 4], [3, 2, 5, 0], [2e-3] * 4, n_nodes=6)
     pred = solve_model(build_model(net, rates, Params(), PredictConfig()))
-    p = dict(zip(zip(rates.origin.tolist(), rates.destination.tolist()), pred.od.pairing_prob))
+    p = dict(
+        zip(zip(rates.origin.tolist(), rates.destination.tolist(), strict=True), pred.od.pairing_prob, strict=True)
+    )
     assert p[(0, 3)] == pytest.approx(p[(5, 2)], abs=1e-12) and p[(1, 5)] == pytest.approx(p[(4, 0)], abs=1e-12)
-    e = dict(zip(zip(rates.origin.tolist(), rates.destination.tolist()), pred.od.e_vacant))
+    e = dict(zip(zip(rates.origin.tolist(), rates.destination.tolist(), strict=True), pred.od.e_vacant, strict=True))
     assert e[(0, 3)] == pytest.approx(e[(5, 2)], rel=1e-9)
     # Relabelling the OD rows (input order) changes nothing.
     inst = make_instance(seed=9, size=5, n_od=12)

@@ -21,5 +21,5 @@ def test_hours_are_slim_and_equal_hours_are_shared(tmp_path, monkeypatch):
     assert len(full.rho) > 0
     look_full = full.lookup(full.rates.origin, full.rates.destination)
     look_slim = preds[0].lookup(full.rates.origin, full.rates.destination)
-    for a, b in zip(look_full.__dict__.values(), look_slim.__dict__.values()):
+    for a, b in zip(look_full.__dict__.values(), look_slim.__dict__.values(), strict=True):
         np.testing.assert_array_equal(a, b)

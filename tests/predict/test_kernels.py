@@ -76,7 +76,7 @@ def test_sweep_does_not_depend_on_the_thread_count(savings):
             results.append(out + ((sums.by_class, sums.by_seeker) if savings else ()))
     finally:
         set_num_threads(before)
-    for a, b in zip(*results):
+    for a, b in zip(*results, strict=True):
         np.testing.assert_array_equal(a, b)
 
 
@@ -105,10 +105,10 @@ def test_group_counts_equal_a_brute_force_count(seed):
     threshold[::37] = np.inf
     threshold[5::37] = -np.inf
     threshold[9::37] = np.nan
-    got = [count_at_most(a, start[g], sizes[g], t) for g, t in zip(u, threshold)]
+    got = [count_at_most(a, start[g], sizes[g], t) for g, t in zip(u, threshold, strict=True)]
     values = [a[start[g] : start[g] + sizes[g]] for g in u]
-    assert [k for k, _ in got] == [int(np.sum(v <= t)) for v, t in zip(values, threshold)]
-    assert [s for _, s in got] == [int(v[0] <= t < v[-1]) for v, t in zip(values, threshold)]
+    assert [k for k, _ in got] == [int(np.sum(v <= t)) for v, t in zip(values, threshold, strict=True)]
+    assert [s for _, s in got] == [int(v[0] <= t < v[-1]) for v, t in zip(values, threshold, strict=True)]
 
 
 def reference_runs(from_b, to_b, solo_b, group_dest, group_d_oa, a, start, size, d_lim, keep_nonpositive, min_feasible):
@@ -127,7 +127,7 @@ def reference_runs(from_b, to_b, solo_b, group_dest, group_d_oa, a, start, size,
                 take_l = not g_f >= g_l
                 take_f, folo_pref = (not take_l) and f_ok, False
 
-            def count(t):
+            def count(t, values=values):
                 return int(np.sum(values <= t))
 
             if take_l:
@@ -174,5 +174,5 @@ def test_feasible_runs_equal_a_cell_by_cell_reference(seed, keep_nonpositive, mi
     assert feasible_runs(*args, *short) == (-1, 0)
     out = [np.empty(2 * m * n_u, dtype=t) for t in (np.int64, np.int64, np.int64, np.float64, np.float32, np.float32)]
     k, _ = feasible_runs(*args, *out)
-    got = list(zip(*(col[:k].tolist() for col in out)))
+    got = list(zip(*(col[:k].tolist() for col in out), strict=True))
     assert got == [tuple(float(x) if i >= 3 else int(x) for i, x in enumerate(run)) for run in want]

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -156,7 +158,7 @@ def test_chunks_partition_the_seekers():
     for max_pairs in (1, 7, 50, 10**9):
         chunks = list(m.chunks(max_pairs))
         assert chunks[0][0] == 0 and chunks[-1][1] == len(model.rates)
-        for (_, s1, _, i1), (s0, _, i0, _) in zip(chunks[:-1], chunks[1:]):
+        for (_, s1, _, i1), (s0, _, i0, _) in itertools.pairwise(chunks):
             assert s1 == s0 and i1 == i0
         assert all(s1 == s0 + 1 or i1 - i0 <= max_pairs for s0, s1, i0, i1 in chunks)
     cls, e, _, _ = m.arrays()
@@ -174,7 +176,7 @@ def test_lexsort_fallback_gives_the_same_lists(monkeypatch, priority):
     model = build_model(
         inst.network, inst.rates, inst.params, inst.config.replace(priority=priority), use_cache=False
     )  # a private build: the cached one is packed
-    for got, want in zip(model.matching.arrays(), packed):
+    for got, want in zip(model.matching.arrays(), packed, strict=True):
         np.testing.assert_array_equal(got, want)
     check_against_brute_force(model)
 

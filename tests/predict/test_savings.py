@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 
@@ -62,7 +64,7 @@ def test_i8_waiting_saving(solved):
     for v in values:
         assert np.all(v >= 0) and np.all(v <= bracket + 1e-9)
     assert np.all(values[rounds - 1] == 0) and np.all(values[rounds] == 0)  # n_rem = 0
-    assert all(np.all(a >= b - 1e-12) for a, b in zip(values, values[1:]))  # more rounds left, more saving
+    assert all(np.all(a >= b - 1e-12) for a, b in itertools.pairwise(values))  # more rounds left, more saving
     low = pred.e_wait(o, d, 1, params.replace(response_rate=0.3))
     high = pred.e_wait(o, d, 1, params.replace(response_rate=0.9))
     assert np.all(high >= low)

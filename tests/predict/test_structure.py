@@ -67,7 +67,7 @@ def test_built_once_then_mapped_from_the_cache(cache):
     again = load(inst, tau0_s=300.0)
     assert again.build_s["matching_s"] == 0 and again.directory == first.directory
     assert isinstance(again.matching.local, np.memmap) and again.matching.local.dtype == np.uint16
-    for a, b in zip(again.matching.arrays(), first.matching.arrays()):
+    for a, b in zip(again.matching.arrays(), first.matching.arrays(), strict=True):
         np.testing.assert_array_equal(a, b)
     sp = again.space_for(300.0)
     np.testing.assert_array_equal(sp.tau_s[sp.k == 0], 300.0)
@@ -85,7 +85,7 @@ def test_a_damaged_entry_is_rebuilt_with_a_note(cache, capsys, name):
     rebuilt = load(inst)
     assert "unusable" in capsys.readouterr().err
     assert rebuilt.build_s["matching_s"] > 0
-    for a, b in zip(rebuilt.matching.arrays(), good):
+    for a, b in zip(rebuilt.matching.arrays(), good, strict=True):
         np.testing.assert_array_equal(a, b)
 
 
@@ -98,7 +98,7 @@ def test_a_truncated_array_file_is_rebuilt_with_a_note(cache, capsys, name):
     structure._RECENT.clear()
     rebuilt = load(inst)
     assert "unusable" in capsys.readouterr().err
-    for a, b in zip(rebuilt.matching.arrays(), good):
+    for a, b in zip(rebuilt.matching.arrays(), good, strict=True):
         np.testing.assert_array_equal(a, b)
 
 

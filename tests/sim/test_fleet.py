@@ -17,6 +17,8 @@ also the internal node indices.  Networks:
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 from helpers import line_network, network_from_edges
@@ -246,7 +248,7 @@ def test_random_walk_follows_arcs(grid):
         walk = fl.random_walk_from(4, 1)  # at the centre, having come from node 1
         assert len(walk) == CRUISE_ARCS
         path = [1, 4] + walk.tolist()
-        for a, b in zip(path[:-1], path[1:]):
+        for a, b in itertools.pairwise(path):
             assert int(grid.arc_index(a, b)) >= 0
         # every grid node has >= 2 neighbours: never straight back
         assert all(path[i + 2] != path[i] for i in range(len(path) - 2))

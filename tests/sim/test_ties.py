@@ -94,7 +94,7 @@ def test_pairs_of_equals_triu_indices_and_is_read_only():
 
 def _reference_swaps(model, chosen):
     """The resource swaps of the canonicalisation, over every pair of chosen columns in row-major order."""
-    by_key = {(int(p), int(v)): c for c, (p, v) in enumerate(zip(model.col_passenger, model.col_vehicle))}
+    by_key = {(int(p), int(v)): c for c, (p, v) in enumerate(zip(model.col_passenger, model.col_vehicle, strict=True))}
     values = model.values
     chosen = sorted(chosen)
     while True:

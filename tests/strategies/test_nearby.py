@@ -77,8 +77,8 @@ def test_candidates_equal_the_exhaustive_search(seed):
     def pick(k):
         return rng.choice(nodes, k).tolist()
 
-    passengers = list(zip(pick(8), pick(8)))
-    vacant = [(node, float(pre)) for node, pre in zip(pick(6), rng.choice([0.0, 150.0, 399.5], 6))]
+    passengers = list(zip(pick(8), pick(8), strict=True))
+    vacant = [(node, float(pre)) for node, pre in zip(pick(6), rng.choice([0.0, 150.0, 399.5], 6), strict=True)]
     occupied = [
         {
             "node": a,
@@ -88,7 +88,7 @@ def test_candidates_equal_the_exhaustive_search(seed):
             "pre": float(rng.choice([0.0, 200.0])),
             "onboard": bool(rng.random() < 0.5),
         }
-        for a, b, c in zip(pick(5), pick(5), pick(5))
+        for a, b, c in zip(pick(5), pick(5), pick(5), strict=True)
     ]
     params = Params(max_pickup_m=float(rng.choice([400.0, 800.0, 1600.0])), max_detour_m=900.0)
     state = round_state(net, passengers, vacant, occupied=occupied, params=params)

@@ -102,7 +102,7 @@ def test_r4_without_pairs_rtv_is_a_bipartite_assignment(solve):
         origins = rng.choice(np.arange(1, 6), size=4, replace=False)
         dests = rng.choice(np.arange(6, 11), size=4, replace=False)
         vac = [(int(rng.integers(0, 11)), float(rng.uniform(0, 100))) for _ in range(3)]
-        state = round_state(net, list(zip(origins.tolist(), dests.tolist())), vac, params=params)
+        state = round_state(net, list(zip(origins.tolist(), dests.tolist(), strict=True)), vac, params=params)
         rm = make_strategy("rtv").build(state)
         assert not (rm.kind == Kind.TRIP2).any()
         value = np.full((state.n_passengers, state.n_v0), -1e12)
@@ -227,7 +227,7 @@ def test_r7_rebalancing_moves_min_idle_unserved_at_minimum_distance(solve):
         k = len(vehicles)
         best = (
             min(
-                sum(cost[i, j] for i, j in zip(rows, cols))
+                sum(cost[i, j] for i, j in zip(rows, cols, strict=True))
                 for rows in itertools.permutations(range(len(idle_v)), k)
                 for cols in itertools.combinations(range(len(unserved)), k)
             )
@@ -237,7 +237,7 @@ def test_r7_rebalancing_moves_min_idle_unserved_at_minimum_distance(solve):
         got = sum(
             state.v0_pre_m[np.flatnonzero(state.v0_vehicle == v)[0]]
             + state.dist[state.v0_node[np.flatnonzero(state.v0_vehicle == v)[0]], node]
-            for v, node in zip(vehicles, targets)
+            for v, node in zip(vehicles, targets, strict=True)
         )
         assert got == pytest.approx(best, abs=1e-6)
     assert not make_strategy("rtv").reposition(state, rm, chosen)[0].size  # off by default
