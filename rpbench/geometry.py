@@ -1,4 +1,4 @@
-"""The pair primitive POOL(A, B, h, δ, pre) of ALGORITHMS.md §1.1 (paper Eqs. 5-6).
+"""The pair primitive POOL(A, B, h, δ, pre) of docs/algorithms.md §1.1 (paper Eqs. 5-6).
 
 ``A`` owns the vehicle (on board or assigned), ``B`` joins.  The vehicle can
 divert towards ``o_B`` at node ``h``, which lies on A's shortest path after A

@@ -13,10 +13,10 @@ with a special structure exact algorithms exploit:
   passengers (exactly one option each) and vehicles (at most one passenger);
   a column is (passenger, vehicle) or (passenger, keep waiting).  Bipartite,
   so the LP relaxation is integral.
-* :class:`TripPackingModel` — RTV's trip assignment (ALGORITHMS.md §3.3):
+* :class:`TripPackingModel` — RTV's trip assignment (docs/algorithms.md §3.3):
   a column is (trip of one or two requests, vehicle); each request and each
   vehicle at most once.  General set packing.
-* :class:`PairingModel` — the oracle (ALGORITHMS.md §4): a column is a pair
+* :class:`PairingModel` — the oracle (docs/algorithms.md §4): a column is a pair
   of orders; each order at most once.  General-graph matching: odd cycles
   make the LP relaxation fractional (the unit triangle has LP value 1.5).
   ``objective = "cardinality_then_weight"`` asks for a maximum-cardinality

@@ -3,7 +3,7 @@
 :class:`RoadNetwork` is an immutable directed graph over internal node indices
 ``0..n-1`` (``node_id[i]`` is the id used in the data files).  Its
 :meth:`RoadNetwork.distances` is the *one* distance oracle every part of
-rpbench uses (ALGORITHMS.md §1: "the same distance oracle the simulator
+rpbench uses (docs/algorithms.md §1: "the same distance oracle the simulator
 uses"): all-pairs shortest distances and a predecessor matrix from Dijkstra
 (``scipy.sparse.csgraph``), cached on disk in the user cache directory under
 a hash of the network content, with a SHA-256 digest that every load checks

@@ -7,7 +7,7 @@ A subclass implements :meth:`ProgramBackend.run` — one solve of a
   matrix is the incidence matrix of a bipartite graph, totally unimodular,
   so a simplex vertex is integral (paper Eqs. 1-4); the answer is checked
   and, should it be fractional, re-solved as a MIP;
-* Oracle-2 (``objective = "cardinality_then_weight"``, ALGORITHMS.md §4.3) in
+* Oracle-2 (``objective = "cardinality_then_weight"``, docs/algorithms.md §4.3) in
   two exact stages: stage 1 finds the largest number of pairs ``k*`` by
   Edmonds' algorithm (combinatorial, certified by a Tutte-Berge set); stage 2
   is the solver's MIP maximising the value subject to ``Σ x >= k*``,

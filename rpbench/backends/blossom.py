@@ -12,7 +12,7 @@ its own copy), so one with ``M`` in each copy costs
 * ``λ = 0`` and pairs of value ``<= 0`` dropped: Oracle-1 (max ``w(M)``);
 * ``λ > Σ|w|``: no loss of weight can pay for a lost pair, so the optimum is
   a maximum-weight matching among the maximum-cardinality ones — Oracle-2
-  (ALGORITHMS.md §4) in one exact solve, with integral costs throughout.
+  (docs/algorithms.md §4) in one exact solve, with integral costs throughout.
 
 The pair count is checked against Edmonds' proven maximum
 (:mod:`.cardinality`).  Blossom V cannot be interrupted: under a time limit

@@ -1,6 +1,6 @@
 """Maximum-cardinality matching in a general graph, with its Tutte-Berge certificate.
 
-Oracle-2's first stage (ALGORITHMS.md §4: most pairs) is a maximum-cardinality
+Oracle-2's first stage (docs/algorithms.md §4: most pairs) is a maximum-cardinality
 matching.  Weighted solvers handle it badly — every weight is the same, and
 sparse blossom or a MIP then crawl — so it gets its own exact algorithm:
 

@@ -2,7 +2,7 @@
 
 * **Assignment** (paper Eqs. 1-4, 16): sparse Jonker-Volgenant, ``lap.lapmod``
   (:mod:`.jv`).
-* **Pairing** (ALGORITHMS.md §4): maximum-weight general matching by
+* **Pairing** (docs/algorithms.md §4): maximum-weight general matching by
   PyMatching's sparse blossom through the reduction to a minimum-weight
   T-join — :func:`max_weight_matching`; Oracle-2 by Edmonds' exact maximum
   cardinality (:mod:`.cardinality`) and then a Lagrangian bonus per pair —
@@ -10,7 +10,7 @@
   Oracle-2 beyond ``BLOSSOM_V_FIRST`` pairs) goes to OGDF's Blossom V
   (:mod:`.blossom`) when the ``blossom`` extra is installed, else to the
   HiGHS MIP.
-* **Trip packing** (ALGORITHMS.md §3.3): no special-purpose algorithm; it is
+* **Trip packing** (docs/algorithms.md §3.3): no special-purpose algorithm; it is
   delegated to the HiGHS MIP (exact), and the solution's message says so.
 
 Exactness.  Both libraries compute with sentinels or discretised weights,

@@ -10,12 +10,12 @@ paper's utilities, quantised to integral model units (:func:`~rpbench.model.quan
   passenger is feasible with its nearest 5-20 % of vehicles, worth
   ``-pickup`` on a vacant vehicle and ``saving - pickup`` on a partially
   occupied one (Eq. 7), plus a keep-waiting option worth ``-U(1.5, 4) km``.
-* :func:`pairing` — the oracle (ALGORITHMS.md §4): orders sorted by request
+* :func:`pairing` — the oracle (docs/algorithms.md §4): orders sorted by request
   time, each paired with up to ``partners / 2`` of its next orders in time
   whose pooled trip keeps both detours ``<= 3 km``; value = the saving
   ``l_i + l_j - L`` (Eq. 5).  ``objective="weight"`` keeps positive savings
   only (Oracle-1 drops the others).
-* :func:`trip_packing` — RTV-2 (ALGORITHMS.md §3.3): one-request trips on the
+* :func:`trip_packing` — RTV-2 (docs/algorithms.md §3.3): one-request trips on the
   nearest vehicles, two-request trips on vehicles near both origins, valued
   ``c_ko·|T| + e - pickup``.
 

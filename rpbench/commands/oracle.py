@@ -1,4 +1,4 @@
-"""``rpbench oracle``: solve Oracle-1 / Oracle-2 over all orders of a scenario (ALGORITHMS.md §4)."""
+"""``rpbench oracle``: solve Oracle-1 / Oracle-2 over all orders of a scenario (docs/algorithms.md §4)."""
 
 from __future__ import annotations
 
@@ -30,7 +30,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="solve the offline oracle (Oracle-1 max saving, Oracle-2 max pairs)",
         description="Solve the offline oracle over all orders of a scenario: Oracle-1 maximises "
         "the total distance saving, Oracle-2 the number of pairs (ties by saving). "
-        "Pair feasibility follows ALGORITHMS.md §4.2; the saving is counted once "
+        "Pair feasibility follows docs/algorithms.md §4.2; the saving is counted once "
         "per pair.",
     )
     add_scenario_args(p)
@@ -149,7 +149,7 @@ def run(args: argparse.Namespace) -> int:
         print(
             f"  pair rules: K̄={rules.planner_patience_s:g} s, D̄={rules.max_detour_m:g} m"
             + (f", R̄={rules.max_pickup_m:g} m" if rules.pickup_check else ", no R̄ test")
-            + (f"; flags: {', '.join(flags)}" if flags else "; default flags (ALGORITHMS.md A18)")
+            + (f"; flags: {', '.join(flags)}" if flags else "; default flags (docs/algorithms.md A18)")
         )
     print(
         f"  candidates: {len(candidates):,} feasible of {candidates.evaluated:,} pairs in the time windows "

@@ -1,6 +1,6 @@
 """Candidate pairs of the offline oracle: which two orders may share, and at what saving.
 
-Pair feasibility of ALGORITHMS.md §4.2 (A18).  Let ``i`` be the earlier order
+Pair feasibility of docs/algorithms.md §4.2 (A18).  Let ``i`` be the earlier order
 (``t_i <= t_j``, ties by order id) and ``dt = t_j - t_i``:
 
 * waiting pair, ``dt <= K̄`` (inclusive): j requests while i still waits, so
@@ -176,7 +176,7 @@ class CandidatePairs:
 def find_candidates(
     distances: DistanceOracle | np.ndarray, orders: Orders, rules: PairRules, *, block_pairs: int = BLOCK_PAIRS
 ) -> CandidatePairs:
-    """All feasible pairs of ``orders`` under ``rules`` (ALGORITHMS.md §4.2).
+    """All feasible pairs of ``orders`` under ``rules`` (docs/algorithms.md §4.2).
 
     ``distances`` is the network's one distance oracle (its shortest paths
     are the paths vehicles drive, needed by ``allow_enroute``); a bare

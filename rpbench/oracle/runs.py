@@ -3,7 +3,7 @@
 ``bound`` is the proven upper bound on the saving of any strategy rpbench's
 simulator can run (docs/bound.md): the denominator of the competitive ratio.
 ``oracle1``/``oracle2`` are the paper's offline oracles with the seed's pair
-rules (ALGORITHMS.md A18): references, not bounds (a strategy that pairs en
+rules (docs/algorithms.md A18): references, not bounds (a strategy that pairs en
 route can save more than Oracle-1).  Their options (``--opt
 oracle1.allow_enroute=true``) are typed like a strategy's; the bound has none.
 """

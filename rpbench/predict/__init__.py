@@ -1,7 +1,7 @@
 """The seeker/taker pairing-probability and expected-saving prediction model.
 
 This is the TR-B 2021 model as used by the seed paper's forward-looking (FL)
-dispatcher (paper §3.1-3.3 and Appendix A; ALGORITHMS.md §2 with the typos
+dispatcher (paper §3.1-3.3 and Appendix A; docs/algorithms.md §2 with the typos
 corrected and resolutions A1-A12).
 
 Public API (what the FL / FL-no_delay strategies call)::

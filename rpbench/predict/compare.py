@@ -1,4 +1,4 @@
-"""rpbench's 2017-05-01 predictions vs the authors' published ones (ALGORITHMS.md §2.7, A12).
+"""rpbench's 2017-05-01 predictions vs the authors' published ones (docs/algorithms.md §2.7, A12).
 
 The authors' file ``predict_result_2017-05-01_0800-0900.csv.gz`` is keyed by
 the ``OD_id`` of the per-day OD table; rpbench's per-OD table is joined to it

@@ -1,4 +1,4 @@
-"""Configuration of the prediction model (ALGORITHMS.md §2, resolutions A1-A11).
+"""Configuration of the prediction model (docs/algorithms.md §2, resolutions A1-A11).
 
 The network-side parameters (R̄ ``max_pickup_m``, D̄ ``max_detour_m``, speed
 ``speed_mps``) come from :class:`rpbench.scenarios.base.Params`; everything that

@@ -1,4 +1,4 @@
-"""The fixed-point system (A1)-(A6) and its damped solver (ALGORITHMS.md §2.5-§2.6).
+"""The fixed-point system (A1)-(A6) and its damped solver (docs/algorithms.md §2.5-§2.6).
 
 The system reduces to a map on ρ (one value per taker state).  One
 evaluation, :func:`evaluate`, computes from ρ::

@@ -1,4 +1,4 @@
-"""Matching sets T_s / S_t, pair savings E(s,t) and the priority order (ALGORITHMS.md §2.3-§2.4).
+"""Matching sets T_s / S_t, pair savings E(s,t) and the priority order (docs/algorithms.md §2.3-§2.4).
 
 For every seeker ``s(w')`` (one per OD) this builds the list of taker
 *classes* (see :mod:`.states`) it can pair with, sorted by priority.  A pair

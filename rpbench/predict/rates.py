@@ -1,4 +1,4 @@
-"""OD demand rates λ_w in orders per second (ALGORITHMS.md §2.1).
+"""OD demand rates λ_w in orders per second (docs/algorithms.md §2.1).
 
 :class:`OdRates` is the one input format of the prediction model: OD pairs as
 internal node indices of a :class:`~rpbench.network.RoadNetwork`, each with

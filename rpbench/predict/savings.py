@@ -1,4 +1,4 @@
-"""Expected savings and distances from a solved fixed point (ALGORITHMS.md §2.7, paper Eqs. 8-11).
+"""Expected savings and distances from a solved fixed point (docs/algorithms.md §2.7, paper Eqs. 8-11).
 
 One more sweep over the seeker lists with the final ρ accumulates, per taker
 class c, the opportunity-weighted sums ``Σ_s η^s E`` (weights

@@ -1,4 +1,4 @@
-"""Seeker and taker states (ALGORITHMS.md §2.2, A4, A5).
+"""Seeker and taker states (docs/algorithms.md §2.2, A4, A5).
 
 Every OD ``w`` has one seeker state ``s(w)`` (instantaneous, at the origin)
 and taker states ``t(k, w)``:

@@ -1272,7 +1272,7 @@ def _metric_tables(text: str) -> list[list[tuple[str, list[str]]]]:
 @dataclass
 class _Geometry:
     """Both service orders of pairs with ``x`` picked up first and ``y`` joining: the vehicle turns towards
-    o_y at node h after x rode ``delta`` metres, ``pre`` metres before h (POOL of ALGORITHMS.md §1.1, written
+    o_y at node h after x rode ``delta`` metres, ``pre`` metres before h (POOL of docs/algorithms.md §1.1, written
     again here from the distance table)::
 
         FOFO (x dropped first): L = δ + l(h, o_y) + l(o_y, d_x) + l(d_x, d_y)

@@ -39,7 +39,7 @@ class RoundState:
     ``V0`` are on-duty vacant vehicles at ``v0_pre_m`` metres before node
     ``v0_node`` (pick-up distance = pre + l(node, o_p)).  ``V1`` are on-duty
     vehicles with exactly one unpaired passenger A; the pair geometry of
-    ALGORITHMS.md §1.1 is ``h = v1_node``, ``δ = v1_delta_m``, ``pre =
+    docs/algorithms.md §1.1 is ``h = v1_node``, ``δ = v1_delta_m``, ``pre =
     v1_pre_m`` (for A not yet picked up: h = o_A, δ = 0, pre = 0, A14).
     """
 

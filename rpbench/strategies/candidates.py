@@ -6,7 +6,7 @@ feasible options (paper §2, Eqs. 1-4; pairing conditions of §2.1):
 
 * vacant option (p, v ∈ V0): pick-up ``pk = pre_v + l(node_v, o_p) <= R̄``;
 * join option (p, v ∈ V1 carrying A): ``POOL(A, p, h, δ, pre)`` feasible
-  (ALGORITHMS.md §1.1: pick-up <= R̄, both detours <= D̄).
+  (docs/algorithms.md §1.1: pick-up <= R̄, both detours <= D̄).
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from rpbench.strategies.nearby import near_table
 
 #: Utility of keeping a passenger waiting when the strategy has no waiting
 #: option (MB, FL-no_delay, NP): -M with M = 10^6 m, so a passenger is
-#: assigned whenever any vehicle is feasible (ALGORITHMS.md A13).
+#: assigned whenever any vehicle is feasible (docs/algorithms.md A13).
 NO_WAIT_UTILITY_M = -1e6
 VALUE_UNIT_M = 1e-3  # utilities enter the model in millimetres
 

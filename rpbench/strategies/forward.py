@@ -114,7 +114,7 @@ class _ForwardBase(Strategy):
 
     @classmethod
     def calibrate(cls, options: ForwardOptions, kpis: dict[str, float], hourly, hours: int) -> ForwardOptions:
-        """τ_0 (A4) and l̄ from the MB run "for the same hour" (ALGORITHMS.md §1-§2), per hour where the
+        """τ_0 (A4) and l̄ from the MB run "for the same hour" (docs/algorithms.md §1-§2), per hour where the
         scenario spans several; options the user set are kept."""
         if hours == 1:
             tau0, pickup = kpis["avg_pickup_time_s"], kpis["avg_pickup_distance_m"]

@@ -27,7 +27,7 @@ class PoolingOptions(RunOptions):
     """Options of a strategy that pairs passengers (§1.1)."""
 
     order_rule: str = option(
-        "min_feasible", "drop-off order rule of a pair (ALGORITHMS.md §1.1, A6)", choices=ORDER_RULES
+        "min_feasible", "drop-off order rule of a pair (docs/algorithms.md §1.1, A6)", choices=ORDER_RULES
     )
 
 

@@ -1,6 +1,6 @@
 """RTV: request-trip-vehicle assignment (Alonso-Mora et al., PNAS 2017) for capacity 2.
 
-ALGORITHMS.md §3.3 (rpbench RTV-2), with the seed's distance-saving objective:
+docs/algorithms.md §3.3 (rpbench RTV-2), with the seed's distance-saving objective:
 
 * RV graph: vacant vehicles within R̄ of a request; partially occupied
   vehicles whose POOL with the request is feasible.
@@ -51,7 +51,7 @@ PICKUP_TIE_BREAK = 1e-3
 
 @dataclass(frozen=True)
 class RTVOptions(PoolingOptions):
-    """RTV's options (ALGORITHMS.md §3.3, A15-A17)."""
+    """RTV's options (docs/algorithms.md §3.3, A15-A17)."""
 
     c_ko: float | str | None = option(
         None, "value of serving a request, metres or 'large' (default R̄, A15)", choices=("large",)
@@ -236,7 +236,7 @@ def _present(index: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _top_k_per_request(cols: dict, k: int) -> dict:
-    """Keep each request's k best size-1 RV edges (ALGORITHMS.md §3.3 pruning); pair trips need both edges."""
+    """Keep each request's k best size-1 RV edges (docs/algorithms.md §3.3 pruning); pair trips need both edges."""
     if k <= 0:
         raise ParameterError(f"rtv rv_top_k {k!r} must be a positive integer")
     single = cols["r2"] < 0

@@ -1,4 +1,4 @@
-"""Candidate pairs of the oracle (ALGORITHMS.md §4.2) against a brute-force enumeration.
+"""Candidate pairs of the oracle (docs/algorithms.md §4.2) against a brute-force enumeration.
 
 The reference below loops over every ordered pair of orders in plain Python
 and recomputes POOL (§1.1) from the formulas, with shortest paths summed arc

@@ -1,4 +1,4 @@
-"""Oracle-1 / Oracle-2 (ALGORITHMS.md §4): properties O-T1..O-T8, solvers, CLI, bad inputs.
+"""Oracle-1 / Oracle-2 (docs/algorithms.md §4): properties O-T1..O-T8, solvers, CLI, bad inputs.
 
 Every property runs against an independent reference (networkx's blossom,
 wrapped as a backend here) and against each installed exact preset; the

@@ -254,7 +254,7 @@ def test_l5_distance_unit_invariance():
 def test_l6_symmetry_and_relabelling():
     # Mirror-symmetric line (lengths read the same both ways) with mirrored ODs of equal rate, chosen
     # so that no seeker list holds a priority tie (ties are broken by class index, which a mirror
-    # image does not preserve; ALGORITHMS.md L6 asks for an invariant tie key).
+    # image does not preserve; docs/algorithms.md L6 asks for an invariant tie key).
     net = line_network([250.0, 610.0, 430.0, 610.0, 250.0])
     rates = OdRates.from_arrays([0, 5, 1, 4], [3, 2, 5, 0], [2e-3] * 4, n_nodes=6)
     pred = solve_model(build_model(net, rates, Params(), PredictConfig()))

@@ -1,4 +1,4 @@
-"""OD rates: canonical order, merging, validation, and the Haikou sources (ALGORITHMS.md §2.1)."""
+"""OD rates: canonical order, merging, validation, and the Haikou sources (docs/algorithms.md §2.1)."""
 
 from __future__ import annotations
 

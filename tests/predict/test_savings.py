@@ -1,4 +1,4 @@
-"""Expected savings ē(t), ē(p), ē(s), ē(0,p) and the dispatcher-facing API (ALGORITHMS.md §2.7, I7, I8)."""
+"""Expected savings ē(t), ē(p), ē(s), ē(0,p) and the dispatcher-facing API (docs/algorithms.md §2.7, I7, I8)."""
 
 from __future__ import annotations
 
@@ -112,7 +112,7 @@ def test_per_od_table_and_summary(solved):
 
 
 def test_expected_ride_matches_the_authors_decomposition(solved):
-    """L_w = p_s R_s + (1 - p_s) [Σ π_k R_t(k) + (1 - Σπ) l_w] (TR-B; ALGORITHMS.md §2.7)."""
+    """L_w = p_s R_s + (1 - p_s) [Σ π_k R_t(k) + (1 - Σπ) l_w] (TR-B; docs/algorithms.md §2.7)."""
     model, pred = solved
     od = pred.od
     expected = od.p_seeker * (od.solo_m + od.seeker_detour_m) + (1 - od.p_seeker) * od.taker_ride_m

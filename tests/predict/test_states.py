@@ -1,4 +1,4 @@
-"""Seeker/taker states and taker classes (ALGORITHMS.md §2.2, A4, A5)."""
+"""Seeker/taker states and taker classes (docs/algorithms.md §2.2, A4, A5)."""
 
 from __future__ import annotations
 

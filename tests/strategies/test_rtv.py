@@ -1,4 +1,4 @@
-"""RTV-2 properties R1-R9 of ALGORITHMS.md §3.4 on hand-made round states."""
+"""RTV-2 properties R1-R9 of docs/algorithms.md §3.4 on hand-made round states."""
 
 from __future__ import annotations
 
