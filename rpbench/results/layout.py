@@ -1,0 +1,45 @@
+"""The file names of a results folder, shared by the writer, the checker, the reports and ``publish``.
+
+A comparison folder (one scenario, several runs)::
+
+    meta.json                      versions, git commit, scenario, parameters, seed, preset, machine, runs
+    kpis.csv                       tidy KPI table: run, kpi, value
+    rounds.csv.gz                  per-round solver statistics (model size, build/solve time, status)
+    hourly.csv                     per-hour KPIs of every run
+    orders.csv.gz                  the scenario's orders (id, request, origin, destination, patience, solo distance)
+    fleet.csv.gz                   every vehicle's initial node
+    network.npz                    the road network (nodes, arcs, lengths) the runs drove on
+    runs/<run>/events.csv.gz       a simulation's event log (request, assign, pickup, dropoff, cancel)
+    runs/<run>/trajectories.npz    a simulation's vehicle paths with times and odometers
+    runs/<run>/pairs.csv.gz        an offline run's pairs (bound, Oracle-1, Oracle-2)
+    report.md, *.png               the report and its plots (rendered from the files above)
+
+A parent folder (multi-day run, sweep) holds one comparison folder per day
+or point, its own ``meta.json`` and ``report.md``, and ``by_day.csv`` and
+``summary.csv`` (multi-day) or ``sweep.csv`` (sweep).  A published light
+copy (``rpbench publish``) keeps no ``runs/`` nor inputs (:data:`HEAVY`) and
+adds ``check.txt``, the checker's verdict on the full folder.
+"""
+
+from __future__ import annotations
+
+META = "meta.json"
+KPIS = "kpis.csv"
+ROUNDS = "rounds.csv.gz"
+HOURLY = "hourly.csv"
+ORDERS = "orders.csv.gz"
+FLEET = "fleet.csv.gz"
+NETWORK = "network.npz"
+REPORT = "report.md"
+RUNS = "runs"
+EVENTS = "events.csv.gz"
+TRAJECTORIES = "trajectories.npz"
+PAIRS = "pairs.csv.gz"
+BY_DAY = "by_day.csv"
+SUMMARY = "summary.csv"
+SWEEP = "sweep.csv"
+CHECK = "check.txt"
+
+#: Inputs and logs a published light copy leaves out (the checker's raw material; the recorded command
+#: regenerates them).
+HEAVY = (RUNS, ORDERS, NETWORK, FLEET)
