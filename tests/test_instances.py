@@ -36,7 +36,7 @@ def test_snapshot_round_trip_same_optimum_on_every_preset(snapshots):
         assert meta["strategy"] == entry["strategy"] and model.size == entry["size"]
         for name in installed():
             preset = load_preset(name)
-            backend = preset.make_backend()
+            backend = preset.adapter()
             if not backend.supports(model.structure):
                 continue
             solution = backend.solve(model, preset.options)

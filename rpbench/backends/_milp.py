@@ -31,6 +31,7 @@ ALL = frozenset(Structure)
 
 class ProgramBackend(Backend):
     exact = ALL
+    accepts_hint = True
     #: Backends whose ``run`` can solve the LP relaxation.
     can_relax = True
 

@@ -50,6 +50,9 @@ class Backend(ABC):
     exact: ClassVar[frozenset[Structure]]
     #: One line for ``rpbench list``.
     description: ClassVar[str] = ""
+    #: Whether :meth:`solve` takes ``hint=`` (a feasible 0/1 column vector to warm-start from); only then
+    #: does :func:`rpbench.backends.solve` pass one.
+    accepts_hint: ClassVar[bool] = False
 
     @classmethod
     def missing_libraries(cls) -> list[str]:
@@ -73,4 +76,5 @@ class Backend(ABC):
 
     @abstractmethod
     def solve(self, model: Model, options: SolveOptions) -> Solution:
-        """Solve ``model`` and return a validated solution."""
+        """Solve ``model`` and return a validated solution (a backend with :attr:`accepts_hint` also takes
+        ``hint=``)."""

@@ -37,8 +37,9 @@ from importlib import resources
 from pathlib import Path
 
 from rpbench.backends.base import Backend, SolveOptions
-from rpbench.backends.registry import REGISTRY, backend_class, get_backend, plugin_names
+from rpbench.backends.registry import REGISTRY, backend_class, plugin_names
 from rpbench.exceptions import PresetError, one_line
+from rpbench.model import Structure
 from rpbench.paths import source_root
 from rpbench.plugins import is_spec
 
@@ -74,14 +75,39 @@ class Preset:
             instance=backend,
         )
 
-    def backend_class(self) -> type[Backend]:
-        return type(self.instance) if self.instance is not None else backend_class(self.backend)
+    def adapter(self) -> Backend:
+        """The backend object that solves this preset's models (its solver library is not imported yet)."""
+        if self.instance is not None:
+            return self.instance
+        try:
+            return backend_class(self.backend)()
+        except ModuleNotFoundError as exc:  # a broken installation: an adapter module of the package is gone
+            if not (exc.name or "").startswith("rpbench.backends."):
+                raise
+            raise PresetError(
+                f"solver preset {self.name!r}: the adapter module {exc.name} of backend {self.backend!r} is "
+                "missing from this installation; choose another --solver"
+            ) from None
 
     def is_installed(self) -> bool:
-        return self.backend_class().is_installed()
+        return self.adapter().is_installed()
 
-    def make_backend(self) -> Backend:
-        return self.instance if self.instance is not None else get_backend(self.backend)
+    def require(self, structure: Structure, *, needed_by: str | None = None) -> Backend:
+        """The adapter, checked to solve ``structure`` models exactly and to be installed; else one line.
+
+        This is the one place that decides "exact and installed": every solve goes through
+        :func:`rpbench.backends.solve`, which asks it, and the harness asks before a run starts, so that a
+        wrong ``--solver`` costs nothing.  ``needed_by`` names what needs it, for the message.
+        """
+        backend = self.adapter()
+        if not backend.supports(structure):
+            who = f", which {needed_by} needs" if needed_by else ""
+            raise PresetError(
+                f"solver preset {self.name!r} (backend {self.backend!r}) does not solve {structure.value} models "
+                f"exactly{who}; choose another --solver"
+            )
+        backend.ensure_installed()
+        return backend
 
     def as_dict(self) -> dict:
         o = self.options

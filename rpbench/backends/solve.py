@@ -12,22 +12,19 @@ from __future__ import annotations
 import numpy as np
 
 from rpbench.backends.presets import Preset
-from rpbench.exceptions import PresetError, SolverError
+from rpbench.exceptions import SolverError
 from rpbench.model import Model, Solution, Status, Structure, empty_solution
 
 
 def solve(model: Model, preset: Preset, *, hint: np.ndarray | None = None) -> Solution:
     """Solve ``model`` with ``preset``; ``hint`` (0/1 per column, feasible) warm-starts backends that take one."""
-    backend = preset.make_backend()
-    backend.ensure_installed()
-    if not backend.supports(model.structure):
-        raise PresetError(
-            f"solver preset {preset.name!r} (backend {backend.name!r}) does not solve "
-            f"{model.structure.value} models exactly; choose another --solver"
-        )
+    backend = preset.require(model.structure)
     if model.n_cols == 0:
         return empty_solution(model, backend.name)
-    solution = backend.solve(model, preset.options) if hint is None else backend.solve(model, preset.options, hint=hint)
+    if hint is not None and backend.accepts_hint:
+        solution = backend.solve(model, preset.options, hint=hint)  # type: ignore[call-arg]
+    else:
+        solution = backend.solve(model, preset.options)
     verify(model, solution, preset.name)
     return solution
 

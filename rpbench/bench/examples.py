@@ -21,8 +21,9 @@ from pathlib import Path
 
 from rpbench.bench import synthetic
 from rpbench.bench.snapshot import take_snapshots
+from rpbench.harness.spec import RunSpec
 from rpbench.instances import save_instance
-from rpbench.scenarios import build_scenario
+from rpbench.scenarios import ScenarioRequest
 
 
 def write_examples(folder: str | Path) -> list[Path]:
@@ -41,9 +42,8 @@ def write_examples(folder: str | Path) -> list[Path]:
             )
         )
     with tempfile.TemporaryDirectory() as tmp:
-        snaps, entries = take_snapshots(
-            build_scenario("toy", sample=0.3, seed=1), ["mb", "rtv", "fl"], "highs", Path(tmp) / "toy", largest=1
-        )
+        spec = RunSpec.of(ScenarioRequest("toy", sample=0.3, seed=1), ["mb", "rtv", "fl"])
+        snaps, entries = take_snapshots(spec, Path(tmp) / "toy", largest=1)
         for e in entries:
             target = folder / e["file"]
             shutil.copy(snaps / e["file"], target)

@@ -220,7 +220,7 @@ class _Inline:
     def __init__(self, preset: Preset) -> None:
         self.preset, self.error = preset, None
         try:
-            preset.make_backend().ensure_installed()
+            preset.adapter().ensure_installed()
             _warm_up(preset)
         except RpbenchError as exc:
             self.error = str(exc)

@@ -12,47 +12,49 @@ from pathlib import Path
 from rpbench import results
 from rpbench.backends import load_preset
 from rpbench.harness.comparison import calibrated, simulate_strategy
+from rpbench.harness.spec import RunSpec
 from rpbench.instances import save_instance
+from rpbench.results.store import check_new_folder
 from rpbench.scenarios.base import Scenario
-from rpbench.strategies import strategy_class
-from rpbench.strategies.options import RunOptions
 
 
 def take_snapshots(
-    scenario: Scenario,
-    strategies: list[str],
-    preset_name: str,
+    spec: RunSpec,
     out: str | Path,
     *,
+    scenario: Scenario | None = None,
     rounds: list[int] | None = None,
     largest: int = 3,
-    run_options: dict[str, RunOptions] | None = None,
 ) -> tuple[Path, list[dict]]:
-    """Simulate each strategy and save the chosen rounds' models under ``out`` (a new folder)."""
-    preset = load_preset(preset_name)
-    run_options = run_options or {}
+    """Simulate each strategy of ``spec`` and save the chosen rounds' models under ``out`` (a new folder).
+
+    ``scenario``: the one ``spec.request`` builds, when built already.  Offline runs have no rounds and are
+    not part of a snapshot.
+    """
+    check_new_folder(out)
+    preset = load_preset(spec.preset)
+    scenario = scenario if scenario is not None else spec.request.build()
     entries: list[dict] = []
     done: dict = {}
     out = Path(out)
     with results.new_results_folder(out, out.name) as (tmp, final):
-        for name in strategies:
+        for entry in spec.simulated:
             seen: list[tuple[int, float, object, float, str]] = []
 
             def capture(k, t, rm, solution, seen=seen):
                 if rounds is None or k in rounds:
                     seen.append((k, t, rm.model, solution.objective, solution.status.value))
 
-            options = run_options.get(name) or strategy_class(name).Options()
-            options = calibrated(scenario, name, options, preset, done, progress=False)  # as in a comparison
-            simulate_strategy(scenario, name, preset, options=options, progress=False, capture=capture)
+            entry = calibrated(entry, scenario, preset, done, progress=False)  # as in a comparison
+            simulate_strategy(scenario, entry, preset, progress=False, capture=capture, strict=spec.strict)
             picked = seen if rounds is not None else sorted(seen, key=lambda s: (-s[2].n_cols, s[0]))[:largest]
             for k, t, model, objective, status in sorted(picked, key=lambda s: s[0]):
-                stem = f"{scenario.name}_{name}_round{k:05d}"
+                stem = f"{scenario.name}_{entry.name}_round{k:05d}"
                 meta = {
                     "scenario": scenario.label,
                     "scenario_name": scenario.name,
                     "seed": scenario.seed,
-                    "strategy": name,
+                    "strategy": entry.name,
                     "round": k,
                     "t_s": t,
                     "preset": preset.name,

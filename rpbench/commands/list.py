@@ -8,7 +8,7 @@ from rpbench.backends.presets import load_preset, preset_names
 from rpbench.commands._common import add_data_arg, print_json
 from rpbench.data import available_peak_dates
 from rpbench.exceptions import RpbenchError
-from rpbench.harness.comparison import options_class
+from rpbench.harness.spec import options_class
 from rpbench.oracle.runs import ORACLE_RUNS
 from rpbench.paths import default_data_candidates, locate_data_dir
 from rpbench.scenarios import SCENARIOS
@@ -35,7 +35,7 @@ def gather(data: str | None) -> dict:
     for name in preset_names():
         try:
             preset = load_preset(name)
-            cls = preset.backend_class()
+            cls = preset.adapter()
             presets.append(
                 {
                     "name": name,

@@ -6,24 +6,16 @@ import argparse
 
 import pandas as pd
 
-from rpbench.commands._common import (
-    add_scenario_args,
-    add_strict_arg,
-    command_line,
-    note,
-    note_unproven,
-    print_json,
-    scenario_request,
-)
+from rpbench.commands._common import add_scenario_args, note, note_unproven, print_json, scenario_request
+from rpbench.commands._runs import add_run_args, run_spec
 from rpbench.exceptions import ParameterError
-from rpbench.harness.comparison import parse_run_options, parse_strategies, run_comparison
+from rpbench.harness.comparison import run_comparison
 from rpbench.harness.multiday import run_days
-from rpbench.harness.strict import strict_mode
+from rpbench.harness.spec import RunSpec
+from rpbench.results import layout
 from rpbench.results.report import load_kpis, text_table
-from rpbench.results.store import check_new_folder
-from rpbench.scenarios import ScenarioRequest
-
-DEFAULT_STRATEGIES = "np,mb,rtv,fl-nd,fl,bound,oracle1,oracle2"
+from rpbench.results.runs import run_styles
+from rpbench.results.store import read_meta
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -34,28 +26,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         "(strategies as columns) and write a new results folder.",
     )
     add_scenario_args(p)
-    p.add_argument(
-        "--strategies",
-        default=DEFAULT_STRATEGIES,
-        help=f"comma-separated strategies and oracles (default {DEFAULT_STRATEGIES})",
-    )
-    p.add_argument("--solver", default="highs", help="solver preset, solvers/NAME.toml (default highs)")
-    p.add_argument(
-        "--oracle-solver",
-        default=None,
-        metavar="PRESET",
-        help="preset for Oracle-1/Oracle-2 (default: --solver; `matching` is the fastest exact one)",
-    )
-    p.add_argument(
-        "--opt",
-        action="append",
-        default=[],
-        metavar="STRATEGY.KEY=VALUE",
-        help="strategy option, e.g. --opt rtv.c_ko=large (repeatable; `rpbench list` names them)",
-    )
+    add_run_args(p)
     p.add_argument("--out", default=None, help="results folder to create (default ./rpbench-runs/<stamp>_...)")
     p.add_argument("--json", action="store_true", help="print the KPI table as one JSON object")
-    add_strict_arg(p)
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument(
         "--dates",
@@ -80,30 +53,16 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    strategies = parse_strategies(args.strategies)
-    run_options = parse_run_options(args.opt, strategies)
-    request = scenario_request(args)
-    check_new_folder(args.out)  # before simulating: a bad --out must not cost the whole run
-    with strict_mode(args.strict):
-        if args.dates:
-            return run_many_days(args, request, strategies, run_options)
-        return run_one(args, request, strategies, run_options)
+    if args.dates and args.date:
+        raise ParameterError("--dates and --date exclude each other; drop --date")
+    spec = run_spec(args, scenario_request(args).resolved())
+    return run_many_days(args, spec) if args.dates else run_one(args, spec)
 
 
-def run_one(args: argparse.Namespace, request: ScenarioRequest, strategies: list[str], run_options: dict) -> int:
-    scenario = request.build()
+def run_one(args: argparse.Namespace, spec: RunSpec) -> int:
+    scenario = spec.request.build()
     note(scenario.label)
-    folder, table = run_comparison(
-        scenario,
-        strategies,
-        args.solver,
-        out=args.out,
-        run_options=run_options,
-        progress=False if args.no_progress else None,
-        request=request,
-        command=command_line(),
-        oracle_solver=args.oracle_solver,
-    )
+    folder, table = run_comparison(spec, args.out, scenario=scenario, progress=False if args.no_progress else None)
     unproven = note_unproven(folder)
     if args.json:
         print_json(
@@ -115,30 +74,19 @@ def run_one(args: argparse.Namespace, request: ScenarioRequest, strategies: list
             }
         )
         return 0
-    print(text_table(table, title=f"{scenario.label} — solver preset {args.solver}", unproven=unproven))
+    title = f"{scenario.label} — solver preset {spec.preset}"
+    print(text_table(table, title=title, unproven=unproven, styles=run_styles(read_meta(folder))))
     print(f"\nresults written to {folder}  (verify: rpbench check {folder})")
     return 0
 
 
-def run_many_days(args: argparse.Namespace, request: ScenarioRequest, strategies: list[str], run_options: dict) -> int:
-    if args.date:
-        raise ParameterError("--dates and --date exclude each other; drop --date")
-    dates = request.dates(args.dates)
-    note(f"running {len(dates)} days of {request.name} ({dates[0]} .. {dates[-1]}) x {', '.join(strategies)}")
-    folder = run_days(
-        request,
-        dates,
-        strategies=strategies,
-        preset=args.solver,
-        run_options=run_options,
-        out=args.out,
-        workers=args.workers,
-        scheduler=args.scheduler,
-        command=command_line(),
-        oracle_solver=args.oracle_solver,
-    )
-    summary = pd.read_csv(folder / "summary.csv")
-    mean = summary.pivot(index="kpi", columns="run", values="mean")[[s for s in strategies]]
+def run_many_days(args: argparse.Namespace, spec: RunSpec) -> int:
+    dates = spec.request.dates(args.dates)
+    name = spec.request.name
+    note(f"running {len(dates)} days of {name} ({dates[0]} .. {dates[-1]}) x {', '.join(spec.names)}")
+    folder = run_days(spec, dates, args.out, workers=args.workers, scheduler=args.scheduler)
+    summary = pd.read_csv(folder / layout.SUMMARY)
+    mean = summary.pivot(index="kpi", columns="run", values="mean")[spec.names]
     unproven = note_unproven(folder)
     if args.json:
         print_json(
@@ -151,13 +99,7 @@ def run_many_days(args: argparse.Namespace, request: ScenarioRequest, strategies
             }
         )
         return 0
-    print(
-        text_table(
-            mean,
-            title=f"Mean over {len(dates)} days of {request.name} ({dates[0]} .. {dates[-1]}), "
-            f"solver preset {args.solver}",
-            unproven=unproven,
-        )
-    )
+    title = f"Mean over {len(dates)} days of {name} ({dates[0]} .. {dates[-1]}), solver preset {spec.preset}"
+    print(text_table(mean, title=title, unproven=unproven, styles=run_styles(read_meta(folder / dates[0]))))
     print(f"\nresults written to {folder}  (per-day folders inside; report: {folder / 'report.md'})")
     return 0

@@ -6,9 +6,8 @@ import argparse
 
 from rpbench.bench.snapshot import take_snapshots
 from rpbench.commands._common import add_scenario_args, note, print_json, scenario_request
+from rpbench.commands._runs import parse_runs, run_spec
 from rpbench.exceptions import ParameterError
-from rpbench.harness.comparison import parse_run_options, parse_strategies
-from rpbench.oracle.runs import ORACLE_RUNS
 from rpbench.results.store import check_new_folder
 
 
@@ -31,8 +30,11 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    strategies = [s for s in parse_strategies(args.strategies) if s not in ORACLE_RUNS]
-    run_options = parse_run_options(args.opt, strategies)
+    runs = [e for e in parse_runs(args.strategies, args.opt) if not e.offline]
+    if not runs:
+        raise ParameterError(
+            f"--strategies {args.strategies!r}: offline runs have no rounds to freeze; name a strategy"
+        )
     rounds = None
     if args.rounds:
         try:
@@ -41,12 +43,11 @@ def run(args: argparse.Namespace) -> int:
             raise ParameterError(f"--rounds {args.rounds!r}: expected round indices like 10,100,200") from None
     if args.largest < 1:
         raise ParameterError(f"--largest {args.largest} must be >= 1")
-    check_new_folder(args.out)  # before simulating: a bad --out must not cost the runs
-    scenario = scenario_request(args).build()
+    spec = run_spec(args, scenario_request(args), runs=runs)
+    check_new_folder(args.out)  # before the scenario is built and simulated
+    scenario = spec.request.build()
     note(scenario.label)
-    folder, entries = take_snapshots(
-        scenario, strategies, args.solver, args.out, rounds=rounds, largest=args.largest, run_options=run_options
-    )
+    folder, entries = take_snapshots(spec, args.out, scenario=scenario, rounds=rounds, largest=args.largest)
     if args.json:
         print_json({"folder": str(folder), "instances": entries})
         return 0

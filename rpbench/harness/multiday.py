@@ -8,98 +8,51 @@ per-day plot per metric.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 
 import pandas as pd
 
 from rpbench import results
-from rpbench.harness.comparison import run_comparison
+from rpbench.harness.comparison import ComparisonTask, run_task
 from rpbench.harness.parallel import run_tasks
-from rpbench.paths import require_data_dir
+from rpbench.harness.spec import RunSpec
+from rpbench.results.folder import write_parent_meta
 from rpbench.results.metrics import KPI_LABELS, KPI_ORDER
 from rpbench.results.parents import by_day_table, day_folders
 from rpbench.results.plots import per_day_figures
 from rpbench.results.report import RATIO_ROWS, findings, fmt, load_kpis, markdown_table, offline_notes
-from rpbench.results.runs import run_label
-from rpbench.scenarios import SCENARIOS, ScenarioRequest
-from rpbench.strategies.options import RunOptions
-
-
-@dataclass(frozen=True)
-class DayTask:
-    """Everything a worker process needs to run one day (picklable)."""
-
-    request: ScenarioRequest
-    out: str
-    strategies: tuple
-    preset: str
-    run_options: dict
-    command: str | None
-    oracle_solver: str | None = None
-
-
-def run_day(task: DayTask) -> str:
-    """Worker entry point: one day's comparison written to ``task.out``."""
-    folder, _ = run_comparison(
-        task.request.build(),
-        list(task.strategies),
-        task.preset,
-        out=task.out,
-        run_options=task.run_options,
-        progress=False,
-        request=task.request,
-        command=task.command,
-        oracle_solver=task.oracle_solver,
-    )
-    return str(folder)
+from rpbench.results.runs import run_label, run_styles
+from rpbench.results.store import check_new_folder
+from rpbench.scenarios import SCENARIOS
 
 
 def run_days(
-    request: ScenarioRequest,
-    dates: list[str],
-    *,
-    strategies: list[str],
-    preset: str,
-    run_options: dict[str, RunOptions],
-    out: str | None,
-    workers: int | None,
-    scheduler: str | None,
-    command: str | None,
-    oracle_solver: str | None = None,
+    spec: RunSpec, dates: list[str], out: str | None = None, *, workers: int | None = None, scheduler: str | None = None
 ) -> Path:
-    """One comparison per date of ``request``'s scenario, in parallel, then the per-day and mean tables."""
-    request = request.replace(data_dir=str(require_data_dir(request.data_dir, what="multi-day runs")))
-    default = f"{results.timestamp()}_{request.name}_{dates[0]}..{dates[-1]}_{preset}"
+    """One comparison per date of ``spec``'s scenario, in parallel, then the per-day and mean tables.
+
+    The data folder is resolved once, here (:meth:`~rpbench.scenarios.ScenarioRequest.resolved`): worker
+    processes look for none of their own.
+    """
+    check_new_folder(out)
+    request = spec.request.resolved()
+    default = f"{results.timestamp()}_{request.name}_{dates[0]}..{dates[-1]}_{spec.preset}"
     with results.new_results_folder(out, default) as (tmp, final):
-        tasks = [
-            DayTask(
-                request=request.replace(date=d),
-                out=str(tmp / d),
-                strategies=tuple(strategies),
-                preset=preset,
-                run_options=run_options,
-                command=command,
-                oracle_solver=oracle_solver,
-            )
-            for d in dates
-        ]
-        run_tasks(run_day, tasks, workers=workers, scheduler=scheduler, label="days")
-        results.write_json(
-            tmp / "meta.json",
+        tasks = [ComparisonTask(spec.for_request(request.replace(date=d)), str(tmp / d)) for d in dates]
+        run_tasks(run_task, tasks, workers=workers, scheduler=scheduler, label="days")
+        write_parent_meta(
+            tmp,
+            "multi-day",
+            dates,
             {
-                "rpbench_results": 1,
-                "kind": "multi-day",
                 "scenario": request.name,
                 "dates": dates,
-                "children": list(dates),  # `rpbench check`'s manifest
-                "strategies": strategies,
-                "preset": preset,
+                "strategies": spec.names,
+                "preset": spec.preset,
                 "sample": request.sample,
                 "seed": request.seed,
                 "params": request.overrides,
-                "command": command,
-                **results.environment(),
+                "command": spec.command,
             },
         )
         summarize(tmp)
@@ -129,7 +82,8 @@ def write_multiday_report(parent: Path, name: str | None = None) -> Path:
     runs = [r for r in meta.get("strategies", []) if r in mean.columns]
     mean = mean[runs]
     days = day_folders(parent)
-    first = results.read_meta(days[0])["scenario"]
+    first_meta = results.read_meta(days[0])
+    first, styles = first_meta["scenario"], run_styles(first_meta)
     scenario = meta.get("scenario", "haikou-peak")  # folders written before --dates took any scenario
     what = "peak hours" if scenario == "haikou-peak" else "days"
     sample = first["args"].get("sample") or (SCENARIOS[scenario].default_sample if scenario in SCENARIOS else None)
@@ -142,14 +96,14 @@ def write_multiday_report(parent: Path, name: str | None = None) -> Path:
     ]
     if meta.get("command"):
         lines += ["Command:", "", f"    {meta['command']}", ""]
-    lines += ["## Mean over days", "", markdown_table(mean), ""] + offline_notes(mean, {})
+    lines += ["## Mean over days", "", markdown_table(mean, styles=styles), ""] + offline_notes(mean, {})
     key = ["total_saving_km", "avg_detour_m", "response_rate", "pairing_ratio"]
     for kpi in key + [r for r in RATIO_ROWS if r in set(table["kpi"])]:
         wide = table[table["kpi"] == kpi].pivot(index="date", columns="run", values="value")[runs]
         lines += [
             f"### {KPI_LABELS.get(kpi, kpi)} per day",
             "",
-            "| date | " + " | ".join(run_label(r) for r in runs) + " |",
+            "| date | " + " | ".join(run_label(r, styles) for r in runs) + " |",
             "|---|" + "---:|" * len(runs),
         ]
         lines += [f"| {d} | " + " | ".join(fmt(kpi, wide.loc[d, r]) for r in runs) + " |" for d in wide.index]

@@ -17,11 +17,9 @@ import os
 import sys
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import dataclass
 from typing import Any
 
 from rpbench.exceptions import ParameterError
-from rpbench.harness.strict import is_strict, strict_mode
 
 
 def run_tasks(
@@ -35,9 +33,8 @@ def run_tasks(
 ) -> list[Any]:
     """``[fn(t) for t in tasks]``, in parallel unless ``workers == 1``.
 
-    ``fn`` and the tasks must pickle (``fn`` a module-level function).  Worker
-    processes run ``fn`` under the caller's ``--strict`` policy
-    (:mod:`rpbench.harness.strict`).  An exception in a task, or in this
+    ``fn`` and the tasks must pickle (``fn`` a module-level function; a task
+    carries everything it needs, its run specification included).  An exception in a task, or in this
     process (Ctrl-C, SIGTERM turned into an exception by the CLI), stops the
     workers before it propagates, so the caller's results-folder cleanup does
     not race with workers still writing into it.
@@ -49,12 +46,11 @@ def run_tasks(
         return []
     if progress is None:
         progress = sys.stderr.isatty()
-    job = _UnderPolicy(fn, is_strict())
     if scheduler is not None:
-        return _on_dask(job, tasks, scheduler, label, progress)
+        return _on_dask(fn, tasks, scheduler, label, progress)
     if workers == 1 or n == 1:
         return [fn(t) for t in _bar(tasks, label, progress)]
-    return _in_processes(job, tasks, min(n, workers or os.cpu_count() or 1), label, progress)
+    return _in_processes(fn, tasks, min(n, workers or os.cpu_count() or 1), label, progress)
 
 
 def _in_processes(
@@ -111,18 +107,6 @@ def _on_dask(job: Callable[[Any], Any], tasks: Sequence[Any], scheduler: str, la
         return out
     finally:
         client.close()
-
-
-@dataclass(frozen=True)
-class _UnderPolicy:
-    """``fn`` run in a worker under the strict-mode policy of the process that submitted it (picklable)."""
-
-    fn: Callable[[Any], Any]
-    strict: bool
-
-    def __call__(self, task: Any) -> Any:
-        with strict_mode(self.strict):
-            return self.fn(task)
 
 
 def _bar(iterable, label: str, enabled: bool, total: int | None = None):

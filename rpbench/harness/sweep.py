@@ -21,16 +21,18 @@ from pathlib import Path
 
 from rpbench import paper, results
 from rpbench.exceptions import ParameterError
-from rpbench.harness.comparison import run_comparison
+from rpbench.harness.comparison import ComparisonTask, run_task
 from rpbench.harness.parallel import run_tasks
+from rpbench.harness.spec import RunSpec
+from rpbench.results import layout
+from rpbench.results.folder import write_parent_meta
 from rpbench.results.metrics import KPI_LABELS
 from rpbench.results.parents import sweep_table
 from rpbench.results.plots import sweep_figure
 from rpbench.results.report import fmt
-from rpbench.results.runs import run_label
-from rpbench.scenarios import ScenarioRequest
+from rpbench.results.runs import run_label, run_styles
+from rpbench.results.store import check_new_folder
 from rpbench.scenarios.base import Params
-from rpbench.strategies.options import RunOptions
 
 ALIASES = {
     "K": ("patience_mean_s", "planner_patience_s"),
@@ -150,79 +152,42 @@ def parse_over(text: str) -> tuple[str, list[float]]:
     return name.strip(), values
 
 
-@dataclass(frozen=True)
-class PointTask:
-    """Everything a worker process needs to run one sweep point (picklable)."""
-
-    request: ScenarioRequest  # with the point's overrides applied
-    out: str
-    strategies: tuple
-    preset: str
-    run_options: dict
-    command: str | None
-
-
-def run_point(task: PointTask) -> str:
-    """Worker entry point: one sweep point's comparison written to ``task.out``."""
-    folder, _ = run_comparison(
-        task.request.build(),
-        list(task.strategies),
-        task.preset,
-        out=task.out,
-        run_options=task.run_options,
-        progress=False,
-        request=task.request,
-        command=task.command,
-    )
-    return str(folder)
-
-
 def run_sweep(
-    spec: SweepSpec,
+    sweep: SweepSpec,
     points: list[SweepPoint],
+    spec: RunSpec,
+    out: str | None = None,
     *,
-    request: ScenarioRequest,
-    preset: str,
-    run_options: dict[str, RunOptions],
-    out: str | None,
-    workers: int | None,
-    scheduler: str | None,
-    command: str | None,
+    workers: int | None = None,
+    scheduler: str | None = None,
 ) -> Path:
-    """One comparison per point (the request with the point's overrides), in parallel, then the sweep table."""
-    default = f"{results.timestamp()}_sweep-{spec.name}_{request.name}_{preset}"
+    """One comparison of ``spec`` per point (its request with the point's overrides), in parallel, then the
+    sweep table and report.  The data folder is resolved once, here, for every worker."""
+    check_new_folder(out)
+    request = spec.request.resolved()
+    default = f"{results.timestamp()}_sweep-{sweep.name}_{request.name}_{spec.preset}"
     with results.new_results_folder(out, default) as (tmp, final):
         tasks = [
-            PointTask(
-                request=request.with_overrides(p.overrides),
-                out=str(tmp / p.label),
-                strategies=spec.strategies,
-                preset=preset,
-                run_options=run_options,
-                command=command,
-            )
-            for p in points
+            ComparisonTask(spec.for_request(request.with_overrides(p.overrides)), str(tmp / p.label)) for p in points
         ]
-        run_tasks(run_point, tasks, workers=workers, scheduler=scheduler, label=f"sweep {spec.name}")
-        results.write_json(
-            tmp / "meta.json",
+        run_tasks(run_task, tasks, workers=workers, scheduler=scheduler, label=f"sweep {sweep.name}")
+        write_parent_meta(
+            tmp,
+            "sweep",
+            [p.label for p in points],
             {
-                "rpbench_results": 1,
-                "kind": "sweep",
-                "sweep": spec.name,
-                "parameter": spec.parameter,
+                "sweep": sweep.name,
+                "parameter": sweep.parameter,
                 "points": [{"label": p.label, "value": p.value, "overrides": p.overrides} for p in points],
-                "children": [p.label for p in points],  # the point folders: `rpbench check`'s manifest
-                "strategies": list(spec.strategies),
-                "kpis": list(spec.kpis),
+                "strategies": spec.names,
+                "kpis": list(sweep.kpis),
                 "scenario": request.name,
                 "scenario_args": request.meta(),
-                "preset": preset,
-                "command": command,
-                **results.environment(),
+                "preset": spec.preset,
+                "command": spec.command,
             },
         )
-        sweep_table(tmp).to_csv(tmp / "sweep.csv", index=False)
+        sweep_table(tmp).to_csv(tmp / layout.SWEEP, index=False)
         write_sweep_report(tmp, name=final.name)
     return final
 
@@ -252,7 +217,10 @@ def write_sweep_report(parent: Path, name: str | None = None) -> Path:
         lines += ["Command:", "", f"    {meta['command']}", ""]
     if with_paper:
         lines += ["Each cell: rpbench (paper). The paper's values are shown for comparison only.", ""]
-    head = [meta["parameter"]] + [f"{KPI_LABELS.get(k, k).split(' (')[0]} {run_label(r)}" for k in kpis for r in runs]
+    styles = run_styles(results.read_meta(parent / meta["points"][0]["label"])) if meta["points"] else {}
+    head = [meta["parameter"]] + [
+        f"{KPI_LABELS.get(k, k).split(' (')[0]} {run_label(r, styles)}" for k in kpis for r in runs
+    ]
     lines += ["| " + " | ".join(head) + " |", "|---|" + "---:|" * (len(head) - 1)]
     for p in meta["points"]:
         sel = table[table["label"] == p["label"]].set_index(["kpi", "run"])["value"]

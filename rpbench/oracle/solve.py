@@ -187,16 +187,7 @@ def resolve_preset(solver: str | Preset | Backend, options: SolveOptions | None 
         preset = solver if isinstance(solver, Preset) else load_preset(str(solver))
         if options is not None:
             preset = dataclasses.replace(preset, options=options)
-        try:
-            preset.backend_class()
-        except ModuleNotFoundError as exc:
-            if not (exc.name or "").startswith("rpbench.backends."):
-                raise
-            raise PresetError(
-                f"solver preset {preset.name!r}: the adapter module {exc.name} of backend "
-                f"{preset.backend!r} is missing from this installation; choose another --solver"
-            ) from None
-    if Structure.PAIRING not in preset.backend_class().exact:
+    if not preset.adapter().supports(Structure.PAIRING):
         raise PresetError(
             f"solver {preset.name!r} (backend {preset.backend!r}) does not solve the pairing model "
             f"exactly; choose a backend that does: {', '.join(pairing_backends()) or 'none'}"

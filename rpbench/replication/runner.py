@@ -112,11 +112,11 @@ def run_authors(inputs: Inputs, strategy: str, switches, preset: Preset) -> Outc
 def run_rpbench(chosen: PaperInput, strategy: str, preset: Preset, done: dict) -> dict[str, float]:
     """rpbench's own engine on ``chosen``; response over its denominator (the authors': the whole sample)."""
     from rpbench.harness.comparison import calibrated, simulate_strategy
-    from rpbench.strategies import strategy_class
+    from rpbench.harness.spec import resolve_runs
 
     scenario = chosen.scenario
-    options = calibrated(scenario, strategy, strategy_class(strategy).Options(), preset, done, False)
-    run = simulate_strategy(scenario, strategy, preset, options=options, progress=False)
+    (entry,) = resolve_runs([strategy])
+    run = simulate_strategy(scenario, calibrated(entry, scenario, preset, done, False), preset, progress=False)
     done[strategy] = run
     k = dict(run.kpis)
     k["response_denominator"] = chosen.response_denominator

@@ -18,7 +18,7 @@ from rpbench import paper, results
 from rpbench.exceptions import ResultsError
 from rpbench.results.metrics import EXTRA_KPIS, KPI_LABELS, KPI_ORDER
 from rpbench.results.plots import hourly_figure
-from rpbench.results.runs import run_label
+from rpbench.results.runs import Styles, run_label, run_styles
 
 #: Competitive-ratio rows: KPI name -> the oracle run whose total saving is the denominator.
 #: Ratio rows: KPI name -> the offline run whose total saving is the denominator.  Only the first is a
@@ -84,13 +84,19 @@ def table_rows(table: pd.DataFrame) -> list[str]:
     return [k for k in KPI_ORDER if k in table.index] + [k for k in RATIO_ROWS if k in table.index]
 
 
-def text_table(table: pd.DataFrame, *, title: str | None = None, unproven: dict[str, str] | None = None) -> str:
+def text_table(
+    table: pd.DataFrame,
+    *,
+    title: str | None = None,
+    unproven: dict[str, str] | None = None,
+    styles: Styles | None = None,
+) -> str:
     """A plain-text table for the terminal (KPIs as rows, runs as columns); the columns of ``unproven``
     runs (:func:`unproven_runs`) are marked, with a footnote line."""
     rows = table_rows(table)
     cols = list(table.columns)
     unproven = unproven or {}
-    head = ["Metric"] + [run_label(c) + (UNPROVEN_MARK if c in unproven else "") for c in cols]
+    head = ["Metric"] + [run_label(c, styles) + (UNPROVEN_MARK if c in unproven else "") for c in cols]
     body = [[KPI_LABELS.get(k, k)] + [fmt(k, table.loc[k, c]) for c in cols] for k in rows]
     widths = [max(len(r[i]) for r in [head] + body) for i in range(len(head))]
     lines = []
@@ -109,7 +115,10 @@ def text_table(table: pd.DataFrame, *, title: str | None = None, unproven: dict[
 
 
 def markdown_table(
-    table: pd.DataFrame, paper_values: dict | None = None, unproven: dict[str, str] | None = None
+    table: pd.DataFrame,
+    paper_values: dict | None = None,
+    unproven: dict[str, str] | None = None,
+    styles: Styles | None = None,
 ) -> str:
     """The Table 2 layout in markdown; with ``paper_values`` each cell reads "rpbench (paper)"; the columns
     of ``unproven`` runs are marked (the footnote is :func:`unproven_notes`)."""
@@ -117,7 +126,9 @@ def markdown_table(
     cols = list(table.columns)
     unproven = unproven or {}
     out = [
-        "| Metric | " + " | ".join(run_label(c) + ("\\" + UNPROVEN_MARK if c in unproven else "") for c in cols) + " |",
+        "| Metric | "
+        + " | ".join(run_label(c, styles) + ("\\" + UNPROVEN_MARK if c in unproven else "") for c in cols)
+        + " |",
         "|---|" + "---:|" * len(cols),
     ]
     for k in rows:
@@ -185,11 +196,11 @@ def unproven_runs(folder: Path) -> dict[str, str]:
     return dict(sorted(found.items(), key=lambda kv: order.index(kv[0]) if kv[0] in order else len(order)))
 
 
-def unproven_notes(unproven: dict[str, str]) -> list[str]:
+def unproven_notes(unproven: dict[str, str], styles: Styles | None = None) -> list[str]:
     """The footnote of a report table with marked columns (nothing when every run is proven)."""
     if not unproven:
         return []
-    why = "; ".join(f"{run_label(r)}: {text}" for r, text in unproven.items())
+    why = "; ".join(f"{run_label(r, styles)}: {text}" for r, text in unproven.items())
     return [
         f"\\{UNPROVEN_MARK} **Not proven optimal.** {why}. The solver stopped before proving optimality "
         "(its preset's time limit or gap), so these columns are not the runs as defined; raise "
@@ -216,8 +227,9 @@ def report_markdown(folder: Path, name: str | None = None) -> str:
     ]
     if meta.get("command"):
         lines += ["Command:", "", f"    {meta['command']}", ""]
-    lines += ["## Comparison (paper Table 2 layout)", "", markdown_table(table, unproven=unproven), ""]
-    lines += unproven_notes(unproven) + offline_notes(table, meta)
+    styles = run_styles(meta)
+    lines += ["## Comparison (paper Table 2 layout)", "", markdown_table(table, unproven=unproven, styles=styles), ""]
+    lines += unproven_notes(unproven, styles) + offline_notes(table, meta)
     if paper.table2_applies(sc["name"], args.get("date"), args.get("sample")):
         lines += [
             "## Beside the paper",
@@ -225,7 +237,7 @@ def report_markdown(folder: Path, name: str | None = None) -> str:
             "Each cell: rpbench (paper Table 2). The paper's numbers are shown for comparison only; "
             "nothing is tuned to them.",
             "",
-            markdown_table(table, paper.TABLE2, unproven),
+            markdown_table(table, paper.TABLE2, unproven, styles),
             "",
         ]
     summary = solver_summary(folder)
@@ -238,7 +250,7 @@ def report_markdown(folder: Path, name: str | None = None) -> str:
         ]
     walls = {r: v.get("wall_s") for r, v in meta.get("runs", {}).items() if v.get("wall_s") is not None}
     if walls:
-        lines += ["Wall time per run: " + ", ".join(f"{run_label(r)} {w:.2f} s" for r, w in walls.items()), ""]
+        lines += ["Wall time per run: " + ", ".join(f"{run_label(r, styles)} {w:.2f} s" for r, w in walls.items()), ""]
     if results.run_names(folder):
         verify = f"Verify this folder with `rpbench check {name or folder.name}`."
     else:
@@ -334,9 +346,9 @@ def check_metrics(metrics: list[str] | None) -> list[str] | None:
     return metrics
 
 
-def selected_markdown(table: pd.DataFrame) -> str:
+def selected_markdown(table: pd.DataFrame, styles: Styles | None = None) -> str:
     cols = list(table.columns)
-    out = ["| Metric | " + " | ".join(run_label(c) for c in cols) + " |", "|---|" + "---:|" * len(cols)]
+    out = ["| Metric | " + " | ".join(run_label(c, styles) for c in cols) + " |", "|---|" + "---:|" * len(cols)]
     for k in table.index:
         out.append(f"| {KPI_LABELS.get(k, k)} | " + " | ".join(fmt(k, table.loc[k, c]) for c in cols) + " |")
     return "\n".join(out)

@@ -1,28 +1,48 @@
-"""How a run is called in tables and drawn in plots: read off the strategy classes and oracle runs.
+"""How a run is called in tables and drawn in plots.
 
-A plug-in strategy (an entry-point name or a ``module:Class`` run name) is
-shown by its class's ``label`` and ``color`` like a built-in one.  A run name
-that resolves to no class (say, a plug-in that is not installed where a
-folder is re-rendered) is shown under its own name.
+A results folder records each run's label and colour in ``meta.json``
+(:mod:`rpbench.results.folder`), so a folder renders from its files alone,
+plug-in strategies included: :func:`run_styles` reads them.  Without a record
+(folders written before labels were recorded, tables built in code) the
+label and colour are read off the strategy classes and offline runs; a run
+name that resolves to no class is shown under its own name.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import Any
+
 from rpbench.oracle.runs import ORACLE_RUNS
 from rpbench.strategies import strategy_class
 
+#: Run name -> (label, colour): what :func:`run_styles` returns and the ``styles`` arguments take.
+Styles = Mapping[str, tuple[str, str | None]]
 
-def run_label(name: str) -> str:
+
+def run_styles(meta: Mapping[str, Any]) -> dict[str, tuple[str, str | None]]:
+    """The label and colour of every run a folder's ``meta.json`` records (others fall back to the classes)."""
+    out = {}
+    for name, record in (meta.get("runs") or {}).items():
+        if isinstance(record, Mapping) and isinstance(record.get("label"), str):
+            color = record.get("color")
+            out[name] = (record["label"], color if isinstance(color, str) else None)
+    return out
+
+
+def run_label(name: str, styles: Styles | None = None) -> str:
     """Column header / legend entry of a run (``fl-nd`` -> ``FL-no_delay``)."""
-    return _style(name)[0]
+    return _style(name, styles)[0]
 
 
-def run_color(name: str) -> str | None:
+def run_color(name: str, styles: Styles | None = None) -> str | None:
     """Matplotlib colour of a run's line (None: the next colour of the cycle)."""
-    return _style(name)[1]
+    return _style(name, styles)[1]
 
 
-def _style(name: str) -> tuple[str, str | None]:
+def _style(name: str, styles: Styles | None) -> tuple[str, str | None]:
+    if styles and name in styles:
+        return styles[name]
     if name in ORACLE_RUNS:
         run = ORACLE_RUNS[name]
         return run.label, run.color

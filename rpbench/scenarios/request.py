@@ -51,6 +51,14 @@ class ScenarioRequest:
         """This request with more parameter overrides (they win over the present ones)."""
         return self.replace(params={**self.overrides, **overrides})
 
+    def resolved(self) -> ScenarioRequest:
+        """This request with its data folder found now (``--data``, ``$RPBENCH_DATA``, the defaults: see
+        :mod:`rpbench.paths`), so that every later build, in any worker process, reads the same folder; a
+        scenario that needs no data is returned as it is."""
+        if self.data_dir is not None or not scenario_spec(self.name).needs_data:
+            return self
+        return self.replace(data_dir=str(require_data_dir(None, what=f"scenario {self.name!r}")))
+
     def build(self) -> Scenario:
         return build_scenario(
             self.name,

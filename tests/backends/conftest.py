@@ -15,7 +15,7 @@ SLOW_PRESETS = ("blossom-v",)
 def make(name: str):
     """(backend, options) of a preset; skips the test when the preset's library is not installed."""
     preset = load_preset(name)
-    cls = preset.backend_class()
+    cls = preset.adapter()
     if not cls.is_installed():
         pytest.skip(f"preset {name!r}: {', '.join(cls.missing_libraries())} not installed")
     return get_backend(preset.backend), preset.options

@@ -21,8 +21,9 @@ from rpbench.backends.presets import parse_preset
 from rpbench.backends.registry import plugin_names
 from rpbench.bench import synthetic
 from rpbench.cli import main
-from rpbench.exceptions import ParameterError, PresetError, SolverError
+from rpbench.exceptions import PresetError, SolverError
 from rpbench.harness.comparison import run_comparison
+from rpbench.harness.spec import RunSpec
 from rpbench.model import Status
 from rpbench.results.check import check_folder
 from rpbench.scenarios import ScenarioRequest
@@ -51,22 +52,24 @@ def preset_file(folder, backend: str, options: str = "") -> str:
 
 def test_a_module_class_backend_solves_a_toy_run_through_a_preset_file(example, tmp_path):
     preset = load_preset(preset_file(example, SPEC))
-    assert preset.backend == SPEC and preset.backend_class().__name__ == "DenseLSABackend"
-    scenario = ScenarioRequest("toy", sample=0.1, seed=2).build()
-    folder, table = run_comparison(scenario, ["mb", "fl"], preset.path, out=tmp_path / "run", progress=False)
+    assert preset.backend == SPEC and type(preset.adapter()).__name__ == "DenseLSABackend"
+    request = ScenarioRequest("toy", sample=0.1, seed=2)
+    folder, table = run_comparison(
+        RunSpec.of(request, ["mb", "fl"], preset=preset.path), tmp_path / "run", progress=False
+    )
     meta = json.loads((folder / "meta.json").read_text())
     assert meta["preset"]["backend"] == SPEC and meta["preset"]["name"] == "mine"
     assert all(c.ok for c in check_folder(folder))
     # the same optimum as a built-in exact backend (the simulator breaks ties canonically)
-    _, reference = run_comparison(scenario, ["mb", "fl"], "highs", out=tmp_path / "highs", progress=False)
+    _, reference = run_comparison(RunSpec.of(request, ["mb", "fl"]), tmp_path / "highs", progress=False)
     same = [k for k in table.index if k != "wall_s"]
     assert np.allclose(table.loc[same].to_numpy(float), reference.loc[same].to_numpy(float), equal_nan=True)
 
 
 def test_a_plugin_backend_is_refused_for_structures_it_does_not_solve(example, tmp_path):
-    scenario = ScenarioRequest("toy", sample=0.1, seed=2).build()
-    with pytest.raises(ParameterError, match="does not solve trip_packing models exactly"):
-        run_comparison(scenario, ["rtv"], preset_file(example, SPEC), out=tmp_path / "never", progress=False)
+    spec = RunSpec.of(ScenarioRequest("toy", sample=0.1, seed=2), ["rtv"], preset=preset_file(example, SPEC))
+    with pytest.raises(PresetError, match="does not solve trip_packing models exactly"):
+        run_comparison(spec, tmp_path / "never", progress=False)
     assert not (tmp_path / "never").exists()
 
 
@@ -141,7 +144,7 @@ def test_backend_entry_points_resolve_and_builtins_win(example):
     assert backend_class("lsa").__name__ == "DenseLSABackend" and backend_class("highs") is HighsBackend
     assert "lsa" in plugin_names() and "highs" not in plugin_names()
     preset = parse_preset("mine", 'backend = "lsa"\n', "mine.toml")
-    assert preset.backend == "lsa" and preset.backend_class() is backend_class(SPEC)
+    assert preset.backend == "lsa" and type(preset.adapter()) is backend_class(SPEC)
     with pytest.raises(
         PresetError,
         match="unknown backend 'gurobi'; known backends: highs, .*; installed plug-ins: lsa; or give MODULE:CLASS",

@@ -63,4 +63,4 @@ def test_solve_checks_support_and_verifies_the_answer():
 
 def test_preset_of_a_backend_object_keeps_options():
     preset = Preset.of(Fixed(), SolveOptions(time_limit_s=3.0))
-    assert preset.make_backend().name == "fixed" and preset.options.time_limit_s == 3.0
+    assert preset.adapter().name == "fixed" and preset.options.time_limit_s == 3.0

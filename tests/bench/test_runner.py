@@ -65,7 +65,7 @@ def test_errors_and_wrong_answers_are_rows_not_crashes(monkeypatch):
     preset = Preset(name="broken", backend="highs", description="", options=SolveOptions(), path="-")
     monkeypatch.setattr(
         Preset,
-        "make_backend",
+        "adapter",
         lambda self: (
             _Broken()
             if self.name == "broken"

@@ -1,6 +1,6 @@
 """Options of run, sweep, snapshot and oracle: every bad value is one line, exit status 2, nothing written.
 
-``--opt STRATEGY.KEY=VALUE`` is typed per strategy (unknown keys, values
+``--opt RUN.KEY=VALUE`` is typed per strategy (unknown keys, values
 of the wrong kind and strategies not run are errors); these are regression
 tests of that contract on each command that takes options, and of the
 oracle's numeric flags.  Every case passes an ``--out`` that must stay
@@ -20,15 +20,15 @@ SWEEP = ("sweep", "--over", "dt=20,30", *TOY, "--workers", "1")
     "argv, message",
     [
         (("run", *TOY, "--strategies", "mb", "--opt", "mb.foo=1"), "mb: unknown option 'foo'"),
-        (("run", *TOY, "--strategies", "mb", "--opt", "rtv.c_ko=large"), "strategy 'rtv' is not in --strategies"),
+        (("run", *TOY, "--strategies", "mb", "--opt", "rtv.c_ko=large"), "run 'rtv' is not in --strategies"),
         (("run", *TOY, "--strategies", "rtv", "--opt", "rtv.c_ko=huge"), "option c_ko = 'huge' must be"),
-        (("run", *TOY, "--strategies", "mb", "--opt", "mb"), "expected STRATEGY.KEY=VALUE"),
-        (("run", *TOY, "--strategies", "mb", "--opt", "mb.=1"), "expected STRATEGY.KEY=VALUE"),
+        (("run", *TOY, "--strategies", "mb", "--opt", "mb"), "expected RUN.KEY=VALUE"),
+        (("run", *TOY, "--strategies", "mb", "--opt", "mb.=1"), "expected RUN.KEY=VALUE"),
         (("run", *TOY, "--strategies", "nope"), "unknown strategy 'nope'"),
-        (("run", *TOY, "--strategies", "mb,mb"), "names a strategy twice"),
+        (("run", *TOY, "--strategies", "mb,mb"), "names 'mb' twice"),
         (("run", *TOY, "--strategies", "mb", "--solver", "nope"), "unknown solver preset 'nope'"),
         ((*SWEEP, "--strategies", "mb", "--opt", "mb.foo=1"), "mb: unknown option 'foo'"),
-        ((*SWEEP, "--strategies", "mb", "--opt", "fl.x=1"), "strategy 'fl' is not in --strategies"),
+        ((*SWEEP, "--strategies", "mb", "--opt", "fl.x=1"), "run 'fl' is not in --strategies"),
         (("sweep", "--over", "dt=", *TOY), "expected NAME=V1,V2,..."),
         (("sweep", "--over", "nope=1,2", *TOY), "unknown sweep parameter 'nope'"),
         (("snapshot", *TOY, "--strategies", "mb", "--opt", "mb.foo=1"), "mb: unknown option 'foo'"),

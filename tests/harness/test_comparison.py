@@ -6,9 +6,9 @@ import json
 
 import pytest
 
-from rpbench.exceptions import ParameterError
 from rpbench.harness import comparison
-from rpbench.harness.comparison import parse_run_options, parse_strategies, run_comparison
+from rpbench.harness.comparison import run_comparison
+from rpbench.harness.spec import RunSpec
 from rpbench.scenarios import ScenarioRequest
 from rpbench.strategies.forward import ForwardOptions
 
@@ -22,14 +22,12 @@ def test_fl_is_calibrated_by_one_mb_run_shared_with_the_mb_column(toy_request, t
     calls = []
     real = comparison.simulate_strategy
 
-    def counting(scenario, name, preset, **kw):
-        calls.append((name, kw.get("options")))
-        return real(scenario, name, preset, **kw)
+    def counting(scenario, entry, preset, **kw):
+        calls.append((entry.name, entry.options))
+        return real(scenario, entry, preset, **kw)
 
     monkeypatch.setattr(comparison, "simulate_strategy", counting)
-    folder, table = run_comparison(
-        toy_request.build(), ["fl", "mb"], "highs", out=tmp_path / "r", progress=False, request=toy_request
-    )
+    folder, table = run_comparison(RunSpec.of(toy_request, ["fl", "mb"]), tmp_path / "r", progress=False)
     assert [name for name, _ in calls] == ["mb", "fl"]  # the calibration run is the MB column
     fl_options = calls[1][1]
     mb = table["mb"]
@@ -48,18 +46,10 @@ def test_user_options_are_kept_and_an_mb_column_with_options_is_its_own_run(toy_
     monkeypatch.setattr(
         comparison,
         "simulate_strategy",
-        lambda sc, name, preset, **kw: calls.append(name) or real(sc, name, preset, **kw),
+        lambda sc, entry, preset, **kw: calls.append(entry.name) or real(sc, entry, preset, **kw),
     )
-    options = parse_run_options(["fl.tau0_s=60", "mb.order_rule=min_then_check"], ["mb", "fl"])
-    run_comparison(
-        toy_request.build(),
-        ["mb", "fl"],
-        "highs",
-        out=tmp_path / "r",
-        run_options=options,
-        progress=False,
-        request=toy_request,
-    )
+    options = {"fl": {"tau0_s": "60"}, "mb": {"order_rule": "min_then_check"}}
+    run_comparison(RunSpec.of(toy_request, ["mb", "fl"], options=options), tmp_path / "r", progress=False)
     # MB with options is not the default calibration run: MB(options), MB(default) for l̄, FL
     assert calls == ["mb", "mb", "fl"]
 
@@ -70,16 +60,8 @@ def test_fully_specified_fl_needs_no_calibration(toy_request, tmp_path, monkeypa
     monkeypatch.setattr(
         comparison,
         "simulate_strategy",
-        lambda sc, name, preset, **kw: calls.append(name) or real(sc, name, preset, **kw),
+        lambda sc, entry, preset, **kw: calls.append(entry.name) or real(sc, entry, preset, **kw),
     )
-    options = parse_run_options(["fl.tau0_s=60", "fl.mean_pickup_m=500"], ["fl"])
-    run_comparison(toy_request.build(), ["fl"], "highs", out=tmp_path / "r", run_options=options, progress=False)
+    spec = RunSpec.of(toy_request, ["fl"], options={"fl": {"tau0_s": 60.0, "mean_pickup_m": 500.0}})
+    run_comparison(spec, tmp_path / "r", progress=False)
     assert calls == ["fl"]
-
-
-def test_strategy_list_is_checked():
-    assert parse_strategies("MB, fl ,oracle1") == ["mb", "fl", "oracle1"]
-    with pytest.raises(ParameterError, match="unknown strategy 'fx'"):
-        parse_strategies("mb,fx")
-    with pytest.raises(ParameterError, match="names a strategy twice"):
-        parse_strategies("mb,mb")

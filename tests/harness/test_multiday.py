@@ -6,6 +6,7 @@ import pandas as pd
 import pytest
 
 from rpbench.harness.multiday import run_days
+from rpbench.harness.spec import RunSpec
 from rpbench.scenarios import ScenarioRequest
 
 
@@ -15,17 +16,8 @@ def test_multi_day_folder(two_day_data, tmp_path, workers):
     """In-process and in two spawned workers (the day tasks must pickle): the same folder."""
     data = two_day_data
     request = ScenarioRequest("haikou-peak", sample=1.0, data_dir=str(data))
-    folder = run_days(
-        request,
-        ["2017-05-01", "2017-05-02"],
-        strategies=["mb", "rtv"],
-        preset="highs",
-        run_options={},
-        out=str(tmp_path / "days"),
-        workers=workers,
-        scheduler=None,
-        command="test",
-    )
+    spec = RunSpec.of(request, ["mb", "rtv"], command="test")
+    folder = run_days(spec, ["2017-05-01", "2017-05-02"], str(tmp_path / "days"), workers=workers)
     by_day = pd.read_csv(folder / "by_day.csv")
     assert set(by_day["date"]) == {"2017-05-01", "2017-05-02"} and set(by_day["run"]) == {"mb", "rtv"}
     summary = pd.read_csv(folder / "summary.csv")
@@ -43,17 +35,7 @@ def test_dates_of_the_synthetic_full_day(fake_data, tmp_path):
     request = ScenarioRequest("haikou-day", sample=0.1, data_dir=str(fake_data))
     dates = request.dates("2017-05-01..2017-05-31")
     assert dates and all(d.startswith("2017-05") for d in dates)
-    folder = run_days(
-        request,
-        dates[:1],
-        strategies=["mb"],
-        preset="highs",
-        run_options={},
-        out=str(tmp_path / "days"),
-        workers=1,
-        scheduler=None,
-        command="test",
-    )
+    folder = run_days(RunSpec.of(request, ["mb"], command="test"), dates[:1], str(tmp_path / "days"), workers=1)
     meta = __import__("json").loads((folder / dates[0] / "meta.json").read_text())
     assert meta["scenario"]["name"] == "haikou-day" and meta["scenario"]["args"]["date"] == dates[0]
     assert "scenario `haikou-day`" in (folder / "report.md").read_text()

@@ -11,15 +11,10 @@ import pytest
 
 from rpbench.exceptions import ParameterError
 from rpbench.harness.parallel import run_tasks
-from rpbench.harness.strict import is_strict, strict_mode
 
 
 def square(x: int) -> int:
     return x * x
-
-
-def strictness(_: int) -> bool:
-    return is_strict()
 
 
 def sleep_or_fail(task: tuple[str, str]) -> None:
@@ -45,13 +40,6 @@ def test_results_come_back_in_task_order():
 def test_bad_worker_count_is_a_parameter_error():
     with pytest.raises(ParameterError, match="--workers 0"):
         run_tasks(square, [1], workers=0)
-
-
-@pytest.mark.slow
-def test_workers_run_under_the_callers_strict_policy():
-    with strict_mode(True):
-        assert run_tasks(strictness, [0, 1], workers=2, progress=False) == [True, True]
-    assert run_tasks(strictness, [0, 1], workers=2, progress=False) == [False, False]
 
 
 @pytest.mark.slow

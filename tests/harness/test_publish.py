@@ -12,18 +12,14 @@ from rpbench.exceptions import ResultsError
 from rpbench.harness.comparison import run_comparison
 from rpbench.harness.publish import publish
 from rpbench.harness.render import render
-from rpbench.scenarios import build_scenario
+from rpbench.harness.spec import RunSpec
+from rpbench.scenarios import ScenarioRequest
 
 
 @pytest.fixture(scope="module")
 def run_folder(tmp_path_factory):
-    folder, _ = run_comparison(
-        build_scenario("toy", sample=0.2, seed=5),
-        ["mb", "oracle1"],
-        "highs",
-        out=tmp_path_factory.mktemp("runs") / "toy",
-        progress=False,
-    )
+    spec = RunSpec.of(ScenarioRequest("toy", sample=0.2, seed=5), ["mb", "oracle1"])
+    folder, _ = run_comparison(spec, tmp_path_factory.mktemp("runs") / "toy", progress=False)
     return folder
 
 
@@ -49,19 +45,10 @@ def test_a_folder_failing_the_checker_is_not_published(run_folder, tmp_path, cap
 @pytest.mark.slow
 def test_a_published_multi_day_report_names_the_published_folder(two_day_data, tmp_path):
     from rpbench.harness.multiday import run_days
-    from rpbench.scenarios import ScenarioRequest
 
-    folder = run_days(
-        ScenarioRequest("haikou-peak", sample=1.0, data_dir=str(two_day_data)),
-        ["2017-05-01", "2017-05-02"],
-        strategies=["mb"],
-        preset="highs",
-        run_options={},
-        out=str(tmp_path / "days"),
-        workers=1,
-        scheduler=None,
-        command="test",
-    )
+    request = ScenarioRequest("haikou-peak", sample=1.0, data_dir=str(two_day_data))
+    spec = RunSpec.of(request, ["mb"], command="test")
+    folder = run_days(spec, ["2017-05-01", "2017-05-02"], str(tmp_path / "days"), workers=1)
     dest = publish(folder, tmp_path / "published-days")
     report = (dest / "report.md").read_text()
     assert "rpbench check published-days/<date>" in report and "partial" not in report

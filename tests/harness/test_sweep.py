@@ -56,21 +56,14 @@ def test_sweep_cli_rejects_unknown_parameter(capsys):
 @pytest.mark.slow
 def test_sweep_runs_end_to_end_on_the_toy_city(tmp_path):
     from rpbench.harness.render import render
+    from rpbench.harness.spec import RunSpec
     from rpbench.harness.sweep import SweepSpec, run_sweep
     from rpbench.scenarios import ScenarioRequest
 
     spec = SweepSpec("dt", "dt", (10, 30), ("mb",), ("total_saving_km", "response_rate"))
     request = ScenarioRequest("toy", sample=0.1, seed=1)
     folder = run_sweep(
-        spec,
-        expand("dt", spec.values),
-        request=request,
-        preset="highs",
-        run_options={},
-        out=str(tmp_path / "sw"),
-        workers=1,
-        scheduler=None,
-        command="test",
+        spec, expand("dt", spec.values), RunSpec.of(request, ["mb"], command="test"), str(tmp_path / "sw"), workers=1
     )
     assert (folder / "dt=10").is_dir() and (folder / "dt=30").is_dir()
     assert (folder / "sweep.png").is_file()

@@ -12,16 +12,15 @@ import pytest
 from rpbench.cli import main
 from rpbench.exceptions import ResultsError
 from rpbench.harness.comparison import run_comparison
+from rpbench.harness.spec import RunSpec
 from rpbench.results.check import check_folder
-from rpbench.scenarios import build_scenario
+from rpbench.scenarios import ScenarioRequest
 
 
 @pytest.fixture(scope="module")
 def clean_run(tmp_path_factory):
-    scenario = build_scenario("toy", sample=0.25, seed=3)
-    folder, _ = run_comparison(
-        scenario, ["mb", "rtv", "oracle1"], "highs", out=tmp_path_factory.mktemp("runs") / "clean", progress=False
-    )
+    spec = RunSpec.of(ScenarioRequest("toy", sample=0.25, seed=3), ["mb", "rtv", "oracle1"])
+    folder, _ = run_comparison(spec, tmp_path_factory.mktemp("runs") / "clean", progress=False)
     return folder
 
 

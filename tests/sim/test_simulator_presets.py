@@ -27,7 +27,7 @@ def runs():
     for preset in installed_presets():
         p = load_preset(preset)
         for name in STRATEGIES:
-            if strategy_class(name).structure not in p.backend_class().exact:
+            if strategy_class(name).structure not in p.adapter().exact:
                 continue
             out[preset, name] = simulate_strategy(scenario, name, p, progress=False)
     return out

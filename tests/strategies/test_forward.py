@@ -113,11 +113,11 @@ def test_unknown_options_rejected():
 @pytest.mark.slow
 def test_fl_runs_on_the_toy_city(tmp_path):
     from rpbench.harness.comparison import run_comparison
-    from rpbench.scenarios import build_scenario
+    from rpbench.harness.spec import RunSpec
+    from rpbench.scenarios import ScenarioRequest
 
-    folder, table = run_comparison(
-        build_scenario("toy", sample=0.25, seed=8), ["mb", "fl-nd", "fl"], "highs", out=tmp_path / "fl", progress=False
-    )
+    spec = RunSpec.of(ScenarioRequest("toy", sample=0.25, seed=8), ["mb", "fl-nd", "fl"])
+    folder, table = run_comparison(spec, tmp_path / "fl", progress=False)
     import json
 
     meta = json.loads((folder / "meta.json").read_text())

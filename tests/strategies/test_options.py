@@ -5,8 +5,9 @@ from __future__ import annotations
 import pytest
 
 from rpbench.cli import main
+from rpbench.commands._runs import parse_runs
 from rpbench.exceptions import ParameterError
-from rpbench.harness.comparison import options_class, parse_run_options
+from rpbench.harness.spec import options_class
 from rpbench.oracle.runs import ORACLE_RUNS
 from rpbench.strategies import REGISTRY, strategy_class
 from rpbench.strategies.forward import ForwardOptions
@@ -21,7 +22,7 @@ def test_every_run_refuses_an_unknown_option_naming_the_known_ones(name):
     with pytest.raises(
         ParameterError, match=f"{name}: unknown option 'rebalence'; known options: {', '.join(known) or 'none'}$"
     ):
-        parse_run_options([f"{name}.rebalence=true"], [name])
+        parse_runs([name], [f"{name}.rebalence=true"])
 
 
 @pytest.mark.parametrize("name", list(REGISTRY))
@@ -61,10 +62,10 @@ def test_bad_values_are_refused_by_name(raw, message):
 
 
 def test_opt_must_name_a_run_in_the_list():
-    with pytest.raises(ParameterError, match="strategy 'fl' is not in --strategies"):
-        parse_run_options(["fl.rates=month"], ["mb"])
-    with pytest.raises(ParameterError, match="expected STRATEGY.KEY=VALUE"):
-        parse_run_options(["rtv"], ["rtv"])
+    with pytest.raises(ParameterError, match="run 'fl' is not in --strategies"):
+        parse_runs(["mb"], ["fl.rates=month"])
+    with pytest.raises(ParameterError, match="expected RUN.KEY=VALUE"):
+        parse_runs(["rtv"], ["rtv"])
 
 
 def test_cli_typo_exits_2_with_one_line(capsys, tmp_path):

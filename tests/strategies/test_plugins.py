@@ -1,4 +1,4 @@
-"""Strategies defined outside rpbench: ``module:Class`` run names, entry points, their errors and options.
+"""Strategies defined outside rpbench: ``module:Class`` and entry points, their run names, errors and options.
 
 A plug-in module is written to a temporary folder put on ``sys.path``; entry
 points are declared by a hand-written ``.dist-info`` folder there (what pip
@@ -23,10 +23,10 @@ from plugin_helpers import EXAMPLE, declare_entry_points, forget
 
 from rpbench import plugins
 from rpbench.cli import main
+from rpbench.commands._runs import parse_runs
 from rpbench.exceptions import ParameterError
-from rpbench.harness.comparison import parse_run_options, parse_strategies, split_option_key
+from rpbench.harness.spec import resolve_runs
 from rpbench.results.check import check_folder
-from rpbench.results.runs import run_color, run_label
 from rpbench.strategies import plugin_names, strategy_class
 from rpbench.strategies.myopic import MyopicBatch
 
@@ -64,6 +64,14 @@ class MyStrategy(Strategy):
         vac, join = vacant_options(state), join_options(state)
         return assignment_round(state, vac, -vac.pickup_m, join, join.saving_m - join.pickup_m,
                                 np.full(state.n_passengers, NO_WAIT_UTILITY_M), name="mine")
+
+
+class Twin(MyStrategy):
+    """Another class under the same run name."""
+
+
+class Builtin(MyStrategy):
+    name = "mb"
 
 
 class Abstract(Strategy):
@@ -112,26 +120,50 @@ def test_module_class_strategy_runs_everywhere_a_builtin_does(plugin_dir, tmp_pa
     )
     assert code == 0, capsys.readouterr().err
     kpis = json.loads(capsys.readouterr().out)["kpis"]
-    assert list(kpis) == ["mb", "mymod:MyStrategy"]
+    assert list(kpis) == ["mb", "mine"]  # the plug-in runs under its class's name
     same = {k: v for k, v in kpis["mb"].items() if k != "wall_s"}
-    assert {k: kpis["mymod:MyStrategy"][k] for k in same} == pytest.approx(same, nan_ok=True)  # MB, renamed
-    assert (out / "runs" / "mymod:MyStrategy" / "events.csv.gz").is_file()
+    assert {k: kpis["mine"][k] for k in same} == pytest.approx(same, nan_ok=True)  # MB, renamed
+    assert (out / "runs" / "mine" / "events.csv.gz").is_file()
     meta = json.loads((out / "meta.json").read_text())
-    assert meta["strategies"] == ["mb", "mymod:MyStrategy"]
-    assert meta["runs"]["mymod:MyStrategy"]["options"] == {"x": 3}
+    assert meta["strategies"] == ["mb", "mine"]
+    record = meta["runs"]["mine"]
+    assert record["options"] == {"x": 3} and record["source"] == "mymod:MyStrategy"
+    assert (record["label"], record["color"]) == ("Mine", "tab:pink")  # what a report needs, without the class
     checks = check_folder(out)
-    assert [c.run for c in checks] == ["mb", "mymod:MyStrategy"] and all(c.ok for c in checks)
+    assert [c.run for c in checks] == ["mb", "mine"] and all(c.ok for c in checks)
     assert main(["check", str(out)]) == 0
     assert "| Metric | MB | Mine |" in (out / "report.md").read_text()
-    assert (run_label("mymod:MyStrategy"), run_color("mymod:MyStrategy")) == ("Mine", "tab:pink")
+    # the folder re-renders from its files alone: the plug-in need not be importable any more
+    forget("mymod")
+    sys.path.remove(str(plugin_dir))
+    (out / "report.md").unlink()
+    assert main(["report", str(out)]) == 0
+    assert "| Metric | MB | Mine |" in (out / "report.md").read_text()
 
 
-def test_spec_names_keep_their_case_and_builtin_names_do_not(plugin_dir):
-    assert parse_strategies(" MB, mymod:MyStrategy ,Oracle1") == ["mb", "mymod:MyStrategy", "oracle1"]
-    with pytest.raises(ParameterError, match="names a strategy twice"):
-        parse_strategies("mymod:MyStrategy,mymod:MyStrategy")
+def names(items: str) -> list[tuple[str, str]]:
+    return [(e.name, e.source) for e in resolve_runs(items.split(","))]
+
+
+def test_sources_keep_their_case_and_builtin_names_do_not(plugin_dir):
+    """A ``module:Class`` source is case-sensitive (Python names are); built-in names are not."""
+    assert names(" MB, mymod:MyStrategy ,Oracle1") == [
+        ("mb", "mb"),
+        ("mine", "mymod:MyStrategy"),
+        ("oracle1", "oracle1"),
+    ]
+    with pytest.raises(ParameterError, match="names 'mine' twice"):
+        names("mymod:MyStrategy,mymod:MyStrategy")
     with pytest.raises(ParameterError, match="has no attribute 'mystrategy'"):
-        parse_strategies("mymod:mystrategy")
+        names("mymod:mystrategy")
+
+
+def test_two_plugins_under_one_run_name_or_a_builtin_name_are_refused(plugin_dir):
+    """The run name is the class's ``name``: two classes sharing one, or one taking a built-in's, fail."""
+    with pytest.raises(ParameterError, match="runs 'mymod:MyStrategy' and 'mymod:Twin' as 'mine'"):
+        names("mymod:MyStrategy,mymod:Twin")
+    with pytest.raises(ParameterError, match="declares name 'mb', the name of a built-in run"):
+        names("mymod:Builtin")
 
 
 @pytest.mark.parametrize(
@@ -197,39 +229,30 @@ def test_a_class_lacking_a_declared_attribute_is_refused(plugin_dir):
     forget("nolabel")
     with pytest.raises(ParameterError, match="nolabel.NoLabel lacks the class attribute.s. label every strategy"):
         strategy_class("nolabel:NoLabel")
-    assert run_label("nolabel:NoLabel") == "nolabel:NoLabel"  # a report falls back to the run name
     forget("nolabel")
 
 
 # ------------------------------------------------------------------ --opt
-def test_opt_reaches_the_typed_options_of_a_spec(plugin_dir):
-    options = parse_run_options(["mymod:MyStrategy.x=7", "mb.order_rule=min_then_check"], ["mb", "mymod:MyStrategy"])
-    assert options["mymod:MyStrategy"].x == 7 and options["mymod:MyStrategy"].as_dict() == {"x": 7}
-    assert type(options["mymod:MyStrategy"]).__name__ == "MyOptions"
-    assert options["mb"].order_rule == "min_then_check"
-    with pytest.raises(ParameterError, match="mymod:MyStrategy: unknown option 'y'; known options: x"):
-        parse_run_options(["mymod:MyStrategy.y=1"], ["mymod:MyStrategy"])
+def options(strategies: str, *items: str) -> dict:
+    return {e.name: e.options for e in parse_runs(strategies, items)}
+
+
+def test_opt_reaches_the_typed_options_of_a_plugin_by_name_or_source(plugin_dir):
+    """``--opt NAME.x=...`` uses the run's name; the source it was given by works too."""
+    got = options("mb,mymod:MyStrategy", "mine.x=7", "mb.order_rule=min_then_check")
+    assert got["mine"].x == 7 and got["mine"].as_dict() == {"x": 7} and type(got["mine"]).__name__ == "MyOptions"
+    assert got["mb"].order_rule == "min_then_check"
+    assert options("mymod:MyStrategy", "mymod:MyStrategy.x=5")["mine"].x == 5
+    with pytest.raises(ParameterError, match="mine: unknown option 'y'; known options: x"):
+        options("mymod:MyStrategy", "mine.y=1")
     with pytest.raises(ParameterError, match="option x = 'many' must be an integer"):
-        parse_run_options(["mymod:MyStrategy.x=many"], ["mymod:MyStrategy"])
+        options("mymod:MyStrategy", "mine.x=many")
     with pytest.raises(ParameterError, match="mymod: x must be >= 0"):
-        parse_run_options(["mymod:MyStrategy.x=-1"], ["mymod:MyStrategy"])
-    with pytest.raises(ParameterError, match="strategy 'mymod:Other' is not in --strategies"):
-        parse_run_options(["mymod:Other.x=1"], ["mymod:MyStrategy"])
-    with pytest.raises(ParameterError, match="expected STRATEGY.KEY=VALUE"):
-        parse_run_options(["mymod:MyStrategy=1"], ["mymod:MyStrategy"])
-
-
-def test_opt_key_splits_at_the_longest_run_name():
-    assert split_option_key("pkg.rules:Greedy.threshold", ["mb", "pkg.rules:Greedy"]) == (
-        "pkg.rules:Greedy",
-        "threshold",
-    )
-    assert split_option_key("a.b.c", ["a", "a.b"]) == ("a.b", "c")
-    assert split_option_key("rtv.c_ko", ["rtv"]) == ("rtv", "c_ko")
-    # not a run of the list: a guess for the error message (a dotted module before the colon stays whole)
-    assert split_option_key("pkg.rules:Other.x", ["mb"]) == ("pkg.rules:Other", "x")
-    assert split_option_key("fl.rates", ["mb"]) == ("fl", "rates")
-    assert split_option_key("rtv", ["rtv"]) == ("rtv", "")
+        options("mymod:MyStrategy", "mine.x=-1")
+    with pytest.raises(ParameterError, match="run 'mymod:Other' is not in --strategies"):
+        options("mymod:MyStrategy", "mymod:Other.x=1")
+    with pytest.raises(ParameterError, match="expected RUN.KEY=VALUE"):
+        options("mymod:MyStrategy", "mine=1")
 
 
 def test_cli_opt_of_a_spec_unknown_option_exits_2(plugin_dir, tmp_path, capsys):
@@ -241,7 +264,7 @@ def test_cli_opt_of_a_spec_unknown_option_exits_2(plugin_dir, tmp_path, capsys):
             "--strategies",
             "mymod:MyStrategy",
             "--opt",
-            "mymod:MyStrategy.z=1",
+            "mine.z=1",
             "--out",
             str(tmp_path / "never"),
             "--no-progress",
@@ -269,19 +292,19 @@ def test_entry_points_resolve_and_builtins_win(plugin_dir):
     assert strategy_class("MYPLUG") is strategy_class("myplug")  # names compare case-insensitively
     assert strategy_class("mb") is MyopicBatch  # a shadowing entry point is ignored
     assert "myplug" in plugin_names() and "mb" not in plugin_names()
-    assert parse_strategies("mb,MyPlug,oracle1") == ["mb", "myplug", "oracle1"]  # oracles win too
+    # oracles win too; the plug-in runs under its class's name
+    assert names("mb,MyPlug,oracle1") == [("mb", "mb"), ("mine", "myplug"), ("oracle1", "oracle1")]
     with pytest.raises(
         ParameterError,
         match=r"strategy 'broken' \(entry point broken = nomod_xyz:Thing of "
         r"mine_dist\): cannot import module 'nomod_xyz'",
     ):
-        parse_strategies("broken")
+        names("broken")
     with pytest.raises(ParameterError, match="mymod.helper is a function, not a subclass"):
         strategy_class("notone")
     with pytest.raises(ParameterError, match="installed plug-ins: broken, myplug, notone"):
         strategy_class("nosuch")
-    options = parse_run_options(["myplug.x=2"], ["myplug"])
-    assert options["myplug"].x == 2
+    assert options("myplug", "mine.x=2")["mine"].x == 2
 
 
 def test_one_name_declared_by_two_distributions_is_ambiguous(plugin_dir):
@@ -307,7 +330,7 @@ def test_sweep_and_snapshot_with_a_plugin_strategy(plugin_dir, tmp_path, capsys)
             "--strategies",
             "mb,mymod:MyStrategy",
             "--opt",
-            "mymod:MyStrategy.x=2",
+            "mine.x=2",
             "--workers",
             "1",
             "--out",
@@ -318,7 +341,7 @@ def test_sweep_and_snapshot_with_a_plugin_strategy(plugin_dir, tmp_path, capsys)
     for point in ("dt=10", "dt=30"):
         assert all(c.ok for c in check_folder(out / point))
         meta = json.loads((out / point / "meta.json").read_text())
-        assert meta["runs"]["mymod:MyStrategy"]["options"] == {"x": 2}
+        assert meta["runs"]["mine"]["options"] == {"x": 2}
     assert "Response rate Mine" in (out / "report.md").read_text()
     assert main(["report", str(out)]) == 0
     snap = tmp_path / "snap"
@@ -342,7 +365,7 @@ def test_sweep_and_snapshot_with_a_plugin_strategy(plugin_dir, tmp_path, capsys)
         == 0
     )
     manifest = json.loads((snap / "manifest.json").read_text())
-    assert [e["strategy"] for e in manifest["instances"]] == ["mymod:MyStrategy"]
+    assert [e["strategy"] for e in manifest["instances"]] == ["mine"]
     assert (snap / manifest["instances"][0]["file"]).is_file()
 
 

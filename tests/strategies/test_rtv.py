@@ -18,7 +18,7 @@ from rpbench.strategies import Kind, make_strategy
 @pytest.fixture(scope="module")
 def solve():
     preset = load_preset("highs")
-    backend = preset.make_backend()
+    backend = preset.adapter()
     return lambda model: backend.solve(model, preset.options)
 
 

@@ -1,0 +1,206 @@
+"""The run specification: everything one comparison needs, frozen, built once and passed down.
+
+A :class:`RunSpec` names the scenario (a :class:`~rpbench.scenarios.ScenarioRequest`),
+the runs in column order (:class:`RunEntry`: strategies and offline runs,
+each under its name with its typed options), the solver presets, the strict
+policy and the command line to record.  ``rpbench run`` builds one from its
+arguments (:mod:`rpbench.commands._runs`); the multi-day runner and sweeps
+derive one per day or point (:meth:`RunSpec.for_request`) and hand it to worker
+processes as it is (it pickles); Python callers build one with
+:meth:`RunSpec.of`.
+
+A run's *name* is its folder ``runs/<name>/``, its ``--opt NAME.option=...``
+prefix and its column in ``kpis.csv``.  A built-in strategy or offline run is
+named as typed (``mb``, ``bound``); a plug-in strategy, given as an entry point
+or as ``module:Class``, runs under its class's ``name`` attribute, and its
+*source* (the text it was found by) is what worker processes resolve.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from rpbench.exceptions import ParameterError
+from rpbench.oracle.runs import ORACLE_RUNS
+from rpbench.plugins import is_spec
+from rpbench.scenarios import ScenarioRequest
+from rpbench.strategies import REGISTRY as STRATEGY_REGISTRY
+from rpbench.strategies import Strategy, plugin_names, strategy_class
+from rpbench.strategies.options import RunOptions
+
+#: A run name is a folder name and an ``--opt`` prefix: letters, digits and ``._-``, not starting with a dot.
+_RUN_NAME = re.compile(r"^[A-Za-z0-9_-][A-Za-z0-9._-]*$")
+
+
+@dataclass(frozen=True)
+class RunEntry:
+    """One column of a comparison: a strategy (simulated) or an offline run (bound, oracles)."""
+
+    name: str
+    source: str  # what finds its class: a built-in name, an entry-point name or ``module:Class``
+    options: RunOptions
+
+    @property
+    def offline(self) -> bool:
+        return self.name in ORACLE_RUNS
+
+    def strategy_class(self) -> type[Strategy]:
+        """The strategy class of a simulated run (resolved from :attr:`source`, also in a worker process)."""
+        return strategy_class(self.source)
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """A comparison of runs on one scenario, as one frozen, picklable object (see the module docstring)."""
+
+    request: ScenarioRequest
+    runs: tuple[RunEntry, ...]
+    preset: str = "highs"
+    oracle_preset: str | None = None  # None: the comparison's own preset
+    strict: bool = False  # an answer the solver did not prove optimal is an error, not a note
+    command: str | None = None  # the command line recorded in results folders
+
+    def __post_init__(self) -> None:
+        if not self.runs:
+            raise ParameterError("a comparison needs at least one strategy or offline run")
+        names = [r.name for r in self.runs]
+        twice = sorted({n for n in names if names.count(n) > 1})
+        if twice:
+            raise ParameterError(f"run name {twice[0]!r} appears twice; every run of a comparison needs its own name")
+
+    @classmethod
+    def of(
+        cls,
+        request: ScenarioRequest | str,
+        strategies: Sequence[str],
+        *,
+        preset: str = "highs",
+        options: Mapping[str, RunOptions | Mapping[str, Any]] | None = None,
+        oracle_preset: str | None = None,
+        strict: bool = False,
+        command: str | None = None,
+    ) -> RunSpec:
+        """A spec from run names (or plug-in sources) and per-run options keyed by run name.
+
+        ``request`` may be a scenario name (its defaults otherwise); option
+        values are Python values or text, checked against each run's declared
+        options.
+        """
+        if isinstance(request, str):
+            request = ScenarioRequest(name=request)
+        entries = resolve_runs(strategies)
+        given = dict(options or {})
+        unknown = [name for name in given if name not in {e.name for e in entries}]
+        if unknown:
+            raise ParameterError(f"options for {unknown[0]!r}, which is not one of the runs ({', '.join(given)})")
+        entries = [dataclasses.replace(e, options=typed_options(e, given.get(e.name))) for e in entries]
+        return cls(
+            request=request,
+            runs=tuple(entries),
+            preset=preset,
+            oracle_preset=oracle_preset,
+            strict=strict,
+            command=command,
+        )
+
+    @property
+    def names(self) -> list[str]:
+        """The run names in column order."""
+        return [r.name for r in self.runs]
+
+    @property
+    def simulated(self) -> list[RunEntry]:
+        return [r for r in self.runs if not r.offline]
+
+    @property
+    def offline(self) -> list[RunEntry]:
+        return [r for r in self.runs if r.offline]
+
+    def entry(self, name: str) -> RunEntry:
+        for r in self.runs:
+            if r.name == name:
+                return r
+        raise KeyError(name)
+
+    def for_request(self, request: ScenarioRequest) -> RunSpec:
+        """The same comparison on another scenario request (a day of a multi-day run, a sweep point)."""
+        return dataclasses.replace(self, request=request)
+
+    def with_runs(self, names: Sequence[str]) -> RunSpec:
+        """The comparison restricted to (or reordered as) ``names``; entries keep their options."""
+        return dataclasses.replace(self, runs=tuple(self.entry(n) for n in names))
+
+
+def options_class(entry_source: str) -> type[RunOptions]:
+    """The declared options of an offline run or a strategy."""
+    if entry_source in ORACLE_RUNS:
+        return ORACLE_RUNS[entry_source].Options
+    return strategy_class(entry_source).Options
+
+
+def typed_options(entry: RunEntry, raw: RunOptions | Mapping[str, Any] | None) -> RunOptions:
+    """``raw`` (parsed options, a dict of values or text, or None for the defaults) checked for ``entry``."""
+    cls = options_class(entry.source)
+    if isinstance(raw, RunOptions):
+        if not isinstance(raw, cls):
+            raise ParameterError(f"{entry.name}: options must be {cls.__name__}, not {type(raw).__name__}")
+        return raw
+    return cls.parse(entry.name, dict(raw or {}))
+
+
+def known_runs() -> list[str]:
+    """Every name ``--strategies`` accepts without a ``module:`` prefix (an oracle hides a plug-in's name)."""
+    return [*STRATEGY_REGISTRY, *(n for n in plugin_names() if n not in ORACLE_RUNS), *ORACLE_RUNS]
+
+
+def resolve_runs(items: Sequence[str]) -> list[RunEntry]:
+    """Run entries (default options) for names as typed, in order, each resolved and named.
+
+    Built-in strategy and offline-run names are case-insensitive; an
+    entry-point name too; a ``module:Class`` source keeps its case (Python
+    names are case-sensitive).  Offline runs take precedence over plug-ins of
+    the same name.  A plug-in runs under its class's ``name``, which must be a
+    plain name of its own: not a built-in's, not another run's.  Classes are
+    imported here, so an import error is reported before any run.
+    """
+    sources = [s.strip() if is_spec(s) else s.strip().lower() for s in items if s.strip()]
+    if not sources:
+        raise ParameterError(f"unknown strategy '(none)'; choose from {', '.join(known_runs())}")
+    entries: list[RunEntry] = []
+    for source in sources:
+        if source in ORACLE_RUNS or source in STRATEGY_REGISTRY:
+            entries.append(RunEntry(source, source, options_class(source)()))
+            continue
+        if not is_spec(source) and source not in plugin_names():
+            raise ParameterError(
+                f"unknown strategy {source!r}; choose from {', '.join(known_runs())}, "
+                "or give a strategy class as MODULE:CLASS (e.g. mypkg.rules:Greedy)"
+            )
+        cls = strategy_class(source)
+        entries.append(RunEntry(_plugin_run_name(source, cls), source, cls.Options()))
+    seen: dict[str, str] = {}
+    for e in entries:
+        if e.name in seen:
+            first = seen[e.name]
+            what = f"names {e.name!r} twice" if first == e.source else f"runs {first!r} and {e.source!r} as {e.name!r}"
+            raise ParameterError(f"strategy list {','.join(sources)} {what}; every run needs its own name")
+        seen[e.name] = e.source
+    return entries
+
+
+def _plugin_run_name(source: str, cls: type[Strategy]) -> str:
+    name = getattr(cls, "name", None)
+    if not isinstance(name, str) or not _RUN_NAME.match(name):
+        raise ParameterError(
+            f"strategy {source!r}: its class's name {name!r} is not a plain run name (letters, digits, '.', '_', "
+            "'-'; it names the run's folder and its --opt prefix)"
+        )
+    if name.lower() in STRATEGY_REGISTRY or name.lower() in ORACLE_RUNS:
+        raise ParameterError(
+            f"strategy {source!r} declares name {name!r}, the name of a built-in run; give its class another name"
+        )
+    return name

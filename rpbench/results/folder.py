@@ -1,0 +1,202 @@
+"""Writing a comparison's results folder, and the ``meta.json`` of parent folders (multi-day runs, sweeps).
+
+:func:`write_folder` writes every file of :mod:`.layout` but the report
+(:func:`rpbench.results.report.write_report` renders it from these files):
+the inputs, one folder per run, the KPI, round and hourly tables and
+``meta.json``.  ``meta.json`` records, per run, what the checker holds it to
+(kind, options, rules, status: digested in ``inputs_digest``) and what a
+report needs to show it without importing its class (label, colour, source),
+so that a folder re-renders from its files alone, plug-ins included.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from rpbench.backends import Preset
+from rpbench.oracle.runs import ORACLE_RUNS
+from rpbench.oracle.solve import OracleResult
+from rpbench.results import layout
+from rpbench.results.check import inputs_digest
+from rpbench.results.store import environment, save_network, save_trajectories, write_json
+from rpbench.scenarios.base import Scenario
+from rpbench.sim.simulator import SimResult
+from rpbench.strategies.options import RunOptions
+
+#: Format version of ``meta.json`` (``rpbench_results``).
+RESULTS_FORMAT = 1
+
+
+@dataclass
+class StrategyRun:
+    """One simulated run with its KPIs: what its folder and its rows of the tables hold."""
+
+    name: str
+    sim: SimResult
+    passengers: pd.DataFrame
+    kpis: dict[str, float]
+    hourly: pd.DataFrame
+    options: RunOptions
+    source: str  # the strategy it ran (a built-in name, an entry point or module:Class)
+    label: str
+    color: str | None
+
+
+def oracle_kpis(result: OracleResult) -> dict[str, float]:
+    """The numeric KPIs of an offline run (its solver facts go to meta.json)."""
+    return {
+        k: float(v)
+        for k, v in result.kpis().items()
+        if isinstance(v, (int, float, np.number)) and not isinstance(v, bool) and k != "variant"
+    }
+
+
+def bound_by_hour(pairs: pd.DataFrame) -> pd.DataFrame:
+    """The upper bound's matching split by the hour of each pair's earlier request (``hourly.csv`` rows of run
+    ``bound``; only the saving column: per hour this is a description of the matching, not itself a bound)."""
+    hour = (np.minimum(pairs["first_request_s"], pairs["second_request_s"]) // 3600).astype(int)
+    saving = pairs["saving_m"].groupby(hour).sum() / 1000.0
+    return pd.DataFrame({"hour": saving.index, "total_saving_km": saving.to_numpy(), "run": "bound"})
+
+
+def competitive_ratio_rows(runs: Sequence[StrategyRun], offline: dict[str, OracleResult]) -> list[dict[str, Any]]:
+    """``competitive_ratio_bound`` of every simulated run: its saving / the proven upper bound (docs/bound.md)."""
+    bound = offline.get("bound")
+    if bound is None:
+        return []
+    bound_km = oracle_kpis(bound)["total_saving_km"]
+    return [
+        {
+            "run": r.name,
+            "kpi": "competitive_ratio_bound",
+            "value": r.kpis["total_saving_km"] / bound_km if bound_km else float("nan"),
+        }
+        for r in runs
+    ]
+
+
+def write_folder(
+    folder: Path,
+    scenario: Scenario,
+    runs: Sequence[StrategyRun],
+    offline: dict[str, OracleResult],
+    *,
+    order: Sequence[str],
+    preset: Preset,
+    scenario_args: dict[str, Any],
+    command: str | None,
+) -> None:
+    """Write the comparison of ``runs`` and ``offline`` on ``scenario`` into ``folder`` (``order``: columns)."""
+    orders = scenario.orders
+    solo = scenario.network.distances()(orders.origin, orders.destination)
+    pd.DataFrame(
+        {
+            "order_id": orders.order_id,
+            "request_s": orders.request_s,
+            "origin": orders.origin,
+            "destination": orders.destination,
+            "patience_s": orders.patience_s,
+            "solo_m": solo,
+        }
+    ).to_csv(folder / layout.ORDERS, index=False)
+    save_network(folder / layout.NETWORK, scenario.network)
+    pd.DataFrame({"vehicle": np.arange(len(scenario.fleet)), "initial_node": scenario.fleet.initial_node}).to_csv(
+        folder / layout.FLEET, index=False
+    )
+    tidy: list[dict[str, Any]] = []
+    rounds, hourly = [], []
+    meta_runs: dict[str, dict[str, Any]] = {}
+    for r in runs:
+        d = folder / layout.RUNS / r.name
+        d.mkdir(parents=True)
+        r.sim.events.to_csv(d / layout.EVENTS, index=False)
+        save_trajectories(d / layout.TRAJECTORIES, r.sim.trajectories)
+        tidy += [{"run": r.name, "kpi": k, "value": v} for k, v in r.kpis.items()]
+        rounds.append(r.sim.rounds.assign(run=r.name))
+        hourly.append(r.hourly.assign(run=r.name))
+        meta_runs[r.name] = {
+            "kind": "simulation",
+            "options": r.options.as_dict(),
+            "wall_s": r.sim.wall_s,
+            "prepare_s": r.sim.prepare_s,
+            "end_s": r.sim.end_s,
+            "rounds_solved": len(r.sim.rounds),
+            "source": r.source,
+            "label": r.label,
+            "color": r.color,
+        }
+    tidy += competitive_ratio_rows(runs, offline)
+    for name, res in offline.items():
+        d = folder / layout.RUNS / name
+        d.mkdir(parents=True)
+        res.pairs.to_csv(d / layout.PAIRS, index=False)
+        tidy += [{"run": name, "kpi": k, "value": v} for k, v in oracle_kpis(res).items()]
+        facts = res.kpis()
+        meta_runs[name] = {
+            "kind": "oracle",
+            "variant": res.variant,
+            "solver": res.solver,
+            "status": facts["status"],
+            "rules": dataclasses.asdict(res.rules),
+            "objective_m": facts["objective_m"],
+            "bound_m": facts["bound_m"],
+            "gap": facts["gap"],
+            "candidates": res.n_candidates,
+            "evaluated": res.n_evaluated,
+            "unit_m": res.model.unit_m,
+            "timings_s": res.timings,
+            "source": name,
+            "label": ORACLE_RUNS[name].label,
+            "color": ORACLE_RUNS[name].color,
+        }
+    pd.DataFrame(tidy).to_csv(folder / layout.KPIS, index=False)
+    if rounds:
+        pd.concat(rounds, ignore_index=True).to_csv(folder / layout.ROUNDS, index=False)
+    if hourly and "bound" in offline:
+        hourly.append(bound_by_hour(offline["bound"].pairs))
+    if hourly:
+        pd.concat(hourly, ignore_index=True).to_csv(folder / layout.HOURLY, index=False)
+    meta = {
+        "rpbench_results": RESULTS_FORMAT,
+        "command": command,
+        "scenario": {
+            "name": scenario.name,
+            "label": scenario.label,
+            "synthetic": scenario.synthetic,
+            "args": scenario_args,
+            "seed": scenario.seed,
+            "start_time": scenario.start_time,
+            "horizon_s": scenario.horizon_s,
+            "provenance": scenario.provenance,
+            "summary": {k: v for k, v in scenario.summary().items() if k != "params"},
+            "network_hash": scenario.network.content_hash,
+        },
+        "params": scenario.params.as_dict(),
+        "preset": preset.as_dict(),
+        "strategies": list(order),
+        "runs": meta_runs,
+        # What `rpbench check` holds the folder to (docs/guarantees.md): every run folder written, and the
+        # SHA-256 of the inputs, parameters and run options, so that a deleted run or an edit is caught.
+        "manifest": {"runs": list(meta_runs)},
+        "inputs_digest": inputs_digest(folder, scenario.params.as_dict(), meta_runs),
+        **environment(),
+        "written": time.strftime("%Y-%m-%dT%H:%M:%S"),
+    }
+    write_json(folder / layout.META, meta)
+
+
+def write_parent_meta(folder: Path, kind: str, children: Sequence[str], fields: dict[str, Any]) -> None:
+    """``meta.json`` of a multi-day or sweep folder: its kind, its child folders (the checker's manifest),
+    the kind's own ``fields`` and the environment."""
+    write_json(
+        folder / layout.META,
+        {"rpbench_results": RESULTS_FORMAT, "kind": kind, **fields, "children": list(children), **environment()},
+    )

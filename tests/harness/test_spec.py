@@ -1,0 +1,57 @@
+"""The run specification: run names resolved once, typed options, one name per run, picklable."""
+
+from __future__ import annotations
+
+import pickle
+
+import pytest
+
+from rpbench.exceptions import ParameterError
+from rpbench.harness.spec import RunSpec, resolve_runs
+from rpbench.oracle.runs import OracleOptions
+from rpbench.scenarios import ScenarioRequest
+from rpbench.strategies.rtv import RTVOptions
+
+
+def test_names_are_case_insensitive_and_keep_their_order():
+    """Built-in and offline names resolve in the order given, lower-cased."""
+    assert [e.name for e in resolve_runs(["MB", " fl ", "oracle1"])] == ["mb", "fl", "oracle1"]
+    assert [e.offline for e in resolve_runs(["mb", "bound"])] == [False, True]
+
+
+def test_unknown_and_repeated_names_are_one_error_each():
+    """An unknown name or a name given twice fails before anything runs."""
+    with pytest.raises(ParameterError, match="unknown strategy 'fx'"):
+        resolve_runs(["mb", "fx"])
+    with pytest.raises(ParameterError, match="names 'mb' twice"):
+        resolve_runs(["mb", "mb"])
+    with pytest.raises(ParameterError, match="unknown strategy"):
+        resolve_runs([" ", ""])
+
+
+def test_of_types_the_options_of_each_run():
+    """Options given as text or values are parsed by the run's declared options class."""
+    spec = RunSpec.of("toy", ["rtv", "oracle1"], options={"rtv": {"rebalance": "true"}, "oracle1": {}})
+    assert isinstance(spec.entry("rtv").options, RTVOptions) and spec.entry("rtv").options.rebalance is True
+    assert isinstance(spec.entry("oracle1").options, OracleOptions)
+    with pytest.raises(ParameterError, match="unknown option"):
+        RunSpec.of("toy", ["rtv"], options={"rtv": {"no_such": 1}})
+    with pytest.raises(ParameterError, match="not one of the runs"):
+        RunSpec.of("toy", ["rtv"], options={"mb": {}})
+
+
+def test_a_spec_pickles_and_moves_to_another_request():
+    """Worker processes receive the spec as it is; a day or a sweep point changes only its request."""
+    spec = RunSpec.of(ScenarioRequest("toy", sample=0.2), ["mb", "fl"], preset="matching", strict=True)
+    again = pickle.loads(pickle.dumps(spec))
+    assert again == spec
+    moved = spec.for_request(spec.request.replace(seed=3))
+    assert moved.request.seed == 3 and moved.runs == spec.runs and moved.strict and moved.preset == "matching"
+    assert [e.name for e in spec.simulated] == ["mb", "fl"] and spec.offline == []
+
+
+def test_two_runs_under_one_name_are_refused():
+    """The run name is a folder name: a spec refuses it twice."""
+    (mb,) = resolve_runs(["mb"])
+    with pytest.raises(ParameterError, match="appears twice"):
+        RunSpec(request=ScenarioRequest("toy"), runs=(mb, mb))
