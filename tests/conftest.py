@@ -1,9 +1,18 @@
-"""Shared fixtures: the real data folder (tests skip without it) and a tiny fake one in its format."""
+"""Shared fixtures: the real data folder (tests skip without it) and a tiny fake one in its format.
+
+The tests never write into the user's cache: the session runs with ``$RPBENCH_CACHE`` pointed at a
+temporary folder (removed at the end), inherited by the worker processes and subprocesses tests start.
+``RPBENCH_TEST_CACHE=DIR`` keeps one instead, so that repeated runs reuse its all-pairs tables and
+prediction structures.
+"""
 
 from __future__ import annotations
 
 import gzip
+import os
+import shutil
 import sys
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -14,6 +23,23 @@ from rpbench.paths import find_data_dir
 sys.path.insert(0, str(Path(__file__).parent))
 
 from helpers import write_fake_haikou, write_gz
+
+_SESSION_CACHE: str | None = None
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    global _SESSION_CACHE
+    kept = os.environ.get("RPBENCH_TEST_CACHE")
+    if kept:
+        os.environ["RPBENCH_CACHE"] = kept
+    else:
+        _SESSION_CACHE = tempfile.mkdtemp(prefix="rpbench-test-cache-")
+        os.environ["RPBENCH_CACHE"] = _SESSION_CACHE
+
+
+def pytest_unconfigure(config: pytest.Config) -> None:
+    if _SESSION_CACHE is not None:
+        shutil.rmtree(_SESSION_CACHE, ignore_errors=True)
 
 
 @pytest.fixture(scope="session")

@@ -66,11 +66,6 @@ def highs_settings(options: SolveOptions, time_limit: float | None, *, relax: bo
     return settings
 
 
-def configure(h, options: SolveOptions, time_limit: float | None, *, relax: bool) -> None:
-    """Apply :func:`highs_settings` to a ``highspy.Highs`` (an option HiGHS rejects is an error)."""
-    _apply(h, highs_settings(options, time_limit, relax=relax))
-
-
 def _apply(h, settings: dict) -> None:
     for key, value in settings.items():
         if h.setOptionValue(key, value).name == "kError":

@@ -76,8 +76,14 @@ def test_errors_are_rpbench_errors_for_the_cli():
 
 
 def test_unknown_method_is_a_solver_error():
+    """A method the backend does not offer is one SolverError naming it."""
     with pytest.raises(SolverError, match="method 'simplex' unknown"):
         get_backend("highs").solve(ASSIGN, SolveOptions(method="simplex"))
+
+
+def test_unknown_ortools_method_is_a_solver_error():
+    """The same for OR-Tools (the backends extra)."""
+    pytest.importorskip("ortools")
     with pytest.raises(SolverError, match="method 'lp' unknown"):
         get_backend("ortools").solve(ASSIGN, SolveOptions(method="lp"))
 

@@ -1,4 +1,4 @@
-"""The node-pair bit table (rpbench.strategies.nearby) and the candidate search that it pre-filters."""
+"""Feasible options of a round (rpbench.strategies.candidates) and the node-pair table that pre-filters them."""
 
 from __future__ import annotations
 
@@ -10,8 +10,7 @@ from helpers import network_from_edges, round_state
 
 from rpbench.geometry import TOLERANCE_M, choose_order, pair_geometry
 from rpbench.scenarios.base import Params
-from rpbench.strategies.candidates import join_options, vacant_options
-from rpbench.strategies.nearby import NearTable, near_table
+from rpbench.strategies.candidates import NearTable, join_options, near_table, vacant_options
 
 
 @pytest.mark.parametrize("seed", range(10))
