@@ -52,3 +52,30 @@ def test_a_published_multi_day_report_names_the_published_folder(two_day_data, t
     dest = publish(folder, tmp_path / "published-days")
     report = (dest / "report.md").read_text()
     assert "rpbench check published-days/<date>" in report and "partial" not in report
+
+
+def test_the_published_command_names_the_published_folder():
+    """A reader reruns the recorded command: ``--out`` names the published folder, no machine path remains."""
+    from rpbench.harness.publish import published_command
+
+    ran = "rpbench run --dates 2017-05-01..2017-05-14 --out /scratch/x/peak-hours --data /mnt/d --workers 2"
+    assert published_command(ran, "peak-hours") == (
+        "rpbench run --dates 2017-05-01..2017-05-14 --out peak-hours --workers 2"
+    )
+    assert published_command("rpbench run --out=/a/b --data=/c", "b") == "rpbench run --out b"
+    assert published_command("rpbench run", "b") == "rpbench run"  # nothing to replace
+
+
+def test_a_published_folder_records_the_rewritten_command(run_folder, tmp_path):
+    import json
+
+    meta = json.loads((run_folder / "meta.json").read_text())
+    assert meta["command"] is None or "--out" not in (meta["command"] or "")
+    source = tmp_path / "src"
+    shutil.copytree(run_folder, source)
+    meta["command"] = f"rpbench run --scenario toy --out {source}"
+    (source / "meta.json").write_text(json.dumps(meta))
+    dest = publish(source, tmp_path / "toy-published")
+    published = json.loads((dest / "meta.json").read_text())
+    assert published["command"] == "rpbench run --scenario toy --out toy-published"
+    assert str(tmp_path) not in (dest / "report.md").read_text()
