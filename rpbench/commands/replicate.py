@@ -1,5 +1,5 @@
 """``rpbench replicate``: the authors' simulator semantics, the ablation and rpbench's engine, beside the
-authors' committed outputs and the paper's printed values (issue 13, docs/replication.md)."""
+authors' committed outputs and the paper's printed values (docs/replication.md)."""
 
 from __future__ import annotations
 
@@ -38,7 +38,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--strategies",
         default=DEFAULT_STRATEGIES,
-        help=f"comma-separated subset of {DEFAULT_STRATEGIES} (default all; RTV runs under rpbench's engine only)",
+        help=f"comma-separated subset of {DEFAULT_STRATEGIES} (default all)",
     )
     p.add_argument("--solver", default="highs", help="solver preset for every round (default highs)")
     p.add_argument(

@@ -12,8 +12,8 @@ seeded by its row index.  This module returns those frames:
   old pandas inner merge groups the rows by OD key in order of first
   appearance.  We apply the same grouping (stable), which is the row order the
   committed 2017-05-01 outputs come from (the response-rate denominator 530 =
-  round(0.3 x 1,766) confirms the file; the grouping is stated in issue 13,
-  where a run of the authors' code on it reproduced their output bit for bit).
+  round(0.3 x 1,766) confirms the file, and the authors' code run on the
+  grouped rows reproduces their output bit for bit).
   The per-OD predictions (FL's inputs) are joined from
   ``OD_2017-05-01_0800-0900.csv`` and ``predict_result_2017-05-01_0800-0900.csv.gz``.
 * every other date: ``orders/<date>.csv.gz`` as it is (already merged and
@@ -32,8 +32,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from rpbench.data.orders import PEAK_DIR, parse_date, peak_order_path
-from rpbench.exceptions import DataError, DataNotFoundError
+from rpbench.data.orders import parse_date, peak_order_path
+from rpbench.exceptions import DataError
 
 ARRIVE_TIME_FILE = Path("demand_0800_0900") / "raw_orders_2017-05-01_0800-0900_by_arrive_time.csv.gz"
 OD_FILE = Path("demand_0800_0900") / "OD_2017-05-01_0800-0900.csv"
@@ -146,11 +146,3 @@ def _od_predictions(data_dir: Path) -> pd.DataFrame:
     table["destination_id"] = table["destination_id"].astype(np.int64)
     table = table.drop_duplicates(["origin_id", "destination_id"])
     return table.set_index(["origin_id", "destination_id"])[list(PREDICTION_COLUMNS)]
-
-
-def require_paper_dates(data_dir: Path) -> list[str]:
-    """Dates with an input the authors' engine can read (the peak-hour order files)."""
-    folder = data_dir / PEAK_DIR
-    if not folder.is_dir():
-        raise DataNotFoundError(f"no order folder {str(folder)!r}")
-    return sorted(p.name[:10] for p in folder.glob("????-??-??.csv.gz"))

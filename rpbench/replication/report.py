@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-#: The issue's agreement criterion.
+#: The agreement criterion with the committed outputs: MB and RTV within REL_TOL on pairing ratio and total
+#: saving, NP's response rate within NP_RESPONSE_TOL.
 REL_TOL = 0.15
 NP_RESPONSE_TOL = 0.03
-MIN_DAYS = 10
 CRITERION_STRATEGIES = ("mb", "rtv")
 
 
@@ -197,7 +197,7 @@ def markdown(frame: pd.DataFrame, meta: dict) -> str:
         "## Agreement of the authors' engine with the committed outputs",
         "",
         (
-            "Criterion (issue 13): MB and RTV within 15 % on pairing ratio and total saving on at least 10 of "
+            "Criterion: MB and RTV within 15 % on pairing ratio and total saving on at least 10 of "
             "14 days; NP's response rate within 0.03."
         ),
         "",

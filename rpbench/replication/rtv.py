@@ -20,74 +20,111 @@ there is no pick-up test between the two requests of a trip.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from rpbench.model import TripPackingModel, quantize
+from rpbench.replication.geometry import TakerGeometry
 from rpbench.replication.weights import AUTHORS_BONUS
+
+if TYPE_CHECKING:
+    from rpbench.replication.engine import AuthorsEngine
+
+#: Per column of a round's model: the vehicle's index in the fleet and the trip's passengers.
+Trip = tuple[int, tuple[int, ...]]
 
 
 def pair_legs(
-    dist: np.ndarray, o: np.ndarray, d: np.ndarray, solo: np.ndarray, first: int, second: int, strict_ties: bool
+    dist: np.ndarray,
+    origin: np.ndarray,
+    destination: np.ndarray,
+    solo_m: np.ndarray,
+    first: int,
+    second: int,
+    strict_ties: bool,
 ) -> tuple[bool, float, float, float]:
-    """Drop-off order of ``second`` joining ``first`` from O_second: (first-on-first-off?, shared, rest, ...).
+    """Drop-off order of ``second`` joining ``first`` from O_second.
 
-    Returns (fofo, leg1, leg2, shared) with the authors' rule: FOFO iff its two legs sum strictly less.
+    Returns (fofo, leg1, leg2, shared) with the authors' rule: first-on-first-off iff its two legs sum
+    strictly less (``strict_ties``; else ties go to first-on-first-off).
     """
-    f1, f2 = dist[o[second], d[first]], dist[d[first], d[second]]
-    l1, l2 = solo[second], dist[d[second], d[first]]
+    f1, f2 = dist[origin[second], destination[first]], dist[destination[first], destination[second]]
+    l1, l2 = solo_m[second], dist[destination[second], destination[first]]
     fofo = (f1 + f2 < l1 + l2) if strict_ties else (f1 + f2 <= l1 + l2)
     return (True, f1, f2, f1) if fofo else (False, l1, l2, l1)
 
 
-def pair_geometry(dist, o, d, solo, first: int, second: int, lead_m: float, strict_ties: bool) -> dict[str, float]:
+def authors_pair_geometry(
+    dist: np.ndarray,
+    origin: np.ndarray,
+    destination: np.ndarray,
+    solo_m: np.ndarray,
+    first: int,
+    second: int,
+    lead_m: float,
+    strict_ties: bool,
+) -> TakerGeometry[float]:
     """Rides, shared distance, saving and detours of ``first`` (in the vehicle ``lead_m`` before O_second)
-    and ``second``."""
-    fofo, leg1, leg2, shared = pair_legs(dist, o, d, solo, first, second, strict_ties)
-    a_in = lead_m + leg1 if fofo else lead_m + leg1 + leg2
-    b_in = leg1 + leg2 if fofo else leg1
-    saving = solo[first] + solo[second] - (a_in + b_in - shared)
-    return {
-        "fofo": fofo,
-        "a_in": a_in,
-        "b_in": b_in,
-        "shared": shared,
-        "saving": saving,
-        "detour_a": a_in - solo[first],
-        "detour_b": b_in - solo[second],
-        "rest": leg1 + leg2,
-    }
+    and ``second``; the pick-up weight is ``lead_m``."""
+    fofo, leg1, leg2, shared = pair_legs(dist, origin, destination, solo_m, first, second, strict_ties)
+    first_ride = lead_m + leg1 if fofo else lead_m + leg1 + leg2
+    second_ride = leg1 + leg2 if fofo else leg1
+    saving = solo_m[first] + solo_m[second] - (first_ride + second_ride - shared)
+    return TakerGeometry(
+        pickup_m=lead_m,
+        lead_m=lead_m,
+        fofo=fofo,
+        first_ride_m=first_ride,
+        second_ride_m=second_ride,
+        shared_m=shared,
+        saving_m=saving,
+        first_detour_m=first_ride - solo_m[first],
+        second_detour_m=second_ride - solo_m[second],
+        rest_m=leg1 + leg2,
+    )
 
 
 def _within(x: float, limit: float, strict: bool) -> bool:
     return x < limit if strict else x <= limit
 
 
-def build_round(engine, t: float, seekers: list[int], active: list[int]) -> tuple[TripPackingModel, list]:
+def build_round(
+    engine: AuthorsEngine, t: float, seekers: list[int], active: list[int]
+) -> tuple[TripPackingModel, list[Trip]]:
     """The round's trip-packing model and, per column, (vehicle index, request tuple)."""
-    sw, p = engine.sw, engine.sc.params
-    dist, o, d, solo = engine.dist.dist, engine.o, engine.d, engine.solo
-    strict = sw.authors_weights
-    authors = sw.authors_weights
+    switches, params = engine.switches, engine.scenario.params
+    dist, origin, destination, solo = engine.distances.dist, engine.origin, engine.destination, engine.solo_m
+    from_first_origin = switches.pickup_from_first_origin
+    strict = authors = switches.authors_weights
     s = list(seekers)
     pos = {r: i for i, r in enumerate(s)}
     cols: list[tuple[int, tuple[int, ...]]] = []
     values: list[float] = []
+
+    def within_detours(g: TakerGeometry[float]) -> bool:
+        return _within(g.first_detour_m, params.max_detour_m, strict) and _within(
+            g.second_detour_m, params.max_detour_m, strict
+        )
+
     # Request-request edges: first = the later-listed passenger (the authors' loop order), pick-up from its origin.
     rr: dict[tuple[int, int], float] = {}
     for i in range(len(s)):
         for j in range(i + 1, len(s)):
             first, second = s[j], s[i]
-            g = pair_geometry(dist, o, d, solo, first, second, dist[o[first], o[second]], sw.pickup_from_first_origin)
-            if _within(g["detour_a"], p.max_detour_m, strict) and _within(g["detour_b"], p.max_detour_m, strict):
-                rr[(first, second)] = g["saving"] if authors else 2 * AUTHORS_BONUS + g["saving"]
+            lead = dist[origin[first], origin[second]]
+            g = authors_pair_geometry(dist, origin, destination, solo, first, second, lead, from_first_origin)
+            if within_detours(g):
+                rr[(first, second)] = g.saving_m if authors else 2 * AUTHORS_BONUS + g.saving_m
     for c, vi in enumerate(active):
         veh = engine.vehicles[vi]
-        pk = dist[veh.node, o[np.asarray(s)]]
-        near = [r for r, k in zip(s, pk, strict=True) if _within(k, p.max_pickup_m, True)]
-        if veh.p0 < 0:
+        pk = dist[veh.node, origin[np.asarray(s)]]
+        near = [r for r, k in zip(s, pk, strict=True) if _within(k, params.max_pickup_m, True)]
+        if veh.passenger < 0:
+            reversed_pickup = from_first_origin and engine.rules.reversed_vacant_pickup
             for r in near:
-                pk_w = dist[o[r], veh.node] if sw.pickup_from_first_origin else dist[veh.node, o[r]]
-                if pk_w <= p.max_pickup_m:
+                pk_w = dist[origin[r], veh.node] if reversed_pickup else dist[veh.node, origin[r]]
+                if pk_w <= params.max_pickup_m:
                     cols.append((c, (r,)))
                     values.append(AUTHORS_BONUS - pk_w)
             for a_i in range(len(near)):
@@ -98,28 +135,22 @@ def build_round(engine, t: float, seekers: list[int], active: list[int]) -> tupl
                         continue
                     value = rr[key]
                     if not authors:
-                        value -= float(dist[veh.node, o[key[0]]])
+                        value -= float(dist[veh.node, origin[key[0]]])
                     cols.append((c, tuple(sorted((a, b), key=lambda x: pos[x]))))
                     values.append(value)
         else:
-            a = veh.p0
+            a = veh.passenger
             for r in near:
-                from_vehicle = engine._taker_geometry_one(veh, r, from_vehicle=True)
-                if not (
-                    _within(from_vehicle["detour_a"], p.max_detour_m, strict)
-                    and _within(from_vehicle["detour_b"], p.max_detour_m, strict)
-                ):
+                if not within_detours(engine.one_taker_geometry(veh, r, from_vehicle=True)):
                     continue
-                g = engine._taker_geometry_one(veh, r, from_vehicle=not sw.pickup_from_first_origin)
-                if not (
-                    _within(g["detour_a"], p.max_detour_m, strict) and _within(g["detour_b"], p.max_detour_m, strict)
-                ):
+                g = engine.one_taker_geometry(veh, r, from_vehicle=not from_first_origin)
+                if not within_detours(g):
                     continue
-                pk_w = dist[o[a], o[r]] if sw.pickup_from_first_origin else g["pk"]
-                if pk_w > p.max_pickup_m:
+                pk_w = dist[origin[a], origin[r]] if from_first_origin else g.pickup_m
+                if pk_w > params.max_pickup_m:
                     continue
                 cols.append((c, (r,)))
-                values.append(AUTHORS_BONUS + g["saving"] - pk_w)
+                values.append(AUTHORS_BONUS + g.saving_m - pk_w)
     col_vehicle = [c for c, _ in cols]
     req1 = [pos[trip[0]] if len(trip) == 1 else min(pos[trip[0]], pos[trip[1]]) for _, trip in cols]
     req2 = [-1 if len(trip) == 1 else max(pos[trip[0]], pos[trip[1]]) for _, trip in cols]

@@ -20,6 +20,7 @@ from __future__ import annotations
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -28,13 +29,12 @@ from rpbench.backends.presets import Preset
 from rpbench.data.paper_orders import PREDICTION_COLUMNS
 from rpbench.exceptions import ParameterError
 from rpbench.replication import reference
-from rpbench.replication.engine import STRATEGIES as AUTHORS_STRATEGIES
-from rpbench.replication.engine import AuthorsEngine, Outcome
-from rpbench.replication.switches import steps_for
+from rpbench.replication.engine import STRATEGIES, AuthorsEngine, AuthorsRun
+from rpbench.replication.switches import Switches, steps_for
+from rpbench.scenarios.base import Scenario
 from rpbench.scenarios.paper_input import PaperInput, load_paper_input
 from rpbench.scenarios.peak import build_peak
 
-KNOWN_STRATEGIES = ("np", "mb", "rtv", "fl-nd", "fl")
 KPIS = (
     "response_rate",
     "pairing_ratio",
@@ -56,17 +56,15 @@ class Inputs:
 
 @dataclass
 class Replication:
-    rows: list[dict] = field(default_factory=list)
-    outcomes: dict[tuple[str, str, str], Outcome] = field(default_factory=dict)  # (date, strategy, engine)
+    rows: list[dict[str, object]] = field(default_factory=list)
+    outcomes: dict[tuple[str, str, str], AuthorsRun] = field(default_factory=dict)  # (date, strategy, engine)
 
 
 def parse_strategies(text: str) -> list[str]:
     names = [s.strip().lower() for s in text.split(",") if s.strip()]
-    unknown = [s for s in names if s not in KNOWN_STRATEGIES]
+    unknown = [s for s in names if s not in STRATEGIES]
     if not names or unknown:
-        raise ParameterError(
-            f"--strategies {text!r}: expected a comma-separated subset of {', '.join(KNOWN_STRATEGIES)}"
-        )
+        raise ParameterError(f"--strategies {text!r}: expected a comma-separated subset of {', '.join(STRATEGIES)}")
     return list(dict.fromkeys(names))
 
 
@@ -81,7 +79,7 @@ def load_inputs(data_dir: Path, date: str) -> Inputs:
     return Inputs(paper=paper, peak=peak)
 
 
-def _peak_predictions(data_dir: Path, date: str, scenario) -> pd.DataFrame:
+def _peak_predictions(data_dir: Path, date: str, scenario: Scenario) -> pd.DataFrame:
     """The order file's per-order predictions aligned with a haikou-peak scenario's orders."""
     from rpbench.data.orders import peak_order_path
 
@@ -95,7 +93,7 @@ def engine_name(label: str) -> str:
     return label if label == "authors" else f"authors-{label}"
 
 
-def run_authors(inputs: Inputs, strategy: str, switches, preset: Preset) -> Outcome:
+def run_authors(inputs: Inputs, strategy: str, switches: Switches, preset: Preset) -> AuthorsRun:
     chosen = inputs.paper if switches.authors_input else inputs.peak
     return AuthorsEngine(
         chosen.scenario,
@@ -109,7 +107,7 @@ def run_authors(inputs: Inputs, strategy: str, switches, preset: Preset) -> Outc
     ).run()
 
 
-def run_rpbench(chosen: PaperInput, strategy: str, preset: Preset, done: dict) -> dict[str, float]:
+def run_rpbench(chosen: PaperInput, strategy: str, preset: Preset, done: dict[str, Any]) -> dict[str, float]:
     """rpbench's own engine on ``chosen``; response over its denominator (the authors': the whole sample)."""
     from rpbench.harness.comparison import calibrated, simulate_strategy
     from rpbench.harness.spec import resolve_runs
@@ -142,10 +140,10 @@ def replicate(
     out = Replication()
     for date in dates:
         inputs = load_inputs(data_dir, date)
-        done: dict = {}
-        done_peak: dict = {}
+        done: dict[str, Any] = {}
+        done_peak: dict[str, Any] = {}
         for strategy in strategies:
-            if strategy in AUTHORS_STRATEGIES:
+            if strategy in STRATEGIES:
                 for label, switches in steps:
                     outcome = run_authors(inputs, strategy, switches, preset)
                     name = engine_name(label)
@@ -172,24 +170,27 @@ def replicate(
     return out
 
 
-def _row(engine: str, strategy: str, date: str, kpis: dict, off: list[str], committed: pd.DataFrame) -> dict:
-    row = {"engine": engine, "strategy": strategy, "date": date, "switches_off": ",".join(off)}
+def _row(
+    engine: str, strategy: str, date: str, kpis: dict[str, float], off: list[str], committed: pd.DataFrame
+) -> dict[str, object]:
+    row: dict[str, object] = {"engine": engine, "strategy": strategy, "date": date, "switches_off": ",".join(off)}
     for k in ("orders", "response_denominator", "vehicles", "served", "pooled_passengers"):
         if k in kpis:
             row[k] = int(kpis[k])
-    for k in KPIS:
-        row[k] = _clean(kpis.get(k, float("nan")))
+    ours = {k: _clean(kpis.get(k, float("nan"))) for k in KPIS}
+    row.update(ours)
     for k in reference.KPIS:
         c = reference.committed_value(committed, strategy, date, k)
         row[f"committed_{k}"] = _clean(c)
-        row[f"diff_{k}"] = _clean(row[k] - c) if np.isfinite(c) else None
+        mine = ours[k]
+        row[f"diff_{k}"] = _clean(mine - c) if mine is not None and np.isfinite(c) else None
         printed, origin = reference.printed_value(strategy, date, k)
         row[f"paper_{k}"] = _clean(printed)
         row[f"paper_{k}_origin"] = origin or None
     return row
 
 
-def _clean(x) -> float | None:
+def _clean(x: float) -> float | None:
     """JSON-friendly: NaN -> None."""
     x = float(x)
     return None if not np.isfinite(x) else x

@@ -1,4 +1,4 @@
-"""The mechanisms of the authors' simulator, one named switch each (issue 13's list, in its order).
+"""The mechanisms of the authors' simulator, one named switch each, in the fixed order of the ablation.
 
 ``True`` is the authors' behaviour (learnt by reading their public code:
 ``yangchen-seu/A-prediction-based-forward-looking-vehicle-dispatching-strategy-for-dynamic-ride-pooling``,
@@ -18,16 +18,16 @@ from rpbench.exceptions import ParameterError
 
 @dataclass(frozen=True)
 class Mechanism:
+    """One switch: its name and what it does on and off."""
+
     name: str
-    item: int  # the item number in issue 13's list
-    authors: str  # what the switch on does (the authors' code)
-    fixed: str  # what the switch off does
+    when_on: str  # what the switch on does (the authors' code)
+    when_off: str  # what the switch off does (the paper's text and rpbench's simulator)
 
 
 MECHANISMS: tuple[Mechanism, ...] = (
     Mechanism(
         "teleport",
-        1,
         "a vehicle steps by popping the LAST node of its route: one passenger's vehicle jumps to the "
         "origin in one round and to the destination a few rounds later; vehicles move only in rounds "
         "with waiting passengers and free vehicles; a vehicle assigned while standing at the passenger's "
@@ -36,20 +36,17 @@ MECHANISMS: tuple[Mechanism, ...] = (
     ),
     Mechanism(
         "early_release",
-        2,
         "a solo vehicle is vacant again when it has jumped to the destination (about a minute after "
         "assignment); only pooled trips block the vehicle for (pick-up + route) x 0.12 s/m",
         "a solo vehicle is vacant no earlier than its real arrival at the destination",
     ),
     Mechanism(
         "grid_cells",
-        3,
         "a vehicle is a candidate only if its node lies in the passenger's 0.05 degree cell",
         "every vehicle within the pick-up radius is a candidate",
     ),
     Mechanism(
         "pickup_from_first_origin",
-        4,
         "the second pick-up (and the pair's saving and detours) is measured from the first passenger's "
         "origin wherever the vehicle is, weights use the reversed direction (passenger origin -> vehicle); "
         "ties in the drop-off order go to first-on-last-off; the pooled vehicle ends at the second "
@@ -59,7 +56,6 @@ MECHANISMS: tuple[Mechanism, ...] = (
     ),
     Mechanism(
         "idle_jumps",
-        5,
         "an unmatched vacant vehicle heads for a random order origin (and, with teleport, jumps there "
         "once its route's first link's time has passed, then steps back along the route one node per "
         "round until the route is used up; RTV draws anew every round)",
@@ -67,7 +63,6 @@ MECHANISMS: tuple[Mechanism, ...] = (
     ),
     Mechanism(
         "authors_input",
-        6,
         "the authors' exact input: haikou-paper-input (arrive-time selection on 2017-05-01, pandas "
         "sample random_state=1, int(n/4) vehicles, whole sample as the response denominator)",
         "rpbench's haikou-peak input (departures inside the hour, seeded sample, 25 vehicles per 100 "
@@ -75,7 +70,6 @@ MECHANISMS: tuple[Mechanism, ...] = (
     ),
     Mechanism(
         "authors_weights",
-        7,
         "the authors' weights and small rules: MB 3000 + saving - pick-up / 3000 - pick-up (no match "
         "-3000), NP (ride - pick-up) + 3000, FL-no_delay e - pk + 3000, a taker without a partner "
         "delivered alone after 600 s, patience not floored in MB and NP",
@@ -84,7 +78,6 @@ MECHANISMS: tuple[Mechanism, ...] = (
     ),
     Mechanism(
         "authors_ledger",
-        8,
         "the authors' ledger and FL parameters: a solo passenger counts as served only once delivered, "
         "MB's first pick-up keeps only the last link, FL alpha 1.1 and r_w 0.8 with the predicted "
         "savings doubled and the waiting utility times 1/(k+1)",

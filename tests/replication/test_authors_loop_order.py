@@ -1,12 +1,12 @@
-"""Details of the authors' loop that their published code showed when run step by step beside the engine.
+"""Details of the authors' loop that decide whether the engine follows their published code batch by batch.
 
-Running the authors' published RTV folder and this engine round by round on 2017-05-02
-(docs/replication.md) found three places where the engine's state parted from theirs:
-the order in which a round's new passengers are listed, the list idle vehicles draw
-targets from, and a vehicle assigned while already standing at its passenger's origin.
-The same comparison with their MB folder (``baseline2_batch_matching``) found two more, in
-the loop MB shares with NP and FL: how an idle vehicle moves, and the same vehicle-at-origin
-rule.  Line networks have 1,000 m links (120 s each at the authors' 0.12 s/m).
+Compared batch by batch with the authors' published RTV code on 2017-05-02
+(docs/replication.md), the engine's state depends on the order in which a batch's new
+passengers are listed, the list idle vehicles draw targets from, and a vehicle assigned
+while already standing at its passenger's origin.  In the loop MB shares with NP and FL
+(their ``baseline2_batch_matching``), it also depends on how an idle vehicle moves, and on
+the same vehicle-at-origin rule.  Line networks have 1,000 m links (120 s each at the
+authors' 0.12 s/m).
 """
 
 import random
@@ -24,14 +24,14 @@ PRESET = load_preset("highs")
 
 
 class _Recording(AuthorsEngine):
-    """Keeps the passenger list each RTV round was built from."""
+    """Keeps the passenger list each RTV batch was built from."""
 
     def _match_rtv(self, t, seekers, active):
         self.rounds = getattr(self, "rounds", []) + [(t, list(seekers))]
         return super()._match_rtv(t, seekers, active)
 
 
-def test_a_rounds_new_passengers_follow_the_release_rank():
+def test_a_batchs_new_passengers_follow_the_release_rank():
     net = line_network(8)
     sc = scenario_of(net, [(5.0, 1, 6), (6.0, 2, 4)], [0])
     by_time = _Recording(sc, "rtv", PRESET)
@@ -80,7 +80,7 @@ def test_rtv_vehicle_assigned_at_the_origin_counts_as_picked_up(start, picked, a
     eng = AuthorsEngine(sc, "rtv", PRESET)
     veh = eng.vehicles[0]
     eng._apply(130.0, {0: (0,)}, [0])
-    assert veh.p0 == 0 and veh.picked is picked
+    assert veh.passenger == 0 and veh.picked_up is picked
     assert veh.active_at == active_at
     assert veh.node == net.index_of([node])[0]
 
@@ -126,8 +126,8 @@ def test_run_authors_passes_the_inputs_order_and_origins(monkeypatch):
 @pytest.mark.parametrize(
     "start, picked, node_next",
     [
-        (1, True, 5),  # at the origin: picked up at once, so the next round already delivers
-        (0, False, 1),  # one link away: the next round jumps to the origin (boarding comes after)
+        (1, True, 5),  # at the origin: picked up at once, so the next batch already delivers
+        (0, False, 1),  # one link away: the next batch jumps to the origin (boarding comes after)
     ],
 )
 def test_mb_vehicle_assigned_at_the_origin_counts_as_picked_up(start, picked, node_next):
@@ -135,14 +135,14 @@ def test_mb_vehicle_assigned_at_the_origin_counts_as_picked_up(start, picked, no
     sc = scenario_of(net, [(5.0, 1, 5)], [start])
     eng = AuthorsEngine(sc, "mb", PRESET)
     veh = eng.vehicles[0]
-    eng._apply(130.0, {0: 0}, [0])
-    assert veh.p0 == 0 and veh.picked is picked
+    eng._apply(130.0, {0: (0,)}, [0])
+    assert veh.passenger == 0 and veh.picked_up is picked
     assert veh.active_at == 0.0 and veh.node == net.index_of([start])[0]  # MB moves nobody it has just assigned
     eng._apply(140.0, {}, [0])  # 140 s > 120 s (first link) since it was last active
     assert veh.node == net.index_of([node_next])[0]
 
 
-def test_idle_vehicle_jumps_in_the_round_it_draws_then_walks_back_along_the_route():
+def test_idle_vehicle_jumps_in_the_batch_it_draws_then_walks_back_along_the_route():
     net = line_network(7)
     sc = scenario_of(net, [(5.0, 5, 6)], [0])
     eng = AuthorsEngine(sc, "mb", PRESET)
@@ -153,7 +153,7 @@ def test_idle_vehicle_jumps_in_the_round_it_draws_then_walks_back_along_the_rout
     eng._idle(veh, 250.0)  # 120 s since the last move: not more than the first link
     assert node[veh.node] == 5
     seen = []
-    for t in (251.0, 380.0, 510.0, 640.0):  # then one node back along the route per round
+    for t in (251.0, 380.0, 510.0, 640.0):  # then one node back along the route per batch
         eng._idle(veh, t)
         seen.append(node[veh.node])
     assert seen == [4, 3, 2, 1]

@@ -4,6 +4,7 @@ Line networks have 1,000 m links; at the authors' 0.12 s/m a link takes 120 s.
 """
 
 import numpy as np
+import pandas as pd
 import pytest
 from helpers import line_network, scenario_of
 
@@ -11,7 +12,7 @@ from rpbench.backends.presets import load_preset
 from rpbench.data.road import NetworkTables
 from rpbench.exceptions import ParameterError
 from rpbench.network import RoadNetwork
-from rpbench.replication import weights as W
+from rpbench.replication import weights
 from rpbench.replication.cells import NO_CELL, node_cells
 from rpbench.replication.engine import AuthorsEngine, Leg, Vehicle
 from rpbench.replication.runner import Inputs, run_authors
@@ -49,7 +50,8 @@ def test_all_on_is_the_authors_and_the_ablation_is_one_off_at_a_time():
 # ---------------------------------------------------------------- 1 teleport
 def _taker(eng, vehicle_node, order, t_assign=0.0):
     veh = eng.vehicles[0]
-    veh.node, veh.p0, veh.picked, veh.assigned_s, veh.assign_node = vehicle_node, order, False, t_assign, vehicle_node
+    veh.node, veh.passenger, veh.picked_up = vehicle_node, order, False
+    veh.assigned_s, veh.assign_node = t_assign, vehicle_node
     veh.active_at = t_assign
     return veh
 
@@ -61,7 +63,7 @@ def test_teleport_jumps_to_the_last_node_of_the_route_in_one_round():
     veh = _taker(eng, net.index_of([0])[0], 0)
     eng._move_taker(0, veh, 130.0)  # 130 s > 120 s for the first link
     assert veh.node == net.index_of([3])[0]  # 3,000 m in one step
-    assert veh.p0_pickup_m == 1000.0  # MB's ledger keeps only the last link
+    assert veh.pickup_m == 1000.0  # MB's ledger keeps only the last link
 
 
 def test_without_teleport_the_vehicle_is_where_the_clock_says():
@@ -82,9 +84,9 @@ def test_early_release_frees_a_solo_vehicle_before_its_real_arrival(early, vacan
     sc = scenario_of(net, [(5.0, 1, 4)], [0])
     eng = engine(sc, early_release=early)
     veh = _taker(eng, net.index_of([4])[0], 0)  # it has already jumped to the destination
-    veh.picked, veh.assign_node = True, int(net.index_of([0])[0])  # assigned at node 0 at t = 0
-    eng._move_taker(0, veh, 300.0)  # at the destination: delivered this round
-    assert veh.p0 == -1
+    veh.picked_up, veh.assign_node = True, int(net.index_of([0])[0])  # assigned at node 0 at t = 0
+    eng._move_taker(0, veh, 300.0)  # at the destination: delivered this batch
+    assert veh.passenger == -1
     assert veh.active_at == pytest.approx(vacant_at)
 
 
@@ -130,10 +132,10 @@ def test_second_pickup_measured_from_the_first_origin(first_origin, lead, saving
     sc = scenario_of(net, [(5.0, 0, 6), (6.0, 1, 6)], [2])
     eng = engine(sc, pickup_from_first_origin=first_origin)
     veh = _taker(eng, net.index_of([2])[0], 0)
-    veh.picked = True  # p0 boarded at node 0 and rode to node 2
-    g = eng._taker_geometry(veh, np.array([1]))
-    assert float(g["lead"][0]) == lead  # from O_a: 1,000 m; from the vehicle: 2,000 + 1,000 m
-    assert float(g["saving"][0]) == saving
+    veh.picked_up = True  # the first passenger boarded at node 0 and rode to node 2
+    g = eng._taker_geometry(veh, np.array([1])).first()
+    assert g.lead_m == lead  # from O_a: 1,000 m; from the vehicle: 2,000 + 1,000 m
+    assert g.saving_m == saving
 
 
 # ---------------------------------------------------------------- 5 idle jumps
@@ -171,19 +173,63 @@ def test_authors_np_prefers_the_long_trip_rpbench_np_the_near_one():
 
 
 def test_weight_formulas():
-    pk = np.array([500.0])
-    assert W.vacant_values("mb", True, pk, np.array([0.0]), np.array([0.0]), np.array([1.0]))[0] == 2500.0
-    assert W.vacant_values("mb", False, pk, np.array([0.0]), np.array([0.0]), np.array([1.0]))[0] == -500.0
-    assert W.offset("mb", True) == 1000.0 and W.offset("np", True) == 2000.0 and W.offset("fl", True) == 0.0
-    assert W.balanced(np.array([0.0]), np.array([0.0]))[0] == 0.0
+    pk, ride, e, prio = np.array([500.0]), np.array([2000.0]), np.array([800.0]), np.array([1.0])
+    rules = weights.RULES
+    assert weights.vacant_values(rules["mb"], True, pk, ride, e, prio)[0] == 2500.0
+    assert weights.vacant_values(rules["mb"], False, pk, ride, e, prio)[0] == -500.0
+    assert weights.vacant_values(rules["np"], True, pk, ride, e, prio)[0] == 4500.0  # (ride - pk) + 3000
+    assert weights.vacant_values(rules["np"], False, pk, ride, e, prio)[0] == -500.0
+    assert weights.vacant_values(rules["fl-nd"], True, pk, ride, e, prio)[0] == 3300.0
+    assert weights.vacant_values(rules["fl-nd"], False, pk, ride, e, prio)[0] == 300.0
+    assert weights.vacant_values(rules["fl"], True, pk, ride, e, prio)[0] == pytest.approx(800.0**2 / 1300.0)
+    assert weights.taker_values(rules["mb"], True, e, pk, prio)[0] == 3300.0
+    assert weights.taker_values(rules["fl"], False, e, pk, prio)[0] == pytest.approx(800.0**2 / 1300.0)
+    offsets = {name: weights.offset(r, True) for name, r in rules.items() if not r.packs_trips}
+    assert offsets == {"np": 2000.0, "mb": 1000.0, "fl-nd": 2000.0, "fl": 0.0}
+    assert all(weights.offset(r, False) == 0.0 for r in rules.values())
+    assert weights.balanced(np.array([0.0]), np.array([0.0]))[0] == 0.0
 
 
 def test_patience_floor_only_off_the_authors_mb():
     net = line_network(4)
     sc = scenario_of(net, [(5.0, 0, 3)], [1], patience_s=20.0)
-    assert engine(sc).patience[0] == 20.0
-    assert engine(sc, authors_weights=False).patience[0] == 30.0
-    assert engine(sc, "rtv").patience[0] == 30.0
+    assert engine(sc).patience_s[0] == 20.0
+    assert engine(sc, authors_weights=False).patience_s[0] == 30.0
+    assert engine(sc, "rtv").patience_s[0] == 30.0
+
+
+# ---------------------------------------------------------------- per-strategy rules
+@pytest.mark.parametrize("strategy, idles", [("np", True), ("mb", False)])
+def test_early_return_batches_move_nobody(strategy, idles):
+    net = line_network(7)
+    sc = scenario_of(net, [(1000.0, 5, 6)], [0], horizon_s=500.0)  # the horizon ends before the request
+    called = []
+
+    class Counting(AuthorsEngine):
+        def _idle(self, veh, t):
+            called.append(t)
+            super()._idle(veh, t)
+
+    assert Counting(sc, strategy, PRESET).rules.early_return is not idles
+    Counting(sc, strategy, PRESET).run()
+    # Without passengers the authors' MB returns before moving anyone; their NP moves its idle vehicles.
+    assert bool(called) is idles
+
+
+@pytest.mark.parametrize("ledger, scale", [(True, 2.0), (False, 1.0)])
+def test_predictions_are_doubled_under_the_authors_ledger(ledger, scale):
+    net = line_network(4)
+    sc = scenario_of(net, [(5.0, 0, 3)], [1])
+    predictions = pd.DataFrame({"saved_distance_for_seeker": [100.0], "saved_distance_for_taker": [40.0]})
+    eng = AuthorsEngine(
+        sc, "fl", PRESET, switches=Switches().without(*([] if ledger else ["authors_ledger"])), predictions=predictions
+    )
+    assert eng.fl_params.double_predictions is ledger
+    assert eng.seeker_saving_m[0] == scale * 100.0 and eng.taker_saving_m[0] == scale * 40.0
+    # MB reads no predictions; FL without them is one clear error.
+    assert AuthorsEngine(sc, "mb", PRESET).taker_saving_m[0] == 0.0
+    with pytest.raises(ParameterError, match="needs the per-order predictions"):
+        AuthorsEngine(sc, "fl", PRESET)
 
 
 # ---------------------------------------------------------------- 8 ledger and parameters
@@ -197,11 +243,12 @@ def test_a_solo_passenger_counts_as_served_only_once_delivered(ledger, counted):
 
 
 def test_fl_parameters_follow_the_ledger_switch():
-    assert W.fl_params(True).alpha == 1.1 and W.fl_params(True).response_rate == 0.8
-    assert W.fl_params(False).alpha == 1.01 and W.fl_params(False).response_rate == 0.75
+    assert weights.fl_params(True).alpha == 1.1 and weights.fl_params(True).response_rate == 0.8
+    assert weights.fl_params(False).alpha == 1.01 and weights.fl_params(False).response_rate == 0.75
     k = np.array([1.0])
-    doubled = W.wait_values("fl", True, np.array([100.0]), k, W.fl_params(True))[0]
-    plain = W.wait_values("fl", True, np.array([100.0]), k, W.fl_params(False))[0]
+    fl = weights.RULES["fl"]
+    doubled = weights.wait_values(fl, True, np.array([100.0]), k, weights.fl_params(True))[0]
+    plain = weights.wait_values(fl, True, np.array([100.0]), k, weights.fl_params(False))[0]
     assert doubled == pytest.approx(100 * (1 - 0.2**8) / 2)  # times 1/(k+1)
     assert plain == pytest.approx(100 * (1 - 0.25**8))
 
