@@ -143,6 +143,16 @@ def test_an_impossible_timing_fails(folder):
     assert_fails(folder, "kpi", "KPI wall_s: reported -3.0, not a time or size", run="rtv")
 
 
+def test_a_strategys_preparation_time_is_an_unverified_timing(folder):
+    """prepare_s (a strategy's one-off prepare()) is reported, not recomputed: finite and >= 0 passes."""
+    rows = pd.DataFrame(
+        [{"run": "mb", "kpi": "prepare_s", "value": 0.25}, {"run": "fl", "kpi": "prepare_s", "value": -1}]
+    )
+    edit_csv(folder / "kpis.csv", lambda t: pd.concat([t, rows]))
+    found = violations(folder)
+    assert found == {"kpi": ["fl: KPI prepare_s: reported -1.0, not a time or size (finite, >= 0)"]}
+
+
 # ----------------------------------------------------------------- hourly.csv
 def edit_hourly(folder, run, column, fn, hour=0):
     def edit(t):

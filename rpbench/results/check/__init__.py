@@ -40,7 +40,9 @@ Simulation runs:
   node, follow arcs of the network, with odometer steps equal to arc lengths
   and time steps of at least length / speed, times non-decreasing;
 * ``kpi`` — every KPI of kpis.csv equals its recomputation by the checker's
-  own code from the event log and the odometers; none missing, unknown or text;
+  own code from the event log and the odometers; none missing, unknown or text
+  (timings such as ``wall_s`` and ``prepare_s``, which no file reproduces, are
+  only held to be finite and >= 0);
 * ``bound-certificate`` — every pair the run formed is an edge of the upper
   bound's graph (docs/bound.md) whose weight covers its realised saving (read
   off the odometers, + :data:`CERT_TOL_M`); with a ``bound`` run in the
