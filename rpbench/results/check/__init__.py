@@ -45,7 +45,7 @@ Simulation runs:
   only held to be finite and >= 0);
 * ``bound-certificate`` — every pair the run formed is an edge of the upper
   bound's graph (docs/bound.md) whose weight covers its realised saving (read
-  off the odometers, + :data:`CERT_TOL_M`); with a ``bound`` run in the
+  off the odometers, + :data:`.core.CERT_TOL_M`); with a ``bound`` run in the
   folder, the run's saving is at most the bound.
 
 Oracle runs (``pairs.csv.gz``): ``oracle-rules`` (the recorded pair rules are
@@ -55,6 +55,10 @@ detours, shared and pick-up distances are recomputed from the orders and the
 network, feasible and in the rule's service and pick-up order; the bound's
 pairs are bound edges of the largest weight), ``max-detour`` and ``kpi``
 (recomputed from the recomputed pairs; the solver's objective re-summed).
+
+A ``rpbench replicate`` folder (the authors' engine, whose vehicles teleport):
+``assignment`` and ``accounting`` from its passenger records; every check
+built on trajectories is skipped by name, with the reason.
 
 A folder that cannot be read — a file missing, truncated or unparseable, a
 column missing or not numeric, meta.json without its parameters — is

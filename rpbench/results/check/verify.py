@@ -108,7 +108,7 @@ def _check_comparison(folder: Path) -> tuple[RunCheck, list[RunCheck]]:
 
 def _check_run(f: Folder, name: str, bound: float | None) -> tuple[RunCheck, pd.DataFrame | None]:
     """One run's checks, and its expected rows of hourly.csv (None: an oracle without any).  A malformation
-    this module did not foresee makes the run unreadable (exit status 2), never a traceback."""
+    the checker did not foresee makes the run unreadable (exit status 2), never a traceback."""
     run_dir = f.path / RUNS / name
     try:
         if f.meta["runs"][name]["kind"] == "oracle":
