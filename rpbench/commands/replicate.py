@@ -15,8 +15,8 @@ from rpbench.paths import require_data_dir
 from rpbench.replication.report import criterion, markdown
 from rpbench.replication.runner import parse_strategies, replicate
 from rpbench.replication.switches import steps_for
-from rpbench.results import replication_audit as audit
 from rpbench.results import store as results
+from rpbench.results.check import replication as audit
 from rpbench.results.store import check_new_folder
 from rpbench.scenarios.request import parse_dates
 

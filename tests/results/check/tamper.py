@@ -1,8 +1,8 @@
-"""Shared helpers of the checker's fault-injection tests tests/faults/test_checker_*.py (no test here).
+"""Helpers of the checker's tests (no test here): build a clean folder, tamper with a copy, read the outcome.
 
-Each test module builds its clean folders once (module-scoped fixtures: a toy comparison of every kind of
-run, and the valid edge cases), then tampers with a copy per case and asserts the exact outcome: a named
-check failing with a given message fragment, or ``rpbench check`` exiting 2 with one error line.
+Each test builds its clean folders once per module (the fixtures of ``conftest.py``), then tampers with a copy
+per case and asserts the exact outcome: a named check failing with a given message fragment, or ``rpbench
+check`` exiting 2 with one error line.
 """
 
 from __future__ import annotations
@@ -14,51 +14,23 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-import pytest
 from helpers import write_fake_haikou as _write_fake_haikou
 
 from rpbench.cli import main
 from rpbench.harness.comparison import run_comparison
-from rpbench.results.check import check_tree
-from rpbench.scenarios import build_scenario
+from rpbench.harness.spec import RunSpec
+from rpbench.results.check import check_folder, check_tree
+from rpbench.scenarios import ScenarioRequest
 
 #: The clean folder every tampering starts from: each kind of run rpbench writes.
 RUNS = ["mb", "rtv", "fl", "bound", "oracle1", "oracle2"]
 
 
 def build(out: Path, runs=RUNS, *, sample: float = 0.25, seed: int = 3, run_options=None, **overrides) -> Path:
-    scenario = build_scenario("toy", sample=sample, seed=seed, param_overrides=overrides or None)
-    folder, _ = run_comparison(
-        scenario, list(runs), "highs", out=out, progress=False, oracle_solver="matching", run_options=run_options
-    )
+    request = ScenarioRequest("toy", sample=sample, seed=seed, params=tuple(overrides.items()))
+    spec = RunSpec.of(request, list(runs), options=run_options, oracle_preset="matching")
+    folder, _ = run_comparison(spec, out, progress=False)
     return folder
-
-
-@pytest.fixture(scope="module")
-def base(tmp_path_factory) -> Path:
-    return build(tmp_path_factory.mktemp("clean") / "toy")
-
-
-@pytest.fixture(scope="module")
-def enroute(tmp_path_factory) -> Path:
-    """Oracles with en-route pairs (the second order joins the first one's ride), both pick-up orders and
-    the pick-up test: every branch of the oracle rules."""
-    return build(
-        tmp_path_factory.mktemp("enroute") / "toy",
-        ["mb", "oracle1", "oracle2"],
-        sample=0.5,
-        seed=1,
-        run_options={
-            "oracle1": {"allow_enroute": "true", "both_pickup_orders": "true"},
-            "oracle2": {"allow_enroute": "true", "pickup_check": "true"},
-        },
-    )
-
-
-@pytest.fixture
-def folder(base, tmp_path) -> Path:
-    """A copy of the clean folder, to tamper with."""
-    return copy(base, tmp_path)
 
 
 def copy(source: Path, tmp_path: Path, name: str = "copy") -> Path:
@@ -135,6 +107,16 @@ def violations(folder: Path) -> dict[str, list[str]]:
         for rc in result.checks:
             for check, messages in rc.violations.items():
                 out.setdefault(check, []).extend(f"{rc.run}: {m}" for m in messages)
+    return out
+
+
+def run_violations(folder: Path) -> dict[str, list[str]]:
+    """Every failed check of :func:`check_folder`'s verdicts (the runs, the folder's own checks when they
+    failed), with its messages as reported."""
+    out: dict[str, list[str]] = {}
+    for rc in check_folder(folder):
+        for check, messages in rc.violations.items():
+            out.setdefault(check, []).extend(messages)
     return out
 
 

@@ -1,6 +1,7 @@
 """Oracle and bound pairs edited: each pair's window, feasibility, service and pick-up order, saving, route
 length, detours, shared and pick-up distances are recomputed from the orders and the folder's network —
-en-route pairs included — so a forged pair fails ``oracle-pairs`` (and the KPIs built on it ``kpi``)."""
+en-route pairs included — so a forged pair fails ``oracle-pairs`` (and the KPIs built on it ``kpi``); the pair
+rules recorded for an oracle are the folder's parameters (``oracle-rules``)."""
 
 from __future__ import annotations
 
@@ -8,16 +9,15 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from faults import test_checker_helpers as helpers
-from faults.test_checker_helpers import (
+from results.check.tamper import (
     assert_fails,
     copy,
     edit_csv,
     edit_meta,
+    run_violations,
     set_kpi,
+    violations,
 )
-
-base, enroute, folder = helpers.base, helpers.enroute, helpers.folder  # fixtures (built once per module)
 
 
 def pairs_path(folder, run):
@@ -71,6 +71,7 @@ STORED = {
 @pytest.mark.parametrize("run", ["oracle1", "oracle2", "bound"])
 @pytest.mark.parametrize("column", list(STORED))
 def test_every_stored_pair_figure_edited_fails(folder, run, column):
+    """Every figure pairs.csv.gz stores is recomputed: any one edited fails ``oracle-pairs``."""
     edit_pairs(folder, run, add_to(column, STORED[column]))
     fragment = (
         "stored weights differ from the largest realisable savings"
@@ -82,6 +83,7 @@ def test_every_stored_pair_figure_edited_fails(folder, run, column):
 
 @pytest.mark.parametrize("column", ["saving_m", "detour_first_m", "shared_m"])
 def test_an_en_route_pairs_figures_are_recomputed_too(enroute, tmp_path, column):
+    """An en-route pair's figures are recomputed from the node where the vehicle turns towards the second order."""
     folder = copy(enroute, tmp_path)
     pairs = pd.read_csv(pairs_path(folder, "oracle1"))
     row = int(np.flatnonzero(pairs["enroute"].to_numpy())[0])
@@ -89,7 +91,7 @@ def test_an_en_route_pairs_figures_are_recomputed_too(enroute, tmp_path, column)
     assert_fails(folder, "oracle-pairs", f"pairs' stored {column} differ", run="oracle1")
 
 
-def test_the_impossible_en_route_pair_of_the_issue_fails(enroute, tmp_path):
+def test_an_impossible_en_route_pair_with_a_forged_saving_fails(enroute, tmp_path):
     """Requests 58 min apart, a 100 km saving, flagged en route, the KPI total raised to match: the second
     order requests long after the first one was delivered, and the saving is not the route's."""
     folder = copy(enroute, tmp_path)
@@ -106,6 +108,7 @@ def test_the_impossible_en_route_pair_of_the_issue_fails(enroute, tmp_path):
 
 
 def test_a_waiting_pair_further_apart_than_the_planner_patience_fails(folder):
+    """A waiting pair's requests lie within K̄ of each other."""
     pairs = pd.read_csv(pairs_path(folder, "oracle1"))
     late, t = unpaired_order(folder, "oracle1", float(pairs.loc[0, "first_request_s"]) + 600.0)
     rejoin(folder, "oracle1", 0, late, t)
@@ -113,12 +116,14 @@ def test_a_waiting_pair_further_apart_than_the_planner_patience_fails(folder):
 
 
 def test_an_en_route_pair_relabelled_waiting_fails(enroute, tmp_path):
+    """An en-route pair relabelled waiting is held to the waiting window, and fails it."""
     folder = copy(enroute, tmp_path)
     edit_pairs(folder, "oracle2", lambda p: p.assign(enroute=False))
     assert_fails(folder, "oracle-pairs", "of waiting orders request more than K̄", run="oracle2")
 
 
 def test_en_route_pairs_in_an_oracle_that_does_not_allow_them_fail(enroute, tmp_path):
+    """En-route pairs only where the oracle's rules allow them."""
     folder = copy(enroute, tmp_path)
     edit_meta(folder, lambda m: m["runs"]["oracle1"]["rules"].__setitem__("allow_enroute", False))
     assert_fails(folder, "oracle-pairs", "en-route pairs in an oracle whose rules do not allow them", run="oracle1")
@@ -137,6 +142,8 @@ def test_pairs_beyond_a_lowered_pickup_radius_fail(enroute, tmp_path):
 
 
 def test_the_later_order_picked_up_first_fails_where_the_rules_forbid_it(folder):
+    """Without both pick-up orders in the rules, the earlier request is picked up first."""
+
     def swap(p):
         k = int(np.flatnonzero((p["second_request_s"] > p["first_request_s"]).to_numpy())[0])
         p.loc[k, ["first_id", "second_id"]] = p.loc[k, ["second_id", "first_id"]].to_numpy()
@@ -147,6 +154,7 @@ def test_the_later_order_picked_up_first_fails_where_the_rules_forbid_it(folder)
 
 
 def test_a_flipped_service_order_fails(folder):
+    """The stored figures are those of the stored service order: a flipped one no longer matches them."""
     edit_pairs(
         folder,
         "oracle2",
@@ -160,11 +168,14 @@ def test_a_flipped_service_order_fails(folder):
 
 
 def test_an_unknown_service_order_fails(folder):
+    """The service order is FOFO or FOLO."""
     edit_pairs(folder, "oracle1", lambda p: p.assign(service_order="LIFO"))
     assert_fails(folder, "oracle-pairs", "have a service order other than FOFO/FOLO", run="oracle1")
 
 
 def test_an_order_in_two_pairs_fails(folder):
+    """The pairs are a matching: no order in two pairs."""
+
     def dup(p):
         p.loc[1, "first_id"] = p.loc[0, "first_id"]
 
@@ -173,16 +184,20 @@ def test_an_order_in_two_pairs_fails(folder):
 
 
 def test_a_duplicated_pair_row_fails(folder):
+    """A pair stored twice puts its orders in two pairs."""
     edit_pairs(folder, "oracle2", lambda p: pd.concat([p, p.iloc[[2]]]))
     assert_fails(folder, "oracle-pairs", "appears in 2 pairs", run="oracle2")
 
 
 def test_a_pair_of_an_unknown_order_fails(folder):
+    """Pairs name orders of orders.csv.gz."""
     edit_pairs(folder, "oracle1", add_to("second_id", 10**6))
     assert_fails(folder, "oracle-pairs", "pairs name order ids that are not in orders.csv.gz", run="oracle1")
 
 
 def test_an_order_paired_with_itself_fails(folder):
+    """A pair is two different orders."""
+
     def same(p):
         p.loc[0, "second_id"] = p.loc[0, "first_id"]
 
@@ -191,17 +206,41 @@ def test_an_order_paired_with_itself_fails(folder):
 
 
 def test_a_stored_request_time_edited_fails(folder):
+    """A pair's stored request times are its orders'."""
     edit_pairs(folder, "oracle2", add_to("first_request_s", 30.0))
     assert_fails(folder, "oracle-pairs", "stored first_request_s differ from orders.csv.gz", run="oracle2")
 
 
 def test_a_deleted_pair_fails_the_kpis(folder):
+    """The oracle's KPIs are recomputed from its pairs: a deleted pair fails ``kpi``."""
     edit_pairs(folder, "oracle1", lambda p: p.iloc[1:])
     assert_fails(folder, "kpi", "KPI pairs: reported 23.0, recomputed 22", run="oracle1")
 
 
 def test_a_bound_pair_that_no_run_could_form_fails(folder):
+    """The bound's pairs are edges of its graph: orders requested too far apart are none."""
     pairs = pd.read_csv(pairs_path(folder, "bound"))
     late, t = unpaired_order(folder, "bound", float(pairs.loc[0, "first_request_s"]) + 1500.0)
     rejoin(folder, "bound", 0, late, t)
     assert_fails(folder, "oracle-pairs", "are not edges of the upper bound's graph", run="bound")
+
+
+def test_a_relaxed_threshold_is_caught_by_the_digest_and_the_oracle_rules(folder):
+    """Raising D̄ in meta.json hides nothing: the digest pins the run's parameters, and the oracles' rules
+    (and the service orders they chose) no longer match them."""
+    edit_meta(folder, lambda m: m["params"].__setitem__("max_detour_m", 1e6))
+    found = violations(folder)
+    assert set(found) == {"inputs-digest", "oracle-rules", "oracle-pairs"}
+    assert any("not served in the order the rule min_feasible picks" in m for m in found["oracle-pairs"])
+
+
+# ------------------------------------------------------------------- manifest
+
+
+def test_oracle_pair_tampering_is_caught(clean_copy):
+    """An order in two pairs of an oracle fails ``oracle-pairs``."""
+    path = clean_copy / "runs" / "oracle1" / "pairs.csv.gz"
+    pairs = pd.read_csv(path)
+    pairs.loc[1, "first_id"] = pairs.loc[0, "first_id"]  # one order in two pairs
+    pairs.to_csv(path, index=False)
+    assert "oracle-pairs" in run_violations(clean_copy)

@@ -22,7 +22,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from rpbench.exceptions import ResultsError
+from rpbench.exceptions import ResultsError, RpbenchError, one_line
+from rpbench.results.check.core import FolderResult, RunCheck
 
 RECORDS_DIR = "records"
 TOL_M = 1e-3
@@ -41,6 +42,7 @@ SKIPPED = {
 
 
 def records_file(folder: Path, date: str, strategy: str, engine: str) -> Path:
+    """Where a replication folder keeps one run's passenger records."""
     return folder / RECORDS_DIR / f"{date}_{strategy}_{engine}.csv.gz"
 
 
@@ -121,7 +123,7 @@ def audit_folder(folder: Path) -> list[tuple[str, dict, dict, dict]]:
         rows = pd.read_csv(runs_csv)
     except (OSError, ValueError) as exc:
         raise ResultsError(f"cannot read {str(runs_csv)!r}: {exc}") from None
-    out = []
+    out: list[tuple[str, dict, dict, dict]] = []
     for row in rows.to_dict("records"):
         name = f"{row['date']}/{row['strategy']}/{row['engine']}"
         path = records_file(folder, row["date"], row["strategy"], row["engine"])
@@ -157,4 +159,16 @@ def audit_folder(folder: Path) -> list[tuple[str, dict, dict, dict]]:
             raise ResultsError(f"cannot read {str(path)!r}: {exc}") from None
         bad, checked = audit_run(records, row)
         out.append((name, bad, checked, dict(SKIPPED)))
+    return out
+
+
+def check_replication(folder: Path) -> FolderResult:
+    """A ``rpbench replicate`` folder: the checks that apply to the authors' engine, the rest skipped by
+    name with the reason."""
+    out = FolderResult(str(folder))
+    try:
+        for name, violations, checked, skipped in audit_folder(folder):
+            out.runs.append(RunCheck(name, violations=violations, checked=checked, skipped=skipped))
+    except RpbenchError as exc:
+        out.error = one_line(exc)
     return out

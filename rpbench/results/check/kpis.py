@@ -1,0 +1,289 @@
+"""Every number a reader is shown, recomputed: ``kpi`` (kpis.csv), ``hourly`` (hourly.csv) and ``report``
+(the KPI tables of report.md).
+
+The KPIs are recomputed from the per-order table of :func:`.events.check_events` (event times, and
+odometers read at the matched trajectory entries), by code of their own: the occupied distance is the union
+of the passengers' odometer intervals per vehicle, the shared distance the overlap of a pair's intervals.
+:mod:`rpbench.results.metrics` (what the run used) steps through pick-up/drop-off events instead.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from rpbench import results
+from rpbench.exceptions import ResultsError, RpbenchError, one_line
+from rpbench.results.check.core import UNVERIFIED_KPIS, RunCheck, as_number, same, show
+from rpbench.results.check.folder import Folder
+from rpbench.results.layout import HOURLY, KPIS, META, REPORT
+from rpbench.results.report import report_markdown
+from rpbench.scenarios.base import Params
+
+
+# ------------------------------------------------------------------------- KPIs
+def _union_length(vehicle: np.ndarray, start: np.ndarray, end: np.ndarray) -> float:
+    """Total length of the union of the intervals [start, end] of each vehicle (odometer readings)."""
+    keep = np.isfinite(start) & np.isfinite(end)
+    vehicle, start, end = vehicle[keep], start[keep], end[keep]
+    if not len(vehicle):
+        return 0.0
+    srt = np.lexsort((start, vehicle))
+    vehicle, start, end = vehicle[srt], start[srt], end[srt]
+    reach = pd.Series(end).groupby(vehicle).cummax().to_numpy()  # furthest end so far, per vehicle
+    before = np.r_[-np.inf, reach[:-1]]
+    before[np.r_[True, vehicle[1:] != vehicle[:-1]]] = -np.inf
+    return float(np.maximum(0.0, end - np.maximum(start, before)).sum())
+
+
+def _passenger_facts(tab: pd.DataFrame, solo: np.ndarray) -> dict[str, np.ndarray]:
+    """Per order: served, pooled, partner, ride, shared distance, detour, pick-up distance, response and
+    pick-up times (read off the per-order table)."""
+    served = tab["served"].to_numpy()
+    partner = tab["partner"].to_numpy()
+    pooled = served & (partner >= 0)
+    p = np.maximum(partner, 0)
+    pick, drop = tab["odo_pick"].to_numpy(), tab["odo_drop"].to_numpy()
+    ride = drop - pick
+    shared = np.where(pooled, np.maximum(0.0, np.minimum(drop, drop[p]) - np.maximum(pick, pick[p])), 0.0)
+    return {
+        "served": served,
+        "pooled": pooled,
+        "partner": partner,
+        "ride": ride,
+        "shared": shared,
+        "detour": ride - solo,
+        "pickup_m": pick - tab["odo_start"].to_numpy(),
+        "response_s": (tab["assign_s"] - tab["request_s"]).to_numpy(),
+        "pickup_s": (tab["pickup_s"] - tab["assign_s"]).to_numpy(),
+    }
+
+
+def _mean(x: np.ndarray, mask: np.ndarray) -> float:
+    return float(x[mask].mean()) if mask.any() else float("nan")
+
+
+def simulation_kpis(tab: pd.DataFrame, solo: np.ndarray, params: Params, bound_km: float | None) -> dict:
+    """docs/simulator.md's KPI definitions, from the event log and the odometers."""
+    x = _passenger_facts(tab, solo)
+    served, pooled = x["served"], x["pooled"]
+    n, n_served, n_pooled = len(tab), int(served.sum()), int(pooled.sum())
+    occupied_km = (
+        _union_length(
+            tab["vehicle"].to_numpy()[served], tab["odo_pick"].to_numpy()[served], tab["odo_drop"].to_numpy()[served]
+        )
+        / 1000.0
+    )
+    solo_km = float(solo[served].sum()) / 1000.0
+    fare = np.where(pooled, params.fare_pooled_cny_per_km, params.fare_solo_cny_per_km)
+    revenue = float((fare * solo)[served].sum()) / 1000.0
+    alt = params.fare_solo_cny_per_km * (x["ride"] - x["shared"]) + params.fare_pooled_cny_per_km * x["shared"]
+    pay = params.driver_pay_cny_per_km * occupied_km
+    out = {
+        "orders": n,
+        "served": n_served,
+        "cancelled": int(tab["cancelled"].sum()),
+        "pooled_passengers": n_pooled,
+        "pairs": n_pooled // 2,
+        "response_rate": n_served / n if n else float("nan"),
+        "pairing_ratio": n_pooled / n_served if n_served else float("nan"),
+        "pairing_ratio_of_orders": n_pooled / n if n else float("nan"),
+        "platform_profit_cny": revenue - pay,
+        "platform_profit_alt_cny": float(alt[served].sum()) / 1000.0 - pay,
+        "avg_response_time_s": _mean(x["response_s"], served),
+        "avg_pickup_time_s": _mean(x["pickup_s"], served),
+        "avg_pickup_distance_m": _mean(x["pickup_m"], served),
+        "avg_detour_m": _mean(x["detour"], pooled),
+        "avg_shared_m": _mean(x["shared"], pooled),
+        "total_occupied_km": occupied_km,
+        "total_solo_served_km": solo_km,
+        "total_saving_km": solo_km - occupied_km,
+    }
+    if bound_km is not None:  # the competitive ratio against the folder's proven bound
+        out["competitive_ratio_bound"] = out["total_saving_km"] / bound_km if bound_km else float("nan")
+    return out
+
+
+def compare_kpis(
+    rc: RunCheck, kind: str, recomputed: dict, reported: pd.DataFrame, claims: dict[str, str | None] | None = None
+) -> None:
+    """Every recomputed KPI is reported and equal; every reported one is recomputed, a solver claim that
+    passed its consistency test (``claims``: key -> failure message or None) or listed as unverifiable."""
+    seen: dict[str, float | None] = {}
+    for key, value in zip(reported["kpi"].to_numpy(), reported["value"].to_numpy(), strict=True):
+        if key in seen:
+            rc.fail("kpi", f"KPI {key} is reported twice")
+        seen[key] = as_number(value)
+        if seen[key] is None:
+            rc.fail("kpi", f"KPI {key}: reported {value!r} is not a number")
+    for key, value in recomputed.items():
+        reported_value = seen.get(key)
+        if key not in seen:
+            rc.fail("kpi", f"KPI {key} is not reported in {KPIS}")
+        elif reported_value is not None and not same(reported_value, float(value)):
+            rc.fail("kpi", f"KPI {key}: reported {reported_value!r}, recomputed {float(value)!r}")
+    for message in (claims or {}).values():
+        if message is not None:
+            rc.fail("kpi", message)
+    allowed = set(recomputed) | set(claims or {}) | UNVERIFIED_KPIS[kind]
+    for key in sorted(set(seen) - allowed):
+        rc.fail("kpi", f"KPI {key} in {KPIS} is not a KPI rpbench reports for a {kind} run")
+    for key in sorted(set(seen) & UNVERIFIED_KPIS[kind]):  # timings and sizes: plausible at least
+        number = seen[key]
+        if number is not None and not (np.isnan(number) or 0 <= number < np.inf):
+            rc.fail("kpi", f"KPI {key}: reported {number!r}, not a time or size (finite, >= 0)")
+    rc.checked["kpis"] = len(recomputed)
+
+
+# ----------------------------------------------------------------------- hourly
+def hourly_expected(tab: pd.DataFrame, solo: np.ndarray) -> pd.DataFrame:
+    """Per request hour (metrics.hourly's definitions): a pair's saving, l_A + l_B - (last drop-off odometer
+    - first pick-up odometer), counts in the hour of its earlier request."""
+    x = _passenger_facts(tab, solo)
+    request = tab["request_s"].to_numpy()
+    hour = np.floor(request / 3600.0).astype(np.int64)
+    served, pooled, partner = x["served"], x["pooled"], x["partner"]
+    lead = np.flatnonzero(pooled & (partner > np.arange(len(tab))))
+    b = partner[lead]
+    pick, drop = tab["odo_pick"].to_numpy(), tab["odo_drop"].to_numpy()
+    saving = solo[lead] + solo[b] - (np.maximum(drop[lead], drop[b]) - np.minimum(pick[lead], pick[b]))
+    pair_hour = np.floor(np.minimum(request[lead], request[b]) / 3600.0).astype(np.int64)
+    frame = pd.DataFrame(
+        {
+            "hour": hour,
+            "served": served,
+            "pooled": pooled,
+            "detour": np.where(pooled, x["detour"], np.nan),
+            "shared": np.where(pooled, x["shared"], np.nan),
+            "pickup_m": np.where(served, x["pickup_m"], np.nan),
+            "pickup_s": np.where(served, x["pickup_s"], np.nan),
+        }
+    )
+    g = frame.groupby("hour")
+    n_served = g["served"].sum()
+    out = pd.DataFrame(
+        {
+            "orders": g.size(),
+            "response_rate": g["served"].mean(),
+            "pairing_ratio": g["pooled"].sum() / n_served.where(n_served > 0),
+            "avg_detour_m": g["detour"].mean(),
+            "avg_shared_m": g["shared"].mean(),
+            "total_saving_km": pd.Series(saving / 1000.0).groupby(pair_hour).sum(),
+            "avg_pickup_m": g["pickup_m"].mean(),
+            "avg_pickup_time_s": g["pickup_s"].mean(),
+        }
+    )
+    out["total_saving_km"] = out["total_saving_km"].fillna(0.0)
+    return out.loc[g.size().index]
+
+
+def check_hourly(
+    fc: RunCheck, f: Folder, runs: list[RunCheck], tables: dict[str, pd.DataFrame], per_hour: set[str]
+) -> None:
+    """hourly.csv (plotted as hourly.png) equals its recomputation ``tables``: a run's wrong rows fail that
+    run's ``hourly`` check, rows of a run without per-hour figures (not in ``per_hour``) the folder's."""
+    path = f.path / HOURLY
+    if not tables:
+        return
+    if not path.is_file():
+        fc.skip("hourly", f"the folder has no {HOURLY}")
+        return
+    try:
+        hourly = results.read_csv(path)
+    except ResultsError as exc:
+        fc.fail("hourly", one_line(exc))
+        return
+    if not {"hour", "run"} <= set(hourly.columns):
+        fc.fail("hourly", f"{HOURLY} lacks its hour or run column")
+        return
+    hourly = hourly.assign(run=hourly["run"].astype(str), hour=pd.to_numeric(hourly["hour"], errors="coerce"))
+    for name in sorted(set(hourly["run"]) - per_hour):
+        fc.fail("hourly", f"{HOURLY} has rows of run {name!r}, which has no per-hour figures in this folder")
+    for rc in runs:
+        if rc.run in tables:
+            _compare_hourly(rc, hourly[hourly["run"] == rc.run].set_index("hour"), tables[rc.run])
+
+
+def _compare_hourly(rc: RunCheck, rows: pd.DataFrame, expected: pd.DataFrame) -> None:
+    """One run's rows of hourly.csv: the same hours, and every figure equal to its recomputation."""
+    if rows.index.has_duplicates or set(rows.index) != set(expected.index):
+        rc.fail(
+            "hourly",
+            f"{HOURLY} has hours {sorted(map(str, rows.index))}, the run's orders request in "
+            f"hours {sorted(map(str, expected.index))}",
+        )
+        return
+    for column in expected.columns:
+        if column not in rows.columns:
+            rc.fail("hourly", f"{HOURLY} lacks the column {column}")
+            continue
+        for hour in expected.index:
+            value = as_number(rows.loc[hour, column])
+            if value is None or not same(value, float(expected.loc[hour, column])):
+                rc.fail(
+                    "hourly",
+                    f"hour {hour}: {column} reported {show(rows.loc[hour, column])}, recomputed "
+                    f"{float(expected.loc[hour, column])!r}",
+                )
+    rc.checked["hours"] = len(expected)
+
+
+# ----------------------------------------------------------------------- report
+MetricTable = list[tuple[str, list[str]]]
+
+
+def check_report(fc: RunCheck, f: Folder) -> None:
+    """The KPI tables of report.md (what most readers read) are the rendering of kpis.csv, which the runs'
+    ``kpi`` checks verify: a number edited in report.md alone fails here."""
+    path = f.path / REPORT
+    if not path.is_file():
+        fc.skip("report", f"the folder has no {REPORT}")
+        return
+    try:
+        expected = _metric_tables(report_markdown(f.path, f.path.name))
+    except (RpbenchError, KeyError, ValueError, TypeError, IndexError) as exc:
+        fc.skip(
+            "report",
+            f"{KPIS} or {META} cannot be rendered ({type(exc).__name__}: {one_line(exc)}); the kpi checks say why",
+        )
+        return
+    found = _metric_tables(path.read_text(errors="replace"))
+    unmatched: set[str] = set()
+    if len(found) != len(expected):
+        unmatched.add(f"({len(found)} KPI tables in {REPORT}, {len(expected)} rendered)")
+    for want, have in zip(expected, found, strict=True):
+        shown = dict(have)
+        for label, cells in want:
+            if label not in shown:
+                unmatched.add(label)
+            elif shown[label] != cells:
+                fc.fail(
+                    "report",
+                    f"{REPORT} shows {label}: {' | '.join(shown[label])}; {KPIS} renders {' | '.join(cells)}",
+                )
+        unmatched |= set(shown) - {label for label, _ in want}
+    if unmatched:  # a row deleted, or worded by another rpbench version: nothing false is shown
+        fc.skip(
+            "report",
+            f"{REPORT} rows not compared (absent from {REPORT} or from today's rendering): "
+            f"{', '.join(sorted(unmatched))}",
+        )
+    fc.checked["report_tables"] = len(expected)
+
+
+def _metric_tables(text: str) -> list[MetricTable]:
+    """The markdown tables whose header starts with "| Metric |": per row its label and its cells (the header,
+    where a run may be marked unproven, is not compared)."""
+    tables: list[MetricTable] = []
+    current: MetricTable | None = None
+    for line in text.splitlines():
+        if line.startswith("| Metric |"):
+            current = []
+            tables.append(current)
+        elif current is not None and line.startswith("|"):
+            cells = [c.strip() for c in line.strip().strip("|").split("|")]
+            if not set("".join(cells)) <= set("-: "):  # not the |---|---:| line
+                current.append((cells[0], cells[1:]))
+        else:
+            current = None
+    return tables

@@ -1,0 +1,140 @@
+"""The entry points: which checks a folder gets, and in which order.
+
+A replication folder goes to :mod:`.replication`, a multi-day or sweep parent to :mod:`.parents` (then
+each child), a comparison folder to its folder checks (:mod:`.folder`), each run's (:mod:`.events`,
+:mod:`.kpis` and :mod:`.certificate` for a simulation, :mod:`.oracle` for an offline run), then the tables
+built over all runs (``hourly``, ``report``).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from rpbench import results
+from rpbench.exceptions import ResultsError, RpbenchError, one_line
+from rpbench.results.check.certificate import check_certificate
+from rpbench.results.check.core import EVENT_COLUMNS, FOLDER, PARENT_KINDS, FolderResult, RunCheck
+from rpbench.results.check.events import check_event_log, check_events, check_movement
+from rpbench.results.check.folder import (
+    Folder,
+    bound_km,
+    check_digest,
+    check_manifest,
+    check_orders,
+    read_folder,
+    read_table,
+)
+from rpbench.results.check.kpis import check_hourly, check_report, compare_kpis, hourly_expected, simulation_kpis
+from rpbench.results.check.oracle import check_oracle
+from rpbench.results.check.parents import check_parent
+from rpbench.results.check.replication import check_replication
+from rpbench.results.layout import EVENTS, META, RUNS, TRAJECTORIES
+
+
+def check_tree(path: str | Path) -> list[FolderResult]:
+    """Check a results folder, or a multi-day / sweep parent (its own files, then every child folder);
+    an unreadable folder is a :class:`FolderResult` with ``error`` set, never an exception."""
+    path = Path(path)
+    if not path.is_dir():
+        return [FolderResult(str(path), error=f"results folder {str(path)!r} does not exist")]
+    meta = None
+    if (path / META).exists():
+        try:
+            meta = results.read_meta(path)
+        except RpbenchError as exc:
+            return [FolderResult(str(path), error=one_line(exc))]
+    if meta is not None and meta.get("kind") == "replication":
+        return [check_replication(path)]
+    if meta is not None and meta.get("kind") in PARENT_KINDS:
+        parent, children = check_parent(path, meta)
+        return [parent] + [check_results(child) for child in children]
+    return [check_results(folder) for folder in results.run_folders(path)]
+
+
+def check_results(folder: str | Path) -> FolderResult:
+    """Check one results folder (a comparison: ``runs/<name>/``); never raises on a malformed folder."""
+    out = FolderResult(str(folder))
+    try:
+        with np.errstate(all="ignore"):  # absurd values (1e300 s) must not print numpy warnings
+            out.folder_check, out.runs = _check_comparison(Path(folder))
+    except RpbenchError as exc:
+        out.error = one_line(exc)
+    return out
+
+
+def check_folder(folder: str | Path) -> list[RunCheck]:
+    """Check every run of a results folder; one :class:`RunCheck` per run, preceded by the folder's own
+    checks (run :data:`FOLDER`) when one of them failed.  Raises :class:`ResultsError` when the folder is
+    unreadable."""
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise ResultsError(f"results folder {str(folder)!r} does not exist")
+    found = check_results(folder)
+    if found.error is not None:
+        raise ResultsError(found.error)
+    assert found.folder_check is not None  # set whenever the folder could be read
+    return ([found.folder_check] if not found.folder_check.ok else []) + found.runs
+
+
+def _check_comparison(folder: Path) -> tuple[RunCheck, list[RunCheck]]:
+    """A comparison folder: its own checks, every run's, then hourly.csv and report.md over all runs."""
+    f = read_folder(folder)
+    fc = RunCheck(FOLDER)
+    names = check_manifest(fc, f)
+    check_digest(fc, f)
+    check_orders(fc, f)
+    bound = bound_km(f)
+    runs, hourly = [], {}
+    for name in names:
+        rc, table = _check_run(f, name, bound)
+        runs.append(rc)
+        if table is not None:
+            hourly[name] = table
+    if not any(f.meta["runs"][name]["kind"] == "simulation" for name in names):
+        hourly = {}  # hourly.csv is written for the strategy runs (and then the bound's split)
+    per_hour = {
+        name
+        for name in names
+        if f.meta["runs"][name]["kind"] == "simulation"
+        or f.meta["runs"][name].get("rules", {}).get("window") == "bound"
+    }
+    check_hourly(fc, f, runs, hourly, per_hour)
+    check_report(fc, f)
+    return fc, runs
+
+
+def _check_run(f: Folder, name: str, bound: float | None) -> tuple[RunCheck, pd.DataFrame | None]:
+    """One run's checks, and its expected rows of hourly.csv (None: an oracle without any).  A malformation
+    the checker did not foresee makes the run unreadable (exit status 2), never a traceback."""
+    run_dir = f.path / RUNS / name
+    try:
+        if f.meta["runs"][name]["kind"] == "oracle":
+            return check_oracle(f, name, run_dir)
+        return _check_simulation(f, name, run_dir, bound)
+    except RpbenchError:
+        raise
+    except (ValueError, TypeError, KeyError, IndexError, OverflowError, AttributeError) as exc:
+        raise ResultsError(f"{str(run_dir)!r} cannot be checked: {type(exc).__name__}: {one_line(exc)}") from None
+
+
+def _check_simulation(f: Folder, name: str, run_dir: Path, bound: float | None) -> tuple[RunCheck, pd.DataFrame | None]:
+    """A simulation run: movement first (nothing else can be read without it), then the event log, the
+    service rules, the KPIs and the bound certificate."""
+    rc = RunCheck(name)
+    events = read_table(run_dir / EVENTS, EVENT_COLUMNS)
+    traj = results.load_trajectories(run_dir / TRAJECTORIES)
+    if not check_movement(rc, traj, f.network, f.fleet["initial_node"].to_numpy(), f.params):
+        for check in ("service", "max-pickup", "max-detour", "kpi", "bound-certificate", "hourly"):
+            rc.skip(check, "the trajectories cannot be read per vehicle (see [movement])")
+        return rc, None
+    events = check_event_log(rc, events, f, len(f.fleet))
+    tab = check_events(rc, events, f, traj)
+    kpis = simulation_kpis(tab, f.solo, f.params, bound)
+    compare_kpis(rc, "simulation", kpis, f.reported(name))
+    check_certificate(rc, tab, f, kpis["total_saving_km"], bound)
+    rc.checked["orders"] = f.n
+    rc.checked["served"] = int(tab["served"].sum())
+    return rc, hourly_expected(tab, f.solo)
