@@ -367,7 +367,7 @@ def figure_lines(folder: Path, dest: Path) -> list[str]:
         "",
         f"![headline KPIs per run]({KPIS_PNG})",
         "",
-        "Headline KPIs of the table above, one bar per run; a panel leaves out the runs without that KPI "
+        "Headline KPIs of the comparison table, one bar per run; a panel leaves out the runs without that KPI "
         f"(offline runs have no response rate nor pick-up time){no_ratio}.",
         "",
     ]
