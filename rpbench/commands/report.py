@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import argparse
+import shutil
+import tempfile
+from functools import partial
 from pathlib import Path
 
 from rpbench.commands._common import check_out_file, write_out_file
@@ -18,17 +21,37 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("folders", nargs="+", metavar="RESULTS_DIR")
     p.add_argument("--metrics", default=None, help="comma-separated KPI names for the combined table")
-    p.add_argument("--out", default=None, help="write the markdown here instead of printing it")
+    p.add_argument(
+        "--out",
+        default=None,
+        metavar="FILE",
+        help="write the markdown to FILE, and its plots beside it as FILE's name + '-' + the plot's name, "
+        "instead of printing it; the results folders are then left as they are",
+    )
     p.set_defaults(handler=run)
 
 
 def run(args: argparse.Namespace) -> int:
     metrics = [m.strip() for m in args.metrics.split(",")] if args.metrics else None
-    out = check_out_file(args.out, "--out") if args.out else None  # before rendering anything
-    text, _ = render([Path(f) for f in args.folders], metrics)
-    if out is not None:
-        write_out_file(out, "--out", lambda tmp: tmp.write_text(text))
-        print(f"report written to {args.out}")
-    else:
+    if args.out is None:
+        text, _ = render([Path(f) for f in args.folders], metrics)
         print(text)
+        return 0
+    out = check_out_file(args.out, "--out")  # before rendering anything
+    plots: list[Path] = []
+    try:
+        with tempfile.TemporaryDirectory(prefix="rpbench-report-") as tmp:
+            text, _ = render([Path(f) for f in args.folders], metrics, dest=Path(tmp))
+            for png in sorted(Path(tmp).glob("*.png")):
+                target = out.with_name(f"{out.stem}-{png.name}")
+                write_out_file(target, "--out", partial(shutil.copyfile, png))
+                plots.append(target)
+                text = text.replace(f"]({png.name})", f"]({target.name})")  # the report's links follow the plots
+        write_out_file(out, "--out", lambda tmp: tmp.write_text(text))
+    except BaseException:  # a report written in part is not written: its plots go too
+        for target in plots:
+            target.unlink(missing_ok=True)
+        raise
+    beside = f" (plots beside it: {', '.join(p.name for p in plots)})" if plots else ""
+    print(f"report written to {args.out}{beside}")
     return 0

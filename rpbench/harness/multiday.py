@@ -118,10 +118,14 @@ def write_multiday_report(parent: Path, name: str | None = None) -> Path:
         lines += ["## Do the paper's findings hold?", "", "| claim | days where it holds |", "|---|---:|"]
         lines += [f"| {c} | {sum(v)} of {len(v)} |" for c, v in claims.items()]
         lines.append("")
-    plots = per_day_figures(table, parent, MULTIDAY_PLOT_KPIS)
+    plots = per_day_figures(table, parent, MULTIDAY_PLOT_KPIS, styles)
     if plots:
         lines += ["## Per-day plots", ""] + [f"![{p.stem}]({p.name})" for p in plots] + [""]
-    lines += [f"Each day's folder is an ordinary results folder: `rpbench check {name or parent.name}/<date>`.", ""]
+    lines += [
+        "Each day's folder is an ordinary results folder: `rpbench check PATH/<date>`, PATH being the path to "
+        f"`{name or parent.name}`, the folder holding this report.",
+        "",
+    ]
     path = parent / "report.md"
     path.write_text("\n".join(lines))
     return path

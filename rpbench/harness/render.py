@@ -2,20 +2,29 @@
 
 from __future__ import annotations
 
+import shutil
+import tempfile
 from pathlib import Path
 
 from rpbench import results
 from rpbench.exceptions import ResultsError
 from rpbench.harness.multiday import write_multiday_report
 from rpbench.harness.sweep import write_sweep_report
+from rpbench.results.layout import HEAVY, REPORT
 from rpbench.results.report import check_metrics, load_kpis, selected_markdown, write_report
 
+#: Folder kinds whose report is written by their own harness module (all others are comparisons).
+PARENT_KINDS = ("multi-day", "sweep")
 
-def render(folders: list[Path], metrics: list[str] | None = None) -> tuple[str, list[Path]]:
+
+def render(folders: list[Path], metrics: list[str] | None = None, dest: Path | None = None) -> tuple[str, list[Path]]:
     """Re-render the report of each folder from its files; return (markdown, written report paths).
 
     One folder: its own report (comparison, multi-day or sweep).  Several
     comparison folders: a combined table with one column group per folder.
+    Each folder's report and figures are rewritten in it; with ``dest`` the
+    folders are only read: one folder's report and figures go to ``dest``,
+    several folders' combined table is only returned.
     """
     metrics = check_metrics(metrics)
     written = []
@@ -23,15 +32,13 @@ def render(folders: list[Path], metrics: list[str] | None = None) -> tuple[str, 
         if not folder.is_dir():
             raise ResultsError(f"results folder {str(folder)!r} does not exist")
         kind = results.read_meta(folder).get("kind", "comparison")
-        if kind == "multi-day":
-            written.append(write_multiday_report(folder))
-        elif kind == "sweep":
-            written.append(write_sweep_report(folder))
-        else:
+        if kind not in PARENT_KINDS and not results.run_names(folder) and not (folder / "kpis.csv").is_file():
             # a published light copy keeps kpis.csv but not the event logs under runs/
-            if not results.run_names(folder) and not (folder / "kpis.csv").is_file():
-                raise ResultsError(f"results folder {str(folder)!r} holds no runs (no runs/ and no kpis.csv)")
-            written.append(write_report(folder))
+            raise ResultsError(f"results folder {str(folder)!r} holds no runs (no runs/ and no kpis.csv)")
+        if dest is None:
+            written.append(_write(folder, kind))
+        elif len(folders) == 1:
+            written.append(_write_elsewhere(folder, kind, dest))
     if len(folders) == 1 and metrics is None:
         return written[0].read_text(), written
     blocks = []
@@ -49,3 +56,29 @@ def render(folders: list[Path], metrics: list[str] | None = None) -> tuple[str, 
             + "\n"
         )
     return "# rpbench results\n\n" + "\n".join(blocks), written
+
+
+def _write(folder: Path, kind: str, name: str | None = None) -> Path:
+    if kind == "multi-day":
+        return write_multiday_report(folder, name)
+    if kind == "sweep":
+        return write_sweep_report(folder, name)
+    return write_report(folder, name)
+
+
+def _write_elsewhere(folder: Path, kind: str, dest: Path) -> Path:
+    """The report of ``folder`` and its figures written into ``dest``, nothing written in ``folder``.
+
+    A parent folder's report writer writes beside the files it reads, so it runs on a copy of the
+    folder's tables (no event logs, inputs, reports nor figures) and only its report and figures move.
+    """
+    if kind not in PARENT_KINDS:
+        return write_report(folder, folder.name, dest)
+    with tempfile.TemporaryDirectory(dir=dest) as tmp:
+        copy = Path(tmp) / folder.name
+        shutil.copytree(folder, copy, ignore=shutil.ignore_patterns(*HEAVY, REPORT, "*.png"))
+        _write(copy, kind, folder.name)
+        for path in copy.iterdir():
+            if path.name == REPORT or path.suffix == ".png":
+                shutil.move(path, dest / path.name)
+    return dest / REPORT

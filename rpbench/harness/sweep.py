@@ -235,12 +235,18 @@ def write_sweep_report(parent: Path, name: str | None = None) -> Path:
         lines.append(f"| {p['value']:g} | " + " | ".join(cells) + " |")
     lines.append("")
     plot = sweep_figure(
-        table[table["run"].isin(runs)], meta["parameter"], kpis, parent / "sweep.png", f"sweep {meta['sweep']}"
+        table[table["run"].isin(runs)],
+        meta["parameter"],
+        kpis,
+        parent / "sweep.png",
+        f"sweep {meta['sweep']}",
+        styles,
     )
     lines += [
         f"![sweep]({plot.name})",
         "",
-        f"Each point is an ordinary results folder: `rpbench check {name or parent.name}/<point>`.",
+        "Each point is an ordinary results folder: `rpbench check PATH/<point>`, PATH being the path to "
+        f"`{name or parent.name}`, the folder holding this report.",
         "",
     ]
     path = parent / "report.md"

@@ -12,7 +12,9 @@ A comparison folder (one scenario, several runs)::
     runs/<run>/events.csv.gz       a simulation's event log (request, assign, pickup, dropoff, cancel)
     runs/<run>/trajectories.npz    a simulation's vehicle paths with times and odometers
     runs/<run>/pairs.csv.gz        an offline run's pairs (bound, Oracle-1, Oracle-2)
-    report.md, *.png               the report and its plots (rendered from the files above)
+    report.md                      the report, rendered from the files above, with its figures:
+    kpis.png, timeline.png         the headline KPIs per run; waiting, served and pooled passengers over time
+    hourly.png                     the KPIs per hour (scenarios of more than two hours)
 
 A parent folder (multi-day run, sweep) holds one comparison folder per day
 or point, its own ``meta.json`` and ``report.md``, and ``by_day.csv`` and
@@ -39,6 +41,9 @@ BY_DAY = "by_day.csv"
 SUMMARY = "summary.csv"
 SWEEP = "sweep.csv"
 CHECK = "check.txt"
+KPIS_PNG = "kpis.png"
+TIMELINE_PNG = "timeline.png"
+HOURLY_PNG = "hourly.png"
 
 #: Inputs and logs a published light copy leaves out (the checker's raw material; the recorded command
 #: regenerates them).

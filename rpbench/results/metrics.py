@@ -23,7 +23,11 @@ and paired with another passenger in the same vehicle):
 * ``total_occupied_km`` — distance driven with at least one passenger on
   board (the paper's dist_total).
 * ``total_saving_km`` — Σ solo distance of served passengers minus
-  total_occupied_km (the paper's dist_save; = Σ over pairs of l_A + l_B - L).
+  total_occupied_km (the paper's dist_save; = Σ over pairs of l_A + l_B - L, so exactly 0 when
+  nothing was pooled).
+
+:func:`state_spells` and :func:`count_at` / :func:`mean_count` give the run's timeline: how many
+passengers wait, are served, ride pooled or have cancelled at any time, from the event log alone.
 """
 
 from __future__ import annotations
@@ -199,7 +203,8 @@ def kpis(tab: pd.DataFrame, occupied_m: np.ndarray, params: Params) -> dict[str,
         "avg_shared_m": mean(tab["shared_m"].to_numpy(), pooled),
         "total_occupied_km": occupied_km,
         "total_solo_served_km": solo_served_km,
-        "total_saving_km": solo_served_km - occupied_km,
+        # Σ over pairs of l_A + l_B - L: no pair, no saving (the difference of two equal sums is float noise)
+        "total_saving_km": solo_served_km - occupied_km if n_pooled else 0.0,
     }
 
 
@@ -248,3 +253,82 @@ def _pair_length(tab: pd.DataFrame, partner: np.ndarray) -> np.ndarray:
     ride = tab["ride_m"].to_numpy()
     shared = np.nan_to_num(tab["shared_m"].to_numpy())
     return ride + ride[partner] - shared
+
+
+#: The passenger states of a run's timeline, each a set of spells (:func:`state_spells`).
+TIMELINE_STATES = ("waiting", "serving", "pooled", "cancelled")
+
+
+def state_spells(events: pd.DataFrame) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Per state of :data:`TIMELINE_STATES`, the sorted start times and the sorted end times of the
+    passengers' spells in it (an end of inf: the spell lasts past the log), from the event log alone:
+
+    * ``waiting`` — from the request to the assignment or the cancellation;
+    * ``serving`` — from the assignment to the drop-off;
+    * ``pooled`` — on board with the partner on board too (from the later pick-up of the pair to the
+      earlier drop-off; assign events name the partners, and the first passenger of a join learns its
+      partner from the second's event, as in :func:`passenger_table`);
+    * ``cancelled`` — from the cancellation on.
+
+    An event at time t has happened at t: a spell is [start, end).
+    """
+    ev = events[events["event"].isin(["request", "assign", "pickup", "dropoff", "cancel"])]
+    order = ev["order"].to_numpy(dtype=np.int64)
+    n = int(order.max()) + 1 if len(order) else 0
+    times: dict[str, np.ndarray] = {}
+    for name in ("request", "assign", "pickup", "dropoff", "cancel"):
+        sel = (ev["event"] == name).to_numpy()
+        col = np.full(n, np.nan)
+        col[order[sel]] = ev["t_s"].to_numpy(dtype=np.float64)[sel]
+        times[name] = col
+    assign = ev[ev["event"] == "assign"]
+    partner = np.full(n, -1, dtype=np.int64)
+    a_order = assign["order"].to_numpy(dtype=np.int64)
+    a_partner = assign["partner"].to_numpy(dtype=np.int64)
+    has = a_partner >= 0
+    partner[a_order[has]] = a_partner[has]
+    partner[a_partner[has]] = a_order[has]
+
+    def ended(t: np.ndarray) -> np.ndarray:
+        return np.where(np.isnan(t), np.inf, t)
+
+    request, assigned, cancel = times["request"], times["assign"], times["cancel"]
+    spells = {
+        "waiting": (request, np.fmin(ended(assigned), ended(cancel))),
+        "serving": (assigned, ended(times["dropoff"])),
+        "cancelled": (cancel, np.full(n, np.inf)),
+    }
+    mate = np.flatnonzero(partner >= 0)
+    pick, drop = times["pickup"], ended(times["dropoff"])
+    begin = np.maximum(pick[mate], pick[partner[mate]])  # NaN (either never picked up): no spell
+    end = np.minimum(drop[mate], drop[partner[mate]])
+    spells["pooled"] = (begin, end)
+    out = {}
+    for state in TIMELINE_STATES:
+        start, stop = spells[state]
+        keep = ~np.isnan(start) & (stop > start)
+        out[state] = (np.sort(start[keep]), np.sort(stop[keep]))
+    return out
+
+
+def count_at(spells: tuple[np.ndarray, np.ndarray], t: np.ndarray) -> np.ndarray:
+    """How many of the spells (sorted starts, sorted ends) are under way at each time ``t``."""
+    start, end = spells
+    t = np.asarray(t, dtype=np.float64)
+    return np.searchsorted(start, t, side="right") - np.searchsorted(end, t, side="right")
+
+
+def mean_count(spells: tuple[np.ndarray, np.ndarray], edges: np.ndarray) -> np.ndarray:
+    """The time average of :func:`count_at` over each bin [edges[i], edges[i + 1]) (exact, not sampled)."""
+    start, end = spells
+    edges = np.asarray(edges, dtype=np.float64)
+    area = _time_since(start, edges) - _time_since(end, edges)
+    return np.diff(area) / np.diff(edges)
+
+
+def _time_since(sorted_t: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Σ_i max(0, x - t_i) for each x: the integral up to x of the number of times t_i already passed."""
+    k = np.searchsorted(sorted_t, x, side="right")
+    finite = sorted_t[np.isfinite(sorted_t)]  # an inf time never passes (and would poison the sums)
+    head = np.concatenate([[0.0], np.cumsum(finite)])
+    return k * x - head[k]

@@ -1,14 +1,21 @@
-"""PNG plots for reports (matplotlib, headless), each a pure function of tables read from result files."""
+"""PNG plots for reports (matplotlib, headless), each a pure function of tables read from result files.
+
+Every axis says what it measures and in which unit; a legend lists only the runs drawn in its panel, and a
+run keeps its colour (:func:`rpbench.results.runs.run_color`) across the panels of a figure.
+"""
 
 from __future__ import annotations
 
 import textwrap
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
+import numpy as np
 import pandas as pd
 
 from rpbench.results.metrics import KPI_LABELS
-from rpbench.results.runs import run_color, run_label
+from rpbench.results.runs import Styles, run_color, run_label
 
 HOURLY_PANELS = [
     ("avg_shared_m", "(a) Average shared distance (m)"),
@@ -16,9 +23,62 @@ HOURLY_PANELS = [
     ("total_saving_km", "(c) Distance saving (km)"),
     ("response_rate", "(d) Response rate"),
 ]
+#: The y-axis label of each KPI: what is measured, in which unit (ratios: what over what).
+KPI_AXES = {
+    "response_rate": "response rate (served / orders)",
+    "pairing_ratio": "pairing ratio (pooled / served)",
+    "pairing_ratio_of_orders": "pooled / orders",
+    "platform_profit_cny": "platform profit (CNY)",
+    "platform_profit_alt_cny": "platform profit (CNY)",
+    "avg_response_time_s": "response time (s)",
+    "avg_pickup_time_s": "pick-up time (s)",
+    "avg_pickup_distance_m": "pick-up distance (m)",
+    "avg_detour_m": "detour per pooled passenger (m)",
+    "avg_shared_m": "shared distance per pooled passenger (m)",
+    "total_occupied_km": "occupied driving (km)",
+    "total_saving_km": "distance saving (km)",
+    "competitive_ratio_bound": "saving / proven upper bound",
+    "competitive_ratio": "saving / Oracle-1's saving",
+}
+#: The headline KPIs of a comparison's bar panels (:func:`kpi_figure`): key, panel title.
+KPI_PANELS = [
+    ("total_saving_km", "Total distance saving"),
+    ("pairing_ratio", "Pairing ratio"),
+    ("response_rate", "Response rate"),
+    ("avg_detour_m", "Average detour"),
+    ("avg_pickup_time_s", "Average pick-up time"),
+    ("competitive_ratio_bound", "Competitive ratio"),
+]
+#: The panels of :func:`timeline_figure`: state (:data:`rpbench.results.metrics.TIMELINE_STATES`), title.
+TIMELINE_PANELS = [
+    ("waiting", "(a) Waiting: requested, not yet assigned nor cancelled"),
+    ("serving", "(b) Being served: assigned, not yet dropped off"),
+    ("pooled", "(c) Riding pooled: on board with the partner aboard"),
+    ("cancelled", "(d) Cancelled so far"),
+]
+#: Sweep parameters (the sweep aliases) as axis labels.
+PARAMETER_AXES = {
+    "K": "patience K (s)",
+    "dt": "batch interval Δt (s)",
+    "r_w": "presumed response rate r_w",
+    "ratio": "vehicles per 100 orders",
+}
+_UNIT_SUFFIXES = {"_s": "s", "_m": "m", "_km": "km", "_mps": "m/s", "_cny": "CNY"}
+_TAB10 = [
+    "#1f77b4",
+    "#ff7f0e",
+    "#2ca02c",
+    "#d62728",
+    "#9467bd",
+    "#8c564b",
+    "#e377c2",
+    "#7f7f7f",
+    "#bcbd22",
+    "#17becf",
+]
 
 
-def _pyplot():
+def _pyplot() -> Any:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -27,48 +87,104 @@ def _pyplot():
     return plt
 
 
-def _save(plt, fig, path: Path, title: str) -> Path:
+def _save(plt: Any, fig: Any, path: Path, title: str, rect: tuple[float, float, float, float] | None = None) -> Path:
     """Title (wrapped: scenario labels are long), lay out, write the PNG, free the figure."""
     fig.suptitle("\n".join(textwrap.wrap(title, 110)), fontsize=10)
-    fig.tight_layout()
+    fig.tight_layout(rect=rect)
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
 
 
-def _label(run: str) -> tuple[str, str | None]:
-    return run_label(run), run_color(run)
+def run_colors(runs: Sequence[str], styles: Styles | None = None) -> dict[str, str]:
+    """Each run's colour: its own, else a cycle colour no styled run of ``runs`` uses (stable per figure)."""
+    own = {r: run_color(r, styles) for r in runs}
+    spare = [c for c in _TAB10 if c not in set(own.values())] or _TAB10
+    out, k = {}, 0
+    for r in runs:
+        color = own[r]
+        if color is None:
+            color, k = spare[k % len(spare)], k + 1
+        out[r] = color
+    return out
 
 
-def hourly_figure(hourly: pd.DataFrame, path: Path, title: str) -> Path:
+def axis_label(kpi: str) -> str:
+    """The y-axis label of a KPI (:data:`KPI_AXES`; else its table label)."""
+    return KPI_AXES.get(kpi, KPI_LABELS.get(kpi, kpi))
+
+
+def parameter_label(parameter: str) -> str:
+    """The axis label of a swept parameter: the aliases by name, a Params field with its unit suffix."""
+    if parameter in PARAMETER_AXES:
+        return PARAMETER_AXES[parameter]
+    for suffix, unit in _UNIT_SUFFIXES.items():
+        if parameter.endswith(suffix):
+            return f"{parameter} ({unit})"
+    return parameter
+
+
+def _legends(fig: Any, axes: Sequence[Any], *, below: bool = True) -> bool:
+    """One legend for the figure when every panel draws the same runs (below the panels, or in the first
+    panel), else one per panel, each listing the runs drawn there.  True when a legend sits below."""
+    drawn = [ax.get_legend_handles_labels() for ax in axes]
+    labelled = [(h, lab) for h, lab in drawn if lab]
+    if not labelled:
+        return False
+    if all(lab == labelled[0][1] for _, lab in labelled) and len(labelled) == len(axes):
+        handles, labels = labelled[0]
+        if below:
+            fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 8), fontsize=8, frameon=False)
+            return True
+        axes[0].legend(handles, labels, fontsize=8)
+        return False
+    for ax, (_, lab) in zip(axes, drawn, strict=True):
+        if lab:
+            ax.legend(fontsize=7, framealpha=0.8)
+    return False
+
+
+def hourly_figure(hourly: pd.DataFrame, path: Path, title: str, styles: Styles | None = None) -> Path:
     """The paper's 24-hour comparison: four panels, one line per run (``hourly.csv`` layout)."""
     plt = _pyplot()
-    fig, axes = plt.subplots(2, 2, figsize=(11, 7), sharex=True)
+    fig, axes = plt.subplots(2, 2, figsize=(11, 7.4), sharex=True)
+    colors = run_colors(list(dict.fromkeys(hourly["run"])), styles)
     for ax, (col, name) in zip(axes.ravel(), HOURLY_PANELS, strict=True):
         for run, g in hourly.groupby("run", sort=False):
-            label, color = _label(run)
-            ax.plot(g["hour"], g[col], marker="o", ms=3, label=label, color=color)
+            if g[col].notna().any():  # a run without this KPI (an oracle's response rate) is not drawn
+                label = run_label(str(run), styles)
+                ax.plot(g["hour"], g[col], marker="o", ms=3, label=label, color=colors[str(run)])
         ax.set_title(name, fontsize=10)
+        ax.set_ylabel(axis_label(col), fontsize=9)
         ax.grid(alpha=0.3)
     for ax in axes[1]:
-        ax.set_xlabel("hour of day (request time)")
-    axes[0, 0].legend(fontsize=8)
-    return _save(plt, fig, path, title)
+        ax.set_xlabel("hour of day (request time)", fontsize=9)
+    below = _legends(fig, list(axes.ravel()))
+    return _save(plt, fig, path, title, rect=(0, 0.05, 1, 1) if below else None)
 
 
-def per_day_figures(by_day: pd.DataFrame, folder: Path, kpis: list[str]) -> list[Path]:
+def per_day_figures(by_day: pd.DataFrame, folder: Path, kpis: list[str], styles: Styles | None = None) -> list[Path]:
     """One PNG per KPI: value per day, one line per run (``by_day`` columns date, run, kpi, value)."""
     plt = _pyplot()
     paths = []
+    colors = run_colors(list(dict.fromkeys(by_day["run"])), styles)
     for kpi in kpis:
-        sel = by_day[by_day["kpi"] == kpi]
+        sel = by_day[(by_day["kpi"] == kpi) & by_day["value"].notna()]  # only runs with data are drawn
         if sel.empty:
             continue
         fig, ax = plt.subplots(figsize=(9.5, 3.6))
         for run, g in sel.groupby("run", sort=False):
-            label, color = _label(run)
-            ax.plot(pd.to_datetime(g["date"]), g["value"], marker="o", ms=3, label=label, color=color)
+            ax.plot(
+                pd.to_datetime(g["date"]),
+                g["value"],
+                marker="o",
+                ms=3,
+                label=run_label(str(run), styles),
+                color=colors[str(run)],
+            )
         ax.set_title(KPI_LABELS.get(kpi, kpi), fontsize=10)
+        ax.set_xlabel("date", fontsize=9)
+        ax.set_ylabel(axis_label(kpi), fontsize=9)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.01, 0.5))  # beside: lines fill the plot
         fig.autofmt_xdate()
@@ -80,21 +196,108 @@ def per_day_figures(by_day: pd.DataFrame, folder: Path, kpis: list[str]) -> list
     return paths
 
 
-def sweep_figure(table: pd.DataFrame, parameter: str, kpis: list[str], path: Path, title: str) -> Path:
+def sweep_figure(
+    table: pd.DataFrame, parameter: str, kpis: list[str], path: Path, title: str, styles: Styles | None = None
+) -> Path:
     """KPIs against a swept parameter (``table`` columns value, run, kpi, value_kpi)."""
     plt = _pyplot()
-    fig, axes = plt.subplots(1, len(kpis), figsize=(3.6 * len(kpis), 3.4))
-    axes = [axes] if len(kpis) == 1 else list(axes)
-    for ax, kpi in zip(axes, kpis, strict=True):
-        sel = table[table["kpi"] == kpi]
+    fig, axes = plt.subplots(1, len(kpis), figsize=(3.6 * len(kpis), 3.8), squeeze=False)
+    colors = run_colors(list(dict.fromkeys(table["run"])), styles)
+    for ax, kpi in zip(axes[0], kpis, strict=True):
+        sel = table[(table["kpi"] == kpi) & table["value"].notna()]
         for run, g in sel.groupby("run", sort=False):
-            label, color = _label(run)
-            ax.plot(g["point"], g["value"], marker="o", ms=3, label=label, color=color)
-        ax.set_xlabel(parameter)
-        ax.set_title(KPI_LABELS.get(kpi, kpi), fontsize=9)
+            label = run_label(str(run), styles)
+            ax.plot(g["point"], g["value"], marker="o", ms=3, label=label, color=colors[str(run)])
+        ax.set_xlabel(parameter_label(parameter), fontsize=9)
+        ax.set_ylabel(axis_label(kpi), fontsize=9)
+        ax.set_title(KPI_LABELS.get(kpi, kpi).split(" (")[0], fontsize=9)
         ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=8)
+    below = _legends(fig, list(axes[0]))
+    return _save(plt, fig, path, title, rect=(0, 0.08, 1, 1) if below else None)
+
+
+def kpi_figure(
+    table: pd.DataFrame, path: Path, title: str, text: Callable[[str, float], str], styles: Styles | None = None
+) -> Path:
+    """The headline KPIs of a comparison (:data:`KPI_PANELS`), one bar per run with its value on top.
+
+    ``table`` is the wide KPI table (KPI rows x run columns, as :func:`rpbench.results.report.load_kpis`);
+    a panel shows only the runs with a value (offline runs have no response rate), the competitive ratio
+    only when the folder has a bound run; ``text(kpi, value)`` writes the value as the report's tables do.
+    """
+    plt = _pyplot()
+    panels = [(k, name) for k, name in KPI_PANELS if k in table.index and table.loc[k].notna().any()]
+    ncols = 3
+    nrows = max(1, -(-len(panels) // ncols))
+    fig, axes = plt.subplots(nrows, ncols, figsize=(12, 3.7 * nrows), squeeze=False)
+    runs = [str(r) for r in table.columns]
+    colors = run_colors(runs, styles)
+    for ax, (kpi, name) in zip(axes.ravel(), panels, strict=False):
+        row = table.loc[kpi]
+        shown = [r for r in runs if pd.notna(row[r])]
+        values = np.array([float(row[r]) for r in shown])
+        x = np.arange(len(shown))
+        ax.bar(x, values, color=[colors[r] for r in shown], width=0.7)
+        span = max(float(np.abs(values).max()), 1e-12)
+        for xi, v in zip(x, values, strict=True):
+            ax.text(
+                xi,
+                v + (0.02 * span if v >= 0 else -0.02 * span),
+                text(kpi, v),
+                ha="center",
+                va="bottom" if v >= 0 else "top",
+                fontsize=7,
+            )
+        low, high = min(0.0, float(values.min())), max(0.0, float(values.max()))
+        ax.set_ylim(low - (0.12 * span if low < 0 else 0), high + 0.12 * span)
+        ax.set_xticks(x, [run_label(r, styles) for r in shown], rotation=35, ha="right", fontsize=8)
+        ax.set_title(name, fontsize=10)
+        ax.set_ylabel(axis_label(kpi), fontsize=9)
+        ax.axhline(0, color="black", lw=0.6)
+        ax.grid(alpha=0.3, axis="y")
+    for ax in axes.ravel()[len(panels) :]:
+        ax.set_visible(False)
     return _save(plt, fig, path, title)
+
+
+def timeline_figure(
+    timeline: pd.DataFrame,
+    path: Path,
+    title: str,
+    *,
+    hours: bool,
+    start: str | None,
+    bin_s: float,
+    horizon_s: float,
+    styles: Styles | None = None,
+) -> Path:
+    """The period's timeline: four panels (:data:`TIMELINE_PANELS`), one line per run.
+
+    ``timeline`` columns run, state, t_s (seconds from the scenario start), value: for waiting, serving
+    and pooled the mean count over the ``bin_s`` bin centred on t_s, for cancelled the count by t_s.  The
+    x axis is in hours (``hours``) or minutes from the scenario start (``start``: its clock time), with a
+    dotted line where requests stop (``horizon_s``).
+    """
+    plt = _pyplot()
+    fig, axes = plt.subplots(2, 2, figsize=(11, 7.4), sharex=True)
+    runs = list(dict.fromkeys(str(r) for r in timeline["run"]))
+    colors = run_colors(runs, styles)
+    scale = 3600.0 if hours else 60.0
+    width = f"{bin_s / 60:g}-min"
+    for ax, (state, name) in zip(axes.ravel(), TIMELINE_PANELS, strict=True):
+        sel = timeline[timeline["state"] == state]
+        for run, g in sel.groupby("run", sort=False):
+            ax.plot(g["t_s"] / scale, g["value"], lw=1.2, label=run_label(str(run), styles), color=colors[str(run)])
+        ax.axvline(horizon_s / scale, color="grey", ls=":", lw=1)
+        ax.set_title(name, fontsize=10)
+        ax.set_ylabel("passengers (total)" if state == "cancelled" else f"passengers ({width} mean)", fontsize=9)
+        ax.set_ylim(bottom=0)
+        ax.grid(alpha=0.3)
+    since = f" ({start})" if start else ""
+    for ax in axes[1]:
+        ax.set_xlabel(f"{'hours' if hours else 'minutes'} since the scenario start{since}", fontsize=9)
+    below = _legends(fig, list(axes.ravel()))
+    return _save(plt, fig, path, title, rect=(0, 0.05, 1, 1) if below else None)
 
 
 def bench_figure(table: pd.DataFrame, path: Path, title: str) -> Path:
@@ -109,16 +312,18 @@ def bench_figure(table: pd.DataFrame, path: Path, title: str) -> Path:
     done = table[table["status"] == "optimal"]
     structures = list(dict.fromkeys(table["structure"]))
     fig, axes = plt.subplots(1, len(structures), figsize=(4.2 * len(structures), 3.8), squeeze=False)
+    presets = sorted(set(table["preset"]))
+    colors = {preset: _TAB10[i % len(_TAB10)] for i, preset in enumerate(presets)}  # one colour across panels
     for ax, structure in zip(axes[0], structures, strict=True):
         for preset, g in done[done["structure"] == structure].groupby("preset", sort=True):
             g = g.sort_values("cols")
-            ax.plot(g["cols"], g["total_s"] * 1e3, marker="o", ms=3, label=preset)
+            ax.plot(g["cols"], g["total_s"] * 1e3, marker="o", ms=3, label=preset, color=colors[preset])
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.xaxis.set_minor_formatter(NullFormatter())  # decade labels only: minor ones overlap
-        ax.set_xlabel("model columns")
+        ax.set_xlabel("model columns", fontsize=9)
+        ax.set_ylabel("solver time, proven optimal (ms)", fontsize=9)
         ax.set_title(structure, fontsize=10)
         ax.grid(alpha=0.3, which="both")
-    axes[0, 0].set_ylabel("solver time, proven optimal (ms)")
-    axes[0, 0].legend(fontsize=8)
+    _legends(fig, list(axes[0]), below=False)
     return _save(plt, fig, path, title)

@@ -1,23 +1,35 @@
-"""Reports rendered from result files alone (tables now; plots in rpbench.results.plots).
+"""Reports rendered from result files alone (tables here; plots in rpbench.results.plots).
 
 :func:`load_kpis` reads a results folder's tidy ``kpis.csv`` into the wide
 KPI x run table; :func:`text_table` / :func:`markdown_table` format it in
 the paper's Table 2 layout (strategies as columns); :func:`write_report`
-writes ``report.md`` into the folder.
+writes ``report.md`` and its figures (:data:`FIGURES`) into the folder, or
+into another one.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
 from rpbench import paper, results
 from rpbench.exceptions import ResultsError
-from rpbench.results.metrics import EXTRA_KPIS, KPI_LABELS, KPI_ORDER
-from rpbench.results.plots import hourly_figure
+from rpbench.results import layout
+from rpbench.results.metrics import (
+    EXTRA_KPIS,
+    KPI_LABELS,
+    KPI_ORDER,
+    TIMELINE_STATES,
+    count_at,
+    mean_count,
+    state_spells,
+)
+from rpbench.results.plots import hourly_figure, kpi_figure, timeline_figure
 from rpbench.results.runs import Styles, run_label, run_styles
 
 #: Competitive-ratio rows: KPI name -> the oracle run whose total saving is the denominator.
@@ -32,6 +44,17 @@ ORACLE1_NOTE = (
 )
 #: Marks the column of a run whose numbers rest on solver answers not proven optimal (see :func:`unproven_runs`).
 UNPROVEN_MARK = "*"
+#: The figures of a comparison report: headline KPIs per run, the timeline from the event logs, and the
+#: per-hour KPIs of folders covering more than two hours.
+KPIS_PNG, TIMELINE_PNG, HOURLY_PNG = layout.KPIS_PNG, layout.TIMELINE_PNG, layout.HOURLY_PNG
+FIGURES = (KPIS_PNG, TIMELINE_PNG, HOURLY_PNG)
+#: A scenario longer than this is drawn in hours (the timeline's axis), not minutes.
+LONG_SCENARIO_S = 2 * 3600.0
+#: Timeline bin widths (s), the narrowest giving at most :data:`TIMELINE_MAX_BINS` bins over the period.
+TIMELINE_BINS_S = (60.0, 120.0, 300.0, 600.0, 900.0, 1800.0, 3600.0)
+TIMELINE_MAX_BINS = 240
+#: One-off preparations shorter than this are not listed (they are loading, not work worth a line).
+PREPARE_SHOWN_S = 0.05
 _DECIMALS = {
     "response_rate": 2,
     "pairing_ratio": 2,
@@ -209,15 +232,16 @@ def unproven_notes(unproven: dict[str, str], styles: Styles | None = None) -> li
     ]
 
 
-def report_markdown(folder: Path, name: str | None = None) -> str:
+def report_markdown(folder: Path, name: str | None = None, figures: list[str] | None = None) -> str:
+    """``report.md`` of a comparison folder (``name``: the folder's name in the text; ``figures``: the
+    figure section's lines, :func:`figure_lines`, placed after the comparison tables)."""
     meta = results.read_meta(folder)
     table = load_kpis(folder)
     unproven = unproven_runs(folder)
     sc = meta["scenario"]
     args = sc.get("args", {})
     lines = [f"# rpbench results: {sc['label']}", ""]
-    if sc.get("synthetic"):
-        lines += ["> **Synthetic scenario** — not real order data (see the scenario label).", ""]
+    lines += synthetic_banner(sc)
     lines += [
         f"- scenario `{sc['name']}`, seed {sc['seed']}, {sc['summary']['orders']} orders, "
         f"{sc['summary']['vehicles']} vehicles, {sc['summary']['nodes']} nodes",
@@ -240,6 +264,7 @@ def report_markdown(folder: Path, name: str | None = None) -> str:
             markdown_table(table, paper.TABLE2, unproven, styles),
             "",
         ]
+    lines += figures or []
     summary = solver_summary(folder)
     if summary is not None:
         lines += [
@@ -248,11 +273,12 @@ def report_markdown(folder: Path, name: str | None = None) -> str:
             summary.to_markdown() if _has_tabulate() else "```\n" + summary.to_string() + "\n```",
             "",
         ]
-    walls = {r: v.get("wall_s") for r, v in meta.get("runs", {}).items() if v.get("wall_s") is not None}
-    if walls:
-        lines += ["Wall time per run: " + ", ".join(f"{run_label(r, styles)} {w:.2f} s" for r, w in walls.items()), ""]
+    lines += wall_lines(meta, styles)
     if results.run_names(folder):
-        verify = f"Verify this folder with `rpbench check {name or folder.name}`."
+        verify = (
+            f"Verify this folder with `rpbench check PATH`, PATH being the path to `{name or folder.name}`, "
+            "the folder holding this report."
+        )
     else:
         verify = (
             "This is a published light copy without the event logs: `check.txt` holds the checker's verdict "
@@ -260,6 +286,49 @@ def report_markdown(folder: Path, name: str | None = None) -> str:
         )
     lines += [f"KPI definitions: see `rpbench/results/metrics.py` (and the README). {verify}", ""]
     return "\n".join(lines)
+
+
+def synthetic_banner(scenario: dict[str, Any]) -> list[str]:
+    """The banner at the top of the report of a synthetic scenario: what is synthetic about it."""
+    if not scenario.get("synthetic"):
+        return []
+    if scenario.get("name") == "toy":
+        text = (
+            "**Synthetic city, not Haikou.** Every number in this report comes from rpbench's built-in "
+            "synthetic toy city: a grid road network and orders generated in code, no real data. "
+            "`rpbench data fetch` gets the real Haikou data; `rpbench run` then runs the real peak hour."
+        )
+    elif scenario.get("name") == "haikou-day":
+        text = (
+            "**Synthetic orders.** The road network and each hour's order count are Haikou's, but the orders "
+            "themselves are drawn: request times at random within each hour, origin-destination pairs from the "
+            "08:00-09:00 OD rates of the month (no public full-day order list exists). The numbers describe "
+            "this stand-in, not the real day."
+        )
+    else:
+        text = "**Synthetic scenario** — not real order data (see the scenario label)."
+    return [f"> {text}", ""]
+
+
+def wall_lines(meta: dict[str, Any], styles: Styles | None = None) -> list[str]:
+    """The run times of meta.json: each run's round loop (``wall_s``) and, where recorded (``prepare_s``)
+    and above :data:`PREPARE_SHOWN_S`, its one-off preparation."""
+    runs = meta.get("runs", {})
+    walls = {r: v["wall_s"] for r, v in runs.items() if v.get("wall_s") is not None}
+    prepares = {r: v["prepare_s"] for r, v in runs.items() if v.get("prepare_s") is not None}
+    lines = []
+    if walls:
+        what = "Wall time of the round loop per run" if prepares else "Wall time per run"
+        lines += [f"{what}: " + ", ".join(f"{run_label(r, styles)} {w:.2f} s" for r, w in walls.items()), ""]
+    shown = {r: t for r, t in prepares.items() if t > PREPARE_SHOWN_S}
+    if shown:
+        lines += [
+            "One-off preparation per run, once before its first round (loading or building predictions and "
+            "caches, cache builds included): "
+            + ", ".join(f"{run_label(r, styles)} {t:.2f} s" for r, t in shown.items()),
+            "",
+        ]
+    return lines
 
 
 def offline_notes(table: pd.DataFrame, meta: dict) -> list[str]:
@@ -290,23 +359,142 @@ def _has_tabulate() -> bool:
     return True
 
 
-def write_report(folder: Path, name: str | None = None) -> Path:
-    """Write ``report.md`` (and its PNG plots) into ``folder`` (``name``: its final name, for the text)."""
-    text = report_markdown(folder, name)
-    hourly_png = hourly_plot(folder)
-    if hourly_png is not None:
-        text += (
-            "\n## Per hour\n\nKPIs by request hour (saving of a pair counted in the hour of its earlier "
-            "request). The upper bound's line is its whole-period matching split the same way: per hour it "
-            f"describes that matching and is not itself a bound.\n\n![per-hour comparison]({hourly_png.name})\n"
-        )
-    path = folder / "report.md"
+def write_report(folder: Path, name: str | None = None, dest: Path | None = None) -> Path:
+    """Write ``report.md`` and its figures (:data:`FIGURES`) into ``folder``, or into ``dest`` (``folder``
+    is then only read); ``name``: the folder's final name, for the text.  Returns the report's path."""
+    dest = folder if dest is None else dest
+    text = report_markdown(folder, name, figure_lines(folder, dest))
+    path = dest / "report.md"
     path.write_text(text)
     return path
 
 
-def hourly_plot(folder: Path) -> Path | None:
-    """``hourly.png`` when the folder covers more than two hours (full-day and trace scenarios)."""
+def figure_lines(folder: Path, dest: Path) -> list[str]:
+    """Draw the figures of ``folder`` into ``dest``; return the report's figure section embedding them."""
+    meta = results.read_meta(folder)
+    sc = meta["scenario"]
+    table = load_kpis(folder)
+    styles = run_styles(meta)
+    kpi_figure(table, dest / KPIS_PNG, sc["label"], fmt, styles)
+    no_ratio = "" if "bound" in table.columns else "; without an upper bound run there is no competitive ratio"
+    lines = [
+        "## Figures",
+        "",
+        f"![headline KPIs per run]({KPIS_PNG})",
+        "",
+        "Headline KPIs of the comparison table, one bar per run; a panel leaves out the runs without that KPI "
+        f"(offline runs have no response rate nor pick-up time){no_ratio}.",
+        "",
+    ]
+    (dest / TIMELINE_PNG).unlink(missing_ok=True)  # a light copy's timeline would no longer be the folder's
+    timeline = timeline_of(folder)
+    if isinstance(timeline, str):
+        lines += [timeline, ""]
+    else:
+        timeline_figure(
+            timeline.table,
+            dest / TIMELINE_PNG,
+            sc["label"],
+            hours=timeline.hours,
+            start=timeline.start,
+            bin_s=timeline.bin_s,
+            horizon_s=timeline.horizon_s,
+            styles=styles,
+        )
+        unit = "hours" if timeline.hours else "minutes"
+        left_out = (
+            f" The offline runs ({', '.join(run_label(r, styles) for r in timeline.offline)}) pair orders after the "
+            "fact and have no event log: they are not drawn."
+            if timeline.offline
+            else ""
+        )
+        lines += [
+            f"![timeline of the period]({TIMELINE_PNG})",
+            "",
+            f"Over the period, per strategy (from its event log): passengers waiting (requested, not yet "
+            f"assigned nor cancelled), being served (assigned, not yet dropped off) and riding pooled (on "
+            f"board with their partner aboard), each the mean over {timeline.bin_s / 60:g}-minute bins, and "
+            f"the passengers cancelled so far; {unit} since the scenario start, the dotted line where "
+            f"requests stop.{left_out}",
+            "",
+        ]
+    hourly_png = hourly_plot(folder, dest)
+    if hourly_png is not None:
+        lines += [
+            "### Per hour",
+            "",
+            "KPIs by request hour (saving of a pair counted in the hour of its earlier request). The upper "
+            "bound's line is its whole-period matching split the same way: per hour it describes that "
+            "matching and is not itself a bound.",
+            "",
+            f"![per-hour comparison]({hourly_png.name})",
+            "",
+        ]
+    return lines
+
+
+@dataclass(frozen=True)
+class Timeline:
+    """What :func:`rpbench.results.plots.timeline_figure` draws, read off a folder's event logs."""
+
+    table: pd.DataFrame  # run, state, t_s, value
+    bin_s: float
+    hours: bool
+    start: str | None  # the scenario start's clock time (HH:MM)
+    horizon_s: float
+    offline: list[str]  # runs without an event log, in the folder's order
+
+
+def timeline_of(folder: Path) -> Timeline | str:
+    """The timeline of every simulation run of ``folder`` (:func:`rpbench.results.metrics.state_spells`,
+    binned by :data:`TIMELINE_BINS_S`), or the sentence saying why there is none."""
+    meta = results.read_meta(folder)
+    sc = meta["scenario"]
+    if not results.run_names(folder):
+        return (
+            "No timeline: it is drawn from the runs' event logs (`runs/<run>/events.csv.gz`), which this "
+            "published light copy leaves out; rerun the command above for the full folder."
+        )
+    order = list(dict.fromkeys([*meta.get("strategies", []), *results.run_names(folder)]))
+    logs = {r: folder / "runs" / r / "events.csv.gz" for r in order}
+    simulated = [r for r in order if logs[r].is_file()]
+    if not simulated:
+        return "No timeline: every run of this folder is offline (no event log to draw)."
+    spells, end = {}, 0.0
+    try:
+        for r in simulated:
+            events = results.read_csv(logs[r])
+            spells[r] = state_spells(events)
+            end = max(end, float(events["t_s"].max()) if len(events) else 0.0)
+    except (ResultsError, KeyError, ValueError) as exc:  # a damaged log: `rpbench check` says what is wrong
+        return f"No timeline: an event log cannot be read ({exc})."
+    horizon = float(sc.get("horizon_s") or end)
+    span = max(end, horizon, 1.0)
+    bin_s = next((w for w in TIMELINE_BINS_S if span / w <= TIMELINE_MAX_BINS), TIMELINE_BINS_S[-1])
+    edges = np.arange(0.0, span + bin_s, bin_s)
+    middle = (edges[:-1] + edges[1:]) / 2
+    frames = []
+    for r in simulated:
+        for state in TIMELINE_STATES:
+            if state == "cancelled":  # a running total: the count at each bin's end, from 0 at the start
+                t, value = edges, count_at(spells[r][state], edges).astype(float)
+            else:
+                t, value = middle, mean_count(spells[r][state], edges)
+            frames.append(pd.DataFrame({"run": r, "state": state, "t_s": t, "value": value}))
+    start = sc.get("start_time")
+    return Timeline(
+        table=pd.concat(frames, ignore_index=True),
+        bin_s=bin_s,
+        hours=horizon > LONG_SCENARIO_S,
+        start=pd.Timestamp(start).strftime("%H:%M") if start else None,
+        horizon_s=horizon,
+        offline=[r for r in order if r not in simulated],
+    )
+
+
+def hourly_plot(folder: Path, dest: Path | None = None) -> Path | None:
+    """``hourly.png`` (into ``dest``, default ``folder``) when the folder covers more than two hours
+    (full-day and trace scenarios)."""
     path = folder / "hourly.csv"
     if not path.is_file():
         return None
@@ -314,7 +502,8 @@ def hourly_plot(folder: Path) -> Path | None:
     if hourly.empty or hourly["hour"].nunique() <= 2:
         return None
     meta = results.read_meta(folder)
-    return hourly_figure(hourly, folder / "hourly.png", meta["scenario"]["label"])
+    path = (folder if dest is None else dest) / HOURLY_PNG
+    return hourly_figure(hourly, path, meta["scenario"]["label"], run_styles(meta))
 
 
 def findings(table: pd.DataFrame) -> dict[str, bool] | None:

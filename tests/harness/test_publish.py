@@ -51,7 +51,7 @@ def test_a_published_multi_day_report_names_the_published_folder(two_day_data, t
     folder = run_days(spec, ["2017-05-01", "2017-05-02"], str(tmp_path / "days"), workers=1)
     dest = publish(folder, tmp_path / "published-days")
     report = (dest / "report.md").read_text()
-    assert "rpbench check published-days/<date>" in report and "partial" not in report
+    assert "rpbench check PATH/<date>" in report and "`published-days`" in report and "partial" not in report
 
 
 def test_the_published_command_names_the_published_folder():

@@ -18,6 +18,8 @@ Odometers at events (linear in between, e.g. vehicle 0 at 10 s: 100 m; vehicle 1
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -25,12 +27,16 @@ import pytest
 from rpbench.results.metrics import (
     EXTRA_KPIS,
     KPI_ORDER,
+    TIMELINE_STATES,
     _pair_length,
+    count_at,
     hourly,
     kpis,
+    mean_count,
     occupied_distance_m,
     odometer_at,
     passenger_table,
+    state_spells,
 )
 from rpbench.scenarios.base import Params
 from rpbench.sim.simulator import EVENT_COLUMNS, EVENT_DTYPES
@@ -222,8 +228,37 @@ def test_no_pooling_gives_nan_pool_averages():
     out = kpis(t, occupied_distance_m(events, TRAJ), Params())
     assert out["response_rate"] == 1.0 and out["pairing_ratio"] == 0.0
     assert np.isnan(out["avg_detour_m"]) and np.isnan(out["avg_shared_m"])
-    assert out["total_saving_km"] == pytest.approx(0.0)
+    assert out["total_saving_km"] == 0.0
     assert out["platform_profit_cny"] == pytest.approx(7.5 - 2 * 1.5)  # fare 5 · 1.5, pay 2 · 1.5
+
+
+def test_no_pair_saves_exactly_nothing():
+    """Solo rides whose solo distances and odometer legs sum to the same length in different float roundings:
+    the saving is Σ over pairs, none here, so exactly 0 (not the 1e-13 of the two sums' difference)."""
+    events = event_log(
+        [
+            (0.0, "request", 0, -1, 10, "", -1, False),
+            (0.0, "request", 1, -1, 20, "", -1, False),
+            (10.0, "assign", 0, 0, -1, "vacant", -1, False),
+            (10.0, "assign", 1, 1, -1, "vacant", -1, False),
+            (20.0, "pickup", 0, 0, 10, "", -1, False),
+            (20.0, "pickup", 1, 1, 20, "", -1, False),
+            (40.0, "dropoff", 0, 0, 11, "", -1, False),
+            (40.0, "dropoff", 1, 1, 21, "", -1, False),
+        ]
+    )
+    traj = trajectories(
+        [
+            [(1, 0.0, 0.0), (10, 20.0, 0.1), (11, 40.0, 1000.2)],
+            [(2, 0.0, 0.0), (20, 20.0, 0.2), (21, 40.0, 3333.3)],
+        ]
+    )
+    solo = np.array([1000.1, 3333.1])
+    occupied = occupied_distance_m(events, traj)
+    assert float(solo.sum()) / 1000 - float(occupied.sum()) / 1000 != 0.0  # the float noise the rule removes
+    out = kpis(passenger_table(events, solo, np.zeros(2), traj), occupied, Params())
+    assert out["pairs"] == 0 and out["total_saving_km"] == 0.0
+    assert out["total_occupied_km"] == pytest.approx(out["total_solo_served_km"])
 
 
 def test_hourly(tab):
@@ -247,3 +282,60 @@ def test_hourly(tab):
 
 def test_hourly_default_start_hour(tab):
     assert hourly(tab)["hour"].tolist() == [0, 1]
+
+
+def direct_count(events: pd.DataFrame, state: str, t: float) -> int:
+    """How many passengers are in ``state`` at ``t``, counted order by order from the log (the definitions of
+    :func:`state_spells`, written out; an event at t has happened at t)."""
+    at: dict[int, dict[str, float]] = {}
+    partner: dict[int, int] = {}
+    for row in events.itertuples():
+        if row.order >= 0:
+            at.setdefault(row.order, {})[row.event] = row.t_s
+        if row.event == "assign" and row.partner >= 0:
+            partner[row.order], partner[row.partner] = row.partner, row.order
+
+    def by(o: int, name: str) -> bool:
+        return name in at[o] and at[o][name] <= t
+
+    def aboard(o: int) -> bool:
+        return by(o, "pickup") and not by(o, "dropoff")
+
+    if state == "waiting":
+        return sum(by(o, "request") and not by(o, "assign") and not by(o, "cancel") for o in at)
+    if state == "serving":
+        return sum(by(o, "assign") and not by(o, "dropoff") for o in at)
+    if state == "pooled":
+        return sum(o in partner and aboard(o) and aboard(partner[o]) for o in at)
+    return sum(by(o, "cancel") for o in at)
+
+
+def test_timeline_spells_count_the_states():
+    spells = state_spells(EVENTS)
+    assert set(spells) == set(TIMELINE_STATES)
+    t = np.array([0.0, 25.0, 50.0, 120.0, 210.0, 3750.0, 3790.0])
+    assert count_at(spells["waiting"], t).tolist() == [1, 2, 0, 0, 0, 1, 0]
+    assert count_at(spells["serving"], t).tolist() == [0, 1, 3, 3, 1, 0, 0]
+    # orders 1 and 2 both aboard from 110 s (2's pick-up) to 210 s (1's drop-off); the join names 1 only
+    assert count_at(spells["pooled"], t).tolist() == [0, 0, 0, 2, 0, 0, 0]
+    assert count_at(spells["cancelled"], t).tolist() == [0, 0, 0, 0, 0, 0, 1]
+    for state in TIMELINE_STATES:
+        assert count_at(spells[state], t).tolist() == [direct_count(EVENTS, state, x) for x in t]
+
+
+def test_timeline_means_are_exact_time_averages():
+    spells = state_spells(EVENTS)
+    # pooled: 0 over [100, 110), 2 over [110, 120); serving over [0, 60): 1 from 10 s, 2 from 30 s, 3 from 50 s
+    assert mean_count(spells["pooled"], np.array([100.0, 120.0])).tolist() == pytest.approx([1.0])
+    assert mean_count(spells["serving"], np.array([0.0, 60.0])).tolist() == pytest.approx([(20 + 40 + 30) / 60])
+    # every event time is a whole second: the mean over a bin is the mean of the counts at its seconds
+    edges = np.array([0.0, 60.0, 120.0, 300.0, 3600.0, 3800.0])
+    for state in TIMELINE_STATES:
+        seconds = [count_at(spells[state], np.arange(a, b)).mean() for a, b in itertools.pairwise(edges)]
+        assert mean_count(spells[state], edges) == pytest.approx(seconds)
+
+
+def test_timeline_of_an_empty_log():
+    spells = state_spells(EVENTS.iloc[:0])
+    assert all(count_at(spells[s], np.array([5.0])).tolist() == [0] for s in TIMELINE_STATES)
+    assert mean_count(spells["waiting"], np.array([0.0, 60.0])).tolist() == [0.0]

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 import shutil
+import time
+from pathlib import Path
 
 import pandas as pd
 import pytest
@@ -13,8 +15,10 @@ from rpbench.harness.render import render
 from rpbench.results.report import fmt, load_kpis, text_table
 
 
-def fixture_folder(tmp_path, *, scenario="haikou-peak", args=None, runs=("mb", "fl", "oracle1"), hourly=False):
-    folder = tmp_path / "fixture"
+def fixture_folder(
+    tmp_path, *, scenario="haikou-peak", args=None, runs=("mb", "fl", "oracle1"), hourly=False, name="fixture"
+):
+    folder = tmp_path / name
     (folder / "runs").mkdir(parents=True)
     for r in runs:
         (folder / "runs" / r).mkdir()
@@ -106,6 +110,55 @@ def test_hourly_plot_for_multi_hour_results(tmp_path):
     folder = fixture_folder(tmp_path, scenario="haikou-day", hourly=True)
     md, _ = render([folder])
     assert (folder / "hourly.png").is_file() and "hourly.png" in md
+    assert md.rstrip().endswith("the folder holding this report.")  # the figures come before the last line
+
+
+def test_every_comparison_has_its_kpi_figure(tmp_path):
+    folder = fixture_folder(tmp_path)  # one hour: no per-hour plot, but the KPI bars
+    md, _ = render([folder])
+    assert (folder / "kpis.png").is_file() and "![headline KPIs per run](kpis.png)" in md
+    assert not (folder / "hourly.png").exists() and "there is no competitive ratio" in md
+    # the runs/ folders hold no event log: the timeline says why it is missing
+    assert "No timeline: every run of this folder is offline" in md and not (folder / "timeline.png").exists()
+
+
+def test_the_check_line_holds_wherever_the_user_stands(tmp_path):
+    md, _ = render([fixture_folder(tmp_path, name="peak-2017-05-01")])
+    assert "Verify this folder with `rpbench check PATH`, PATH being the path to `peak-2017-05-01`" in md
+    assert "rpbench check peak-2017-05-01`" not in md
+
+
+def test_a_synthetic_scenario_says_so_at_the_top(tmp_path):
+    def top(md: str) -> str:
+        return md.split("## Comparison")[0]
+
+    folder = fixture_folder(tmp_path, scenario="toy", args={})
+    meta = json.loads((folder / "meta.json").read_text())
+    meta["scenario"]["synthetic"] = True
+    (folder / "meta.json").write_text(json.dumps(meta))
+    head = top(render([folder])[0])
+    assert "Synthetic city, not Haikou" in head and "`rpbench data fetch`" in head
+    meta["scenario"]["name"] = "haikou-day"
+    (folder / "meta.json").write_text(json.dumps(meta))
+    head = top(render([folder])[0])
+    assert "Synthetic orders" in head and "no public full-day order list" in head and "data fetch" not in head
+    real = top(render([fixture_folder(tmp_path, name="real")])[0])
+    assert "ynthetic" not in real
+
+
+def test_wall_time_and_one_off_preparation(tmp_path):
+    folder = fixture_folder(tmp_path, runs=("mb", "fl"))
+    md, _ = render([folder])
+    assert "Wall time per run: MB 1.50 s, FL 1.50 s" in md and "preparation" not in md  # no prepare_s: as before
+    meta = json.loads((folder / "meta.json").read_text())
+    meta["runs"]["mb"]["prepare_s"] = 0.01
+    meta["runs"]["fl"]["prepare_s"] = 9.876
+    (folder / "meta.json").write_text(json.dumps(meta))
+    md, _ = render([folder])
+    assert "Wall time of the round loop per run: MB 1.50 s, FL 1.50 s" in md
+    line = next(x for x in md.splitlines() if x.startswith("One-off preparation per run"))
+    assert "once before its first round" in line and "cache builds included" in line
+    assert line.endswith(": FL 9.88 s")  # MB's 0.01 s is below the threshold
 
 
 def test_selected_metrics_and_unknown_metric(tmp_path):
@@ -128,8 +181,11 @@ def test_empty_results_folder(tmp_path):
 def test_a_light_copy_without_event_logs_still_renders(tmp_path):
     folder = fixture_folder(tmp_path, runs=("mb", "fl", "bound", "oracle1"))
     shutil.rmtree(folder / "runs")
+    (folder / "timeline.png").write_bytes(b"drawn from logs this copy no longer holds")
     md, _ = render([folder])
     assert "Competitive ratio (saving / proven upper bound)" in md
+    assert (folder / "kpis.png").is_file() and "kpis.png" in md
+    assert "No timeline" in md and "light copy leaves out" in md and not (folder / "timeline.png").exists()
 
 
 def test_report_cli(tmp_path, capsys):
@@ -142,9 +198,77 @@ def test_report_cli(tmp_path, capsys):
     assert "Comparison" in capsys.readouterr().out
 
 
+def snapshot(folder: Path) -> dict[str, tuple[int, bytes]]:
+    """Every file below ``folder``: modification time and bytes."""
+    return {
+        str(p.relative_to(folder)): (p.stat().st_mtime_ns, p.read_bytes()) for p in folder.rglob("*") if p.is_file()
+    }
+
+
+def multi_day_folder(tmp_path: Path) -> Path:
+    parent = tmp_path / "days"
+    for date in ("2017-05-01", "2017-05-02"):
+        day = fixture_folder(parent, args={"date": date, "sample": 0.3}, name=date)
+        kpis = pd.read_csv(day / "kpis.csv")
+        pairing = pd.DataFrame({"run": ["mb", "fl", "oracle1"], "kpi": "pairing_ratio", "value": [0.2, 0.27, 0.66]})
+        pd.concat([kpis, pairing]).to_csv(day / "kpis.csv", index=False)  # a KPI the multi-day report tabulates
+    meta = {
+        "kind": "multi-day",
+        "scenario": "haikou-peak",
+        "dates": ["2017-05-01", "2017-05-02"],
+        "strategies": ["mb", "fl", "oracle1"],
+        "seed": 0,
+        "preset": "highs",
+        "versions": {"rpbench": "test"},
+        "git_commit": "abc",
+    }
+    (parent / "meta.json").write_text(json.dumps(meta))
+    return parent
+
+
+@pytest.mark.parametrize("kind", ["comparison", "multi-day"])
+def test_report_out_writes_nothing_in_the_folder(tmp_path, capsys, kind):
+    from rpbench.cli import main
+
+    folder = fixture_folder(tmp_path, hourly=True, scenario="haikou-day") if kind == "comparison" else None
+    folder = folder or multi_day_folder(tmp_path)
+    assert main(["report", str(folder)]) == 0  # a rendered folder, as `rpbench run` leaves it
+    before = snapshot(folder)
+    time.sleep(0.01)  # a rewrite would show in the modification times, not only in the bytes
+    (tmp_path / "out").mkdir()
+    out = tmp_path / "out" / "summary.md"
+    assert main(["report", str(folder), "--out", str(out)]) == 0
+    assert snapshot(folder) == before
+    text = out.read_text()
+    plots = sorted(p.name for p in out.parent.glob("*.png"))
+    assert plots and all(p.startswith("summary-") for p in plots) and "plots beside it" in capsys.readouterr().out
+    assert all(f"]({p})" in text for p in plots)  # the links follow the plots
+    assert sorted(out.parent.iterdir()) == sorted([out, *(out.parent / p for p in plots)])  # no leftovers
+    assert text == (folder / "report.md").read_text().replace("](", "](summary-")  # what the folder shows
+
+
 def test_formatting():
     assert fmt("response_rate", 0.8123) == "0.81"
     assert fmt("avg_detour_m", 912.4) == "912"
     assert fmt("total_saving_km", -1e-12) == "0.0"
     assert fmt("competitive_ratio", -1e-9) == "0.000"
     assert fmt("avg_detour_m", float("nan")) == "/"
+
+
+def test_a_failed_report_out_leaves_no_plots_behind(tmp_path, capsys, monkeypatch):
+    from rpbench.cli import main
+
+    folder = fixture_folder(tmp_path)
+    (tmp_path / "out").mkdir()
+    out = tmp_path / "out" / "r.md"
+    real_write_text = Path.write_text
+
+    def full_disk(self, *args, **kwargs):  # the markdown, written last, finds the disk full
+        if self.parent == out.parent:
+            raise OSError(28, "No space left on device")
+        return real_write_text(self, *args, **kwargs)
+
+    monkeypatch.setattr(Path, "write_text", full_disk)
+    assert main(["report", str(folder), "--out", str(out)]) == 2
+    assert "No space left on device" in capsys.readouterr().err
+    assert list(out.parent.iterdir()) == []

@@ -1,0 +1,229 @@
+"""The figures of reports: labelled axes with units, legends of the runs drawn, and a toy run's figures."""
+
+from __future__ import annotations
+
+import json
+
+import matplotlib
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+import pytest
+
+from rpbench import results
+from rpbench.harness.comparison import run_comparison
+from rpbench.harness.spec import RunSpec
+from rpbench.results.check import check_folder
+from rpbench.results.metrics import count_at, state_spells
+from rpbench.results.plots import bench_figure, hourly_figure, kpi_figure, per_day_figures, sweep_figure
+from rpbench.results.report import fmt, load_kpis, timeline_of
+from rpbench.scenarios import ScenarioRequest
+
+matplotlib.use("Agg")
+
+
+@pytest.fixture
+def figures(monkeypatch):
+    """The figures the plot functions close, kept open for inspection (closed after the test)."""
+    kept = []
+    monkeypatch.setattr(plt, "close", kept.append)
+    yield kept
+    monkeypatch.undo()
+    plt.close("all")
+
+
+def panels(fig):
+    return [ax for ax in fig.axes if ax.get_visible()]
+
+
+def legend_runs(ax) -> list[str]:
+    legend = ax.get_legend()
+    return [t.get_text() for t in legend.get_texts()] if legend else []
+
+
+def assert_labelled(fig, *, categorical_x: bool = False):
+    """Every panel has a y label; every bottom panel (shared x) an x label, or run names as ticks."""
+    for ax in panels(fig):
+        assert ax.get_ylabel(), ax.get_title()
+        if categorical_x:
+            assert all(t.get_text() for t in ax.get_xticklabels()), ax.get_title()
+        elif ax.get_subplotspec().is_last_row():
+            assert ax.get_xlabel(), ax.get_title()
+
+
+def hourly_table() -> pd.DataFrame:
+    rows = []
+    for run in ("mb", "fl", "bound"):
+        for h in range(24):
+            rows.append(
+                {
+                    "run": run,
+                    "hour": h,
+                    "avg_shared_m": 1000.0 + h,
+                    "avg_detour_m": 500.0,
+                    "total_saving_km": float(h),
+                    "response_rate": np.nan if run == "bound" else 0.8,  # an offline run serves no one
+                }
+            )
+    return pd.DataFrame(rows)
+
+
+def test_hourly_axes_and_legends(tmp_path, figures):
+    hourly_figure(hourly_table(), tmp_path / "h.png", "title")
+    (fig,) = figures
+    assert_labelled(fig)
+    by_title = {ax.get_title(): ax for ax in panels(fig)}
+    assert by_title["(c) Distance saving (km)"].get_ylabel() == "distance saving (km)"
+    assert panels(fig)[-1].get_xlabel() == "hour of day (request time)"
+    # the bound has no response rate: that panel's legend does not list it, the others do
+    assert legend_runs(by_title["(d) Response rate"]) == ["MB", "FL"]
+    assert legend_runs(by_title["(c) Distance saving (km)"]) == ["MB", "FL", "Upper bound"]
+
+
+def test_one_legend_when_every_panel_draws_the_same_runs(tmp_path, figures):
+    table = hourly_table()
+    hourly_figure(table[table["run"] != "bound"], tmp_path / "h.png", "title")
+    (fig,) = figures
+    assert not any(legend_runs(ax) for ax in panels(fig))
+    assert [t.get_text() for t in fig.legends[0].get_texts()] == ["MB", "FL"]
+
+
+def test_per_day_axes_list_only_runs_with_data(tmp_path, figures):
+    by_day = pd.DataFrame(
+        [
+            {"date": d, "run": r, "kpi": k, "value": np.nan if (r == "oracle1" and k == "response_rate") else 1.0}
+            for d in ("2017-05-01", "2017-05-02")
+            for r in ("mb", "oracle1")
+            for k in ("response_rate", "total_saving_km")
+        ]
+    )
+    paths = per_day_figures(by_day, tmp_path, ["response_rate", "total_saving_km"])
+    assert [p.name for p in paths] == ["by_day_response_rate.png", "by_day_total_saving_km.png"]
+    rate, saving = figures
+    assert_labelled(rate)
+    assert_labelled(saving)
+    assert rate.axes[0].get_xlabel() == "date" and rate.axes[0].get_ylabel() == "response rate (served / orders)"
+    assert legend_runs(rate.axes[0]) == ["MB"] and legend_runs(saving.axes[0]) == ["MB", "Oracle-1"]
+
+
+def test_sweep_axes_name_the_parameter_with_its_unit(tmp_path, figures):
+    table = pd.DataFrame(
+        [
+            {"point": v, "label": f"dt={v}", "run": r, "kpi": k, "value": float(v)}
+            for v in (2, 10)
+            for r in ("mb", "fl")
+            for k in ("avg_detour_m", "response_rate")
+        ]
+    )
+    sweep_figure(table, "dt", ["avg_detour_m", "response_rate"], tmp_path / "s.png", "sweep")
+    (fig,) = figures
+    assert_labelled(fig)
+    assert {ax.get_xlabel() for ax in panels(fig)} == {"batch interval Δt (s)"}
+    assert panels(fig)[0].get_ylabel() == "detour per pooled passenger (m)"
+    sweep_figure(table, "planner_patience_s", ["avg_detour_m"], tmp_path / "s2.png", "sweep")
+    assert panels(figures[1])[0].get_xlabel() == "planner_patience_s (s)"
+
+
+def test_bench_axes_and_a_preset_colour_per_preset(tmp_path, figures):
+    table = pd.DataFrame(
+        [
+            {"structure": s, "preset": p, "status": "optimal", "cols": c, "total_s": 0.001 * c}
+            for s in ("assignment", "packing")
+            for p in (("highs", "jv") if s == "assignment" else ("highs",))
+            for c in (10, 100)
+        ]
+    )
+    bench_figure(table, tmp_path / "b.png", "bench")
+    (fig,) = figures
+    assert_labelled(fig)
+    assignment, packing = panels(fig)
+    assert assignment.get_xlabel() == "model columns" and packing.get_ylabel() == "solver time, proven optimal (ms)"
+    assert legend_runs(assignment) == ["highs", "jv"] and legend_runs(packing) == ["highs"]
+    assert assignment.get_lines()[0].get_color() == packing.get_lines()[0].get_color()
+
+
+def test_kpi_bars_leave_out_runs_without_the_kpi(tmp_path, figures):
+    table = pd.DataFrame(
+        {"np": [0.0, 0.8, np.nan], "mb": [111.0, 0.9, 900.0], "oracle1": [250.0, np.nan, 940.0]},
+        index=["total_saving_km", "response_rate", "avg_detour_m"],
+    )
+    kpi_figure(table, tmp_path / "k.png", "title", fmt)
+    (fig,) = figures
+    assert_labelled(fig, categorical_x=True)
+    by_title = {ax.get_title(): ax for ax in panels(fig)}
+    assert set(by_title) == {"Total distance saving", "Response rate", "Average detour"}  # no ratio without a bound
+    ticks = {t: [x.get_text() for x in ax.get_xticklabels()] for t, ax in by_title.items()}
+    assert ticks == {
+        "Total distance saving": ["NP", "MB", "Oracle-1"],
+        "Response rate": ["NP", "MB"],
+        "Average detour": ["MB", "Oracle-1"],
+    }
+    assert by_title["Total distance saving"].get_ylabel() == "distance saving (km)"
+    # each bar carries its value as the report's tables print it
+    assert [t.get_text() for t in by_title["Total distance saving"].texts] == ["0.0", "111", "250"]
+
+
+# ------------------------------------------------------------------------------------------- a toy run
+@pytest.fixture(scope="module")
+def toy_run(tmp_path_factory):
+    spec = RunSpec.of(ScenarioRequest("toy", sample=0.2, seed=5), ["np", "mb", "bound"])
+    folder, _ = run_comparison(spec, tmp_path_factory.mktemp("runs") / "toy", progress=False)
+    return folder
+
+
+def test_a_toy_run_has_its_figures(toy_run):
+    report = (toy_run / "report.md").read_text()
+    for png in ("kpis.png", "timeline.png"):
+        assert (toy_run / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and f"]({png})" in report
+    assert not (toy_run / "hourly.png").exists()  # one hour: no per-hour plot
+    assert "The offline runs (Upper bound) pair orders after the fact" in report
+    assert report.index("Synthetic city, not Haikou") < report.index("## Comparison")
+
+
+def direct_counts(events: pd.DataFrame, t: float) -> dict[str, int]:
+    """The states at ``t`` from a per-order pivot of the log (an event at t has happened at t)."""
+    ev = events[events["order"] >= 0]
+    at = ev.pivot_table(index="order", columns="event", values="t_s", aggfunc="first") <= t
+    at = at.reindex(columns=["request", "assign", "pickup", "dropoff", "cancel"], fill_value=False)
+    links = events[(events["event"] == "assign") & (events["partner"] >= 0)]
+    mates = pd.concat(
+        [links.set_index("order")["partner"], links.set_index("partner")["order"]]
+    )  # the first passenger of a join is named only by the second's event
+    aboard = at["pickup"] & ~at["dropoff"]
+    partner_aboard = aboard.reindex(mates.reindex(at.index).to_numpy()).fillna(False).to_numpy()
+    return {
+        "waiting": int((at["request"] & ~at["assign"] & ~at["cancel"]).sum()),
+        "serving": int((at["assign"] & ~at["dropoff"]).sum()),
+        "pooled": int((aboard.to_numpy() & partner_aboard).sum()),
+        "cancelled": int(at["cancel"].sum()),
+    }
+
+
+def test_the_timeline_counts_what_the_event_log_holds(toy_run):
+    events = results.read_csv(toy_run / "runs" / "mb" / "events.csv.gz")
+    spells = state_spells(events)
+    instants = [0.0, 300.0, 900.0, 1800.5, 2700.0, 3600.0, float(events["t_s"].max())]
+    for t in instants:
+        counted = {state: int(count_at(spells[state], np.array([t]))[0]) for state in spells}
+        assert counted == direct_counts(events, t)
+    assert any(direct_counts(events, t)["pooled"] > 0 for t in instants)  # the instants see pooled riders
+    timeline = timeline_of(toy_run)
+    assert not isinstance(timeline, str) and timeline.offline == ["bound"] and not timeline.hours
+    cancelled = timeline.table.query("run == 'mb' and state == 'cancelled'")
+    for t, value in zip(cancelled["t_s"], cancelled["value"], strict=True):
+        assert value == direct_counts(events, t)["cancelled"]
+    # a bin's mean is the time average of the counts: sampled finely, the same number
+    waiting = timeline.table.query("run == 'np' and state == 'waiting'").iloc[10]
+    np_events = results.read_csv(toy_run / "runs" / "np" / "events.csv.gz")
+    half = timeline.bin_s / 2
+    grid = np.linspace(waiting["t_s"] - half, waiting["t_s"] + half, 601)[:-1] + timeline.bin_s / 1200
+    sampled = np.mean([direct_counts(np_events, t)["waiting"] for t in grid])
+    assert sampled > 0 and waiting["value"] == pytest.approx(sampled, abs=0.05)
+
+
+def test_np_saves_exactly_nothing_and_the_checker_agrees(toy_run):
+    table = load_kpis(toy_run)
+    assert table.loc["pairs", "np"] == 0
+    assert table.loc["total_saving_km", "np"] == 0.0 and table.loc["competitive_ratio_bound", "np"] == 0.0
+    assert json.loads((toy_run / "meta.json").read_text())["runs"]["np"]["kind"] == "simulation"
+    assert all(rc.ok for rc in check_folder(toy_run))
