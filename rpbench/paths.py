@@ -26,6 +26,7 @@ from rpbench.exceptions import CacheError, DataNotFoundError, one_line
 DATA_ENV = "RPBENCH_DATA"
 CACHE_ENV = "RPBENCH_CACHE"
 DATA_HOME_ENV = "RPBENCH_DATA_HOME"
+DATA_MIRROR_ENV = "RPBENCH_DATA_MIRROR"
 _RELATIVE_DEFAULT = Path("..") / "shared" / "data" / "haikou"
 # The fetched folder gets the same name as the shared one, so the data home can
 # later hold other cities beside it.
