@@ -11,9 +11,9 @@ it.  ``offline`` skips the fetch.
 
 Without a folder, :func:`ensure_data_dir` raises a one-line error saying why,
 and a command whose default scenario is the Haikou one runs the toy city
-after :func:`warn_synthetic`'s banner instead (``rpbench.scenarios.registry.
-default_scenario_name``).  Only the default falls back: a scenario named on
-the command line is never swapped for another.
+after :func:`warn_synthetic`'s banner instead
+(:func:`rpbench.scenarios.registry.default_scenario_name`).  Only the default
+falls back: a scenario named on the command line is never swapped for another.
 """
 
 from __future__ import annotations
