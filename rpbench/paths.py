@@ -7,7 +7,9 @@ source tree when rpbench runs from a checkout), else the folder
 ``rpbench data fetch`` downloads into (``haikou`` in the user data directory,
 or in ``RPBENCH_DATA_HOME``), so a fresh machine without ``../shared`` runs
 the real data after one fetch.  Nothing here assumes which days exist in the
-folder.
+folder.  When no folder is found, :func:`require_data_dir` fetches the pinned
+registry into that last folder first (:mod:`rpbench.data.first_run`), from
+``$RPBENCH_DATA_MIRROR`` when set.
 
 The cache (all-pairs distances, predictions) lives in the user cache
 directory, never in the repository; ``RPBENCH_CACHE`` overrides it.  A
@@ -26,6 +28,7 @@ from rpbench.exceptions import CacheError, DataNotFoundError, one_line
 DATA_ENV = "RPBENCH_DATA"
 CACHE_ENV = "RPBENCH_CACHE"
 DATA_HOME_ENV = "RPBENCH_DATA_HOME"
+DATA_MIRROR_ENV = "RPBENCH_DATA_MIRROR"
 _RELATIVE_DEFAULT = Path("..") / "shared" / "data" / "haikou"
 # The fetched folder gets the same name as the shared one, so the data home can
 # later hold other cities beside it.
@@ -105,16 +108,23 @@ def find_data_dir(explicit: str | os.PathLike | None = None) -> Path | None:
     return locate_data_dir(explicit)[0]
 
 
-def require_data_dir(explicit: str | os.PathLike | None = None, *, what: str = "this scenario") -> Path:
-    """Like :func:`find_data_dir` but raise a clear error when nothing is found."""
-    found = find_data_dir(explicit)
-    if found is None:
-        tried = ", ".join(str(c) for c in default_data_candidates())
-        raise DataNotFoundError(
-            f"no Haikou data folder found for {what} (tried {tried}); "
-            f"pass --data DIR, set ${DATA_ENV}, or download it with `rpbench data fetch`"
-        )
-    return found
+def require_data_dir(
+    explicit: str | os.PathLike | None = None, *, what: str = "this scenario", offline: bool = False
+) -> Path:
+    """Like :func:`find_data_dir`, but fetch the data when no folder is found, and raise a clear error
+    when that is not possible.
+
+    Without ``--data`` nor ``$RPBENCH_DATA`` and no folder found (or the
+    fetched folder incomplete), the pinned registry is fetched into
+    :func:`fetched_data_dir` as ``rpbench data fetch`` does; ``offline``
+    skips the fetch.  A folder that cannot be had is a
+    :class:`DataNotFoundError` saying why (see
+    :func:`rpbench.data.first_run.ensure_data_dir`).
+    """
+    # Imported here: the fetch reads the registry, whose module imports this one.
+    from rpbench.data.first_run import ensure_data_dir
+
+    return ensure_data_dir(explicit, what=what, offline=offline)
 
 
 def cache_dir() -> Path:

@@ -13,11 +13,12 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from rpbench.data.first_run import ensure_data_dir
 from rpbench.exceptions import ParameterError, RpbenchError
 from rpbench.results import run_folders, to_jsonable
 from rpbench.results.report import unproven_runs
 from rpbench.results.runs import run_label
-from rpbench.scenarios import ScenarioRequest, default_scenario_name
+from rpbench.scenarios import ScenarioRequest, default_scenario_name, scenario_spec
 from rpbench.scenarios.base import Params
 
 
@@ -27,7 +28,16 @@ def add_data_arg(parser: argparse.ArgumentParser) -> None:
         metavar="DIR",
         default=None,
         help="Haikou data folder (default: $RPBENCH_DATA, else ../shared/data/haikou, else the folder "
-        "`rpbench data fetch` fills; `rpbench list` says which)",
+        "`rpbench data fetch` fills, fetched on first use; `rpbench list` says which)",
+    )
+
+
+def add_offline_arg(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--offline",
+        action="store_true",
+        help="never download: without a data folder, run the toy city (or fail when a Haikou scenario is "
+        "named) instead of fetching the data first",
     )
 
 
@@ -37,7 +47,10 @@ def add_scenario_args(parser: argparse.ArgumentParser, *, positional: bool = Fal
         parser.add_argument("scenario", metavar="NAME", help="scenario name (see `rpbench list`)")
     else:
         parser.add_argument(
-            "--scenario", default=None, help="scenario name (default: haikou-peak, or toy when no data folder exists)"
+            "--scenario",
+            default=None,
+            help="scenario name (default: haikou-peak, fetching its data on first use; the toy city, "
+            "said loudly, when that fails)",
         )
     parser.add_argument("--date", default=None, help="date YYYY-MM-DD (default 2017-05-01)")
     parser.add_argument(
@@ -59,6 +72,7 @@ def add_scenario_args(parser: argparse.ArgumentParser, *, positional: bool = Fal
         help="override a parameter, e.g. --param dt_s=30 (repeatable; see `rpbench list`)",
     )
     add_data_arg(parser)
+    add_offline_arg(parser)
 
 
 def parse_param_overrides(items: list[str]) -> dict[str, float]:
@@ -77,16 +91,24 @@ def parse_param_overrides(items: list[str]) -> dict[str, float]:
 
 
 def scenario_request(args: argparse.Namespace) -> ScenarioRequest:
-    """The scenario the arguments name (without --scenario: haikou-peak, or the toy city without data)."""
-    name = args.scenario or default_scenario_name(args.data)
-    if args.scenario is None and name == "toy":
-        note("no Haikou data folder found: running the built-in SYNTHETIC toy city (pass --data DIR for Haikou)")
+    """The scenario the arguments name, its data folder fetched first when it needs one and none is found
+    (:mod:`rpbench.data.first_run`; not with ``--offline``).  Without ``--scenario``: haikou-peak, or the
+    toy city after a banner when its data cannot be had; a named scenario is never swapped."""
+    params = tuple(parse_param_overrides(args.param).items())  # a bad --param fails before any download
+    offline = bool(getattr(args, "offline", False))
+    progress = False if getattr(args, "no_progress", False) else None
+    if args.scenario is None:
+        name = default_scenario_name(args.data, offline=offline, progress=progress)
+    else:
+        name = args.scenario
+        if scenario_spec(name).needs_data:
+            ensure_data_dir(args.data, what=f"scenario {name!r}", offline=offline, progress=progress)
     return ScenarioRequest(
         name=name,
         date=args.date,
         sample=args.sample,
         seed=args.seed,
-        params=tuple(parse_param_overrides(args.param).items()),
+        params=params,
         fleet_placement=args.fleet_placement,
         data_dir=args.data,
     )

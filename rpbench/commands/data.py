@@ -3,6 +3,8 @@
 The pinned file list and the download logic are :mod:`rpbench.data.fetch`.
 Summaries go to stdout (one JSON object with ``--json``), the progress bar
 to stderr; a network error or a checksum mismatch is one line and exit 2.
+Commands that need the data fetch it the same way by themselves when no
+folder is found (:mod:`rpbench.data.first_run`).
 """
 
 from __future__ import annotations
@@ -10,9 +12,17 @@ from __future__ import annotations
 import argparse
 import sys
 
+from rpbench import paths
 from rpbench.commands._common import print_json
-from rpbench.data.fetch import check_verified, fetch, mirror_base, source_urls, verify
-from rpbench.paths import DATA_HOME_ENV, fetched_data_dir, locate_data_dir, require_data_dir
+from rpbench.data.fetch import check_verified, fetch, source_urls, verify
+from rpbench.exceptions import DataNotFoundError
+from rpbench.paths import (
+    DATA_ENV,
+    DATA_HOME_ENV,
+    DATA_MIRROR_ENV,
+    fetched_data_dir,
+    locate_data_dir,
+)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -47,7 +57,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="URL",
         default=None,
         help="fetch the stored file names from this copy of a data folder instead "
-        "(http(s)://, file:// or a local folder); content is still checked",
+        f"(http(s)://, file:// or a local folder; default: ${DATA_MIRROR_ENV}, else the pinned sources); "
+        "content is still checked",
     )
     f.add_argument("--dry-run", action="store_true", help="print each file and the URL it comes from; download nothing")
     f.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -89,7 +100,7 @@ def run_fetch(args: argparse.Namespace) -> int:
     if args.json:
         print_json(report.as_dict())
         return 0
-    source = "pinned upstream sources" if report.source == "registry" else mirror_base(args.mirror)
+    source = "pinned upstream sources" if report.source == "registry" else report.source
     if report.downloaded:
         print(
             f"fetched {len(report.downloaded)} file(s) ({report.content_bytes / 1e6:.1f} MB of content) "
@@ -106,8 +117,13 @@ def run_fetch(args: argparse.Namespace) -> int:
 
 
 def run_verify(args: argparse.Namespace) -> int:
-    folder = require_data_dir(args.data, what="rpbench data verify")
-    origin = locate_data_dir(args.data)[1]
+    folder, origin = locate_data_dir(args.data)
+    if folder is None:  # nothing to verify: no download either
+        tried = ", ".join(str(c) for c in paths.default_data_candidates())
+        raise DataNotFoundError(
+            f"no Haikou data folder found to verify (tried {tried}); fetch it with `rpbench data fetch`, "
+            f"pass --data DIR or set ${DATA_ENV}"
+        )
     report = verify(folder)
     if args.json:
         print_json({**report.as_dict(), "source": origin})

@@ -7,10 +7,11 @@ import argparse
 from rpbench.backends.presets import load_preset, preset_names
 from rpbench.commands._common import add_data_arg, print_json
 from rpbench.data import available_peak_dates
+from rpbench.data.first_run import fetch_plan
 from rpbench.exceptions import RpbenchError
 from rpbench.harness.spec import options_class
 from rpbench.oracle.runs import ORACLE_RUNS
-from rpbench.paths import default_data_candidates, locate_data_dir
+from rpbench.paths import default_data_candidates, describe_candidate, fetched_data_dir, locate_data_dir
 from rpbench.scenarios import SCENARIOS
 from rpbench.scenarios.base import Params
 from rpbench.strategies import REGISTRY as STRATEGY_REGISTRY
@@ -31,6 +32,13 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def gather(data: str | None) -> dict:
     folder, origin = locate_data_dir(data)
+    pending = None  # what the first command needing the data would fetch (nothing is downloaded here)
+    if folder is None or origin == describe_candidate(fetched_data_dir()):
+        try:
+            plan = fetch_plan()
+            pending = plan.as_dict() if plan.todo else None
+        except RpbenchError as exc:  # a bad $RPBENCH_DATA_MIRROR: said here, raised by the fetch
+            pending = {"error": str(exc)}
     presets = []
     for name in preset_names():
         try:
@@ -52,6 +60,7 @@ def gather(data: str | None) -> dict:
         "data_dir": str(folder) if folder else None,
         "data_dir_source": origin,
         "data_dir_candidates": [str(c) for c in default_data_candidates()],
+        "data_fetch_pending": pending,
         "peak_dates": available_peak_dates(folder) if folder else [],
         "scenarios": [
             {
@@ -84,13 +93,20 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         print_json(info)
         return 0
-    folder = info["data_dir"]
+    folder, pending = info["data_dir"], info["data_fetch_pending"]
     if folder:
         print(f"data folder: {folder} (from {info['data_dir_source']})")
     else:
+        print("data folder: none found")
+    if pending and "error" in pending:
+        print(f"  the first command that needs the data cannot fetch it: {pending['error']}")
+    elif pending:
+        lacks = f"lacks {pending['files']} of its {pending['registry_files']} files: " if folder else ""
+        source = "the pinned GitHub sources" if pending["source"] == "registry" else f"the mirror {pending['source']}"
         print(
-            "data folder: none found (only the toy scenario runs); pass --data DIR, or download it once "
-            "with `rpbench data fetch`"
+            f"  {lacks}the first command that needs the data fetches {pending['files']} files "
+            f"({pending['content_bytes'] / 1e6:.1f} MB of content) from {source} into {pending['dest']} "
+            "(now: `rpbench data fetch`; --offline runs the toy city instead)"
         )
     if info["peak_dates"]:
         dates = info["peak_dates"]

@@ -11,8 +11,8 @@ between implementations and levels while the data does not.
 * :func:`fetch` without a mirror downloads each upstream file, hashes it while
   it streams and gzips it on the fly where the transform says so.  With a
   mirror (another copy of the data folder, ``http(s)://``, ``file://`` or a
-  local folder) it downloads the stored names as they are (already gzipped)
-  and only checks their content.
+  local folder; ``--mirror``, else ``$RPBENCH_DATA_MIRROR``) it downloads
+  the stored names as they are (already gzipped) and only checks their content.
 * :func:`verify` checks the registry files present in a folder, lists the
   missing ones and the files the registry does not know (another day's
   orders in the same format is normal: nothing in rpbench assumes the days).
@@ -23,6 +23,10 @@ to its final name only once its content hash matches, so an interrupted or
 corrupt download never leaves a file under the final name.  Files already
 present with the right content are skipped, which makes a second run free and
 an interrupted one resumable (file by file; the largest file is 2.3 MB).
+
+Connecting (and the TLS handshake) times out after :data:`CONNECT_TIMEOUT_S`,
+so a host that does not answer fails in seconds; once connected, each read
+may take :data:`READ_TIMEOUT_S` (a slow link is fine, a stalled one is not).
 
 Why urllib and not pooch: pooch checks the hash of the bytes it downloads and
 skips a file when the *stored* file's hash matches.  Neither is the hash pinned
@@ -60,13 +64,14 @@ from tqdm import tqdm
 from rpbench import __version__
 from rpbench.data.orders import PEAK_DIR
 from rpbench.exceptions import ChecksumError, DataError, DownloadError, ParameterError
-from rpbench.paths import fetched_data_dir
+from rpbench.paths import DATA_MIRROR_ENV, fetched_data_dir
 
 REGISTRY_RESOURCE = "registry.toml"
 TRANSFORMS = ("gzip", "none")
 PINNED_PREFIX = "https://raw.githubusercontent.com/"
 CHUNK = 1 << 16
-TIMEOUT_S = 60.0
+CONNECT_TIMEOUT_S = 5.0
+READ_TIMEOUT_S = 60.0
 # Files of the data folder that are documentation of the folder, not data.
 NOT_DATA = ("SOURCE.md",)
 
@@ -158,7 +163,15 @@ def _check_entry(entry: RegistryEntry) -> None:
 
 
 def mirror_base(mirror: str | os.PathLike | None) -> str | None:
-    """The mirror as a base URL: ``http(s)://`` and ``file://`` as given, a local folder as ``file://``."""
+    """The mirror as a base URL: ``http(s)://`` and ``file://`` as given, a local folder as ``file://``.
+
+    Without ``mirror``, ``$RPBENCH_DATA_MIRROR`` (unset or empty: ``None``, the
+    pinned upstream URLs).
+    """
+    option = "--mirror"
+    if mirror is None:
+        mirror = os.environ.get(DATA_MIRROR_ENV) or None
+        option = f"${DATA_MIRROR_ENV}"
     if mirror is None:
         return None
     text = os.fspath(mirror)
@@ -168,7 +181,7 @@ def mirror_base(mirror: str | os.PathLike | None) -> str | None:
     folder = Path(text).expanduser()
     if len(scheme) <= 1 and folder.is_dir():  # no scheme, or a Windows drive letter
         return folder.resolve().as_uri()
-    raise ParameterError(f"--mirror {text!r} is neither an http(s):// or file:// URL nor an existing folder")
+    raise ParameterError(f"{option} {text!r} is neither an http(s):// or file:// URL nor an existing folder")
 
 
 def source_url(entry: RegistryEntry, mirror: str | None = None) -> str:
@@ -244,7 +257,7 @@ def fetch(
             total=sum(e.size for e in todo),
             unit="B",
             unit_scale=True,
-            unit_divisor=1024,
+            unit_divisor=1000,  # MB as the summaries and the first-run announcement print them
             desc="rpbench data fetch",
             file=sys.stderr,
             disable=not (progress and todo),
@@ -318,6 +331,8 @@ def _stream(
         # The stack closes the gzip wrappers before ``out`` is closed (closing a
         # writer adds the gzip trailer to ``out`` and leaves ``out`` open).
         with _open_url(url) as response, contextlib.ExitStack() as stack:
+            content: gzip.GzipFile | BinaryIO
+            sink: gzip.GzipFile | BinaryIO | None
             if entry.transform == "gzip" and served_as_stored:
                 # Store the served gzip bytes as they are, hash what they decompress to.
                 content = stack.enter_context(gzip.GzipFile(fileobj=_Tee(response, out), mode="rb"))
@@ -342,24 +357,59 @@ def _stream(
         ) from None
     except urllib.error.HTTPError as exc:
         raise DownloadError(
-            f"could not download {entry.name} from {url}: HTTP {exc.code} {_one_line(exc.reason)}{_RERUN}"
+            f"could not download {entry.name} from {url}: HTTP {exc.code} {_one_line(exc.reason)}{RERUN_HINT}"
         ) from None
     except urllib.error.URLError as exc:
-        raise DownloadError(f"could not download {entry.name} from {url}: {_one_line(exc.reason)}{_RERUN}") from None
+        raise DownloadError(
+            f"could not download {entry.name} from {url}: {_one_line(exc.reason)}{RERUN_HINT}"
+        ) from None
     except (http.client.HTTPException, OSError) as exc:
         raise DownloadError(
-            f"could not download {entry.name} from {url}: {_one_line(exc) or type(exc).__name__}{_RERUN}"
+            f"could not download {entry.name} from {url}: {_one_line(exc) or type(exc).__name__}{RERUN_HINT}"
         ) from None
     return digest.hexdigest(), size
 
 
-_RERUN = "; check the network (or --mirror) and run `rpbench data fetch` again (stored files are kept)"
+#: The end of a download error's message.
+RERUN_HINT = (
+    f"; check the network (or the mirror: --mirror, ${DATA_MIRROR_ENV}) and run `rpbench data fetch` again "
+    "(stored files are kept)"
+)
 
 
 def _open_url(url: str):
     """Open ``url`` for reading (a seam for tests: they replace it to serve bytes without a network)."""
     request = urllib.request.Request(url, headers={"User-Agent": f"rpbench/{__version__}"})
-    return urllib.request.urlopen(request, timeout=TIMEOUT_S)
+    # The opener's own HTTP(S) handlers replace urllib's defaults; proxies and file:// work as with urlopen.
+    opener = urllib.request.build_opener(_HTTPHandler, _HTTPSHandler)
+    return opener.open(request, timeout=CONNECT_TIMEOUT_S)
+
+
+class _HTTPConnection(http.client.HTTPConnection):
+    """Connects within the timeout it is given (:data:`CONNECT_TIMEOUT_S`), then reads with :data:`READ_TIMEOUT_S`."""
+
+    def connect(self) -> None:
+        super().connect()
+        self.sock.settimeout(READ_TIMEOUT_S)
+
+
+class _HTTPSConnection(http.client.HTTPSConnection):
+    """:class:`_HTTPConnection` for HTTPS: the TLS handshake is part of connecting."""
+
+    def connect(self) -> None:
+        super().connect()
+        self.sock.settimeout(READ_TIMEOUT_S)
+
+
+class _HTTPHandler(urllib.request.HTTPHandler):
+    def http_open(self, req: urllib.request.Request) -> http.client.HTTPResponse:
+        return self.do_open(_HTTPConnection, req)
+
+
+class _HTTPSHandler(urllib.request.HTTPSHandler):
+    def https_open(self, req: urllib.request.Request) -> http.client.HTTPResponse:
+        # No context: http.client builds its default one (certificates and host name checked), as urlopen does.
+        return self.do_open(_HTTPSConnection, req)
 
 
 class _Tee(io.RawIOBase):

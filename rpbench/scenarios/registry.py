@@ -1,8 +1,9 @@
 """The scenario generators by name.
 
 ``build_scenario(name, ...)`` resolves the data folder (``--data``,
-``$RPBENCH_DATA``, ``../shared/data/haikou``), applies parameter overrides
-and returns a frozen :class:`~rpbench.scenarios.base.Scenario`.  A generator
+``$RPBENCH_DATA``, ``../shared/data/haikou``, the fetched folder; fetching it
+first when none exists, :mod:`rpbench.data.first_run`), applies parameter
+overrides and returns a frozen :class:`~rpbench.scenarios.base.Scenario`.  A generator
 of real days also says which dates its data folder holds (``dates``), which
 is what ``--dates`` runs over.
 """
@@ -15,8 +16,9 @@ from pathlib import Path
 from typing import Any
 
 from rpbench.data import available_peak_dates, read_hourly_counts
+from rpbench.data.first_run import obtain_data_dir, warn_synthetic
 from rpbench.exceptions import ParameterError
-from rpbench.paths import find_data_dir, require_data_dir
+from rpbench.paths import require_data_dir
 from rpbench.scenarios.base import Params, Scenario
 from rpbench.scenarios.day import build_day
 from rpbench.scenarios.paper_input import build_paper_input
@@ -116,6 +118,14 @@ def scenario_spec(name: str) -> ScenarioSpec:
     return spec
 
 
-def default_scenario_name(data_dir: str | Path | None = None) -> str:
-    """``haikou-peak`` when a data folder exists, else the built-in ``toy`` city."""
-    return DEFAULT_SCENARIO if find_data_dir(data_dir) is not None else "toy"
+def default_scenario_name(
+    data_dir: str | Path | None = None, *, offline: bool = False, progress: bool | None = None
+) -> str:
+    """``haikou-peak`` when a data folder exists or can be fetched (``offline``: not tried), else the
+    built-in ``toy`` city, after a banner on stderr saying that what follows is synthetic, why, and how
+    to get the real data (:func:`rpbench.data.first_run.obtain_data_dir`)."""
+    folder, why = obtain_data_dir(data_dir, offline=offline, progress=progress)
+    if folder is not None:
+        return DEFAULT_SCENARIO
+    warn_synthetic(why)
+    return "toy"
