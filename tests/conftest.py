@@ -1,7 +1,8 @@
 """Shared fixtures: the real data folder (tests skip without it) and a tiny fake one in its format.
 
 The tests never write into the user's cache: the session runs with ``$RPBENCH_CACHE`` pointed at a
-temporary folder (removed at the end), inherited by the worker processes and subprocesses tests start.
+temporary folder (removed at the end), inherited by the worker processes and subprocesses tests start;
+and they never download: ``$RPBENCH_DATA_MIRROR`` (unless set) is a local port that refuses.
 ``RPBENCH_TEST_CACHE=DIR`` keeps one instead, so that repeated runs reuse its all-pairs tables and
 prediction structures.
 """
@@ -29,6 +30,8 @@ _SESSION_CACHE: str | None = None
 
 def pytest_configure(config: pytest.Config) -> None:
     global _SESSION_CACHE
+    # A test that lets rpbench fetch the data (a first run) reaches no real server: a mirror that refuses.
+    os.environ.setdefault("RPBENCH_DATA_MIRROR", "http://127.0.0.1:9/")
     kept = os.environ.get("RPBENCH_TEST_CACHE")
     if kept:
         os.environ["RPBENCH_CACHE"] = kept

@@ -9,7 +9,7 @@ import sys
 import pandas as pd
 
 from rpbench.backends.presets import load_preset
-from rpbench.commands._common import add_data_arg, command_line, print_json
+from rpbench.commands._common import add_data_arg, add_offline_arg, command_line, print_json
 from rpbench.data import available_peak_dates
 from rpbench.paths import require_data_dir
 from rpbench.replication.report import criterion, markdown
@@ -33,6 +33,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "committed outputs and the paper's printed Table 2.",
     )
     add_data_arg(p)
+    add_offline_arg(p)
     p.add_argument("--date", default=None, help="one date (default 2017-05-01)")
     p.add_argument("--dates", default=None, metavar="A..B|A,B,...", help="several dates, e.g. 2017-05-01..2017-05-14")
     p.add_argument(
@@ -63,7 +64,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     strategies = parse_strategies(args.strategies)
-    data_dir = require_data_dir(args.data, what="rpbench replicate")
+    data_dir = require_data_dir(args.data, what="rpbench replicate", offline=args.offline)
     have = available_peak_dates(data_dir)
     if args.date and args.dates:
         from rpbench.exceptions import ParameterError

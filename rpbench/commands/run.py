@@ -8,6 +8,7 @@ import pandas as pd
 
 from rpbench.commands._common import add_scenario_args, note, note_unproven, print_json, scenario_request
 from rpbench.commands._runs import add_run_args, run_spec
+from rpbench.data.first_run import FETCH_COMMAND
 from rpbench.exceptions import ParameterError
 from rpbench.harness.comparison import run_comparison
 from rpbench.harness.multiday import run_days
@@ -15,7 +16,7 @@ from rpbench.harness.spec import RunSpec
 from rpbench.results import layout
 from rpbench.results.report import load_kpis, text_table
 from rpbench.results.runs import run_styles
-from rpbench.results.store import read_meta
+from rpbench.results.store import check_new_folder, read_meta
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -55,8 +56,12 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     if args.dates and args.date:
         raise ParameterError("--dates and --date exclude each other; drop --date")
+    check_new_folder(args.out)  # before a first run's data download: a bad --out must cost nothing
     spec = run_spec(args, scenario_request(args).resolved())
-    return run_many_days(args, spec) if args.dates else run_one(args, spec)
+    code = run_many_days(args, spec) if args.dates else run_one(args, spec)
+    if args.scenario is None and spec.request.name == "toy" and not args.json:  # the fall-back city
+        note(f"rpbench: SYNTHETIC DATA: the table above is the toy city, not Haikou; get the data: {FETCH_COMMAND}")
+    return code
 
 
 def run_one(args: argparse.Namespace, spec: RunSpec) -> int:

@@ -176,7 +176,8 @@ def test_registry_covers_every_file_rpbench_reads():
     assert all(e.transform == ("gzip" if e.name.endswith(".gz") else "none") for e in REGISTRY)
 
 
-def test_urls_without_mirror_are_the_pinned_raw_github_ones():
+def test_urls_without_mirror_are_the_pinned_raw_github_ones(monkeypatch):
+    monkeypatch.delenv("RPBENCH_DATA_MIRROR", raising=False)  # the test session's refusing mirror
     urls = dict(source_urls())
     assert list(urls) == NAMES
     assert urls["network/node.csv"] == (
@@ -242,6 +243,7 @@ def test_fetch_from_mirror_then_again_downloads_nothing(capsys, mirror, tmp_path
 
 def test_fetch_without_mirror_gzips_the_upstream_content(monkeypatch, served_dir, tmp_path):
     """The pinned route, offline: the opener serves each upstream file (the stored file decompressed)."""
+    monkeypatch.delenv("RPBENCH_DATA_MIRROR", raising=False)  # the test session's refusing mirror
     by_url = {e.url: e for e in REGISTRY}
     opened: list[str] = []
 
