@@ -13,6 +13,7 @@ before it on the same line is another one (``paper §4.1``, ``TR-B §5``).  Rang
 from __future__ import annotations
 
 import re
+import sys
 from pathlib import Path
 
 import pytest
@@ -133,6 +134,64 @@ def test_every_reference_resolves(page):
         for n, ref in unresolved(path.read_text(encoding="utf-8", errors="replace"), sections, labels)
     ]
     assert not missing, "docs/algorithms.md does not define:\n" + "\n".join(missing)
+
+
+#: Markdown files whose links to each other must resolve.
+LINKED = ("README.md", "CHANGELOG.md", "docs", "instances", "results", "solvers", "examples")
+LINK_RE = re.compile(r"\[[^\]]*\]\((?P<target>[^)\s]+)\)")
+
+
+def slug(heading: str) -> str:
+    """A heading's anchor as GitHub renders it (lower case, punctuation dropped, spaces to hyphens)."""
+    text = re.sub(r"[^\w\- ]", "", heading.strip().lower())
+    return text.replace(" ", "-")
+
+
+def anchors(path: Path) -> set[str]:
+    return {slug(m[1]) for m in re.finditer(r"^#+\s+(.*)$", path.read_text(encoding="utf-8"), re.M)}
+
+
+def markdown_files() -> list[Path]:
+    files: list[Path] = []
+    for name in LINKED:
+        path = ROOT / name
+        if path.is_file():
+            files.append(path)
+        elif path.is_dir():
+            files.extend(p for p in sorted(path.rglob("*.md")) if p.name != "report.md")  # reports are generated
+    return files
+
+
+def broken_links(path: Path) -> list[str]:
+    """Links of ``path`` to a file or heading of the repository that does not exist."""
+    broken = []
+    for m in LINK_RE.finditer(path.read_text(encoding="utf-8")):
+        target = m["target"]
+        if re.match(r"[a-z]+:", target):
+            continue  # a web address
+        file_part, _, anchor = target.partition("#")
+        dest = (path.parent / file_part).resolve() if file_part else path
+        if not dest.exists():
+            broken.append(f"{path.relative_to(ROOT)}: {target} (no such file)")
+        elif anchor and dest.suffix == ".md" and anchor not in anchors(dest):
+            broken.append(f"{path.relative_to(ROOT)}: {target} (no such heading)")
+    return broken
+
+
+def test_links_between_documents_resolve():
+    """Documents link to each other by relative paths that exist, headings included."""
+    files = markdown_files()
+    assert ALGORITHMS in files
+    broken = [b for path in files for b in broken_links(path)]
+    assert not broken, "\n".join(broken)
+
+
+def test_a_broken_link_is_named(tmp_path, monkeypatch):
+    monkeypatch.setattr(sys.modules[__name__], "ROOT", tmp_path)
+    (tmp_path / "a.md").write_text("# Top\n\n## The model\n", encoding="utf-8")
+    page = tmp_path / "b.md"
+    page.write_text("[ok](a.md#the-model) [gone](c.md) [no heading](a.md#accuracy) [web](https://x.org/y)\n")
+    assert broken_links(page) == ["b.md: c.md (no such file)", "b.md: a.md#accuracy (no such heading)"]
 
 
 @pytest.mark.parametrize(
