@@ -1,4 +1,4 @@
-"""The batch-round simulator (paper §2.1 and §4.1; issue "Simulator").
+"""The batch-round simulator (paper §2.1 and §4.1).
 
 Every Δt seconds, at rounds t = 0, Δt, 2Δt, ...:
 

@@ -25,7 +25,7 @@ from rpbench.strategies.options import RunOptions
 class Kind(enum.IntEnum):
     """What a chosen column means."""
 
-    WAIT = 0  # keep the passenger waiting this round
+    WAIT = 0  # keep the passenger waiting for a later batch
     VACANT = 1  # a vacant vehicle (V0) picks the passenger up
     JOIN = 2  # the passenger joins a partially occupied vehicle (V1)
     TRIP2 = 3  # a vacant vehicle picks up two waiting passengers (RTV size-2 trip)
@@ -152,7 +152,7 @@ class Strategy(ABC):
 
     @abstractmethod
     def build(self, state: RoundState) -> RoundModel:
-        """Build this round's model from the state."""
+        """Build the model of the batch round the state describes."""
 
     def reposition(self, state: RoundState, rm: RoundModel, chosen: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Vehicles to send towards nodes after the round's decisions (default: none).
