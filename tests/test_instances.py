@@ -10,9 +10,10 @@ import pytest
 from rpbench.backends.presets import load_preset, preset_names
 from rpbench.bench.snapshot import take_snapshots
 from rpbench.exceptions import ResultsError
+from rpbench.harness.spec import RunSpec
 from rpbench.instances import find_instances, load_instance, save_instance
 from rpbench.model import AssignmentModel, PairingModel, TripPackingModel
-from rpbench.scenarios import build_scenario
+from rpbench.scenarios import ScenarioRequest
 
 
 def installed():
@@ -21,10 +22,8 @@ def installed():
 
 @pytest.fixture(scope="module")
 def snapshots(tmp_path_factory):
-    scenario = build_scenario("toy", sample=0.25, seed=4)
-    folder, entries = take_snapshots(
-        scenario, ["mb", "rtv"], "highs", tmp_path_factory.mktemp("s") / "snaps", largest=2
-    )
+    spec = RunSpec.of(ScenarioRequest("toy", sample=0.25, seed=4), ["mb", "rtv"], preset="highs")
+    folder, entries = take_snapshots(spec, tmp_path_factory.mktemp("s") / "snaps", largest=2)
     return folder, entries
 
 
