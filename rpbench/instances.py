@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from rpbench.exceptions import ModelError, ResultsError, one_line
-from rpbench.model import AssignmentModel, PairingModel, Structure, TripPackingModel
+from rpbench.model import AssignmentModel, Model, PairingModel, Structure, TripPackingModel
 
 FORMAT = "rpbench-instance-1"
 #: Largest declared row count (passengers, vehicles, requests, orders): ~1000 times the largest fleet or
@@ -81,7 +81,7 @@ def save_instance(path: str | Path, model, meta: dict[str, Any] | None = None) -
     return path
 
 
-def load_instance(path: str | Path):
+def load_instance(path: str | Path) -> tuple[Model, dict[str, Any]]:
     """Read an instance file; return ``(model, meta)``.  Raises ResultsError on a corrupt file.
 
     Nothing is allocated from what the file merely declares: every array's
@@ -106,7 +106,8 @@ def load_instance(path: str | Path):
         if missing:
             raise KeyError(", ".join(missing))
         _check_declared_sizes(data, structure)
-        common = dict(unit_m=float(data["unit_m"]), name=str(data["name"]))
+        unit_m, name = float(data["unit_m"]), str(data["name"])
+        model: Model
         if structure == Structure.ASSIGNMENT:
             model = AssignmentModel(
                 int(data["n_passengers"]),
@@ -114,7 +115,8 @@ def load_instance(path: str | Path):
                 data["col_passenger"],
                 data["col_vehicle"],
                 data["values"],
-                **common,
+                unit_m=unit_m,
+                name=name,
             )
         elif structure == Structure.TRIP_PACKING:
             model = TripPackingModel(
@@ -124,7 +126,8 @@ def load_instance(path: str | Path):
                 data["col_request1"],
                 data["col_request2"],
                 data["values"],
-                **common,
+                unit_m=unit_m,
+                name=name,
             )
         else:
             model = PairingModel(
@@ -133,7 +136,8 @@ def load_instance(path: str | Path):
                 data["col_b"],
                 data["values"],
                 objective=str(data.get("objective", "weight")),
-                **common,
+                unit_m=unit_m,
+                name=name,
             )
         meta = json.loads(str(data.get("meta_json", "{}")))
         if not isinstance(meta, dict):
@@ -237,7 +241,7 @@ def find_instances(paths: list[str | Path]) -> list[Path]:
     return out
 
 
-def load_instances(paths: list[str | Path]) -> tuple[list, dict[str, float]]:
+def load_instances(paths: list[str | Path]) -> tuple[list[Model], dict[str, float]]:
     """Models of every instance file under ``paths``, named uniquely, and the optima their runs proved.
 
     Models are renamed after their file (``toy_mb_round00025``; the parent

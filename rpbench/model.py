@@ -33,7 +33,7 @@ from __future__ import annotations
 import copy
 import enum
 from dataclasses import dataclass, field
-from typing import ClassVar
+from typing import ClassVar, Self
 
 import numpy as np
 import scipy.sparse as sp
@@ -126,7 +126,7 @@ class _Model:
         data = np.ones(len(rows), dtype=np.float64)
         return sp.csc_matrix((data, rows, start), shape=(self.n_rows, self.n_cols))
 
-    def renamed(self, name: str) -> _Model:
+    def renamed(self, name: str) -> Self:
         """The same model under another name (arrays shared, no re-validation)."""
         twin = copy.copy(self)
         object.__setattr__(twin, "name", name)

@@ -280,7 +280,7 @@ def apsp_digest(dist: np.ndarray, pred: np.ndarray) -> str:
     """SHA-256 of an all-pairs table: dtypes, shapes and the bytes of both arrays."""
     h = hashlib.sha256(f"{_DIGEST_FORMAT}|{dist.dtype.str}{dist.shape}|{pred.dtype.str}{pred.shape}|".encode())
     for arr in (dist, pred):
-        h.update(memoryview(np.ascontiguousarray(arr)).cast("B"))
+        h.update(np.ascontiguousarray(arr).data.cast("B"))
     return h.hexdigest()
 
 

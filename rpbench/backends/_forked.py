@@ -10,11 +10,22 @@ from __future__ import annotations
 
 import time
 
+import numpy as np
+
 from rpbench.exceptions import SolverError
 
 
 class Timeout(Exception):
-    """A solver call ran past its deadline (and its child was killed)."""
+    """A solver call ran past its deadline (and its child was killed).
+
+    A caller that has a feasible answer and a bound when the deadline strikes attaches them
+    (``best``: chosen columns, ``bound``: on the objective) before passing the exception on.
+    """
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.best: np.ndarray | None = None
+        self.bound: int | None = None
 
 
 def run_in_child(fn, args, deadline: float | None, *, solver: str):

@@ -24,7 +24,7 @@ from rpbench.backends._common import LIMIT, OPTIMAL, Clock, Program, Raw, finish
 from rpbench.backends.base import Backend, SolveOptions
 from rpbench.backends.cardinality import columns_of_mate, maximum_cardinality_matching
 from rpbench.exceptions import SolverError
-from rpbench.model import Model, Solution, Structure, empty_solution
+from rpbench.model import AssignmentModel, Model, PairingModel, Solution, Structure, empty_solution
 
 ALL = frozenset(Structure)
 
@@ -54,16 +54,16 @@ class ProgramBackend(Backend):
         if model.n_cols == 0:
             return empty_solution(model, self.name)
         clock = Clock()
-        if model.structure is Structure.ASSIGNMENT:
+        if isinstance(model, AssignmentModel):
             return self.solve_assignment(model, options, clock)
-        if model.structure is Structure.PAIRING and model.objective == "cardinality_then_weight":
+        if isinstance(model, PairingModel) and model.objective == "cardinality_then_weight":
             return self.solve_lexicographic(model, options, clock, hint)
         raw = self.run(program(model), options, clock, time_limit=options.time_limit_s, hint=hint)
         if raw.x is None and hint is not None and raw.state == LIMIT:
             raw.x = np.round(hint)  # stopped before adopting the (feasible) warm start
         return finish(model, raw, self.name, clock, options.mip_rel_gap)
 
-    def solve_assignment(self, model: Model, options: SolveOptions, clock: Clock) -> Solution:
+    def solve_assignment(self, model: AssignmentModel, options: SolveOptions, clock: Clock) -> Solution:
         method = options.method or ("lp" if self.can_relax else "mip")
         if method not in ("lp", "mip"):
             raise SolverError(f"backend {self.name!r}: method {method!r} unknown for the assignment; use lp or mip")
@@ -87,7 +87,7 @@ class ProgramBackend(Backend):
         return finish(model, raw, self.name, clock, options.mip_rel_gap)
 
     def solve_lexicographic(
-        self, model: Model, options: SolveOptions, clock: Clock, hint: np.ndarray | None = None
+        self, model: PairingModel, options: SolveOptions, clock: Clock, hint: np.ndarray | None = None
     ) -> Solution:
         """Oracle-2: ``k*`` exactly by Edmonds' algorithm (certified, :mod:`.cardinality`), then the MIP.
 

@@ -36,7 +36,17 @@ from rpbench.backends.cardinality import columns_of_mate, edge_indices, maximum_
 from rpbench.backends.highs import HighsBackend
 from rpbench.backends.jv import lapmod_solution
 from rpbench.exceptions import SolverError, SolverNotInstalledError
-from rpbench.model import Model, PairingModel, Solution, Status, Structure, empty_solution, make_solution
+from rpbench.model import (
+    AssignmentModel,
+    Model,
+    PairingModel,
+    Solution,
+    Status,
+    Structure,
+    TripPackingModel,
+    empty_solution,
+    make_solution,
+)
 
 #: OGDF multiplies integral costs by 4 internally; sums of costs must stay in int64.
 INT64_SAFE = 2**60
@@ -80,9 +90,9 @@ class BlossomBackend(Backend):
         self.ensure_installed()
         if model.n_cols == 0:
             return empty_solution(model, self.name)
-        if model.structure is Structure.ASSIGNMENT:
+        if isinstance(model, AssignmentModel):
             return lapmod_solution(model, self.name)
-        if model.structure is Structure.TRIP_PACKING:
+        if isinstance(model, TripPackingModel):
             sol = HighsBackend().solve(model, options)
             note = "; ".join(m for m in ("trip packing solved by HiGHS (LP or MIP)", sol.message) if m)
             return replace(sol, backend=self.name, message=note)

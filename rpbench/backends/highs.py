@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import threading
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -22,6 +23,9 @@ from rpbench.backends.base import SolveOptions
 from rpbench.backends.unique import unique_optimum
 from rpbench.exceptions import SolverError
 from rpbench.model import Model, Solution, Status, Structure, make_solution
+
+if TYPE_CHECKING:
+    import highspy
 
 #: HiGHS model status name -> raw state (x in [0, 1]: "unbounded or infeasible" is infeasible).
 STATUS = {
@@ -66,7 +70,7 @@ def highs_settings(options: SolveOptions, time_limit: float | None, *, relax: bo
     return settings
 
 
-def _apply(h, settings: dict) -> None:
+def _apply(h: highspy.Highs, settings: dict) -> None:
     for key, value in settings.items():
         if h.setOptionValue(key, value).name == "kError":
             raise SolverError(f"HiGHS rejected option {key} = {value!r}; see the HiGHS option list")
@@ -76,14 +80,14 @@ class _Kept(threading.local):
     """This thread's HiGHS instances by role, with the settings their options were last set to (None: unknown)."""
 
     def __init__(self) -> None:
-        self.highs: dict[str, object] = {}
+        self.highs: dict[str, highspy.Highs] = {}
         self.settings: dict[str, dict | None] = {}
 
 
 _kept = _Kept()
 
 
-def kept_instance(settings: dict, role: str = "solve"):
+def kept_instance(settings: dict, role: str = "solve") -> highspy.Highs:
     """This thread's ``highspy.Highs`` for ``role``, its previous model cleared and its options set to ``settings``.
 
     Constructing a Highs object costs about 0.15 ms, more than solving a typical

@@ -52,7 +52,17 @@ from rpbench.backends.cardinality import columns_of_mate, edge_indices, mate_of,
 from rpbench.backends.highs import HighsBackend
 from rpbench.backends.jv import lapmod_solution
 from rpbench.exceptions import SolverError
-from rpbench.model import Model, PairingModel, Solution, Status, Structure, empty_solution, make_solution
+from rpbench.model import (
+    AssignmentModel,
+    Model,
+    PairingModel,
+    Solution,
+    Status,
+    Structure,
+    TripPackingModel,
+    empty_solution,
+    make_solution,
+)
 
 #: Largest edge weight PyMatching accepts and keeps unscaled when all weights are integral.
 PM_MAX_WEIGHT = 2**24 - 1
@@ -77,11 +87,11 @@ class MatchingBackend(Backend):
         self.ensure_installed()
         if model.n_cols == 0:
             return empty_solution(model, self.name)
-        if model.structure is Structure.TRIP_PACKING:
+        if isinstance(model, TripPackingModel):
             sol = HighsBackend().solve(model, options)
             note = "; ".join(m for m in ("trip packing solved by HiGHS (LP or MIP)", sol.message) if m)
             return replace(sol, backend=self.name, message=note)
-        if model.structure is Structure.ASSIGNMENT:
+        if isinstance(model, AssignmentModel):
             return lapmod_solution(model, self.name)
         return solve_pairing(model, options, Clock(), self.name)
 
@@ -261,8 +271,8 @@ def solve_pairing(model: PairingModel, options: SolveOptions, clock: Clock, back
                 return _blossom_v(model, options, clock, backend, why)
             step *= 2
         except Timeout as exc:
-            sel, why = getattr(exc, "best", sel), why or "PyMatching ran out of its share of the time limit"
-            bound = getattr(exc, "bound", None)
+            sel = exc.best if exc.best is not None else sel
+            why, bound = why or "PyMatching ran out of its share of the time limit", exc.bound
             break
     chosen = np.sort(sel)
     if step == 1 and proven and not why:

@@ -128,7 +128,7 @@ class Preset:
 
 
 def _preset_files() -> dict[str, Path | resources.abc.Traversable]:
-    found: dict[str, object] = {}
+    found: dict[str, Path | resources.abc.Traversable] = {}
     checkout = source_root() / "solvers"
     if checkout.is_dir():
         for p in sorted(checkout.glob("*.toml")):
@@ -242,7 +242,7 @@ def _opt(opts: dict, key: str, kind: type, default, where: str, *, low=None, hig
     if not isinstance(value, kind) or isinstance(value, bool):
         raise PresetError(f"solver preset {where!r}: option {key} = {value!r} must be of type {kind.__name__}")
     # TOML spells nan and inf; a NaN limit compares false with everything and would slip through.
-    if kind is float and not math.isfinite(value):
+    if isinstance(value, float) and not math.isfinite(value):
         raise PresetError(f"solver preset {where!r}: option {key} = {value!r} must be a finite number")
     if low is not None and (value <= low if low_open else value < low):
         raise PresetError(f"solver preset {where!r}: {key} must be {'>' if low_open else '>='} {low:g} (got {value!r})")

@@ -32,6 +32,8 @@ import multiprocessing
 import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import replace
+from multiprocessing.context import SpawnProcess
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -124,7 +126,7 @@ def run_benchmark(
 def cross_check(table: pd.DataFrame) -> pd.DataFrame:
     """Fill ``agrees`` by comparing every row with the proven optima of its model."""
     table = table.copy()
-    agrees = []
+    agrees: list[bool | None] = []
     for _, r in table.iterrows():
         same = table[(table["model"] == r["model"]) & (table["status"] == Status.OPTIMAL.value)]
         optima = set(same["objective"])
@@ -160,7 +162,7 @@ def _row(model: Model, preset: Preset, result: dict) -> dict:
 def _solve_once(preset: Preset, model: Model, repeat: int) -> dict:
     """The fastest of ``repeat`` solves, as a row fragment (errors, an infeasible answer among them, become
     status ``error``)."""
-    best = None
+    best: dict[str, Any] = {}
     for _ in range(repeat):
         t0 = time.perf_counter()
         try:
@@ -168,7 +170,7 @@ def _solve_once(preset: Preset, model: Model, repeat: int) -> dict:
         except RpbenchError as exc:
             return _failure("error", str(exc))
         wall = time.perf_counter() - t0
-        row = {
+        row: dict[str, Any] = {
             "status": sol.status.value,
             "objective": sol.objective,
             "bound": sol.bound,
@@ -181,7 +183,7 @@ def _solve_once(preset: Preset, model: Model, repeat: int) -> dict:
             "wall_s": wall,
             "message": sol.message,
         }
-        if best is None or row["total_s"] < best["total_s"]:
+        if not best or row["total_s"] < best["total_s"]:
             best = row
         if sol.status is not Status.OPTIMAL:
             break  # a time-limited run is not repeated
@@ -250,7 +252,7 @@ class _Worker:
 
     def __init__(self, preset: Preset, hard_timeout_s: float | None) -> None:
         self.preset, self.hard = preset, hard_timeout_s
-        self.proc = None
+        self.proc: SpawnProcess | None = None
 
     def _start(self) -> None:
         ctx = multiprocessing.get_context("spawn")  # a clean process: no solver threads inherited
@@ -312,7 +314,7 @@ def format_table(table: pd.DataFrame) -> str:
 
         gap = "-" if r["gap"] is None or pd.isna(r["gap"]) else f"{r['gap']:.1e}"
         obj = "-" if pd.isna(r["objective"]) else f"{r['objective']:,.0f}"
-        agree = {True: "yes", False: "NO"}.get(None if pd.isna(r["agrees"]) else bool(r["agrees"]), "-")
+        agree = "-" if pd.isna(r["agrees"]) else "yes" if bool(r["agrees"]) else "NO"
         lines.append(
             f"{r['model']:<{w}} {size:>{sw}} {r['preset']:<12} {r['status']:<10} {obj:>16} {gap:>8} "
             f"{ms(r['build_s']):>10} {ms(r['solve_s']):>10} {ms(r['total_s']):>10}  {agree}"

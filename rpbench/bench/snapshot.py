@@ -14,8 +14,13 @@ from rpbench.backends import load_preset
 from rpbench.harness.comparison import calibrated, simulate_strategy
 from rpbench.harness.spec import RunSpec
 from rpbench.instances import save_instance
+from rpbench.model import Model, Solution
 from rpbench.results.store import check_new_folder
 from rpbench.scenarios.base import Scenario
+from rpbench.strategies.base import RoundModel
+
+#: A captured round: its number, time, model, the solver's objective and status.
+_Captured = tuple[int, float, Model, float, str]
 
 
 def take_snapshots(
@@ -39,9 +44,9 @@ def take_snapshots(
     out = Path(out)
     with results.new_results_folder(out, out.name) as (tmp, final):
         for entry in spec.simulated:
-            seen: list[tuple[int, float, object, float, str]] = []
+            seen: list[_Captured] = []
 
-            def capture(k, t, rm, solution, seen=seen):
+            def capture(k: int, t: float, rm: RoundModel, solution: Solution, seen: list[_Captured] = seen) -> None:
                 if rounds is None or k in rounds:
                     seen.append((k, t, rm.model, solution.objective, solution.status.value))
 

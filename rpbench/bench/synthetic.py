@@ -27,7 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 from rpbench.exceptions import ParameterError
-from rpbench.model import OBJECTIVES, AssignmentModel, PairingModel, TripPackingModel, quantize
+from rpbench.model import OBJECTIVES, AssignmentModel, Model, PairingModel, TripPackingModel, quantize
 
 CITY_M = (20_000.0, 12_000.0)
 ROAD_FACTOR = 1.3
@@ -164,12 +164,12 @@ def pairing(
         i, j, saving = i[order], j[order], saving[order]
         keep = (np.arange(len(i)) - np.searchsorted(i, i)) < half
         parts.append((i[keep], j[keep], saving[keep]))
-    i, j, saving = (np.concatenate(p) for p in zip(*parts, strict=True)) if parts else (np.zeros(0),) * 3
+    col_a, col_b, saving_m = (np.concatenate(p) for p in zip(*parts, strict=True)) if parts else (np.zeros(0),) * 3
     return PairingModel(
         n,
-        i,
-        j,
-        quantize(saving, unit_m),
+        col_a,
+        col_b,
+        quantize(saving_m, unit_m),
         objective=objective,
         unit_m=unit_m,
         name=name or f"pairing-{n}-{objective}-s{seed}",
@@ -255,11 +255,11 @@ SUITES: dict[str, list[tuple[str, tuple[int, ...]]]] = {
 }
 
 
-def suite(name: str = "default", *, seed: int = 0, objectives: tuple[str, ...] = ("weight",)) -> list:
+def suite(name: str = "default", *, seed: int = 0, objectives: tuple[str, ...] = ("weight",)) -> list[Model]:
     """The models of a named benchmark set (pairing once per objective)."""
     if name not in SUITES:
         raise ParameterError(f"synthetic size set {name!r} unknown; expected one of {', '.join(SUITES)}")
-    models = []
+    models: list[Model] = []
     for structure, args in SUITES[name]:
         if structure == "assignment":
             models.append(assignment(*args, seed=seed))

@@ -89,6 +89,7 @@ def run(args: argparse.Namespace) -> int:
     if not (args.unit_m > 0 and math.isfinite(args.unit_m)):
         raise ParameterError(f"--unit-m {args.unit_m!r} must be a finite number of metres > 0")
     scenario = scenario_request(args).build()
+    variants: tuple[int, ...]
     if args.variant == "bound":
         if args.both_pickup_orders or args.pickup_check or args.allow_enroute:
             raise ParameterError("--variant bound takes no pair-rule flags: the bound's rules are fixed by its proof")

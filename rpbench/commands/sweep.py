@@ -42,12 +42,12 @@ def build_spec(args: argparse.Namespace) -> SweepSpec:
     if (args.sweep is None) == (args.over is None):
         raise ParameterError(f"give either a predefined sweep ({', '.join(SWEEPS)}) or --over NAME=V1,V2,...")
     if args.over:
-        parameter, values = parse_over(args.over)
+        parameter, over = parse_over(args.over)
         strategies = tuple(split_list(args.strategies or "mb,rtv,fl"))
         return SweepSpec(
             name=parameter,
             parameter=parameter,
-            values=tuple(values),
+            values=tuple(over),
             strategies=strategies,
             kpis=("avg_detour_m", "total_saving_km", "avg_response_time_s", "response_rate", "pairing_ratio"),
         )

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import dataclasses
 import sys
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -33,7 +32,7 @@ from rpbench.results.report import with_competitive_ratios, write_report
 from rpbench.results.runs import run_label
 from rpbench.results.store import check_new_folder, new_results_folder, timestamp
 from rpbench.scenarios.base import Scenario
-from rpbench.sim.simulator import SimResult, Simulator
+from rpbench.sim.simulator import Capture, SimResult, Simulator
 
 
 def run_comparison(
@@ -142,7 +141,7 @@ def simulate_strategy(
     *,
     progress: bool | None = None,
     canonical_ties: bool = True,
-    capture: Callable | None = None,
+    capture: Capture | None = None,
     strict: bool = False,
 ) -> StrategyRun:
     """Simulate one strategy run and compute its KPIs from the event log (``entry``: a run entry, or a

@@ -108,7 +108,7 @@ def write_multiday_report(parent: Path, name: str | None = None) -> Path:
         ]
         lines += [f"| {d} | " + " | ".join(fmt(kpi, wide.loc[d, r]) for r in runs) + " |" for d in wide.index]
         lines.append("")
-    claims = {}
+    claims: dict[str, list[bool]] = {}
     for day in days:
         f = findings(load_kpis(day))
         if f:

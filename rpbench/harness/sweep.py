@@ -200,11 +200,8 @@ def write_sweep_report(parent: Path, name: str | None = None) -> Path:
     kpis = meta["kpis"]
     runs = meta["strategies"]
     args = meta.get("scenario_args", {})
-    with_paper = (
-        spec is not None
-        and spec.paper_table
-        and paper.table2_applies(meta["scenario"], args.get("date"), args.get("sample"))
-    )
+    paper_table = (spec.paper_table if spec is not None else None) or {}
+    with_paper = bool(paper_table) and paper.table2_applies(meta["scenario"], args.get("date"), args.get("sample"))
     lines = [
         f"# rpbench sweep `{meta['sweep']}` over {meta['parameter']}",
         "",
@@ -229,7 +226,7 @@ def write_sweep_report(parent: Path, name: str | None = None) -> Path:
             for r in runs:
                 cell = fmt(k, sel.get((k, r), float("nan")))
                 if with_paper:
-                    ref = spec.paper_table.get(_paper_key(p["value"]), {}).get(r, {}).get(k, float("nan"))
+                    ref = paper_table.get(_paper_key(p["value"]), {}).get(r, {}).get(k, float("nan"))
                     cell += f" ({fmt(k, ref)})"
                 cells.append(cell)
         lines.append(f"| {p['value']:g} | " + " | ".join(cells) + " |")

@@ -183,16 +183,14 @@ def find_candidates(
     all-pairs matrix is accepted when ``allow_enroute`` is off.
     """
     t0 = time.perf_counter()
-    if isinstance(distances, DistanceOracle):
-        dist = distances.dist
-    elif rules.allow_enroute:
+    oracle = distances if isinstance(distances, DistanceOracle) else None
+    if oracle is None and rules.allow_enroute:
         raise ParameterError(
             "allow_enroute needs the orders' shortest paths: pass the network's "
             "DistanceOracle (network.distances()), not a bare distance matrix"
         )
-    else:
-        dist = distances
-    dist = np.asarray(dist)  # a plain view: gathers from a memmap subclass are slower
+    # a plain view: gathers from a memmap subclass are slower
+    dist = np.asarray(distances.dist if isinstance(distances, DistanceOracle) else distances)
     if block_pairs < 1:
         raise ParameterError(f"block_pairs = {block_pairs!r} must be >= 1")
     n = len(orders)
@@ -202,12 +200,12 @@ def find_candidates(
     d = orders.destination[rank].astype(np.intp)
     solo = dist[o, d]
     if rules.window == "bound":
-        if not isinstance(distances, DistanceOracle):
+        if oracle is None:
             raise ParameterError(
                 "the upper bound needs the orders' shortest paths: pass the network's "
                 "DistanceOracle (network.distances()), not a bare distance matrix"
             )
-        return _bound_candidates(distances, dist, orders, rules, rank, t, o, d, solo, block_pairs, t0)
+        return _bound_candidates(oracle, dist, orders, rules, rank, t, o, d, solo, block_pairs, t0)
     k_bar = float(rules.planner_patience_s)
 
     # Window of each i: j in (i, hi_i).  The bound is widened by a hair and the
@@ -217,7 +215,7 @@ def find_candidates(
     hi = np.searchsorted(t, t + reach + 1e-6 * (1.0 + np.abs(t) + reach), side="right")
     count = np.maximum(hi - np.arange(n) - 1, 0)
 
-    path = _paths(distances, dist, o, d) if rules.allow_enroute and n else None
+    path = _paths(oracle, dist, o, d) if oracle is not None and rules.allow_enroute and n else None
     parts: list[dict] = []
     evaluated = 0
     for ii, jj in _pair_blocks(count, block_pairs):
@@ -255,15 +253,21 @@ def _assemble(parts: list[dict], rank, n: int, rules: PairRules, evaluated: int,
     cols = {k: np.concatenate([p[k] for p in parts]) if parts else np.zeros(0, dtype) for k, dtype in _COLUMNS.items()}
     first, second = rank[cols.pop("first")].astype(np.int64), rank[cols.pop("second")].astype(np.int64)
     srt = np.lexsort((np.maximum(first, second), np.minimum(first, second)))
-    cols = {k: v[srt] for k, v in cols.items()}
     return CandidatePairs(
         n_orders=n,
         first=first[srt],
         second=second[srt],
+        enroute=cols["enroute"][srt],
+        fofo=cols["fofo"][srt],
+        saving_m=cols["saving_m"][srt],
+        length_m=cols["length_m"][srt],
+        detour_first_m=cols["detour_first_m"][srt],
+        detour_second_m=cols["detour_second_m"][srt],
+        shared_m=cols["shared_m"][srt],
+        pickup_m=cols["pickup_m"][srt],
         rules=rules,
         evaluated=int(evaluated),
         seconds=time.perf_counter() - t0,
-        **cols,
     )
 
 

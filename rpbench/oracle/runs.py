@@ -39,8 +39,8 @@ class OracleRun:
     defaults: dict[str, Any] = field(default_factory=dict)
     Options: type[RunOptions] = OracleOptions
 
-    def rules(self, params: Params, options: OracleOptions) -> PairRules:
-        """The pair rules of this run on a scenario with ``params``."""
+    def rules(self, params: Params, options: RunOptions) -> PairRules:
+        """The pair rules of this run on a scenario with ``params`` (``options``: of this run's :attr:`Options`)."""
         flags: dict[str, Any] = dict(self.defaults)
         flags.update({k: v for k, v in options.as_dict().items() if v is not None})
         return PairRules.from_params(params, **flags)

@@ -233,7 +233,7 @@ def timestamp() -> str:
 # ------------------------------------------------------------------ metadata
 def environment() -> dict[str, Any]:
     """Versions, git commit and machine facts for meta.json."""
-    versions = {"rpbench": __version__, "python": platform.python_version()}
+    versions: dict[str, str | None] = {"rpbench": __version__, "python": platform.python_version()}
     for pkg in VERSIONED_PACKAGES:
         try:
             versions[pkg] = metadata.version(pkg)
@@ -377,7 +377,8 @@ def _load_npz(path: Path, keys: tuple[str, ...]) -> dict[str, np.ndarray]:
 
 
 def save_trajectories(path: Path, traj: dict[str, np.ndarray]) -> None:
-    np.savez_compressed(path, **traj)
+    # numeric arrays only; the explicit flag also keeps a key from being read as numpy's own argument
+    np.savez_compressed(path, allow_pickle=False, **traj)
 
 
 TRAJECTORY_KEYS = ("vehicle_offsets", "node", "t_s", "odo_m")

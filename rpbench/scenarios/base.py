@@ -183,22 +183,24 @@ class Fleet:
     online_count: np.ndarray | None = None  # int64, <= number of vehicles
 
     def __post_init__(self) -> None:
-        if (self.online_times_s is None) != (self.online_count is None):
-            raise ParameterError("fleet: online_times_s and online_count go together")
-        if self.online_times_s is not None:
-            if len(self.online_times_s) != len(self.online_count) or len(self.online_count) == 0:
-                raise ParameterError("fleet: online schedule arrays differ in length or are empty")
-            if np.any(np.diff(self.online_times_s) <= 0) or self.online_times_s[0] != 0:
-                raise ParameterError("fleet: online_times_s must start at 0 and increase")
-            if np.any(self.online_count < 0) or np.any(self.online_count > len(self.initial_node)):
-                raise ParameterError("fleet: online_count must lie in [0, number of vehicles]")
+        times, count = self.online_times_s, self.online_count
+        if times is None or count is None:
+            if times is not None or count is not None:
+                raise ParameterError("fleet: online_times_s and online_count go together")
+            return
+        if len(times) != len(count) or len(count) == 0:
+            raise ParameterError("fleet: online schedule arrays differ in length or are empty")
+        if np.any(np.diff(times) <= 0) or times[0] != 0:
+            raise ParameterError("fleet: online_times_s must start at 0 and increase")
+        if np.any(count < 0) or np.any(count > len(self.initial_node)):
+            raise ParameterError("fleet: online_count must lie in [0, number of vehicles]")
 
     def __len__(self) -> int:
         return len(self.initial_node)
 
     def on_duty(self, t_s: float) -> int:
         """Number of vehicles on duty at time ``t_s`` (vehicles 0..n-1)."""
-        if self.online_times_s is None:
+        if self.online_times_s is None or self.online_count is None:  # both or neither (__post_init__)
             return len(self.initial_node)
         k = int(np.searchsorted(self.online_times_s, t_s, side="right")) - 1
         return int(self.online_count[max(k, 0)])
@@ -251,7 +253,7 @@ class Scenario:
         """The facts ``rpbench scenario`` prints (keys ``orders``, ``vehicles``, ``nodes`` are stable)."""
         o = self.orders
         solo = self.network.distances()(o.origin, o.destination) if len(o) else np.zeros(0)
-        od = np.unique(o.origin.astype(np.int64) * self.network.n_nodes + o.destination) if len(o) else []
+        od = np.unique(o.origin.astype(np.int64) * self.network.n_nodes + o.destination) if len(o) else np.zeros(0)
         return {
             "scenario": self.name,
             "label": self.label,

@@ -271,7 +271,9 @@ class FleetState:
     def trajectory(self, v: int, t_end: float | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The driven node sequence with times and odometer (up to ``t_end``)."""
         chunks = self.history[v] + [self.plans[v]]
-        nodes, tt, odo = [], [], []
+        nodes: list[np.ndarray] = []
+        tt: list[np.ndarray] = []
+        odo: list[np.ndarray] = []
         for c in chunks:
             n, t, o = c.nodes, c.tt, c.odo
             if nodes and nodes[-1][-1] == n[0] and tt[-1][-1] >= t[0] - _EPS_S:

@@ -29,6 +29,7 @@ import re
 import stat
 import tempfile
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -38,12 +39,15 @@ import pandas as pd
 from rpbench.backends import Preset, solve
 from rpbench.exceptions import SolverError
 from rpbench.instances import save_instance
-from rpbench.model import Status
+from rpbench.model import Solution, Status
 from rpbench.paths import cache_dir
 from rpbench.scenarios.base import Scenario
 from rpbench.sim.fleet import DROPOFF, PICKUP, FleetState, Stop
 from rpbench.sim.ties import canonicalize
 from rpbench.strategies.base import Kind, RoundModel, RoundState, Strategy
+
+#: ``capture(round, t, round_model, solution)``: a hook that sees every solved round.
+Capture = Callable[[int, float, RoundModel, Solution], None]
 
 # passenger states
 PENDING, WAITING, ASSIGNED, ONBOARD, DONE, CANCELLED = range(6)
@@ -130,7 +134,7 @@ class Simulator:
         *,
         canonical_ties: bool = True,
         progress=None,
-        capture=None,
+        capture: Capture | None = None,
         strict: bool = False,
     ):
         """``capture(round, t, round_model, solution)``, if given, sees every solved round (snapshots).
@@ -345,8 +349,8 @@ class Simulator:
             v = int(rm.vehicle[c])
             a, b = int(rm.first[c]), int(rm.second[c])
             fofo = bool(rm.fofo[c])
-            k, h, _ = fl.positions(np.array([v]), t)
-            k, h = int(k[0]), int(h[0])
+            ks, hs, _ = fl.positions(np.array([v]), t)
+            k, h = int(ks[0]), int(hs[0])
             if kind == Kind.VACANT:
                 tail, reach = fl.route_through([h, self.origin[a], self.destination[a]])
                 stops = [Stop(reach[0], PICKUP, a), Stop(reach[1], DROPOFF, a)]
@@ -447,8 +451,8 @@ class Simulator:
         fl = self.fleet
         n_on = self.scenario.fleet.on_duty(t)
         want = np.arange(fl.n) < n_on
-        for v in np.flatnonzero(want != fl.on_duty):
-            v = int(v)
+        for changed in np.flatnonzero(want != fl.on_duty):
+            v = int(changed)
             fl.on_duty[v] = want[v]
             if fl.onboard[v] or fl.assigned[v]:
                 continue  # busy vehicles finish their passengers first

@@ -30,14 +30,15 @@ import functools
 
 import numpy as np
 
-from rpbench.model import AssignmentModel, Solution, Status, TripPackingModel, make_solution
+from rpbench.model import AssignmentModel, Model, Solution, Status, TripPackingModel, make_solution
 
 
-def canonicalize(model, solution: Solution) -> tuple[Solution, int]:
+def canonicalize(model: Model, solution: Solution) -> tuple[Solution, int]:
     """Return the canonical optimum reachable from ``solution`` and the number of moves made."""
     # A proven-unique optimum has no value-neutral move (each would give a second optimum).
     if solution.status != Status.OPTIMAL or len(solution.chosen) == 0 or solution.unique:
         return solution, 0
+    items: tuple[np.ndarray, ...]  # per column, the orders it serves: one array, or two for a trip
     if isinstance(model, AssignmentModel):
         resource = model.col_vehicle.astype(np.int64)
         items = (model.col_passenger.astype(np.int64),)

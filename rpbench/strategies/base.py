@@ -13,13 +13,19 @@ from __future__ import annotations
 import enum
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar, Generic, TypeVar, cast
 
 import numpy as np
 
 from rpbench.model import AssignmentModel, Structure, TripPackingModel
 from rpbench.scenarios.base import Params, Scenario
 from rpbench.strategies.options import RunOptions
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+#: A strategy's options class (:attr:`Strategy.Options`).
+OptionsT = TypeVar("OptionsT", bound=RunOptions)
 
 
 class Kind(enum.IntEnum):
@@ -109,12 +115,14 @@ class RoundModel:
                 raise ValueError(f"RoundModel.{name} has {len(getattr(self, name))} entries for {n} columns")
 
 
-class Strategy(ABC):
+class Strategy(ABC, Generic[OptionsT]):
     """A dispatching formulation: a subclass sets the class attributes and implements :meth:`build`.
 
     Everything the harness, the reports and the plots need to know about a
     strategy is a class attribute here, so adding one is one module plus one
-    registry line.
+    registry line.  A subclass with its own options names their class twice:
+    as :attr:`Options` (read at run time) and as the type parameter
+    (``class RTV(Strategy[RTVOptions])``), which types :attr:`options`.
     """
 
     name: ClassVar[str]
@@ -129,25 +137,27 @@ class Strategy(ABC):
     #: The strategy whose run on the same scenario calibrates this one (None: none needed).
     calibrated_by: ClassVar[str | None] = None
 
-    def __init__(self, options: RunOptions | None = None, **raw: Any):
+    def __init__(self, options: OptionsT | None = None, **raw: Any):
         """Options as a parsed :attr:`Options` object, or as keyword values (parsed and checked here)."""
         if options is not None and raw:
             raise TypeError("give options either parsed or as keywords, not both")
-        self.options = options if options is not None else self.Options.parse(self.name, raw)
-        if not isinstance(self.options, self.Options):
-            raise TypeError(f"{self.name}: options must be {self.Options.__name__}, not {type(self.options).__name__}")
+        parsed = options if options is not None else self.Options.parse(self.name, raw)
+        if not isinstance(parsed, self.Options):
+            raise TypeError(f"{self.name}: options must be {self.Options.__name__}, not {type(parsed).__name__}")
+        # Options is the class the type parameter names; a ClassVar cannot carry the parameter itself
+        self.options: OptionsT = cast(OptionsT, parsed)
 
     @classmethod
-    def needs_calibration(cls, options: RunOptions) -> bool:
+    def needs_calibration(cls, options: OptionsT) -> bool:
         """Whether ``options`` still lack what the :attr:`calibrated_by` run provides."""
         return cls.calibrated_by is not None
 
     @classmethod
-    def calibrate(cls, options: RunOptions, kpis: dict[str, float], hourly, hours: int) -> RunOptions:
+    def calibrate(cls, options: OptionsT, kpis: dict[str, float], hourly: pd.DataFrame, hours: int) -> OptionsT:
         """``options`` completed from the calibration run's KPIs (whole run) and ``hourly`` table."""
         return options
 
-    def prepare(self, scenario: Scenario) -> None:  # noqa: B027 (a hook: doing nothing is the default)
+    def prepare(self, scenario: Scenario) -> None:
         """Called once before the first round (e.g. to load predictions)."""
 
     @abstractmethod

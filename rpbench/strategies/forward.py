@@ -39,6 +39,7 @@ Options (``--opt fl.NAME=VALUE``):
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -48,9 +49,19 @@ from rpbench.predict import RATE_SOURCES, PredictConfig, Prediction, scenario_pr
 from rpbench.predict.config import ACCELERATIONS, PRIORITIES, RHO_MODES
 from rpbench.scenarios.base import Scenario
 from rpbench.strategies.base import RoundModel, RoundState, Strategy
-from rpbench.strategies.candidates import NO_WAIT_UTILITY_M, JoinOptions, assignment_round, join_options, vacant_options
+from rpbench.strategies.candidates import (
+    NO_WAIT_UTILITY_M,
+    JoinOptions,
+    VacantOptions,
+    assignment_round,
+    join_options,
+    vacant_options,
+)
 from rpbench.strategies.myopic import PoolingOptions
-from rpbench.strategies.options import RunOptions, option
+from rpbench.strategies.options import option
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 FALLBACK_TAU0_S = 120.0
 FALLBACK_MEAN_PICKUP_M = 900.0
@@ -97,12 +108,12 @@ def fraction(num: np.ndarray, den: np.ndarray) -> np.ndarray:
     return out
 
 
-class _ForwardBase(Strategy):
+class _ForwardBase(Strategy[ForwardOptions]):
     structure = Structure.ASSIGNMENT
     Options = ForwardOptions
     calibrated_by = "mb"
 
-    def __init__(self, options: RunOptions | None = None, **raw):
+    def __init__(self, options: ForwardOptions | None = None, **raw: Any):
         super().__init__(options, **raw)
         self.predictions: list[Prediction] = []
         self.mean_pickup_m: np.ndarray = np.array([FALLBACK_MEAN_PICKUP_M])
@@ -113,9 +124,13 @@ class _ForwardBase(Strategy):
         return options.tau0_s is None or options.mean_pickup_m is None
 
     @classmethod
-    def calibrate(cls, options: ForwardOptions, kpis: dict[str, float], hourly, hours: int) -> ForwardOptions:
+    def calibrate(
+        cls, options: ForwardOptions, kpis: dict[str, float], hourly: pd.DataFrame, hours: int
+    ) -> ForwardOptions:
         """τ_0 (A4) and l̄ from the MB run "for the same hour" (docs/algorithms.md §1-§2), per hour where the
         scenario spans several; options the user set are kept."""
+        tau0: float | tuple[float, ...]
+        pickup: float | tuple[float, ...]
         if hours == 1:
             tau0, pickup = kpis["avg_pickup_time_s"], kpis["avg_pickup_distance_m"]
         else:
@@ -138,7 +153,7 @@ class _ForwardBase(Strategy):
         hour = min(int(t_s // 3600.0), len(self.predictions) - 1)
         return self.predictions[hour], hour
 
-    def _options(self, state: RoundState):
+    def _options(self, state: RoundState) -> tuple[VacantOptions, JoinOptions, Prediction, int, np.ndarray]:
         vac = vacant_options(state)
         join = join_options(state, self.options.order_rule)
         good = join.saving_m > 0  # A11
@@ -185,7 +200,7 @@ class ForwardLookingNoDelay(_ForwardBase):
         )
 
 
-def _per_hour(value, hours: int, fallback: float, name: str) -> np.ndarray:
+def _per_hour(value: float | tuple[float, ...] | None, hours: int, fallback: float, name: str) -> np.ndarray:
     """A scalar or per-hour list option as an array of ``hours`` values (NaN -> fallback)."""
     if value is None:
         return np.full(hours, fallback)

@@ -31,7 +31,7 @@ class PoolingOptions(RunOptions):
     )
 
 
-class NonPooling(Strategy):
+class NonPooling(Strategy[RunOptions]):
     name = "np"
     label = "NP"
     color = "tab:gray"
@@ -51,7 +51,7 @@ class NonPooling(Strategy):
         )
 
 
-class MyopicBatch(Strategy):
+class MyopicBatch(Strategy[PoolingOptions]):
     name = "mb"
     label = "MB"
     color = "tab:blue"

@@ -16,7 +16,7 @@ import math
 import types
 import typing
 from dataclasses import dataclass
-from typing import Any, Union
+from typing import Any, Self, Union
 
 from rpbench.exceptions import ParameterError
 
@@ -31,7 +31,7 @@ class RunOptions:
     """Base of every options class (a strategy without options uses it as is)."""
 
     @classmethod
-    def parse(cls, owner: str, raw: dict[str, Any] | None = None) -> RunOptions:
+    def parse(cls, owner: str, raw: dict[str, Any] | None = None) -> Self:
         """The options named in ``raw`` (Python values or text), the rest at their defaults."""
         raw = dict(raw or {})
         declared = {f.name: f for f in dataclasses.fields(cls)}
@@ -59,7 +59,7 @@ class RunOptions:
         """Every option, defaults included (as recorded in meta.json)."""
         return {f.name: _plain(getattr(self, f.name)) for f in dataclasses.fields(self)}
 
-    def replace(self, **changes: Any) -> RunOptions:
+    def replace(self, **changes: Any) -> Self:
         return dataclasses.replace(self, **changes)
 
 

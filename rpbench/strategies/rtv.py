@@ -69,7 +69,7 @@ class RTVOptions(PoolingOptions):
             raise ParameterError(f"rtv rv_top_k {self.rv_top_k!r} must be a positive integer")
 
 
-class RTV(Strategy):
+class RTV(Strategy[RTVOptions]):
     name = "rtv"
     label = "RTV"
     color = "tab:orange"
