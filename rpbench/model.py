@@ -9,7 +9,7 @@ Every decision rpbench makes is one of three models, each
 
 with a special structure exact algorithms exploit:
 
-* :class:`AssignmentModel` — one batch round (paper Eqs. 1-4 and 16): rows are
+* :class:`AssignmentModel` — one batch round (paper Eqs. 1-4 and 14): rows are
   passengers (exactly one option each) and vehicles (at most one passenger);
   a column is (passenger, vehicle) or (passenger, keep waiting).  Bipartite,
   so the LP relaxation is integral.

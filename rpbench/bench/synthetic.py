@@ -6,7 +6,7 @@ Used by the model benchmark (:mod:`rpbench.bench.runner`, ``rpbench bench
 are uniform, and road distance is 1.3 x the straight line.  Values follow the
 paper's utilities, quantised to integral model units (:func:`~rpbench.model.quantize`):
 
-* :func:`assignment` — one batch round (paper Eqs. 1-4 and 16): each
+* :func:`assignment` — one batch round (paper Eqs. 1-4 and 14): each
   passenger is feasible with its nearest 5-20 % of vehicles, worth
   ``-pickup`` on a vacant vehicle and ``saving - pickup`` on a partially
   occupied one (Eq. 7), plus a keep-waiting option worth ``-U(1.5, 4) km``.

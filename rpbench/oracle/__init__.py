@@ -1,4 +1,4 @@
-"""The offline oracles (paper Eqs. 18-22, docs/algorithms.md §4): candidate pairs
+"""The offline oracles (paper Eqs. 16-20, docs/algorithms.md §4): candidate pairs
 (:mod:`.pairs`) and the maximum-weight matching over them (:mod:`.solve`)."""
 
 from rpbench.oracle.pairs import CandidatePairs, PairRules, find_candidates

@@ -64,7 +64,7 @@ ORACLE_RUNS: dict[str, OracleRun] = {
             "Oracle-1",
             "tab:red",
             "offline: the paper's Oracle-1, maximum saving over pairs "
-            "requested within K̄ of each other (Eqs. 18-22); a reference, not a bound",
+            "requested within K̄ of each other (Eqs. 16-20); a reference, not a bound",
         ),
         OracleRun(
             "oracle2",

@@ -1,6 +1,6 @@
 """The offline oracle: Oracle-1 (maximum saving) and Oracle-2 (maximum pairs) over a whole period.
 
-docs/algorithms.md §4.  The paper's oracle (Eqs. 18-22, its "linear program"
+docs/algorithms.md §4.  The paper's oracle (Eqs. 16-20, its "linear program"
 over ``x_ij`` for all ``i, j`` with ``x_ij = x_ji`` and ``e(i,i) = 0``) is a
 maximum-weight matching in the general graph of feasible pairs (§4.1):
 

@@ -51,7 +51,7 @@ class StrategyRules:
     packs_trips: bool = False
     #: The authors' vacant-vehicle weight credits the passenger's ride: (ride - pick-up) + 3000.
     credits_ride: bool = False
-    #: The balanced utility of Eq. (15), e^2 / (e + pk) x alpha^k, instead of e - pk.
+    #: The balanced utility of Eq. (13), e^2 / (e + pk) x alpha^k, instead of e - pk.
     balanced_values: bool = False
     #: A keep-waiting column worth the waiting utility ē(0,p) of Eq. (10) (the intended delay).
     waiting_value: bool = False
@@ -117,7 +117,7 @@ def priority(k: np.ndarray, fresh: np.ndarray, p: FLParams) -> np.ndarray:
 
 
 def balanced(e: np.ndarray, pk: np.ndarray) -> np.ndarray:
-    """e^2 / (e + pk) of Eq. (15), 0 where e + pk = 0 (the authors' guard)."""
+    """e^2 / (e + pk) of Eq. (13), 0 where e + pk = 0 (the authors' guard)."""
     den = e + pk
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(den == 0, 0.0, e * e / np.where(den == 0, 1.0, den))
@@ -136,7 +136,7 @@ def vacant_values(
         return balanced(e_taker, pk) * prio
     if authors and rules.credits_ride:
         return solo_m - pk + AUTHORS_BONUS
-    if rules.uses_predictions:  # Eq. (17): ē(p) - pk
+    if rules.uses_predictions:  # Eq. (15): ē(p) - pk
         return e_taker - pk + AUTHORS_BONUS if authors else e_taker - pk
     return AUTHORS_BONUS - pk if authors else -pk  # Eq. (7): -pk
 
@@ -147,7 +147,7 @@ def taker_values(
     """Model value of a partially occupied vehicle taking a second passenger (before the offset)."""
     if rules.balanced_values:
         return balanced(saving, pk) * prio
-    return saving - pk + AUTHORS_BONUS if authors else saving - pk  # Eqs. (7), (17): e - pk
+    return saving - pk + AUTHORS_BONUS if authors else saving - pk  # Eqs. (7), (15): e - pk
 
 
 def offset(rules: StrategyRules, authors: bool) -> float:

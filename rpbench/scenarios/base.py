@@ -51,7 +51,7 @@ class Params:
     max_pickup_m: float = 3000.0  # R̄
     max_detour_m: float = 3000.0  # D̄
     speed_mps: float = 30.0 / 3.6  # constant vehicle speed (30 km/h)
-    alpha: float = 1.01  # FL waiting-priority base α (Eq. 15)
+    alpha: float = 1.01  # FL waiting-priority base α (Eq. 13)
     response_rate: float = 0.75  # r_w, presumed per-round response rate (Eq. 10)
     planner_patience_s: float = 90.0  # K̄, the patience the planner assumes (A10)
     patience_mean_s: float = 90.0  # K_p ~ N(mean, sd), floored

@@ -1,13 +1,13 @@
-"""FL and FL-no_delay: the paper's forward-looking strategies (§3.4, Eqs. 15-17).
+"""FL and FL-no_delay: the paper's forward-looking strategies (§3.4, Eqs. 13-15).
 
 Both rank the same feasible options as MB (:mod:`.candidates`) with the
 predicted expected savings of the seeker/taker model (:mod:`rpbench.predict`):
 
-* **FL** (Eq. 15-16): ``ē(p)²/(ē(p)+pk)·α^k_p`` for a vacant vehicle,
+* **FL** (Eqs. 13-14): ``ē(p)²/(ē(p)+pk)·α^k_p`` for a vacant vehicle,
   ``e²/(e+pk)·α^k_p`` for a partially occupied one, ``ē(0,p) - l̄`` for keeping
   the passenger waiting (Eq. 10: ``ē(0,p) = [1-(1-r_w)^{K̄/Δt-k_p}]·[p_s ē(s) +
   (1-p_s) ē(p)]``).  ``0/0 := 0``.
-* **FL-no_delay** (Eq. 17): ``ē(p) - pk`` and ``e - pk``, no waiting option
+* **FL-no_delay** (Eq. 15): ``ē(p) - pk`` and ``e - pk``, no waiting option
   (waiting gets ``-10⁶ m``, A13).
 
 Partially occupied options with ``e <= 0`` are dropped for both (A11).
@@ -167,7 +167,7 @@ class ForwardLooking(_ForwardBase):
     name = "fl"
     label = "FL"
     color = "tab:green"
-    description = "forward-looking dispatch with intended delay, paper Eqs. (15)-(16)"
+    description = "forward-looking dispatch with intended delay, paper Eqs. (13)-(14)"
 
     def build(self, state: RoundState) -> RoundModel:
         vac, join, prediction, hour, e_vac = self._options(state)
@@ -185,7 +185,7 @@ class ForwardLookingNoDelay(_ForwardBase):
     name = "fl-nd"
     label = "FL-no_delay"
     color = "tab:olive"
-    description = "forward-looking dispatch without intended delay, paper Eq. (17)"
+    description = "forward-looking dispatch without intended delay, paper Eq. (15)"
 
     def build(self, state: RoundState) -> RoundModel:
         vac, join, _, _, e_vac = self._options(state)
