@@ -276,7 +276,7 @@ def test_o_t6_lp_relaxation_of_the_triangle_is_fractional():
 
 # ---------------------------------------------------------------------- O-T7
 def seed_ip(n: int, weight: np.ndarray, feasible: np.ndarray) -> float:
-    """The paper's IP (Eqs. 18-22) solved literally: x_ij for all i, j; rows/columns sum to 1; x = x^T."""
+    """The paper's IP (Eqs. 16-20) solved literally: x_ij for all i, j; rows/columns sum to 1; x = x^T."""
     from scipy.optimize import Bounds, LinearConstraint, milp
 
     e = np.where(feasible, weight, -1e4)  # infeasible pairs get -10^4, as the authors' script
