@@ -3,13 +3,12 @@
 Each step solves ``γ = argmin ||ΔF γ - f||`` over the last ``depth``
 residual differences and returns ``β f - (ΔX + β ΔF) γ`` in place of the
 damped step ``β f``.  On the month table ΔF has about 10^6 rows and at most
-5 columns, and factorising it afresh every step (``numpy.linalg.lstsq``, an
-SVD after a Householder QR, plus stacking the columns) took 0.18 s a step,
-3 s of a prediction.  Here ``ΔF = Q R`` is kept up to date instead, as
-Walker and Ni do: a new column is orthogonalised against Q twice (classical
-Gram-Schmidt with one re-orthogonalisation, orthogonal to working
-precision); the oldest is dropped with Givens rotations on R, applied to Q
-as one small matrix product; and ``min ||R γ - Qᵀ f||`` is solved with the
+5 columns; factorising it afresh every step (an SVD after a Householder QR,
+plus stacking the columns) costs about 0.2 s a step, so ``ΔF = Q R`` is kept
+up to date instead, as Walker and Ni do: a new column is orthogonalised
+against Q twice (classical Gram-Schmidt with one re-orthogonalisation,
+orthogonal to working precision); the oldest is dropped with Givens
+rotations on R, applied to Q as one small matrix product; and ``min ||R γ - Qᵀ f||`` is solved with the
 SVD cut-off numpy's ``lstsq`` applies to ΔF (singular values below
 ``eps · rows`` times the largest count as zero, so a history whose
 differences have become collinear gives the minimum-norm γ, not an exploding

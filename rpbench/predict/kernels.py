@@ -7,8 +7,7 @@ a weighted ``bincount`` per pair and several full-length temporaries; here it
 is one pass that keeps the running product ``λ_s Π_{c' ≻_s c} Q_c'`` in a
 register (a multiplication per pair instead of an ``exp``) and allocates
 nothing.  The per-seeker total ``log(1 - p_s) = Σ_c log Q_c`` is summed in
-log space beside it, exactly as before, so ``p_s`` keeps its relative
-precision when it is tiny.
+log space beside it, so ``p_s`` keeps its relative precision when it is tiny.
 
 The kernels take flat CSR arrays (``off`` of length W + 1, global pair
 offsets) so a caller can stream a memory-mapped structure chunk by chunk.
@@ -16,15 +15,14 @@ Seekers are walked in *blocks* (:mod:`.blocks`): consecutive seekers whose
 lists together name at most 65,536 taker classes.  A block's class values are
 gathered into small arrays first and the pairs index them with block-local
 16-bit numbers, so the per-pair lookups hit a few hundred kilobytes that stay
-in the core's cache instead of megabytes spread over the whole class table
-(about 15-20 % faster per sweep on the month table, and half the bytes
-streamed per pair).  A class's Q, log Q and H share one row of that table,
-so a pair touches one cache line of it.  ``cache=True`` stores the machine
-code beside this module (or in ``NUMBA_CACHE_DIR``), so only the first run
-on a machine pays the compilation (a few seconds).  Every kernel releases the GIL (``nogil``);
-the callers run chunks of blocks in a thread pool rather than with numba's
-``parallel=True``, whose compilation alone took 7 s of a fresh machine's
-first run.
+in the core's cache instead of megabytes spread over the whole class table,
+and a pair costs two bytes of the stream.  A class's Q, log Q and H share one
+row of that table, so a pair touches one cache line of it.  ``cache=True``
+stores the machine code beside this module (or in ``NUMBA_CACHE_DIR``), so
+only the first run on a machine pays the compilation (a few seconds).  Every
+kernel releases the GIL (``nogil``); the callers run chunks of blocks in a
+thread pool rather than with numba's ``parallel=True``, whose compilation
+would add several seconds to a machine's first run.
 """
 
 from __future__ import annotations
