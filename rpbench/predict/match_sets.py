@@ -46,7 +46,7 @@ head node, entry link, destination), and within a class by ``(w, k)``.
 :mod:`.blocks`), the saving ``E`` (float32: sub-millimetre rounding at urban
 distances; the fixed point only uses the order of the classes) and the
 pair's *piece* within its seeker (uint16), 8 bytes a pair, appended origin
-by origin to one raw file per column (see :mod:`.structure`, which keeps them
+by origin to one raw file per column (see :mod:`.list_cache`, which keeps them
 in the cache) and read back as read-only memory maps.  The shared distance
 and the seeker's detour are the same along a piece (one seeker, one
 destination group, one service order: about 25 pairs on the month table), so
@@ -108,7 +108,7 @@ class Matching:
 
     The pairs of seeker ``s(w)`` are ``[seeker_off[w], seeker_off[w+1])`` of
     every column.  The columns are read-only maps of the files in
-    :attr:`directory` (see :mod:`.structure`): several processes share one
+    :attr:`directory` (see :mod:`.list_cache`): several processes share one
     copy in the page cache, and a sweep only brings in what it touches.
     """
 

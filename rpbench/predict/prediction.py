@@ -1,10 +1,12 @@
 """The public entry point: :func:`predict` and the :class:`Prediction` the dispatcher queries.
 
-``predict(network, rates, params, config)`` builds the states (:mod:`.states`)
-and matching sets (:mod:`.matching`), solves the fixed point
+``predict(network, rates, params, config)`` returns the prediction from the
+disk cache (:mod:`.cache`) or else takes the states (:mod:`.states`) and
+matching sets (:mod:`.match_sets`) from the seeker/taker structure
+(:mod:`.list_cache`, built once per machine), solves the fixed point
 (:mod:`.fixed_point`), derives the expected savings (:mod:`.savings`) and
-caches the result on disk (:mod:`.cache`).  The heavy matching structure is
-not kept: a :class:`Prediction` holds per-OD and per-state arrays only.
+caches the result.  The heavy matching sets are not kept: a
+:class:`Prediction` holds per-OD and per-state arrays only.
 """
 
 from __future__ import annotations
@@ -24,11 +26,11 @@ from rpbench.exceptions import ParameterError
 from rpbench.network import RoadNetwork
 from rpbench.predict.config import PredictConfig
 from rpbench.predict.fixed_point import SolveInfo, System, solve
+from rpbench.predict.list_cache import load_lists
 from rpbench.predict.match_sets import Matching
 from rpbench.predict.rates import OdRates
-from rpbench.predict.savings import Outcome, outcome, waiting_saving
+from rpbench.predict.savings import SavingsResult, savings_result, waiting_saving
 from rpbench.predict.states import StateSpace
-from rpbench.predict.structure import load_structure
 from rpbench.scenarios.base import Params
 
 
@@ -68,7 +70,7 @@ class Prediction:
     rates: OdRates
     params: dict
     config: PredictConfig
-    od: Outcome
+    od: SavingsResult
     state_od: np.ndarray  # per state: OD index
     state_k: np.ndarray  # per state: k (0 = origin state)
     state_head: np.ndarray  # per state: head node index
@@ -85,7 +87,7 @@ class Prediction:
 
     def arrays(self) -> tuple[dict[str, np.ndarray], dict]:
         """(arrays, facts) as the disk cache stores them."""
-        arrays = {f"od_{f.name}": getattr(self.od, f.name) for f in dataclasses.fields(Outcome)}
+        arrays = {f"od_{f.name}": getattr(self.od, f.name) for f in dataclasses.fields(SavingsResult)}
         arrays.update({name: getattr(self, name) for name in self.STATE_FIELDS})
         return arrays, self.info
 
@@ -96,7 +98,7 @@ class Prediction:
         """A prediction from the disk cache's (arrays, facts)."""
         arrays, info = stored
         empty = np.zeros(0)  # per-state arrays not read (a slim load) stay empty
-        od = Outcome(**{f.name: arrays.get(f"od_{f.name}", empty) for f in dataclasses.fields(Outcome)})
+        od = SavingsResult(**{f.name: arrays.get(f"od_{f.name}", empty) for f in dataclasses.fields(SavingsResult)})
         return cls(
             node_id=node_id,
             rates=rates,
@@ -111,12 +113,12 @@ class Prediction:
     @classmethod
     def per_state_members(cls) -> frozenset[str]:
         """The disk cache's per-state members (skipped by a slim load)."""
-        return frozenset(cls.STATE_FIELDS) | {f"od_{name}" for name in Outcome.STATE_FIELDS}
+        return frozenset(cls.STATE_FIELDS) | {f"od_{name}" for name in SavingsResult.STATE_FIELDS}
 
     def slim(self) -> Prediction:
         """The same prediction without its per-state arrays (what a dispatcher needs: per-OD values)."""
         empty = np.zeros(0)
-        od = dataclasses.replace(self.od, **{name: empty for name in Outcome.STATE_FIELDS})
+        od = dataclasses.replace(self.od, **{name: empty for name in SavingsResult.STATE_FIELDS})
         return dataclasses.replace(self, od=od, **{name: empty for name in self.STATE_FIELDS})
 
     # ------------------------------------------------------------------ queries
@@ -234,9 +236,9 @@ def build_model(
     config = config or PredictConfig()
     if len(rates) and (rates.origin.max() >= network.n_nodes or rates.destination.max() >= network.n_nodes):
         raise ParameterError("OD rates refer to nodes outside this network; build them for the same network")
-    structure = load_structure(network, rates, params, config, use_cache=use_cache)
+    lists = load_lists(network, rates, params, config, use_cache=use_cache)
     return PredictionModel(
-        network, rates, params, config, structure.space_for(config.tau0_s), structure.matching, structure.build_s
+        network, rates, params, config, lists.space_for(config.tau0_s), lists.matching, lists.build_s
     )
 
 
@@ -245,7 +247,7 @@ def solve_model(model: PredictionModel, *, progress=None, rho0: np.ndarray | Non
     system = model.system
     ev, info = solve(system, progress=progress, rho0=rho0)
     t0 = time.perf_counter()
-    ev, out = outcome(system, ev.rho)
+    ev, out = savings_result(system, ev.rho)
     savings_s = time.perf_counter() - t0
     return _prediction(model, ev, out, info, savings_s)
 
@@ -279,7 +281,7 @@ def predict(
     return prediction
 
 
-def _prediction(model: PredictionModel, ev, out: Outcome, info: SolveInfo, savings_s: float) -> Prediction:
+def _prediction(model: PredictionModel, ev, out: SavingsResult, info: SolveInfo, savings_s: float) -> Prediction:
     sp, m = model.space, model.matching
     relevant = {k: getattr(model.params, k) for k in cache.PARAM_FIELDS}
     facts = {

@@ -1,4 +1,5 @@
-"""The τ_0-independent part of the prediction, built once per machine and shared through the disk cache.
+"""The seeker/taker structure (:class:`CachedLists`): the τ_0-independent part of the prediction, built once
+per machine and shared through the disk cache.
 
 The taker states (:mod:`.states`) and the seekers' sorted matching lists
 (:mod:`.match_sets`) depend on the network, the OD set, R̄, D̄, v and the
@@ -52,18 +53,18 @@ from rpbench.predict.states import StateSpace, build_states
 from rpbench.scenarios.base import Params
 
 #: Bump when the states or the lists change for the same inputs.
-STRUCTURE_VERSION = "3"  # 2: classes stored as block-local numbers; 3: per-piece distances
+FORMAT_VERSION = "3"  # 2: classes stored as block-local numbers; 3: per-piece distances
 #: The network-side parameters and the configuration fields the structure depends on.
-STRUCTURE_PARAMS = ("max_pickup_m", "max_detour_m", "speed_mps")
-STRUCTURE_CONFIG = ("include_origin_state", "priority", "keep_nonpositive", "order_rule")
+KEY_PARAMS = ("max_pickup_m", "max_detour_m", "speed_mps")
+KEY_CONFIG = ("include_origin_state", "priority", "keep_nonpositive", "order_rule")
 
 #: The structure this process used last (one: the month table's maps 1 GB of class lists when swept),
 #: so the hours of a day and the points of a sweep do not reopen it.
-_RECENT: dict[str, Structure] = {}
+_RECENT: dict[str, CachedLists] = {}
 
 
 @dataclass(frozen=True, eq=False)
-class Structure:
+class CachedLists:
     """States (τ_0 = 0 in the origin states) and matching lists; the lists are usually memory maps."""
 
     space: StateSpace
@@ -77,25 +78,25 @@ class Structure:
         return dataclasses.replace(sp, tau_s=np.where(sp.k == 0, float(tau0_s), sp.tau_s))
 
 
-def structure_key(network: RoadNetwork, rates: OdRates, params: Params, config: PredictConfig) -> str:
+def lists_key(network: RoadNetwork, rates: OdRates, params: Params, config: PredictConfig) -> str:
     """Hash of everything the structure depends on (not λ_w, not τ_0)."""
     h = hashlib.sha256()
-    h.update(f"structure|{STRUCTURE_VERSION}|{network.content_hash}|".encode())
+    h.update(f"structure|{FORMAT_VERSION}|{network.content_hash}|".encode())
     for arr in (rates.origin, rates.destination):
         h.update(np.ascontiguousarray(arr, dtype=np.int64).tobytes())
-    h.update(json.dumps({k: float(getattr(params, k)) for k in STRUCTURE_PARAMS}, sort_keys=True).encode())
-    h.update(json.dumps({k: getattr(config, k) for k in STRUCTURE_CONFIG}, sort_keys=True).encode())
+    h.update(json.dumps({k: float(getattr(params, k)) for k in KEY_PARAMS}, sort_keys=True).encode())
+    h.update(json.dumps({k: getattr(config, k) for k in KEY_CONFIG}, sort_keys=True).encode())
     return h.hexdigest()[:24]
 
 
-def load_structure(
+def load_lists(
     network: RoadNetwork, rates: OdRates, params: Params, config: PredictConfig, *, use_cache: bool = True
-) -> Structure:
+) -> CachedLists:
     """The structure for these inputs: from the cache, else built (into the cache when ``use_cache``)."""
     if not use_cache:
         return _private_build(network, rates, params, config)
     root = cache_dir()
-    key = structure_key(network, rates, params, config)
+    key = lists_key(network, rates, params, config)
     final = root / f"predict-structure-{key}"
     if _RECENT.get(key) is not None and _RECENT[key].directory.is_dir():
         return _RECENT[key]
@@ -133,7 +134,7 @@ def _remove_outdated(root: Path) -> None:
     for entry in root.glob("predict-structure-*"):
         try:
             version = json.loads((entry / "manifest.json").read_text()).get("version")
-            outdated = int(version) < int(STRUCTURE_VERSION)
+            outdated = int(version) < int(FORMAT_VERSION)
         except (OSError, ValueError, TypeError, AttributeError):
             continue
         if outdated:
@@ -146,7 +147,7 @@ def _remove_outdated(root: Path) -> None:
             )
 
 
-def _private_build(network, rates, params, config) -> Structure:
+def _private_build(network, rates, params, config) -> CachedLists:
     """A build for this process only: the files are unlinked at once (the maps keep them alive)."""
     try:
         tmp = Path(tempfile.mkdtemp(prefix=".predict-structure-private.", dir=cache_dir()))
@@ -160,7 +161,7 @@ def _private_build(network, rates, params, config) -> Structure:
 
 def _build_into(
     directory: Path, network: RoadNetwork, rates: OdRates, params: Params, config: PredictConfig
-) -> Structure:
+) -> CachedLists:
     t0 = time.perf_counter()
     oracle = network.distances()
     dist = np.ascontiguousarray(oracle.dist)
@@ -175,7 +176,7 @@ def _build_into(
     np.savez(directory / "states.npz", **{f.name: getattr(space, f.name) for f in dataclasses.fields(space)})
     np.save(directory / "seeker_off.npy", matching.seeker_off)
     manifest = {
-        "version": STRUCTURE_VERSION,
+        "version": FORMAT_VERSION,
         "n_od": len(rates),
         "n_pairs": matching.n_pairs,
         "columns": dict(COLUMNS, local=matching.local.dtype.str, piece=matching.piece.dtype.str),
@@ -184,7 +185,7 @@ def _build_into(
     }
     (directory / "manifest.json").write_text(json.dumps(manifest, default=float, indent=1))
     _release_free_heap()
-    return Structure(space=space, matching=matching, build_s=build_s, directory=directory)
+    return CachedLists(space=space, matching=matching, build_s=build_s, directory=directory)
 
 
 def _release_free_heap() -> None:
@@ -194,13 +195,13 @@ def _release_free_heap() -> None:
         ctypes.CDLL("libc.so.6").malloc_trim(0)
 
 
-def _open_entry(directory: Path, n_od: int) -> Structure | None:
+def _open_entry(directory: Path, n_od: int) -> CachedLists | None:
     """The cached structure in ``directory``, or None (absent, or damaged and then deleted)."""
     if not directory.is_dir():
         return None
     try:
         manifest = json.loads((directory / "manifest.json").read_text())
-        if manifest.get("version") != STRUCTURE_VERSION or manifest.get("n_od") != n_od:
+        if manifest.get("version") != FORMAT_VERSION or manifest.get("n_od") != n_od:
             raise ValueError("it was written for other inputs")
         with np.load(directory / "states.npz", allow_pickle=False) as data:
             space = StateSpace(**{f.name: data[f.name] for f in dataclasses.fields(StateSpace)})
@@ -217,7 +218,7 @@ def _open_entry(directory: Path, n_od: int) -> Structure | None:
         shutil.rmtree(directory, ignore_errors=True)
         return None
     zero = {k: 0.0 for k in ("distances_s", "states_s", "matching_s")}
-    return Structure(space=space, matching=matching, build_s=zero, directory=directory)
+    return CachedLists(space=space, matching=matching, build_s=zero, directory=directory)
 
 
 @contextmanager
