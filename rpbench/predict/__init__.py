@@ -44,7 +44,15 @@ authors' published predictions).
 
 from rpbench.predict.config import ACCELERATIONS, PRIORITIES, RHO_MODES, PredictConfig
 from rpbench.predict.hourly import RATE_SOURCES, scenario_predictions
-from rpbench.predict.prediction import Lookup, Prediction, PredictionModel, build_model, predict, solve_model
+from rpbench.predict.prediction import (
+    Lookup,
+    Prediction,
+    PredictionModel,
+    build_model,
+    cached_prediction,
+    predict,
+    solve_model,
+)
 from rpbench.predict.rates import (
     RATE_KINDS,
     OdRates,
@@ -69,6 +77,7 @@ __all__ = [
     "Prediction",
     "PredictionModel",
     "build_model",
+    "cached_prediction",
     "day_table_rates",
     "load_rates",
     "month_rates",

@@ -14,6 +14,7 @@ from __future__ import annotations
 import dataclasses
 import resource
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
@@ -242,7 +243,9 @@ def build_model(
     )
 
 
-def solve_model(model: PredictionModel, *, progress=None, rho0: np.ndarray | None = None) -> Prediction:
+def solve_model(
+    model: PredictionModel, *, progress: Callable[[int, float], None] | None = None, rho0: np.ndarray | None = None
+) -> Prediction:
     """Solve the fixed point of a built model (optionally warm-started) and derive the per-OD outcome."""
     system = model.system
     ev, info = solve(system, progress=progress, rho0=rho0)
@@ -252,6 +255,17 @@ def solve_model(model: PredictionModel, *, progress=None, rho0: np.ndarray | Non
     return _prediction(model, ev, out, info, savings_s)
 
 
+def cached_prediction(
+    network: RoadNetwork, rates: OdRates, params: Params, config: PredictConfig, *, slim: bool = False
+) -> Prediction | None:
+    """The prediction for these inputs from the disk cache, or None; ``slim`` reads its per-OD arrays only."""
+    key = cache.cache_key(network, rates, params, config)
+    hit = cache.load(key, len(rates), skip=Prediction.per_state_members() if slim else frozenset())
+    if hit is None:
+        return None
+    return Prediction.from_arrays(hit, node_id=network.node_id, rates=rates, config=config)
+
+
 def predict(
     network: RoadNetwork,
     rates: OdRates,
@@ -259,25 +273,29 @@ def predict(
     config: PredictConfig | None = None,
     *,
     use_cache: bool = True,
-    progress=None,
+    progress: Callable[[int, float], None] | None = None,
+    rho0: np.ndarray | None = None,
 ) -> Prediction:
-    """The prediction for ``rates`` on ``network`` (cached on disk by inputs, parameters and network)."""
+    """The prediction for ``rates`` on ``network`` (cached on disk by inputs, parameters and network).
+
+    When it is not cached, it is solved on the seeker/taker structure (built
+    once per machine), warm-started from ``rho0`` if given, and then cached.
+    """
     params = params or Params()
     config = config or PredictConfig()
-    key = cache.cache_key(network, rates, params, config)
     if use_cache:
-        hit = cache.load(key, len(rates))
+        hit = cached_prediction(network, rates, params, config)
         if hit is not None:
-            return Prediction.from_arrays(hit, node_id=network.node_id, rates=rates, config=config)
+            return hit
     t0, c0 = time.perf_counter(), time.process_time()
     model = build_model(network, rates, params, config, use_cache=use_cache)
-    prediction = solve_model(model, progress=progress)
+    prediction = solve_model(model, progress=progress, rho0=rho0)
     del model
     prediction.info["time_s"] = round(time.perf_counter() - t0, 4)
     prediction.info["cpu_s"] = round(time.process_time() - c0, 4)  # wall > cpu when the machine is shared
     prediction.info["peak_rss_mb"] = round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0, 1)
     if use_cache:
-        cache.save(key, *prediction.arrays())
+        cache.save(cache.cache_key(network, rates, params, config), *prediction.arrays())
     return prediction
 
 
