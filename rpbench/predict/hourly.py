@@ -6,7 +6,7 @@ scenario's own orders), rounds τ_0 to :data:`TAU0_RESOLUTION_S` so runs with
 nearly equal calibrations share one cached prediction, reuses a solved
 prediction from the disk cache, and otherwise solves the fixed point on the
 cached structure (:mod:`.list_cache`): the matching sets depend only on the OD
-set, the geometry and the priority rule (gigabytes for the 39,510-OD month
+set, the geometry and the priority rule (0.67 GB for the 39,510-OD month
 table, built once per machine), while the demand level and τ_0 enter the
 fixed point only.
 """

@@ -74,12 +74,47 @@ def test_built_once_then_mapped_from_the_cache(cache):
     np.testing.assert_array_equal(sp.tau_s[sp.k > 0], first.space.tau_s[first.space.k > 0])
 
 
-@pytest.mark.parametrize("name", ["local.bin", "piece.bin", "saving_m.bin", "piece_shared_m.bin", "piece_detour_m.bin"])
-def test_a_damaged_entry_is_rebuilt_with_a_note(cache, capsys, name):
+def test_an_entry_holds_the_class_lists_and_the_states_only(cache):
+    inst = make_instance(seed=2, size=6, n_od=40, max_pickup_m=3000, max_detour_m=3000)
+    lists = load(inst)
+    assert sorted(p.name for p in lists.directory.iterdir()) == [
+        "blocks.npz",
+        "local.bin",
+        "manifest.json",
+        "seeker_off.npy",
+        "states.npz",
+    ]
+    assert (lists.directory / "local.bin").stat().st_size == 2 * lists.matching.n_pairs
+    manifest = json.loads((lists.directory / "manifest.json").read_text())
+    assert manifest["version"] == list_cache.FORMAT_VERSION and manifest["local"] == "<u2"
+
+
+def test_a_build_announces_what_where_and_its_size_in_one_line_and_nothing_else(cache, capsys):
+    """stderr is not a terminal here: no progress bar, only the announcing line."""
+    inst = make_instance(seed=2, size=6, n_od=40, max_pickup_m=3000, max_detour_m=3000)
+    load(inst)
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1, err
+    assert f"building the seeker/taker prediction structure for {len(inst.rates)} OD pairs" in err[0]
+    assert f"in {cache}, about 1 MB on disk" in err[0]
+
+
+def test_the_announced_size_comes_from_a_sample_of_the_lists():
+    from rpbench.predict.match_sets import _Builder
+
+    inst = make_instance(seed=7, size=7, n_od=120, max_pickup_m=3000, max_detour_m=3000)
+    lists = list_cache.load_lists(inst.network, inst.rates, inst.params, inst.config, use_cache=False)
+    dist = inst.network.distances().dist
+    builder = _Builder(lists.space, inst.rates, dist, inst.params, inst.config)
+    assert builder.sample_pairs() == lists.matching.n_pairs  # every seeker sampled
+    assert 0.5 < builder.sample_pairs(samples=30) / lists.matching.n_pairs < 2.0
+
+
+def test_a_damaged_entry_is_rebuilt_with_a_note(cache, capsys):
     inst = make_instance(seed=3, size=6, n_od=40, max_pickup_m=3000, max_detour_m=3000)
     good = load(inst).matching.arrays()
     entry = entries(cache)[0]
-    with open(entry / name, "r+b") as fh:
+    with open(entry / "local.bin", "r+b") as fh:
         fh.truncate(8)
     list_cache._RECENT.clear()
     rebuilt = load(inst)
@@ -89,7 +124,7 @@ def test_a_damaged_entry_is_rebuilt_with_a_note(cache, capsys, name):
         np.testing.assert_array_equal(a, b)
 
 
-@pytest.mark.parametrize("name", ["blocks.npz", "states.npz", "piece_off.npy"])
+@pytest.mark.parametrize("name", ["blocks.npz", "states.npz", "seeker_off.npy"])
 def test_a_truncated_array_file_is_rebuilt_with_a_note(cache, capsys, name):
     inst = make_instance(seed=3, size=6, n_od=40, max_pickup_m=3000, max_detour_m=3000)
     good = load(inst).matching.arrays()
