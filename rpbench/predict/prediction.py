@@ -13,14 +13,17 @@ from __future__ import annotations
 
 import dataclasses
 import resource
+import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
 
 import numpy as np
 import pandas as pd
+from tqdm import tqdm
 
 import rpbench.predict.cache as cache
 from rpbench.exceptions import ParameterError
@@ -33,6 +36,9 @@ from rpbench.predict.rates import OdRates
 from rpbench.predict.savings import SavingsResult, savings_result, waiting_saving
 from rpbench.predict.states import StateSpace
 from rpbench.scenarios.base import Params
+
+#: Seconds a solve runs before its progress bar appears (a cached or small prediction shows none).
+PROGRESS_DELAY_S = 3.0
 
 
 @dataclass(frozen=True)
@@ -246,13 +252,55 @@ def build_model(
 def solve_model(
     model: PredictionModel, *, progress: Callable[[int, float], None] | None = None, rho0: np.ndarray | None = None
 ) -> Prediction:
-    """Solve the fixed point of a built model (optionally warm-started) and derive the per-OD outcome."""
+    """Solve the fixed point of a built model (optionally warm-started) and derive the per-OD outcome.
+
+    ``progress(iteration, residual)`` is called after every sweep; without it, a
+    progress bar on stderr shows the sweeps and the savings pass once they
+    have taken :data:`PROGRESS_DELAY_S` (only when stderr is a terminal).
+    """
     system = model.system
-    ev, info = solve(system, progress=progress, rho0=rho0)
-    t0 = time.perf_counter()
-    ev, out = savings_result(system, ev.rho)
-    savings_s = time.perf_counter() - t0
+    with _sweep_bar(progress) as report:
+        ev, info = solve(system, progress=report, rho0=rho0)
+        report(-1, info.residual)
+        t0 = time.perf_counter()
+        ev, out = savings_result(system, ev.rho)
+        savings_s = time.perf_counter() - t0
     return _prediction(model, ev, out, info, savings_s)
+
+
+@contextmanager
+def _sweep_bar(progress: Callable[[int, float], None] | None) -> Iterator[Callable[[int, float], None]]:
+    """``progress`` itself, or the updates of a delayed tqdm bar (iteration -1: the savings pass starts)."""
+    if progress is not None:
+        caller = progress
+
+        def forward(it: int, res: float) -> None:
+            if it >= 0:
+                caller(it, res)
+
+        yield forward
+        return
+    start = time.perf_counter()
+    bar = tqdm(
+        desc="prediction fixed point",
+        unit=" sweeps",
+        file=sys.stderr,
+        leave=False,
+        disable=None,
+        delay=PROGRESS_DELAY_S,
+    )  # off when stderr is not a terminal
+
+    def update(it: int, res: float) -> None:
+        if it < 0:
+            bar.set_postfix_str(f"residual {res:.1e}; expected savings", refresh=False)
+            if time.perf_counter() - start >= PROGRESS_DELAY_S:  # tqdm's delay holds for its updates only
+                bar.refresh()
+            return
+        bar.set_postfix_str(f"residual {res:.1e}", refresh=False)
+        bar.update(1)
+
+    with bar:
+        yield update
 
 
 def cached_prediction(
