@@ -44,7 +44,7 @@ def test_not_a_terminal_gets_the_announcing_line_only(tmp_path, monkeypatch):
     assert err.count("\n") == 1 and err.startswith("rpbench: building the seeker/taker prediction structure")
 
 
-def test_a_quick_solve_shows_no_bar(tmp_path, monkeypatch):
+def test_a_quick_solve_shows_no_bar_of_its_sweeps(tmp_path, monkeypatch):
     err = solve_fresh(tmp_path / "cache", monkeypatch, Terminal())
     assert "prediction fixed point" not in err
 
