@@ -31,10 +31,13 @@ class AndersonMixing:
 
     def __init__(self, depth: int) -> None:
         self.depth = depth
-        self._dx: np.ndarray | None = None  # (n, depth), Fortran order: a ring of ΔX columns
-        self._q: np.ndarray | None = None  # (n, depth), Fortran order: q_0 .. q_{size-1}
-        self._q_spare: np.ndarray | None = None  # where the next drop writes Q (then the two swap)
+        # Column buffers, allocated at the first step for its length n (empty until then):
+        self._dx = np.zeros((0, depth), order="F")  # (n, depth), Fortran order: a ring of ΔX columns
+        self._q = np.zeros((0, depth), order="F")  # (n, depth), Fortran order: q_0 .. q_{size-1}
+        self._q_spare = np.zeros((0, depth), order="F")  # where the next drop writes Q (then the two swap)
         self._r = np.zeros((depth, depth))
+        self.x_prev: np.ndarray | None = None
+        self.f_prev: np.ndarray | None = None
         self.restart()
 
     def restart(self) -> None:
@@ -72,8 +75,9 @@ class AndersonMixing:
         return gamma
 
     def _append(self, x: np.ndarray, f: np.ndarray) -> None:
+        assert self.x_prev is not None and self.f_prev is not None
         n = len(f)
-        if self._q is None or self._q.shape[0] != n:
+        if self._q.shape[0] != n:
             self._dx, self._q, self._q_spare = (np.zeros((n, self.depth), order="F") for _ in range(3))
         if self.size == self.depth:
             self._drop_oldest()

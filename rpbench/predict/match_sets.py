@@ -152,11 +152,13 @@ class ListGeometry:
     def values(self, off: np.ndarray, cls: np.ndarray, s0: int, s1: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(E, shared, seeker detour), float32, of the pairs of seekers ``s0..s1-1`` with global classes ``cls``."""
         n = len(cls)
-        out = tuple(np.empty(n, dtype=np.float32) for _ in range(3))
+        saving, shared, detour = (np.empty(n, dtype=np.float32) for _ in range(3))
         if n:
             dist = np.ascontiguousarray(self.distances())
-            kernels.pair_values(off, np.ascontiguousarray(cls), s0, s1, self.kernel_args(), dist, *out)
-        return out
+            kernels.pair_values(
+                off, np.ascontiguousarray(cls), s0, s1, self.kernel_args(), dist, saving, shared, detour
+            )
+        return saving, shared, detour
 
 
 @dataclass(frozen=True, eq=False)
@@ -542,7 +544,7 @@ class _Builder:
             np.take(g.cls_by_rank, keys.view(np.int64), out=out)
             return
         # Huge distances (beyond 2^18 m) or huge groups: the same order through a slower lexsort.
-        if piece is None:
+        if piece is None or col is None:
             piece, col = np.repeat(np.arange(i0, i1), n), expand_ranges(start, start + n)
         if prio is None:
             prio = pc.g[piece] + g.kappa[col]

@@ -126,7 +126,8 @@ class Prediction:
         """The same prediction without its per-state arrays (what a dispatcher needs: per-OD values)."""
         empty = np.zeros(0)
         od = dataclasses.replace(self.od, **{name: empty for name in SavingsResult.STATE_FIELDS})
-        return dataclasses.replace(self, od=od, **{name: empty for name in self.STATE_FIELDS})
+        per_state: dict[str, Any] = {name: empty for name in self.STATE_FIELDS}
+        return dataclasses.replace(self, od=od, **per_state)
 
     # ------------------------------------------------------------------ queries
     @cached_property
