@@ -128,9 +128,9 @@ def run(args: argparse.Namespace) -> int:
     if args.validate_fcfs:
         model = build_model(network, rates, params, config)
         prediction = solve_model(model)
-        result = simulate(model, hours=args.hours, seed=args.seed)
+        simulated = simulate(model, hours=args.hours, seed=args.seed)
         del model
-        out["fcfs"], _ = validate(prediction, result, min_samples=args.min_samples)
+        out["fcfs"], _ = validate(prediction, simulated, min_samples=args.min_samples)
     else:
         prediction = predict(network, rates, params, config, use_cache=not args.no_cache)
     table = prediction.per_od_table()

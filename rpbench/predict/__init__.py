@@ -32,16 +32,27 @@ saving in metres (A12: not doubled).
 
 Modules, one concept each: :mod:`.rates` (λ_w), :mod:`.config`,
 :mod:`.states` (seeker/taker states, taker classes), :mod:`.match_sets`
-(T_s, E, priority), :mod:`.fixed_point` ((A1)-(A6) and the damped solver),
-:mod:`.savings` (ē and expected distances), :mod:`.prediction` (the entry
-point), :mod:`.hourly` (one prediction per scenario hour: what FL calls),
-:mod:`.cache`, :mod:`.fcfs` (validation simulator), :mod:`.compare` (vs the
+(T_s, E, priority), :mod:`.blocks` (the lists' class blocks),
+:mod:`.list_cache` (states and lists, cached once per machine),
+:mod:`.fixed_point` ((A1)-(A6) and the damped solver), :mod:`.kernels` (its
+compiled sweeps), :mod:`.savings` (ē and expected distances),
+:mod:`.prediction` (the entry point), :mod:`.hourly` (one prediction per
+scenario hour: what FL calls), :mod:`.cache` (solved predictions),
+:mod:`.fcfs` (validation simulator), :mod:`.compare` (vs the
 authors' published predictions).
 """
 
 from rpbench.predict.config import ACCELERATIONS, PRIORITIES, RHO_MODES, PredictConfig
 from rpbench.predict.hourly import RATE_SOURCES, scenario_predictions
-from rpbench.predict.prediction import Lookup, Prediction, PredictionModel, build_model, predict, solve_model
+from rpbench.predict.prediction import (
+    Lookup,
+    Prediction,
+    PredictionModel,
+    build_model,
+    cached_prediction,
+    predict,
+    solve_model,
+)
 from rpbench.predict.rates import (
     RATE_KINDS,
     OdRates,
@@ -66,6 +77,7 @@ __all__ = [
     "Prediction",
     "PredictionModel",
     "build_model",
+    "cached_prediction",
     "day_table_rates",
     "load_rates",
     "month_rates",

@@ -3,13 +3,12 @@
 Each step solves ``γ = argmin ||ΔF γ - f||`` over the last ``depth``
 residual differences and returns ``β f - (ΔX + β ΔF) γ`` in place of the
 damped step ``β f``.  On the month table ΔF has about 10^6 rows and at most
-5 columns, and factorising it afresh every step (``numpy.linalg.lstsq``, an
-SVD after a Householder QR, plus stacking the columns) took 0.18 s a step,
-3 s of a prediction.  Here ``ΔF = Q R`` is kept up to date instead, as
-Walker and Ni do: a new column is orthogonalised against Q twice (classical
-Gram-Schmidt with one re-orthogonalisation, orthogonal to working
-precision); the oldest is dropped with Givens rotations on R, applied to Q
-as one small matrix product; and ``min ||R γ - Qᵀ f||`` is solved with the
+5 columns; factorising it afresh every step (an SVD after a Householder QR,
+plus stacking the columns) costs about 0.2 s a step, so ``ΔF = Q R`` is kept
+up to date instead, as Walker and Ni do: a new column is orthogonalised
+against Q twice (classical Gram-Schmidt with one re-orthogonalisation,
+orthogonal to working precision); the oldest is dropped with Givens
+rotations on R, applied to Q as one small matrix product; and ``min ||R γ - Qᵀ f||`` is solved with the
 SVD cut-off numpy's ``lstsq`` applies to ΔF (singular values below
 ``eps · rows`` times the largest count as zero, so a history whose
 differences have become collinear gives the minimum-norm γ, not an exploding
@@ -32,10 +31,13 @@ class AndersonMixing:
 
     def __init__(self, depth: int) -> None:
         self.depth = depth
-        self._dx: np.ndarray | None = None  # (n, depth), Fortran order: a ring of ΔX columns
-        self._q: np.ndarray | None = None  # (n, depth), Fortran order: q_0 .. q_{size-1}
-        self._q_spare: np.ndarray | None = None  # where the next drop writes Q (then the two swap)
+        # Column buffers, allocated at the first step for its length n (empty until then):
+        self._dx = np.zeros((0, depth), order="F")  # (n, depth), Fortran order: a ring of ΔX columns
+        self._q = np.zeros((0, depth), order="F")  # (n, depth), Fortran order: q_0 .. q_{size-1}
+        self._q_spare = np.zeros((0, depth), order="F")  # where the next drop writes Q (then the two swap)
         self._r = np.zeros((depth, depth))
+        self.x_prev: np.ndarray | None = None
+        self.f_prev: np.ndarray | None = None
         self.restart()
 
     def restart(self) -> None:
@@ -73,8 +75,9 @@ class AndersonMixing:
         return gamma
 
     def _append(self, x: np.ndarray, f: np.ndarray) -> None:
+        assert self.x_prev is not None and self.f_prev is not None
         n = len(f)
-        if self._q is None or self._q.shape[0] != n:
+        if self._q.shape[0] != n:
             self._dx, self._q, self._q_spare = (np.zeros((n, self.depth), order="F") for _ in range(3))
         if self.size == self.depth:
             self._drop_oldest()

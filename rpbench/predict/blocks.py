@@ -125,7 +125,9 @@ class Localizer:
         self.per_class[:n_classes, 2] = 1 if class_size is None else class_size
         # open block, its classes, seekers, block classes, Σ class_size over the pairs
         self.state = np.zeros(5, dtype=np.int64)
-        self.block_seeker, self.block_pos, self.block_cls = [np.zeros(1, np.int64)], [np.zeros(1, np.int64)], []
+        self.block_seeker: list[np.ndarray] = [np.zeros(1, np.int64)]
+        self.block_pos: list[np.ndarray] = [np.zeros(1, np.int64)]
+        self.block_cls: list[np.ndarray] = []
         self.parts: list[np.ndarray] = []  # the local numbers, when there is no file
 
     def append(self, lens: np.ndarray, cls: np.ndarray) -> np.ndarray:
@@ -150,7 +152,7 @@ class Localizer:
         if self.out is None:
             self.parts.append(local)
         else:
-            self.out.write(memoryview(local))
+            self.out.write(local.data)
         return local
 
     @property
@@ -180,7 +182,7 @@ class Localizer:
         narrow = np.fromfile(path, dtype="<u2")
         self.out.seek(0)
         self.out.truncate()
-        self.out.write(memoryview(narrow.astype("<i4")))
+        self.out.write(narrow.astype("<i4").data)
 
 
 def localize_lists(

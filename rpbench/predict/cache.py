@@ -22,6 +22,7 @@ import sys
 import zipfile
 import zlib
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -72,7 +73,7 @@ def save(key: str, arrays: dict[str, np.ndarray], info: dict) -> Path:
     load can tell a complete entry from a damaged one.  A cache that cannot be
     written is a :class:`~rpbench.exceptions.CacheError`.
     """
-    payload = dict(arrays)
+    payload: dict[str, Any] = dict(arrays)  # Any: numpy's stub would match a member against savez's flags
     manifest = {name: [np.asarray(a).dtype.str, list(np.shape(a))] for name, a in arrays.items()}
     payload["info_json"] = _json_bytes(info)
     payload["manifest_json"] = _json_bytes(manifest)

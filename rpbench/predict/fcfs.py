@@ -112,7 +112,7 @@ def simulate(model: PredictionModel, *, hours: float, seed: int = 0, warmup_s: f
         ride[k] = sp.delta_m[state] + sp.class_rest_m[c] - e - det + sh
         shared[[i, k]] = sh
         saving[[i, k]] = e
-        act_id, act_od, act_t = (np.delete(a, taker) for a in (act_id, act_od, act_t))
+        act_id, act_od, act_t = np.delete(act_id, taker), np.delete(act_od, taker), np.delete(act_t, taker)
 
     window = (t_req >= warmup) & (t_req < warmup + hours * 3600.0)
     sums = [

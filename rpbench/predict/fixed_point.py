@@ -40,7 +40,15 @@ from numba import get_num_threads
 
 from rpbench.predict.anderson import AndersonMixing
 from rpbench.predict.config import PredictConfig
-from rpbench.predict.kernels import SAVINGS_ROW, SWEEP_ROW, class_products, savings_blocks, sweep_blocks, taker_map
+from rpbench.predict.kernels import (
+    CELL_ROW,
+    SAVINGS_ROW,
+    SWEEP_ROW,
+    class_products,
+    savings_blocks,
+    sweep_blocks,
+    taker_map,
+)
 from rpbench.predict.match_sets import CHUNK_PAIRS, Matching
 from rpbench.predict.states import StateSpace
 
@@ -115,10 +123,11 @@ def sweep(
 
     ``H_c = Σ_s λ_s Π_{c' ≻_s c} Q_c'`` and ``log(1 - p_s) = Σ_{c ∈ T_s} log Q_c``,
     computed by the compiled kernels one chunk of class blocks (:mod:`.blocks`)
-    at a time, the chunks in parallel threads (the pair columns are usually
-    memory maps).  With ``sums`` the pass also adds the
-    savings pass's pair sums (:mod:`.savings`) and gives the chunks' pages of
-    the pair and piece columns back at once, so they never all sit in memory.
+    at a time, the chunks in parallel threads (the lists are usually memory
+    maps).  With ``sums`` the pass also adds the
+    savings pass's pair sums (:mod:`.savings`), their distances derived from
+    the geometry (:func:`.kernels.savings_blocks`), and gives the chunks' pages
+    of the lists back at once, so they never all sit in memory.
     """
     log_not_paired = np.zeros(len(system.rate_per_s))
     q = np.exp(class_log_q)
@@ -151,24 +160,24 @@ def sweep(
     one_minus_q = -np.expm1(class_log_q)
     # The savings pass is the last over the lists.  Its chunks are cut into SAVINGS_PARTS runs of about
     # equal pairs; each run is walked in order by one task that sums its classes into its own part
-    # (the parts are added in order: the result does not depend on the threads) and gives every
-    # column's pages of a chunk back once it is summed, so the columns never all sit in memory.
+    # (the parts are added in order: the result does not depend on the threads) and gives the list's
+    # pages of a chunk back once it is summed, so the list never sits in memory whole.
     chunk_block = blocks.chunks(m.seeker_off, min(chunk_pairs, SAVINGS_CHUNK_PAIRS))
     runs = _cut(m.seeker_off[blocks.seeker_off[chunk_block]], SAVINGS_PARTS)
     parts = np.zeros((SAVINGS_PARTS, len(class_log_q), 4))
+    geometry = m.geometry.kernel_args()
+    dist = np.ascontiguousarray(m.geometry.distances())
 
     def savings_run(k: int) -> None:
         loc = np.empty(width * int(SAVINGS_ROW))
+        nodes = np.empty(width, dtype=np.uint16 if len(dist) <= 1 << 16 else np.int64)
+        cells = np.empty((len(dist), int(CELL_ROW)))
+        todo, to_o = np.empty(len(dist), dtype=nodes.dtype), np.empty(len(dist))
         for c in range(runs[k], runs[k + 1]):
             b0, b1 = chunk_block[c], chunk_block[c + 1]
             savings_blocks(
                 m.seeker_off,
                 m.local,
-                m.saving_m,
-                m.piece,
-                m.piece_off,
-                m.piece_shared_m,
-                m.piece_detour_m,
                 lam,
                 q,
                 class_log_q,
@@ -180,6 +189,12 @@ def sweep(
                 sums.by_seeker,
                 log_not_paired,
                 loc,
+                nodes,
+                geometry,
+                dist,
+                cells,
+                todo,
+                to_o,
             )
             m.release_seekers(int(blocks.seeker_off[b0]), int(blocks.seeker_off[b1]))
 

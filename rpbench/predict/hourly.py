@@ -5,8 +5,8 @@ rates λ_w from the scenario's :class:`~rpbench.scenarios.base.Demand` (or the
 scenario's own orders), rounds τ_0 to :data:`TAU0_RESOLUTION_S` so runs with
 nearly equal calibrations share one cached prediction, reuses a solved
 prediction from the disk cache, and otherwise solves the fixed point on the
-cached structure (:mod:`.structure`): the matching sets depend only on the OD
-set, the geometry and the priority rule (gigabytes for the 39,510-OD month
+cached structure (:mod:`.list_cache`): the matching sets depend only on the OD
+set, the geometry and the priority rule (0.67 GB for the 39,510-OD month
 table, built once per machine), while the demand level and τ_0 enter the
 fixed point only.
 """
@@ -17,13 +17,11 @@ from pathlib import Path
 
 import numpy as np
 
-import rpbench.predict.cache as cache
 from rpbench.exceptions import ParameterError
-from rpbench.network import RoadNetwork
 from rpbench.predict.config import PredictConfig
-from rpbench.predict.prediction import Prediction, build_model, solve_model
+from rpbench.predict.prediction import Prediction, cached_prediction, predict
 from rpbench.predict.rates import OdRates, month_rates, order_rates
-from rpbench.scenarios.base import Params, Scenario
+from rpbench.scenarios.base import Scenario
 
 #: Where λ_w comes from: the scenario's implied demand, the 21-day table, or the scenario's own orders.
 RATE_SOURCES = ("auto", "month", "scenario")
@@ -59,11 +57,9 @@ def scenario_predictions(
                 rho0 = None
                 if previous is not None and _same_ods(previous[0], rates[h]):
                     rho0 = (
-                        previous[2].rho
-                        if len(previous[2].rho)
-                        else cached_prediction(net, previous[0], params, previous[1]).rho
+                        previous[2].rho if len(previous[2].rho) else predict(net, previous[0], params, previous[1]).rho
                     )
-                prediction = cached_prediction(net, rates[h], params, cfg, rho0=rho0)
+                prediction = predict(net, rates[h], params, cfg, rho0=rho0)
             previous = (rates[h], cfg, prediction)
             memo[key] = prediction.slim()
         out.append(memo[key])
@@ -104,27 +100,3 @@ def hourly_rates(scenario: Scenario, source: str, hours: int) -> list[OdRates]:
         )
         for h in range(hours)
     ]
-
-
-def cached_prediction(
-    net: RoadNetwork,
-    rates: OdRates,
-    params: Params,
-    config: PredictConfig,
-    *,
-    rho0: np.ndarray | None = None,
-    slim: bool = False,
-) -> Prediction | None:
-    """A solved prediction: from the disk cache, else solved on the cached structure (built once per machine).
-
-    ``slim=True`` only reads the cache (per-OD arrays) and returns None when the prediction is not cached.
-    """
-    key = cache.cache_key(net, rates, params, config)
-    hit = cache.load(key, len(rates), skip=Prediction.per_state_members() if slim else frozenset())
-    if hit is not None:
-        return Prediction.from_arrays(hit, node_id=net.node_id, rates=rates, config=config)
-    if slim:
-        return None
-    prediction = solve_model(build_model(net, rates, params, config), rho0=rho0)
-    cache.save(key, *prediction.arrays())
-    return prediction

@@ -7,8 +7,7 @@ a weighted ``bincount`` per pair and several full-length temporaries; here it
 is one pass that keeps the running product ``λ_s Π_{c' ≻_s c} Q_c'`` in a
 register (a multiplication per pair instead of an ``exp``) and allocates
 nothing.  The per-seeker total ``log(1 - p_s) = Σ_c log Q_c`` is summed in
-log space beside it, exactly as before, so ``p_s`` keeps its relative
-precision when it is tiny.
+log space beside it, so ``p_s`` keeps its relative precision when it is tiny.
 
 The kernels take flat CSR arrays (``off`` of length W + 1, global pair
 offsets) so a caller can stream a memory-mapped structure chunk by chunk.
@@ -16,15 +15,14 @@ Seekers are walked in *blocks* (:mod:`.blocks`): consecutive seekers whose
 lists together name at most 65,536 taker classes.  A block's class values are
 gathered into small arrays first and the pairs index them with block-local
 16-bit numbers, so the per-pair lookups hit a few hundred kilobytes that stay
-in the core's cache instead of megabytes spread over the whole class table
-(about 15-20 % faster per sweep on the month table, and half the bytes
-streamed per pair).  A class's Q, log Q and H share one row of that table,
-so a pair touches one cache line of it.  ``cache=True`` stores the machine
-code beside this module (or in ``NUMBA_CACHE_DIR``), so only the first run
-on a machine pays the compilation (a few seconds).  Every kernel releases the GIL (``nogil``);
-the callers run chunks of blocks in a thread pool rather than with numba's
-``parallel=True``, whose compilation alone took 7 s of a fresh machine's
-first run.
+in the core's cache instead of megabytes spread over the whole class table,
+and a pair costs two bytes of the stream.  A class's Q, log Q and H share one
+row of that table, so a pair touches one cache line of it.  ``cache=True``
+stores the machine code beside this module (or in ``NUMBA_CACHE_DIR``), so
+only the first run on a machine pays the compilation (a few seconds).  Every
+kernel releases the GIL (``nogil``); the callers run chunks of blocks in a
+thread pool rather than with numba's ``parallel=True``, whose compilation
+would add several seconds to a machine's first run.
 """
 
 from __future__ import annotations
@@ -35,8 +33,8 @@ from numba import njit
 #: Row widths of the block tables (``loc``), flat arrays of ``width x ROW`` float64: a constant power of two
 #: makes a row's address a shift of the class number, where a 2-D array's stride would cost a multiply.
 SWEEP_ROW = np.uint64(4)  # Q, log Q, the block's H sum, padding: two rows per 64-byte cache line
-SAVINGS_ROW = np.uint64(8)  # Q, log Q, 1 - Q, four class sums, padding: one row per cache line
-RANK_ROW = np.uint64(4)  # a survivor's a, class, piece scratch, padding (``match_sets._Group.by_rank``)
+SAVINGS_ROW = np.uint64(8)  # Q, log Q, 1 - Q, four class sums, l(h, d_A): one row per cache line
+CELL_ROW = np.uint64(8)  # per node d_A: a cell's bound, g_FOLO, g_FOFO, FOFO's shared and detour, its seeker, padding
 _ONE = np.uint64(1)
 
 
@@ -121,11 +119,6 @@ def _walk(i, end, cls, weight, total, loc):  # pragma: no cover - compiled
 def savings_blocks(
     off,
     local,
-    saving,
-    piece,
-    piece_off,
-    piece_shared,
-    piece_detour,
     lam,
     q,
     log_q,
@@ -139,31 +132,94 @@ def savings_blocks(
     by_seeker,
     log_not_paired,
     loc,
+    nodes,
+    geometry,
+    dist,
+    cells,
+    todo,
+    to_o,
 ):  # pragma: no cover
     """:func:`sweep_blocks` that also sums the pair quantities of the savings pass (§2.7).
 
     Per class c: ``by_class[c, 0..3] += w · (1, E, shared, detour)`` (column 0
     is H_c); per seeker s: ``by_seeker[s, 0..3] += w (1 - Q_c) · (1, E, shared,
     detour)``, with ``w = λ_s Π_{c' ≻_s c} Q_c'`` (so ``w (1 - Q_c)`` is the
-    pairing rate of s with class c, telescoped).  A pair's shared distance and
-    detour are its piece's: ``piece_*[piece_off[s] + piece[i]]``.  ``loc`` (flat,
-    :data:`SAVINGS_ROW` per class) holds a block's ``Q``, ``log Q``, ``1 - Q`` and
-    its four class sums in one cache-line row per class.
+    pairing rate of s with class c, telescoped).  A pair's E, shared distance
+    and seeker detour are derived from the geometry as in :func:`pair_values`
+    (``geometry`` = seeker origin, seeker destination, l_B, class head, class
+    l(h, d_A), class destination, D̄ + tolerance, keep E <= 0, min_feasible;
+    ``dist`` the all-pairs matrix), bit for bit.
+
+    Scratch: ``loc`` (flat, :data:`SAVINGS_ROW` per class) holds a block's
+    ``Q``, ``log Q``, ``1 - Q``, its four class sums and the classes' ``a =
+    l(h, o) - l(h, d_A)`` for the current origin o (recomputed when the origin
+    changes: the seekers come sorted by origin) in one cache-line row per
+    class, ``nodes`` the classes' destinations.  ``cells`` (one
+    :data:`CELL_ROW` row per node) holds the current seeker's (d_A) cells
+    (:func:`_fill_cell`), filled for the destinations its list names (listed
+    in ``todo``) before its pairs are walked; ``to_o`` the column ``l(., o)``.
     """
+    origin, dest, solo, class_head, class_rest, class_dest, d_lim, keep_nonpositive, min_feasible = geometry
+    n_nodes = dist.shape[0]
+    flat = cells.reshape(-1)  # a view: a node's row is a shift of its number
+    for v in range(n_nodes):
+        flat[np.uint64(v) * CELL_ROW + np.uint64(7)] = -1.0  # no seeker's cell
     for b in range(b0, b1):
         k0 = block_cls_off[b]
         k = block_cls_off[b + 1] - k0
         _gather_block(block_cls[k0 : k0 + k], (q, log_q, one_minus_q), loc, SAVINGS_ROW)
+        for j in range(k):
+            nodes[j] = class_dest[block_cls[k0 + j]]
+        block_o = -1
         for s in range(block_seeker[b], block_seeker[b + 1]):
+            o, d_b, l_b = origin[s], dest[s], solo[s]
+            row_o, from_b = dist[o], dist[d_b]
+            if o != block_o:  # a = l(h, o) - l(h, d_A) of the block's classes (the seekers come sorted by origin)
+                for v in range(n_nodes):
+                    to_o[v] = dist[v, o]
+                for j in range(k):
+                    c = block_cls[k0 + j]
+                    loc[np.uint64(j) * SAVINGS_ROW + np.uint64(7)] = to_o[class_head[c]] - class_rest[c]
+                block_o = o
+            tag = float(s)
+            i, end = np.uint64(off[s]), np.uint64(off[s + 1])
+            m = 0
+            while i < end:  # the seeker's destinations d_A, each once
+                d_a = nodes[local[i]]
+                r = np.uint64(d_a) * CELL_ROW
+                if flat[r + np.uint64(7)] != tag:
+                    flat[r + np.uint64(7)] = tag
+                    todo[m] = d_a
+                    m += 1
+                i += _ONE
+            for t in range(m):  # their cells: independent reads, which the processor overlaps
+                d_a = todo[t]
+                _fill_cell(
+                    flat,
+                    np.uint64(d_a) * CELL_ROW,
+                    tag,
+                    from_b[d_a],
+                    dist[d_a, d_b],
+                    row_o[d_a],
+                    l_b,
+                    d_lim,
+                    keep_nonpositive,
+                    min_feasible,
+                )
             weight = lam[s]
             total = 0.0
             rate = rate_e = rate_sh = rate_det = 0.0
-            first = piece_off[s]
             i, end = np.uint64(off[s]), np.uint64(off[s + 1])
             while i < end:
                 c = np.uint64(local[i]) * SAVINGS_ROW
-                p = first + piece[i]
-                e, sh, det = saving[i], piece_shared[p], piece_detour[p]
+                d_a = nodes[local[i]]
+                r = np.uint64(d_a) * CELL_ROW
+                a = loc[c + np.uint64(7)]
+                # The order (0 FOFO, 1 FOLO) indexes the cell's values: no branch for the processor to mispredict.
+                r += np.uint64(a <= flat[r])
+                e = np.float64(np.float32(flat[r + _ONE] - a))
+                sh = flat[r + np.uint64(3)]
+                det = flat[r + np.uint64(5)]
                 loc[c + np.uint64(3)] += weight
                 loc[c + np.uint64(4)] += weight * e
                 loc[c + np.uint64(5)] += weight * sh
@@ -186,6 +242,68 @@ def savings_blocks(
             base = np.uint64(j) * SAVINGS_ROW
             for col in range(4):
                 by_class[c, col] += loc[base + np.uint64(3 + col)]
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _fill_cell(flat, r, tag, d_ba, d_ab, d_oa, l_b, d_lim, keep_nonpositive, min_feasible):  # pragma: no cover
+    """Row ``r`` of the savings pass's cell table (:data:`CELL_ROW`): the cell's bound, then g, the shared
+    distance and the seeker's detour (float32 values) for FOFO and FOLO, and ``tag`` (the seeker)."""
+    bound, g_l, g_f = _cell(d_ba, d_ab, d_oa, l_b, d_lim, keep_nonpositive, min_feasible)
+    flat[r], flat[r + _ONE], flat[r + np.uint64(2)] = bound, g_f, g_l
+    flat[r + np.uint64(3)], flat[r + np.uint64(4)] = np.float32(d_oa), np.float32(l_b)
+    flat[r + np.uint64(5)], flat[r + np.uint64(6)] = np.float32(-g_f), 0.0
+    flat[r + np.uint64(7)] = tag
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _cell(d_ba, d_ab, d_oa, l_b, d_lim, keep_nonpositive, min_feasible):  # pragma: no cover - compiled
+    """``(bound, g_FOLO, g_FOFO)`` of a (seeker, d_A) cell of :func:`feasible_runs`: a stored pair of the cell
+    lies in its FOLO run iff ``a <= bound`` (-inf when FOLO is not taken there), else in its FOFO run.
+
+    ``d_ba = l(d_B, d_A)``, ``d_ab = l(d_A, d_B)``, ``d_oa = l(o_B, d_A)``, ``l_b
+    = l_B``; the same float64 operations as :func:`feasible_runs`, so the
+    bound and ``g`` are those the lists were built with.
+    """
+    f_ok = d_oa + d_ab - l_b <= d_lim
+    g_f = l_b - d_oa - d_ab
+    g_l = -d_ba
+    thr_l = d_lim - l_b - d_ba
+    if min_feasible:
+        take_l = not f_ok or g_l > g_f
+    else:
+        take_l = not g_f >= g_l
+    bound = -np.inf
+    if take_l:
+        bound = _minimum(thr_l, np.inf if keep_nonpositive else np.nextafter(g_l, -np.inf))
+    return bound, g_l, g_f
+
+
+@njit(cache=True, nogil=True)
+def pair_values(off, cls, s0, s1, geometry, dist, saving, shared, detour):  # pragma: no cover - compiled
+    """E, shared distance and seeker detour (float32) of the pairs of seekers ``s0..s1-1``.
+
+    A pair of class c (head h, ``a = l(h, o_B) - l(h, d_A)``) lies in the FOLO
+    or the FOFO run of its (seeker, d_A) cell (:func:`_cell`): FOLO gives ``E =
+    g_FOLO - a``, shared ``l_B`` and no detour of the seeker; FOFO ``E = g_FOFO
+    - a``, shared ``l(o_B, d_A)`` and detour ``-g_FOFO``, each rounded to
+    float32 (§1.1; :func:`feasible_runs` for ``g``).  ``cls`` holds the pairs'
+    global classes from pair ``off[s0]`` on; the outputs are written from index
+    0.  ``geometry`` as in :func:`savings_blocks`.
+    """
+    origin, dest, solo, class_head, class_rest, class_dest, d_lim, keep_nonpositive, min_feasible = geometry
+    base = off[s0]
+    for s in range(s0, s1):
+        o, d_b, l_b = origin[s], dest[s], solo[s]
+        for i in range(off[s] - base, off[s + 1] - base):
+            c = cls[i]
+            d_a = class_dest[c]
+            d_oa = dist[o, d_a]
+            bound, g_l, g_f = _cell(dist[d_b, d_a], dist[d_a, d_b], d_oa, l_b, d_lim, keep_nonpositive, min_feasible)
+            a = dist[class_head[c], o] - class_rest[c]
+            if a <= bound:
+                saving[i], shared[i], detour[i] = np.float32(g_l - a), np.float32(l_b), np.float32(0.0)
+            else:
+                saving[i], shared[i], detour[i] = np.float32(g_f - a), np.float32(d_oa), np.float32(-g_f)
 
 
 @njit(cache=True, nogil=True)
@@ -396,42 +514,6 @@ def net_saving_keys(
             keys[e] = (np.uint64(desc) << shift_tie) | np.uint64(tie_rank[col]) | row
             e += 1
     return True
-
-
-@njit(cache=True, nogil=True)
-def decode_entries(
-    keys, tie_bits, rows, start, n, piece_g, tie_rank, by_rank, cls_out, saving_out, piece_out
-):  # pragma: no cover - compiled
-    """Write the sorted entries' columns from their keys: class, E and the piece within its row.
-
-    A key's low ``tie_bits`` bits are its survivor's tie rank r; ``by_rank[r]``
-    (C-contiguous, :data:`RANK_ROW` columns) holds that survivor's ``(a, class)`` and, as scratch, the piece it lies in
-    for the row being decoded (the pieces come grouped by row, and the sorted
-    keys of row r occupy the same span as r's pieces' entries; within a row
-    each survivor belongs to one piece).  One table indexed by rank means one
-    random access per entry, to a line the row's scratch pass just touched.
-    """
-    mask = (np.uint64(1) << np.uint64(tie_bits)) - np.uint64(1)
-    table = by_rank.reshape(-1)  # a view, flat: a row's address is a shift of its rank
-    e = 0
-    j = 0
-    m = len(n)
-    while j < m:
-        j1 = j
-        count = 0
-        while j1 < m and rows[j1] == rows[j]:
-            for col in range(start[j1], start[j1] + n[j1]):
-                table[np.uint64(tie_rank[col]) * RANK_ROW + np.uint64(2)] = j1
-            count += n[j1]
-            j1 += 1
-        for i in range(e, e + count):
-            r = (keys[i] & mask) * RANK_ROW
-            p = np.int64(table[r + np.uint64(2)])
-            cls_out[i] = np.int32(table[r + _ONE])
-            saving_out[i] = piece_g[p] - table[r]
-            piece_out[i] = p - j
-        e += count
-        j = j1
 
 
 @njit(cache=True, nogil=True)

@@ -42,23 +42,22 @@ a grid of 2^-20 m (about 1 µm): values closer than that are ties, broken by
 ascending ``pk`` (same grid), then by class index (classes are numbered by
 head node, entry link, destination), and within a class by ``(w, k)``.
 
-**Storage.**  Per pair: the class, as a block-local number (uint16, see
-:mod:`.blocks`), the saving ``E`` (float32: sub-millimetre rounding at urban
-distances; the fixed point only uses the order of the classes) and the
-pair's *piece* within its seeker (uint16), 8 bytes a pair, appended origin
-by origin to one raw file per column (see :mod:`.structure`, which keeps them
-in the cache) and read back as read-only memory maps.  The shared distance
-and the seeker's detour are the same along a piece (one seeker, one
-destination group, one service order: about 25 pairs on the month table), so
-they are stored once per piece, in float32, in per-piece columns.  The taker's detour is
-``shared - E - detour_seeker`` and its ride from ``h`` is
+**Storage.**  A pair stores its class only, as a block-local number (uint16,
+see :mod:`.blocks`): two bytes a pair, appended origin by origin to one raw
+file (see :mod:`.list_cache`, which keeps it in the cache) and read back as a
+read-only memory map.  The rest of a pair is a function of its seeker, its
+class and the distance matrix, recomputed where it is needed (the savings
+pass, :func:`.kernels.pair_values`) with the float64 operations that built
+the lists: the saving ``E = g - a`` rounded to float32, the shared distance
+and the seeker's detour (float32), so the values are those of the lists'
+construction, bit for bit, and need not be stored (six more bytes a pair,
+1.7 GB on the month table).  The taker's
+detour is ``shared - E - detour_seeker`` and its ride from ``h`` is
 ``l(h,d_A) - E - detour_seeker + shared``.
 
 **Speed.**  Origins are independent and run in a few threads.  Sorting
 (step 3) sorts the packed keys themselves, not an index: a key is unique and
-names its entry (the tie rank names the class survivor, which lies in one
-piece of its seeker's row), so a compiled pass (:mod:`.kernels`) decodes the
-sorted keys into the columns.
+its tie rank names the class survivor, so the sorted keys are the classes.
 """
 
 from __future__ import annotations
@@ -67,6 +66,7 @@ import mmap
 import sys
 import time
 from collections import deque
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -88,72 +88,107 @@ GRID = float(1 << 20)  # priority / pick-up grid: 2^-20 m
 Q_BITS = 39  # quantised priorities cover (-2^18, 2^18) m
 _Q_LIMIT = float(1 << 18) - 1.0
 SORT_ENTRIES = 1 << 21  # entries expanded and sorted at once (bounds temporaries)
-CHUNK_PAIRS = 1 << 24  # pairs per chunk when the sweeps stream the columns
-
-#: The per-pair distance columns (name, dtype), each stored as one raw little-endian file ``<name>.bin``;
-#: the classes are stored as ``local.bin`` (block-local numbers, uint16 or int32) and ``blocks.npz``, the
-#: pairs' pieces as ``piece.bin``, and the per-piece columns as ``piece_<name>.bin`` with ``piece_off.npy``.
-COLUMNS = (("saving_m", "<f4"),)
-PIECE_COLUMNS = (("shared_m", "<f4"), ("detour_m", "<f4"))  # the seeker's detour
+CHUNK_PAIRS = 1 << 24  # pairs per chunk when the sweeps stream the lists
+SIZE_SAMPLES = 64  # seekers whose lists estimate the size of a build before it starts (about 10 %)
 
 
-def piece_dtype(n_nodes: int) -> np.dtype:
-    """Piece numbers within a seeker: at most two pieces (FOFO, FOLO) per destination node."""
-    return np.dtype("<u2") if 2 * n_nodes <= (1 << 16) else np.dtype("<u4")
+@dataclass(frozen=True, eq=False)
+class ListGeometry:
+    """What a pair's E, shared distance and seeker detour are computed from (see :func:`.kernels.pair_values`).
+
+    Per seeker (OD) its origin, destination and ``l_B``; per taker class its
+    head ``h``, ``l(h, d_A)`` and destination ``d_A``; D̄ with the tolerance,
+    the E <= 0 and order rules of the lists, and the all-pairs distance matrix
+    (read when first needed: a sweep of the fixed point does not).
+    """
+
+    origin: np.ndarray  # int64 per seeker
+    destination: np.ndarray  # int64 per seeker
+    solo_m: np.ndarray  # float64 per seeker: l_B
+    class_head: np.ndarray  # int64 per class
+    class_rest_m: np.ndarray  # float64 per class: l(h, d_A)
+    class_dest: np.ndarray  # int64 per class
+    d_lim: float  # D̄ + TOLERANCE_M
+    keep_nonpositive: bool
+    min_feasible: bool  # order_rule == "min_feasible"
+    distances: Callable[[], np.ndarray] = field(repr=False)  # the all-pairs matrix (C order)
+
+    @classmethod
+    def of(
+        cls,
+        space: StateSpace,
+        rates: OdRates,
+        params: Params,
+        config: PredictConfig,
+        distances: Callable[[], np.ndarray],
+    ) -> ListGeometry:
+        return cls(
+            origin=rates.origin.astype(np.int64),
+            destination=rates.destination.astype(np.int64),
+            solo_m=np.asarray(space.solo_m, dtype=np.float64),
+            class_head=space.class_head.astype(np.int64),
+            class_rest_m=np.asarray(space.class_rest_m, dtype=np.float64),
+            class_dest=space.class_dest.astype(np.int64),
+            d_lim=float(params.max_detour_m + TOLERANCE_M),
+            keep_nonpositive=bool(config.keep_nonpositive),
+            min_feasible=config.order_rule == "min_feasible",
+            distances=distances,
+        )
+
+    def kernel_args(self) -> tuple:
+        """The tuple the compiled kernels take."""
+        return (
+            self.origin,
+            self.destination,
+            self.solo_m,
+            self.class_head,
+            self.class_rest_m,
+            self.class_dest,
+            self.d_lim,
+            self.keep_nonpositive,
+            self.min_feasible,
+        )
+
+    def values(self, off: np.ndarray, cls: np.ndarray, s0: int, s1: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(E, shared, seeker detour), float32, of the pairs of seekers ``s0..s1-1`` with global classes ``cls``."""
+        n = len(cls)
+        saving, shared, detour = (np.empty(n, dtype=np.float32) for _ in range(3))
+        if n:
+            dist = np.ascontiguousarray(self.distances())
+            kernels.pair_values(
+                off, np.ascontiguousarray(cls), s0, s1, self.kernel_args(), dist, saving, shared, detour
+            )
+        return saving, shared, detour
 
 
 @dataclass(frozen=True, eq=False)
 class Matching:
-    """Each seeker's taker classes in priority order, as flat CSR columns (usually memory maps).
+    """Each seeker's taker classes in priority order, as flat CSR arrays (the classes usually a memory map).
 
     The pairs of seeker ``s(w)`` are ``[seeker_off[w], seeker_off[w+1])`` of
-    every column.  The columns are read-only maps of the files in
-    :attr:`directory` (see :mod:`.structure`): several processes share one
-    copy in the page cache, and a sweep only brings in what it touches.
+    :attr:`local`, a read-only map of a file of the cache entry (see
+    :mod:`.list_cache`): several processes share one copy in the page cache,
+    and a sweep only brings in what it touches.  A pair's distances come from
+    :attr:`geometry`.
     """
 
     seeker_off: np.ndarray  # int64 (W+1)
     local: np.ndarray  # uint16 (or int32) taker class per pair, numbered within its block
-    saving_m: np.ndarray  # float32 E(s, t)
-    piece: np.ndarray  # uint16 (or uint32) the pair's piece, numbered within its seeker
-    piece_off: np.ndarray  # int64 (W+1): seeker s's pieces are piece_off[s] .. piece_off[s+1]-1
-    piece_shared_m: np.ndarray  # float32 shared distance, per piece
-    piece_detour_m: np.ndarray  # float32 detour of the seeker, per piece
     blocks: ClassBlocks  # the seekers' blocks and the global class of each local number
+    geometry: ListGeometry
     stats: dict = field(default_factory=dict)
 
     @classmethod
     def from_lists(
-        cls,
-        seeker_off,
-        classes,
-        saving_m,
-        shared_m,
-        seeker_detour_m,
-        *,
-        n_classes: int | None = None,
-        limit: int = BLOCK_CLASSES,
+        cls, seeker_off, classes, geometry: ListGeometry, *, n_classes: int | None = None, limit: int = BLOCK_CLASSES
     ) -> Matching:
-        """A matching held in memory, from global class lists and per-pair distances, one piece per pair
-        (tests and small models)."""
+        """A matching held in memory, from global class lists (tests and small models)."""
         seeker_off = np.asarray(seeker_off, dtype=np.int64)
         classes = np.asarray(classes, dtype=np.int32)
         if n_classes is None:
             n_classes = int(classes.max()) + 1 if len(classes) else 0
         local, blocks = localize_lists(seeker_off, classes, n_classes, limit)
-        lens = np.diff(seeker_off)
-        wide = len(lens) and int(lens.max()) > (1 << 16)
-        piece = (np.arange(len(classes)) - np.repeat(seeker_off[:-1], lens)).astype("<u4" if wide else "<u2")
-        return cls(
-            seeker_off=seeker_off,
-            local=local,
-            saving_m=np.asarray(saving_m, dtype=np.float32),
-            piece=piece,
-            piece_off=seeker_off.copy(),
-            piece_shared_m=np.asarray(shared_m, dtype=np.float32),
-            piece_detour_m=np.asarray(seeker_detour_m, dtype=np.float32),
-            blocks=blocks,
-        )
+        return cls(seeker_off=seeker_off, local=local, blocks=blocks, geometry=geometry)
 
     @property
     def cls(self) -> np.ndarray:
@@ -161,20 +196,19 @@ class Matching:
         return self.blocks.classes(self.local, self.seeker_off, 0, len(self.seeker_off) - 1)
 
     @property
+    def saving_m(self) -> np.ndarray:
+        """E of every pair (float32, computed in memory: tests and small models)."""
+        return self.arrays()[1]
+
+    @property
     def shared_m(self) -> np.ndarray:
-        """The shared distance of every pair (float32, expanded in memory: tests and small models)."""
-        return self.piece_shared_m[self._global_piece(0, len(self.seeker_off) - 1)]
+        """The shared distance of every pair (float32, computed in memory: tests and small models)."""
+        return self.arrays()[2]
 
     @property
     def seeker_detour_m(self) -> np.ndarray:
-        """The seeker's detour of every pair (float32, expanded in memory: tests and small models)."""
-        return self.piece_detour_m[self._global_piece(0, len(self.seeker_off) - 1)]
-
-    def _global_piece(self, s0: int, s1: int) -> np.ndarray:
-        """Index into the piece table of every pair of seekers ``s0..s1-1``."""
-        off = self.seeker_off
-        i0, i1 = int(off[s0]), int(off[s1])
-        return np.repeat(self.piece_off[s0:s1], np.diff(off[s0 : s1 + 1])) + self.piece[i0:i1]
+        """The seeker's detour of every pair (float32, computed in memory: tests and small models)."""
+        return self.arrays()[3]
 
     @property
     def n_pairs(self) -> int:
@@ -199,15 +233,9 @@ class Matching:
 
     @property
     def nbytes(self) -> int:
-        return int(
-            self.seeker_off.nbytes
-            + self.local.nbytes
-            + self.piece.nbytes
-            + self.piece_off.nbytes
-            + self.piece_shared_m.nbytes
-            + self.piece_detour_m.nbytes
-            + sum(getattr(self, name).nbytes for name, _ in COLUMNS)
-        )
+        """Bytes of the lists (offsets, local classes, blocks)."""
+        b = self.blocks
+        return int(self.seeker_off.nbytes + self.local.nbytes + b.seeker_off.nbytes + b.cls.nbytes + b.cls_off.nbytes)
 
     def chunks(self, max_pairs: int = CHUNK_PAIRS):
         """``(s0, s1, i0, i1)``: seeker ranges of about ``max_pairs`` pairs (at least one seeker each)."""
@@ -220,69 +248,44 @@ class Matching:
             s0 = s1
 
     def release_seekers(self, s0: int, s1: int) -> None:
-        """Give back this process's pages of the pairs and pieces of seekers ``s0..s1-1`` (every column)."""
-        self.release(int(self.seeker_off[s0]), int(self.seeker_off[s1]), ("local", "saving_m", "piece"))
-        self.release(int(self.piece_off[s0]), int(self.piece_off[s1]), ("piece_shared_m", "piece_detour_m"))
-
-    def release(self, i0: int, i1: int, names: tuple[str, ...]) -> None:
-        """Give back this process's pages of entries ``[i0, i1)`` of the named memory-mapped columns.
+        """Give back this process's pages of the pairs of seekers ``s0..s1-1``.
 
         The data stays in the page cache (a later read maps it again), but a
-        pass over 2.3 GB of columns no longer leaves them all resident.
-        Columns that are not memory maps are left alone.
+        pass over the whole list file no longer leaves it all resident.  A
+        list that is not a memory map is left alone.
         """
-        for name in names:
-            col = getattr(self, name)
-            mapped = getattr(col, "_mmap", None)  # numpy keeps the mmap object of a np.memmap here
-            if mapped is None or not hasattr(mapped, "madvise"):
-                continue
-            start = i0 * col.itemsize // mmap.PAGESIZE * mmap.PAGESIZE  # the columns are mapped from byte 0
-            end = min(i1 * col.itemsize, len(mapped))
-            if end > start:
-                mapped.madvise(mmap.MADV_DONTNEED, start, end - start)
+        col = self.local
+        mapped = getattr(col, "_mmap", None)  # numpy keeps the mmap object of a np.memmap here
+        if mapped is None or not hasattr(mapped, "madvise"):
+            return
+        i0, i1 = int(self.seeker_off[s0]), int(self.seeker_off[s1])
+        start = i0 * col.itemsize // mmap.PAGESIZE * mmap.PAGESIZE  # the file is mapped from byte 0
+        end = min(i1 * col.itemsize, len(mapped))
+        if end > start:
+            mapped.madvise(mmap.MADV_DONTNEED, start, end - start)
 
     def seeker(self, w: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(classes, E, shared, seeker detour) of seeker ``s(w)``, in priority order."""
-        i0, i1 = self.seeker_off[w], self.seeker_off[w + 1]
         classes = self.blocks.classes(self.local, self.seeker_off, w, w + 1)
-        pieces = self._global_piece(w, w + 1)
-        return classes, self.saving_m[i0:i1], self.piece_shared_m[pieces], self.piece_detour_m[pieces]
+        return (classes, *self.geometry.values(self.seeker_off, classes, w, w + 1))
 
     def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """All pairs in OD order as in-memory arrays: classes, E, shared, seeker detour (tests, small models)."""
-        pieces = self._global_piece(0, len(self.seeker_off) - 1)
-        return self.cls, np.array(self.saving_m), self.piece_shared_m[pieces], self.piece_detour_m[pieces]
+        classes = self.cls
+        return (classes, *self.geometry.values(self.seeker_off, classes, 0, len(self.seeker_off) - 1))
 
     @classmethod
-    def open(cls, directory: Path, seeker_off: np.ndarray, stats: dict, dtypes: dict) -> Matching:
-        """The matching whose columns lie in ``directory`` (read-only memory maps); ``dtypes`` names the
-        dtypes of the ``local`` and ``piece`` numbers."""
+    def open(
+        cls, directory: Path, seeker_off: np.ndarray, stats: dict, local_dtype: str, geometry: ListGeometry
+    ) -> Matching:
+        """The matching whose lists lie in ``directory`` (a read-only memory map); ``local_dtype`` names the
+        dtype of the local class numbers."""
         n, n_od = int(seeker_off[-1]), len(seeker_off) - 1
-        if np.dtype(dtypes["local"]) not in (np.dtype("<u2"), np.dtype("<i4")):
-            raise ValueError(f"local class numbers of type {dtypes['local']!r} are not supported")
-        if np.dtype(dtypes["piece"]) not in (np.dtype("<u2"), np.dtype("<u4")):
-            raise ValueError(f"piece numbers of type {dtypes['piece']!r} are not supported")
-        columns = {name: _open_column(directory / f"{name}.bin", dtype, n) for name, dtype in COLUMNS}
-        local = _open_column(directory / "local.bin", dtypes["local"], n)
-        piece = _open_column(directory / "piece.bin", dtypes["piece"], n)
-        piece_off = np.load(directory / "piece_off.npy", allow_pickle=False)
-        if len(piece_off) != n_od + 1 or piece_off[0] != 0 or np.any(np.diff(piece_off) < 0):
-            raise ValueError("its piece offsets are inconsistent")
-        table = {
-            f"piece_{name}": _open_column(directory / f"piece_{name}.bin", dtype, int(piece_off[-1]))
-            for name, dtype in PIECE_COLUMNS
-        }
+        if np.dtype(local_dtype) not in (np.dtype("<u2"), np.dtype("<i4")):
+            raise ValueError(f"local class numbers of type {local_dtype!r} are not supported")
+        local = _open_column(directory / "local.bin", local_dtype, n)
         blocks = ClassBlocks.load(directory, n_od)
-        return cls(
-            seeker_off=seeker_off,
-            stats=stats,
-            local=local,
-            piece=piece,
-            piece_off=piece_off,
-            blocks=blocks,
-            **columns,
-            **table,
-        )
+        return cls(seeker_off=seeker_off, local=local, blocks=blocks, geometry=geometry, stats=stats)
 
 
 def _open_column(path: Path, dtype: str, n: int) -> np.ndarray:
@@ -294,21 +297,31 @@ def _open_column(path: Path, dtype: str, n: int) -> np.ndarray:
 
 
 def build_matching(
-    space: StateSpace, rates: OdRates, dist: np.ndarray, params: Params, config: PredictConfig, directory: Path
+    space: StateSpace,
+    rates: OdRates,
+    dist: np.ndarray,
+    params: Params,
+    config: PredictConfig,
+    directory: Path,
+    estimate: Callable[[int, int], None] | None = None,
 ) -> Matching:
     """Matching sets of every seeker, written into ``directory`` (see the module docstring for the method).
 
     Origins are independent, so they are processed by a few threads (numpy's
     sorts and the compiled kernels release the GIL) and written in OD order:
-    the files do not depend on the number of threads.
+    the files do not depend on the number of threads.  ``estimate`` is first
+    called with the estimated number of pairs (:meth:`_Builder.sample_pairs`)
+    and the bytes a pair's local class number takes.
     """
     t0 = time.perf_counter()
-    writer = _ColumnWriter(directory, len(rates), space.class_size, piece_dtype(dist.shape[0]))
+    writer = _ListWriter(directory, len(rates), space.class_size)
     origin = rates.origin
     stats = {"stage1_candidates": 0, "stage1_kept": 0, "group_queries": 0}
     try:
-        if len(origin):
-            builder = _Builder(space, rates, dist, params, config)
+        builder = _Builder(space, rates, dist, params, config) if len(origin) else None
+        if estimate is not None:
+            estimate(builder.sample_pairs() if builder is not None else 0, writer.localizer.dtype.itemsize)
+        if builder is not None:
             bounds = np.flatnonzero(np.diff(origin)) + 1
             starts = np.concatenate([[0], bounds]).astype(np.int64)
             ends = np.concatenate([bounds, [len(origin)]]).astype(np.int64)
@@ -318,15 +331,16 @@ def build_matching(
             )  # off when stderr is not a terminal
             with bar, ThreadPoolExecutor(max(1, get_num_threads())) as pool:
                 for (_, w0, w1), lists in zip(tasks, _in_order(pool, builder.origin_lists, tasks), strict=True):
-                    writer.append(w0, lists.lens, lists.columns, lists.pieces)
+                    writer.append(w0, lists.lens, lists.classes)
                     for key, value in lists.stats.items():
                         stats[key] += value
                     bar.update(w1 - w0)
-        seeker_off, dtypes = writer.finish()
+        seeker_off, local_dtype = writer.finish()
     finally:
         writer.close()
     stats["state_pairs"] = writer.localizer.state_pairs  # Σ_s |T_s|, for reports
-    matching = Matching.open(directory, seeker_off, stats, dtypes)
+    geometry = ListGeometry.of(space, rates, params, config, lambda: dist)
+    matching = Matching.open(directory, seeker_off, stats, local_dtype, geometry)
     matching.stats["build_s"] = time.perf_counter() - t0
     return matching
 
@@ -344,66 +358,45 @@ def _in_order(pool: ThreadPoolExecutor, fn, tasks, ahead: int = 4):
 
 @dataclass(frozen=True, eq=False)
 class _OriginLists:
-    """The sorted lists of the seekers of one origin: pairs per seeker, the pair columns (class, E, piece)
-    and the piece table (pieces per seeker, shared distance, seeker detour)."""
+    """The sorted lists of the seekers of one origin: pairs per seeker and their global classes."""
 
     lens: np.ndarray
-    columns: tuple[np.ndarray, ...]
-    pieces: tuple[np.ndarray, ...]
+    classes: np.ndarray
     stats: dict
 
 
-class _ColumnWriter:
-    """Appends the per-seeker lists, in OD order, to one raw file per column; the classes go through
-    a :class:`~.blocks.Localizer` into ``local.bin`` and ``blocks.npz``, the pieces' distances into
-    ``piece_<name>.bin`` and their counts into ``piece_off.npy``."""
+class _ListWriter:
+    """Appends the per-seeker lists, in OD order, through a :class:`~.blocks.Localizer` to ``local.bin``
+    and ``blocks.npz``."""
 
-    def __init__(self, directory: Path, n_od: int, class_size: np.ndarray, piece_dtype: np.dtype) -> None:
+    def __init__(self, directory: Path, n_od: int, class_size: np.ndarray) -> None:
         self.n_od = n_od
         self.directory = directory
-        self.piece_dtype = np.dtype(piece_dtype)
-        self.files = {name: open(directory / f"{name}.bin", "wb") for name, _ in COLUMNS}  # noqa: SIM115 (closed by close())
-        self.files["piece"] = open(directory / "piece.bin", "wb")  # noqa: SIM115 (closed by close())
-        self.files.update({f"piece_{name}": open(directory / f"piece_{name}.bin", "wb") for name, _ in PIECE_COLUMNS})  # noqa: SIM115 (closed by close())
-        self.files["local"] = open(directory / "local.bin", "w+b")  # noqa: SIM115 (closed by close())
-        self.localizer = Localizer(len(class_size), self.files["local"], class_size=class_size)
+        self.file = open(directory / "local.bin", "w+b")  # noqa: SIM115 (closed by close())
+        self.localizer = Localizer(len(class_size), self.file, class_size=class_size)
         self.next = 0  # next seeker expected
         self.lens: list[np.ndarray] = []
-        self.piece_counts: list[np.ndarray] = []
 
-    def append(
-        self, w0: int, lens: np.ndarray, columns: tuple[np.ndarray, ...] = (), pieces: tuple[np.ndarray, ...] = ()
-    ) -> None:
-        """Seekers ``w0 .. w0+len(lens)-1`` with ``lens`` pairs each, their pairs' columns (global
-        classes, E, piece) and their piece table (pieces per seeker, shared distance, seeker detour)."""
+    def append(self, w0: int, lens: np.ndarray, classes: np.ndarray | None = None) -> None:
+        """Seekers ``w0 .. w0+len(lens)-1`` with ``lens`` pairs each and their pairs' global classes."""
         assert w0 == self.next, "seekers must be written in OD order"
         lens = np.asarray(lens, dtype=np.int64)
         self.lens.append(lens)
         self.next = w0 + len(lens)
-        classes, saving, piece = columns or (np.zeros(0, dtype=np.int32), np.zeros(0), np.zeros(0))
-        self.localizer.append(lens, classes)
-        self.files["saving_m"].write(memoryview(np.ascontiguousarray(saving, dtype=COLUMNS[0][1])))
-        self.files["piece"].write(memoryview(np.ascontiguousarray(piece, dtype=self.piece_dtype)))
-        counts, *table = pieces or (np.zeros(len(lens), dtype=np.int64), np.zeros(0), np.zeros(0))
-        self.piece_counts.append(np.asarray(counts, dtype=np.int64))
-        for (name, dtype), values in zip(PIECE_COLUMNS, table, strict=True):
-            self.files[f"piece_{name}"].write(memoryview(np.ascontiguousarray(values, dtype=dtype)))
+        self.localizer.append(lens, np.zeros(0, dtype=np.int32) if classes is None else classes)
 
-    def finish(self) -> tuple[np.ndarray, dict]:
-        """The seekers' offsets (int64, W+1) and the dtypes of the local and piece numbers, once every
-        seeker is written (the rest get empty lists)."""
+    def finish(self) -> tuple[np.ndarray, str]:
+        """The seekers' offsets (int64, W+1) and the dtype of the local numbers, once every seeker is
+        written (the rest get empty lists)."""
         if self.next < self.n_od:
             self.append(self.next, np.zeros(self.n_od - self.next, dtype=np.int64))
         self.localizer.finish().save(self.directory)
-        counts = np.concatenate(self.piece_counts) if self.piece_counts else np.zeros(0, dtype=np.int64)
-        np.save(self.directory / "piece_off.npy", offsets_from_counts(counts))
         self.close()
         seeker_off = offsets_from_counts(np.concatenate(self.lens) if self.lens else np.zeros(0, dtype=np.int64))
-        return seeker_off, {"local": self.localizer.dtype.str, "piece": self.piece_dtype.str}
+        return seeker_off, self.localizer.dtype.str
 
     def close(self) -> None:
-        for fh in self.files.values():
-            fh.close()
+        self.file.close()
 
 
 class _Builder:
@@ -420,11 +413,20 @@ class _Builder:
         self.r_lim = params.max_pickup_m + TOLERANCE_M
         self.d_lim = params.max_detour_m + TOLERANCE_M
         self.dest = rates.destination.astype(np.int64)
-        self.piece_dtype = piece_dtype(dist.shape[0])
+        self.origin = rates.origin
         self.solo = space.solo_m
         if np.any(np.diff(space.class_head) < 0):
             raise ValueError("taker classes must be numbered by head node")
         self.head_off = offsets_from_counts(np.bincount(space.class_head, minlength=dist.shape[0]))
+
+    def sample_pairs(self, samples: int = SIZE_SAMPLES) -> int:
+        """The number of pairs of all seekers, estimated from the lists of ``samples`` seekers spread evenly
+        over the OD order (all of them when there are fewer)."""
+        n_od = len(self.dest)
+        seekers = np.unique(np.linspace(0, n_od - 1, min(samples, n_od)).astype(np.int64))
+        origin = self.origin
+        found = sum(int(self.origin_lists(int(origin[w]), int(w), int(w) + 1).lens.sum()) for w in seekers)
+        return round(found * n_od / len(seekers))
 
     # ------------------------------------------------------------------ stage 1
     def origin_lists(self, o: int, w0: int, w1: int) -> _OriginLists:
@@ -445,14 +447,13 @@ class _Builder:
             keep &= a < 0  # E <= l(h,d_A) - p
         kept = np.flatnonzero(keep)  # one pass over the mask serves the five gathers
         if not len(kept):
-            return _OriginLists(np.zeros(w1 - w0, dtype=np.int64), (), (), stats)
+            return _OriginLists(np.zeros(w1 - w0, dtype=np.int64), np.zeros(0, dtype=np.int32), stats)
         g = _Group(cand[kept], a[kept], pk[kept], rest[kept], d_a[kept], row_o)
         stats["stage1_kept"] = g.n
         pieces = self._pieces(g, w0, w1)
         stats["group_queries"] = pieces.searches
-        lens, columns = self._emit(g, w0, w1, pieces)
-        table = (np.bincount(pieces.row, minlength=w1 - w0), pieces.shared, pieces.det)  # pieces are by row
-        return _OriginLists(lens, columns, table, stats)
+        lens, classes = self._emit(g, w0, w1, pieces)
+        return _OriginLists(lens, classes, stats)
 
     # ------------------------------------------------------------------ stage 2
     def _pieces(self, g: _Group, w0: int, w1: int) -> _Pieces:
@@ -489,13 +490,13 @@ class _Builder:
                 return out.head(k, searches)
             capacity = 2 * m * n_u  # at most two runs (FOLO, FOFO) per cell
 
-    def _emit(self, g: _Group, w0: int, w1: int, pc: _Pieces) -> tuple[np.ndarray, tuple[np.ndarray, ...]]:
-        """Pairs per seeker and the sorted columns: pieces expanded, prioritised and sorted a batch at a time."""
+    def _emit(self, g: _Group, w0: int, w1: int, pc: _Pieces) -> tuple[np.ndarray, np.ndarray]:
+        """Pairs per seeker and their sorted classes: pieces expanded, prioritised and sorted a batch at a time."""
         m = w1 - w0
         per_row = np.bincount(pc.row, weights=pc.n, minlength=m).astype(np.int64)
         cum = np.cumsum(per_row)
         n = int(cum[-1]) if m else 0
-        columns = (np.empty(n, dtype=np.int32), np.empty(n, dtype=COLUMNS[0][1]), np.empty(n, dtype=self.piece_dtype))
+        classes = np.empty(n, dtype=np.int32)
         r0 = 0
         while r0 < m:
             base = cum[r0 - 1] if r0 else 0
@@ -504,17 +505,17 @@ class _Builder:
             i0, i1 = (int(i) for i in np.searchsorted(pc.row, [r0, r1]))
             total = int(cum[r1 - 1] - base)
             if total:
-                self._sorted_entries(g, pc, i0, i1, r0, w0, tuple(c[base : base + total] for c in columns))
+                self._sorted_entries(g, pc, i0, i1, r0, w0, classes[base : base + total])
             r0 = r1
-        return per_row, columns
+        return per_row, classes
 
-    def _sorted_entries(self, g: _Group, pc: _Pieces, i0: int, i1: int, r0: int, w0: int, out) -> None:
-        """Pieces ``i0..i1-1`` (seeker rows from ``r0``) expanded, sorted and written into ``out``.
+    def _sorted_entries(self, g: _Group, pc: _Pieces, i0: int, i1: int, r0: int, w0: int, out: np.ndarray) -> None:
+        """Pieces ``i0..i1-1`` (seeker rows from ``r0``) expanded, sorted, and their classes written into ``out``.
 
         The sort key (row | descending priority | tie rank) is unique and names
         its entry: the tie rank names the class survivor, and a survivor lies in
         one piece of its row.  So the keys themselves are sorted (a SIMD sort,
-        several times faster than an argsort) and decoded by a compiled pass.
+        several times faster than an argsort) and their tie ranks give the classes.
         """
         rows, start, n = pc.row[i0:i1] - r0, pc.start[i0:i1], pc.n[i0:i1]
         keys = np.empty(int(n.sum()), dtype=np.uint64)
@@ -537,24 +538,18 @@ class _Builder:
                 self.solo[w0 + pc.row[piece]],
             )
             packable = packable and _pack_keys(rows, n, prio, g.tie_rank[col], g.tie_bits, keys)
-        cls, saving, piece_out = out
         if packable:
             keys.sort()
-            kernels.decode_entries(
-                keys, g.tie_bits, rows, start, n, pc.g[i0:i1], g.tie_rank, g.by_rank, cls, saving, piece_out
-            )
+            keys &= np.uint64((1 << g.tie_bits) - 1)  # the tie ranks
+            np.take(g.cls_by_rank, keys.view(np.int64), out=out)
             return
         # Huge distances (beyond 2^18 m) or huge groups: the same order through a slower lexsort.
-        if piece is None:
+        if piece is None or col is None:
             piece, col = np.repeat(np.arange(i0, i1), n), expand_ranges(start, start + n)
         if prio is None:
             prio = pc.g[piece] + g.kappa[col]
         perm = np.lexsort((g.tie_rank[col], np.floor(np.multiply(prio, -GRID)), np.repeat(rows, n)))
-        col, piece = col[perm], piece[perm]
-        np.take(g.cls, col, out=cls)
-        np.subtract(pc.g[piece], g.a[col], out=saving, casting="same_kind")
-        first_of_row = np.searchsorted(pc.row, pc.row[piece], side="left")  # pieces are sorted by row
-        piece_out[:] = piece - first_of_row
+        np.take(g.cls, col[perm], out=out)
 
 
 @dataclass(frozen=True, eq=False)
@@ -624,11 +619,7 @@ class _Group:
             tie = np.lexsort((order, pk_q[order]))
         self.tie_rank = np.empty(n, dtype=np.int64)
         self.tie_rank[tie] = np.arange(n)
-        # Per tie rank: the survivor's (a, class, piece scratch) in one row, for decoding sorted keys
-        # (classes < 2^31 and pieces are exact in float64).
-        self.by_rank = np.empty((n, int(kernels.RANK_ROW)))
-        self.by_rank[:, 0] = self.a[tie]
-        self.by_rank[:, 1] = self.cls[tie]
+        self.cls_by_rank = self.cls[tie]  # decodes the sorted keys
         self.tie_bits = max(1, int(n).bit_length())
         row_bits = 64 - Q_BITS - self.tie_bits
         self.rows_per_sort = 1 << row_bits if row_bits >= 1 else 1  # 1: _sorted_entries falls back to lexsort

@@ -1,35 +1,44 @@
 """The public entry point: :func:`predict` and the :class:`Prediction` the dispatcher queries.
 
-``predict(network, rates, params, config)`` builds the states (:mod:`.states`)
-and matching sets (:mod:`.matching`), solves the fixed point
+``predict(network, rates, params, config)`` returns the prediction from the
+disk cache (:mod:`.cache`) or else takes the states (:mod:`.states`) and
+matching sets (:mod:`.match_sets`) from the seeker/taker structure
+(:mod:`.list_cache`, built once per machine), solves the fixed point
 (:mod:`.fixed_point`), derives the expected savings (:mod:`.savings`) and
-caches the result on disk (:mod:`.cache`).  The heavy matching structure is
-not kept: a :class:`Prediction` holds per-OD and per-state arrays only.
+caches the result.  The heavy matching sets are not kept: a
+:class:`Prediction` holds per-OD and per-state arrays only.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import resource
+import sys
 import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
 
 import numpy as np
 import pandas as pd
+from tqdm import tqdm
 
 import rpbench.predict.cache as cache
 from rpbench.exceptions import ParameterError
 from rpbench.network import RoadNetwork
 from rpbench.predict.config import PredictConfig
 from rpbench.predict.fixed_point import SolveInfo, System, solve
+from rpbench.predict.list_cache import load_lists
 from rpbench.predict.match_sets import Matching
 from rpbench.predict.rates import OdRates
-from rpbench.predict.savings import Outcome, outcome, waiting_saving
+from rpbench.predict.savings import SavingsResult, savings_result, waiting_saving
 from rpbench.predict.states import StateSpace
-from rpbench.predict.structure import load_structure
 from rpbench.scenarios.base import Params
+
+#: Seconds a solve runs before its progress bar appears (a cached or small prediction shows none).
+PROGRESS_DELAY_S = 3.0
 
 
 @dataclass(frozen=True)
@@ -68,7 +77,7 @@ class Prediction:
     rates: OdRates
     params: dict
     config: PredictConfig
-    od: Outcome
+    od: SavingsResult
     state_od: np.ndarray  # per state: OD index
     state_k: np.ndarray  # per state: k (0 = origin state)
     state_head: np.ndarray  # per state: head node index
@@ -85,7 +94,7 @@ class Prediction:
 
     def arrays(self) -> tuple[dict[str, np.ndarray], dict]:
         """(arrays, facts) as the disk cache stores them."""
-        arrays = {f"od_{f.name}": getattr(self.od, f.name) for f in dataclasses.fields(Outcome)}
+        arrays = {f"od_{f.name}": getattr(self.od, f.name) for f in dataclasses.fields(SavingsResult)}
         arrays.update({name: getattr(self, name) for name in self.STATE_FIELDS})
         return arrays, self.info
 
@@ -96,7 +105,7 @@ class Prediction:
         """A prediction from the disk cache's (arrays, facts)."""
         arrays, info = stored
         empty = np.zeros(0)  # per-state arrays not read (a slim load) stay empty
-        od = Outcome(**{f.name: arrays.get(f"od_{f.name}", empty) for f in dataclasses.fields(Outcome)})
+        od = SavingsResult(**{f.name: arrays.get(f"od_{f.name}", empty) for f in dataclasses.fields(SavingsResult)})
         return cls(
             node_id=node_id,
             rates=rates,
@@ -111,13 +120,14 @@ class Prediction:
     @classmethod
     def per_state_members(cls) -> frozenset[str]:
         """The disk cache's per-state members (skipped by a slim load)."""
-        return frozenset(cls.STATE_FIELDS) | {f"od_{name}" for name in Outcome.STATE_FIELDS}
+        return frozenset(cls.STATE_FIELDS) | {f"od_{name}" for name in SavingsResult.STATE_FIELDS}
 
     def slim(self) -> Prediction:
         """The same prediction without its per-state arrays (what a dispatcher needs: per-OD values)."""
         empty = np.zeros(0)
-        od = dataclasses.replace(self.od, **{name: empty for name in Outcome.STATE_FIELDS})
-        return dataclasses.replace(self, od=od, **{name: empty for name in self.STATE_FIELDS})
+        od = dataclasses.replace(self.od, **{name: empty for name in SavingsResult.STATE_FIELDS})
+        per_state: dict[str, Any] = {name: empty for name in self.STATE_FIELDS}
+        return dataclasses.replace(self, od=od, **per_state)
 
     # ------------------------------------------------------------------ queries
     @cached_property
@@ -234,20 +244,75 @@ def build_model(
     config = config or PredictConfig()
     if len(rates) and (rates.origin.max() >= network.n_nodes or rates.destination.max() >= network.n_nodes):
         raise ParameterError("OD rates refer to nodes outside this network; build them for the same network")
-    structure = load_structure(network, rates, params, config, use_cache=use_cache)
+    lists = load_lists(network, rates, params, config, use_cache=use_cache)
     return PredictionModel(
-        network, rates, params, config, structure.space_for(config.tau0_s), structure.matching, structure.build_s
+        network, rates, params, config, lists.space_for(config.tau0_s), lists.matching, lists.build_s
     )
 
 
-def solve_model(model: PredictionModel, *, progress=None, rho0: np.ndarray | None = None) -> Prediction:
-    """Solve the fixed point of a built model (optionally warm-started) and derive the per-OD outcome."""
+def solve_model(
+    model: PredictionModel, *, progress: Callable[[int, float], None] | None = None, rho0: np.ndarray | None = None
+) -> Prediction:
+    """Solve the fixed point of a built model (optionally warm-started) and derive the per-OD outcome.
+
+    ``progress(iteration, residual)`` is called after every sweep; without it, a
+    progress bar on stderr shows the sweeps and the savings pass once they
+    have taken :data:`PROGRESS_DELAY_S` (only when stderr is a terminal).
+    """
     system = model.system
-    ev, info = solve(system, progress=progress, rho0=rho0)
-    t0 = time.perf_counter()
-    ev, out = outcome(system, ev.rho)
-    savings_s = time.perf_counter() - t0
+    with _sweep_bar(progress) as report:
+        ev, info = solve(system, progress=report, rho0=rho0)
+        report(-1, info.residual)
+        t0 = time.perf_counter()
+        ev, out = savings_result(system, ev.rho)
+        savings_s = time.perf_counter() - t0
     return _prediction(model, ev, out, info, savings_s)
+
+
+@contextmanager
+def _sweep_bar(progress: Callable[[int, float], None] | None) -> Iterator[Callable[[int, float], None]]:
+    """``progress`` itself, or the updates of a delayed tqdm bar (iteration -1: the savings pass starts)."""
+    if progress is not None:
+        caller = progress
+
+        def forward(it: int, res: float) -> None:
+            if it >= 0:
+                caller(it, res)
+
+        yield forward
+        return
+    start = time.perf_counter()
+    bar = tqdm(
+        desc="prediction fixed point",
+        unit=" sweeps",
+        file=sys.stderr,
+        leave=False,
+        disable=None,
+        delay=PROGRESS_DELAY_S,
+    )  # off when stderr is not a terminal
+
+    def update(it: int, res: float) -> None:
+        if it < 0:
+            bar.set_postfix_str(f"residual {res:.1e}; expected savings", refresh=False)
+            if time.perf_counter() - start >= PROGRESS_DELAY_S:  # tqdm's delay holds for its updates only
+                bar.refresh()
+            return
+        bar.set_postfix_str(f"residual {res:.1e}", refresh=False)
+        bar.update(1)
+
+    with bar:
+        yield update
+
+
+def cached_prediction(
+    network: RoadNetwork, rates: OdRates, params: Params, config: PredictConfig, *, slim: bool = False
+) -> Prediction | None:
+    """The prediction for these inputs from the disk cache, or None; ``slim`` reads its per-OD arrays only."""
+    key = cache.cache_key(network, rates, params, config)
+    hit = cache.load(key, len(rates), skip=Prediction.per_state_members() if slim else frozenset())
+    if hit is None:
+        return None
+    return Prediction.from_arrays(hit, node_id=network.node_id, rates=rates, config=config)
 
 
 def predict(
@@ -257,29 +322,33 @@ def predict(
     config: PredictConfig | None = None,
     *,
     use_cache: bool = True,
-    progress=None,
+    progress: Callable[[int, float], None] | None = None,
+    rho0: np.ndarray | None = None,
 ) -> Prediction:
-    """The prediction for ``rates`` on ``network`` (cached on disk by inputs, parameters and network)."""
+    """The prediction for ``rates`` on ``network`` (cached on disk by inputs, parameters and network).
+
+    When it is not cached, it is solved on the seeker/taker structure (built
+    once per machine), warm-started from ``rho0`` if given, and then cached.
+    """
     params = params or Params()
     config = config or PredictConfig()
-    key = cache.cache_key(network, rates, params, config)
     if use_cache:
-        hit = cache.load(key, len(rates))
+        hit = cached_prediction(network, rates, params, config)
         if hit is not None:
-            return Prediction.from_arrays(hit, node_id=network.node_id, rates=rates, config=config)
+            return hit
     t0, c0 = time.perf_counter(), time.process_time()
     model = build_model(network, rates, params, config, use_cache=use_cache)
-    prediction = solve_model(model, progress=progress)
+    prediction = solve_model(model, progress=progress, rho0=rho0)
     del model
     prediction.info["time_s"] = round(time.perf_counter() - t0, 4)
     prediction.info["cpu_s"] = round(time.process_time() - c0, 4)  # wall > cpu when the machine is shared
     prediction.info["peak_rss_mb"] = round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0, 1)
     if use_cache:
-        cache.save(key, *prediction.arrays())
+        cache.save(cache.cache_key(network, rates, params, config), *prediction.arrays())
     return prediction
 
 
-def _prediction(model: PredictionModel, ev, out: Outcome, info: SolveInfo, savings_s: float) -> Prediction:
+def _prediction(model: PredictionModel, ev, out: SavingsResult, info: SolveInfo, savings_s: float) -> Prediction:
     sp, m = model.space, model.matching
     relevant = {k: getattr(model.params, k) for k in cache.PARAM_FIELDS}
     facts = {

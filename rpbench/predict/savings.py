@@ -30,7 +30,7 @@ from rpbench.predict.fixed_point import Evaluation, PairSums, System, evaluate
 
 
 @dataclass(frozen=True, eq=False)
-class Outcome:
+class SavingsResult:
     """Per-OD and per-state results (arrays; distances in metres)."""
 
     # per OD
@@ -67,7 +67,7 @@ class Outcome:
         return self.p_seeker * self.e_seeker + (1.0 - self.p_seeker) * self.e_vacant
 
 
-def outcome(system: System, rho: np.ndarray) -> tuple[Evaluation, Outcome]:
+def savings_result(system: System, rho: np.ndarray) -> tuple[Evaluation, SavingsResult]:
     """Re-evaluate the map at ``rho`` (the solver's final ρ) and derive every expected quantity."""
     sp = system.space
     sums = PairSums.zeros(sp.n_classes, sp.n_od)
@@ -97,7 +97,7 @@ def outcome(system: System, rho: np.ndarray) -> tuple[Evaluation, Outcome]:
     e_seeker, seeker_shared, seeker_detour = seek_mean
     ride = p_s * (solo + seeker_detour) + (1.0 - p_s) * taker_ride
     shared = p_s * seeker_shared + (1.0 - p_s) * taker_shared
-    return ev, Outcome(
+    return ev, SavingsResult(
         p_seeker=p_s,
         pairing_prob=np.minimum(1.0, p_s + (1.0 - p_s) * taker_paired),
         taker_paired=taker_paired,

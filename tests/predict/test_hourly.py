@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from rpbench.predict import PredictConfig, scenario_predictions
-from rpbench.predict.hourly import cached_prediction
+from rpbench.predict import PredictConfig, predict, scenario_predictions
+from rpbench.predict.prediction import cached_prediction
 from rpbench.scenarios.registry import build_scenario
 
 
@@ -23,3 +23,19 @@ def test_hours_are_slim_and_equal_hours_are_shared(tmp_path, monkeypatch):
     look_slim = preds[0].lookup(full.rates.origin, full.rates.destination)
     for a, b in zip(look_full.__dict__.values(), look_slim.__dict__.values(), strict=True):
         np.testing.assert_array_equal(a, b)
+
+
+def test_an_hour_is_solved_and_cached_by_predict(tmp_path, monkeypatch):
+    """The hours FL solves go through :func:`predict`: the same cache entry, with its timing facts."""
+    monkeypatch.setenv("RPBENCH_CACHE", str(tmp_path / "cache"))
+    scenario = build_scenario("toy", sample=1.0, seed=0)
+    (hour,) = scenario_predictions(scenario, "scenario", np.array([60.0]), PredictConfig())
+    config = PredictConfig(tau0_s=60.0)
+    stored = cached_prediction(scenario.network, hour.rates, scenario.params, config)
+    assert stored is not None and {"time_s", "cpu_s", "peak_rss_mb"} <= set(stored.info)
+    again = predict(scenario.network, hour.rates, scenario.params, config)
+    assert again.from_cache
+    fresh = predict(scenario.network, hour.rates, scenario.params, config, use_cache=False)
+    assert not fresh.from_cache
+    for name, value in fresh.arrays()[0].items():
+        np.testing.assert_array_equal(again.arrays()[0][name], value, err_msg=name)

@@ -1,4 +1,5 @@
-"""The compiled sweeps against the numpy formulation they replaced (segmented log sums, exp, bincount)."""
+"""The compiled sweeps against a numpy formulation (segmented log sums, exp, bincount), and the pair values
+they derive against a cell-by-cell reference."""
 
 from __future__ import annotations
 
@@ -8,20 +9,41 @@ import pytest
 from rpbench.predict._arrays import segment_exclusive_cumsum, segment_sums
 from rpbench.predict.config import PredictConfig
 from rpbench.predict.fixed_point import PairSums, System, sweep
-from rpbench.predict.match_sets import Matching
+from rpbench.predict.match_sets import ListGeometry, Matching
 
 from .conftest import make_instance
 
 
+def random_geometry(
+    rng, n_od: int, n_classes: int, n_nodes: int = 9, unreachable: float = 0.0, **rules
+) -> ListGeometry:
+    """Seekers and classes on a random distance matrix of coarse values (ties, thresholds met exactly), a
+    share ``unreachable`` of them infinite."""
+    dist = rng.integers(0, 8, (n_nodes, n_nodes)).astype(np.float64) * 250.0
+    dist[rng.random(dist.shape) < unreachable] = np.inf
+    np.fill_diagonal(dist, 0.0)
+    return ListGeometry(
+        origin=rng.integers(0, n_nodes, n_od),
+        destination=rng.integers(0, n_nodes, n_od),
+        solo_m=rng.integers(1, 9, n_od) * 250.0,
+        class_head=rng.integers(0, n_nodes, n_classes),
+        class_rest_m=rng.integers(0, 8, n_classes) * 250.0,
+        class_dest=rng.integers(0, n_nodes, n_classes),
+        d_lim=rules.get("d_lim", 1000.0),
+        keep_nonpositive=rules.get("keep_nonpositive", False),
+        min_feasible=rules.get("min_feasible", True),
+        distances=lambda: dist,
+    )
+
+
 def random_lists(seed: int, n_od: int = 40, n_classes: int = 30, empty_share: float = 0.2, block_classes: int = 20):
-    """Seeker lists of random lengths (some empty) over random classes, with random per-pair distances."""
+    """Seeker lists of random lengths (some empty) over random classes of a random geometry."""
     rng = np.random.default_rng(seed)
     lens = rng.integers(1, 12, n_od) * (rng.random(n_od) > empty_share)
     off = np.concatenate([[0], np.cumsum(lens)]).astype(np.int64)
     cls = np.concatenate([rng.choice(n_classes, k, replace=False) for k in lens]).astype(np.int32)
-    n = len(cls)
-    cols = [rng.uniform(0, 3000, n).astype(np.float32) for _ in range(3)]
-    matching = Matching.from_lists(off, cls, cols[0], cols[1], cols[2], n_classes=n_classes, limit=block_classes)
+    geometry = random_geometry(rng, n_od, n_classes)
+    matching = Matching.from_lists(off, cls, geometry, n_classes=n_classes, limit=block_classes)
     lam = rng.uniform(0, 0.01, n_od) * (rng.random(n_od) > 0.1)  # some λ = 0
     log_q = np.log1p(-rng.uniform(0, 0.9, n_classes))
     return matching, lam, log_q
@@ -176,3 +198,62 @@ def test_feasible_runs_equal_a_cell_by_cell_reference(seed, keep_nonpositive, mi
     k, _ = feasible_runs(*args, *out)
     got = list(zip(*(col[:k].tolist() for col in out), strict=True))
     assert got == [tuple(float(x) if i >= 3 else int(x) for i, x in enumerate(run)) for run in want]
+
+
+def reference_pair_values(geometry: ListGeometry, seeker: np.ndarray, cls: np.ndarray):
+    """E, shared and seeker detour of each (seeker, class) pair, written from the definitions: the pair lies
+    in the FOLO run of its (seeker, d_A) cell when FOLO is taken there and its ``a`` is within that run's
+    bound (the bound :func:`feasible_runs` counts with), else in the FOFO run."""
+    g, dist = geometry, geometry.distances()
+    o, d_b, l_b = g.origin[seeker], g.destination[seeker], g.solo_m[seeker]
+    h, d_a = g.class_head[cls], g.class_dest[cls]
+    a = dist[h, o] - g.class_rest_m[cls]
+    d_ba, d_ab, d_oa = dist[d_b, d_a], dist[d_a, d_b], dist[o, d_a]
+    f_ok = d_oa + d_ab - l_b <= g.d_lim
+    g_f, g_l, thr_l = l_b - d_oa - d_ab, -d_ba, g.d_lim - l_b - d_ba
+    take_l = (~f_ok | (g_l > g_f)) if g.min_feasible else ~(g_f >= g_l)
+    cut_l = np.full(len(a), np.inf) if g.keep_nonpositive else np.nextafter(g_l, -np.inf)
+    with np.errstate(invalid="ignore"):
+        folo = take_l & (a <= np.fmin(thr_l, cut_l)) & ~np.isnan(thr_l)
+    e = np.where(folo, g_l - a, g_f - a).astype(np.float32)
+    shared = np.where(folo, l_b, d_oa).astype(np.float32)
+    detour = np.where(folo, 0.0, -g_f).astype(np.float32)
+    return e, shared, detour
+
+
+@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("keep_nonpositive", [False, True])
+@pytest.mark.parametrize("min_feasible", [True, False])
+def test_pair_values_equal_a_reference_bit_for_bit(seed, keep_nonpositive, min_feasible):
+    """:func:`pair_values` (what the savings pass computes per pair) against the reference, on every
+    (seeker, class) pair of a random geometry with ties, exactly met thresholds and unreachable nodes."""
+    rng = np.random.default_rng(seed)
+    n_od, n_classes = 30, 25
+    geometry = random_geometry(
+        rng, n_od, n_classes, unreachable=0.05, keep_nonpositive=keep_nonpositive, min_feasible=min_feasible
+    )
+    off = np.arange(n_od + 1, dtype=np.int64) * n_classes
+    cls = np.tile(np.arange(n_classes, dtype=np.int32), n_od)
+    got = geometry.values(off, cls, 0, n_od)
+    want = reference_pair_values(geometry, np.repeat(np.arange(n_od), n_classes), cls)
+    for name, x, y in zip(("E", "shared", "detour"), got, want, strict=True):
+        assert x.dtype == np.float32
+        np.testing.assert_array_equal(x.view(np.uint32), y.view(np.uint32), err_msg=name)
+    s0, s1 = 7, 12  # a range of seekers: the outputs start at its first pair
+    part = geometry.values(off, cls[off[s0] : off[s1]], s0, s1)
+    for x, y in zip(part, got, strict=True):
+        np.testing.assert_array_equal(x, y[off[s0] : off[s1]])
+
+
+def test_savings_pass_uses_the_pair_values_of_the_lists():
+    """The savings pass's sums on a real model equal sums over :meth:`Matching.arrays`' values (which
+    test_match_sets checks against a brute-force POOL), all with E > 0."""
+    model = make_instance(seed=3, size=6, n_od=50, max_pickup_m=3000, max_detour_m=3000).model()
+    rng = np.random.default_rng(1)
+    log_q = np.log1p(-rng.uniform(0, 0.3, model.space.n_classes))
+    _, _, cls_ref, seek_ref = reference_sweep(model.matching, model.rates.rate_per_s, log_q)
+    sums = PairSums.zeros(model.space.n_classes, len(model.rates))
+    sweep(model.system, log_q, sums)
+    np.testing.assert_allclose(sums.by_class, cls_ref, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(sums.by_seeker, seek_ref, rtol=1e-12, atol=1e-12)
+    assert np.all(model.matching.saving_m > 0)

@@ -48,10 +48,12 @@ def brute_force(model, w):
         cfg.priority
     ]
     order = np.lexsort((sp.k[idx], sp.od[idx], sp.cls[idx], np.floor(pk * GRID), np.floor(-prio * GRID)))
-    return idx[order], e[order], ambiguous, res
+    distances = np.stack([e, res.shared[ok], res.detour_b[ok]])[:, order]  # E, shared, seeker detour
+    return idx[order], distances, ambiguous, res
 
 
 def model_list(model, w):
+    """Seeker w's taker states in list order, and their (E, shared, seeker detour)."""
     cls, e, sh, det = model.matching.seeker(w)
     sp = model.space
     states = (
@@ -59,7 +61,7 @@ def model_list(model, w):
         if len(cls)
         else np.zeros(0, dtype=np.int64)
     )
-    return states, np.repeat(e, sp.class_size[cls])
+    return states, np.repeat(np.stack([e, sh, det]), sp.class_size[cls], axis=1)
 
 
 def check_against_brute_force(model):
@@ -70,9 +72,9 @@ def check_against_brute_force(model):
             assert ambiguous <= set(got.tolist()) and ambiguous <= set(expected.tolist())
         if ambiguous:
             got_keep, exp_keep = ~np.isin(got, list(ambiguous)), ~np.isin(expected, list(ambiguous))
-            got, e_got, expected, e_exp = got[got_keep], e_got[got_keep], expected[exp_keep], e_exp[exp_keep]
+            got, e_got, expected, e_exp = got[got_keep], e_got[:, got_keep], expected[exp_keep], e_exp[:, exp_keep]
         assert got.tolist() == expected.tolist(), f"seeker {w}"
-        np.testing.assert_allclose(e_got, e_exp, rtol=1e-6, atol=1e-3)
+        np.testing.assert_allclose(e_got, e_exp, rtol=1e-6, atol=1e-3)  # float32 values
 
 
 @settings(max_examples=15, deadline=None)

@@ -1,25 +1,26 @@
-"""The τ_0-independent part of the prediction, built once per machine and shared through the disk cache.
+"""The seeker/taker structure (:class:`CachedLists`): the τ_0-independent part of the prediction, built once
+per machine and shared through the disk cache.
 
 The taker states (:mod:`.states`) and the seekers' sorted matching lists
 (:mod:`.match_sets`) depend on the network, the OD set, R̄, D̄, v and the
 priority rule, but not on the demand level λ_w nor on τ_0: those enter the
 fixed point only.  For the 21-day month table the lists hold 282 M pairs
-(2.3 GB), so they are built once and kept in the cache folder as raw column
-files that every later run, τ_0, day of a multi-day run, sweep point and
-worker process maps read-only (one copy in the page cache for all of them).
+(0.67 GB with the states), so they are built once and kept in the cache
+folder as raw files that every later run, τ_0, day of a multi-day run, sweep
+point and worker process maps read-only (one copy in the page cache for all
+of them).
 
 Layout of ``<cache>/predict-structure-<key>/``: ``states.npz`` (the
 :class:`~.states.StateSpace` with τ_0 = 0 in the origin states),
-``seeker_off.npy``, one ``<column>.bin`` per pair column (the classes as
-block-local numbers in ``local.bin``, with ``blocks.npz``: see :mod:`.blocks`;
-each pair's piece in ``piece.bin``, with the per-piece distances in
-``piece_*.bin`` and ``piece_off.npy``: see :mod:`.match_sets`) and ``manifest.json`` (sizes, the
-local and piece numbers' dtypes and build facts).  An
-entry is built in a temporary folder beside it and renamed into place, so it
-is complete or absent; concurrent builders take an exclusive lock on
+``seeker_off.npy``, ``local.bin`` (each pair's class as a block-local number,
+with ``blocks.npz``: see :mod:`.blocks`; a pair's distances are recomputed
+from the distance matrix, see :mod:`.match_sets`) and ``manifest.json``
+(sizes, the local numbers' dtype and build facts).  An entry is built in a
+temporary folder beside it and renamed into place, so it is complete or
+absent; concurrent builders take an exclusive lock on
 ``predict-structure-<key>.lock``, and the losers wait and then reuse the
-winner's entry.  A damaged entry (a column of the wrong
-size, an unreadable manifest) is deleted and rebuilt, with a note.
+winner's entry.  A damaged entry (a file of the wrong size, an unreadable
+manifest) is deleted and rebuilt, with a note.
 """
 
 from __future__ import annotations
@@ -36,6 +37,7 @@ import sys
 import tempfile
 import time
 import zipfile
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -46,24 +48,24 @@ from rpbench.exceptions import one_line
 from rpbench.network import RoadNetwork
 from rpbench.paths import cache_dir, cache_write_error
 from rpbench.predict.config import PredictConfig
-from rpbench.predict.match_sets import COLUMNS, Matching, build_matching
+from rpbench.predict.match_sets import ListGeometry, Matching, build_matching
 from rpbench.predict.rates import OdRates
 from rpbench.predict.states import StateSpace, build_states
 from rpbench.scenarios.base import Params
 
-#: Bump when the states or the lists change for the same inputs.
-STRUCTURE_VERSION = "3"  # 2: classes stored as block-local numbers; 3: per-piece distances
+#: Bump when the files, or the states or lists they hold for the same inputs, change.
+FORMAT_VERSION = "4"
 #: The network-side parameters and the configuration fields the structure depends on.
-STRUCTURE_PARAMS = ("max_pickup_m", "max_detour_m", "speed_mps")
-STRUCTURE_CONFIG = ("include_origin_state", "priority", "keep_nonpositive", "order_rule")
+KEY_PARAMS = ("max_pickup_m", "max_detour_m", "speed_mps")
+KEY_CONFIG = ("include_origin_state", "priority", "keep_nonpositive", "order_rule")
 
-#: The structure this process used last (one: the month table's maps 1 GB of class lists when swept),
+#: The structure this process used last (one: the month table's maps 0.6 GB of class lists when swept),
 #: so the hours of a day and the points of a sweep do not reopen it.
-_RECENT: dict[str, Structure] = {}
+_RECENT: dict[str, CachedLists] = {}
 
 
 @dataclass(frozen=True, eq=False)
-class Structure:
+class CachedLists:
     """States (τ_0 = 0 in the origin states) and matching lists; the lists are usually memory maps."""
 
     space: StateSpace
@@ -77,45 +79,49 @@ class Structure:
         return dataclasses.replace(sp, tau_s=np.where(sp.k == 0, float(tau0_s), sp.tau_s))
 
 
-def structure_key(network: RoadNetwork, rates: OdRates, params: Params, config: PredictConfig) -> str:
+def lists_key(network: RoadNetwork, rates: OdRates, params: Params, config: PredictConfig) -> str:
     """Hash of everything the structure depends on (not λ_w, not τ_0)."""
     h = hashlib.sha256()
-    h.update(f"structure|{STRUCTURE_VERSION}|{network.content_hash}|".encode())
+    h.update(f"structure|{FORMAT_VERSION}|{network.content_hash}|".encode())
     for arr in (rates.origin, rates.destination):
         h.update(np.ascontiguousarray(arr, dtype=np.int64).tobytes())
-    h.update(json.dumps({k: float(getattr(params, k)) for k in STRUCTURE_PARAMS}, sort_keys=True).encode())
-    h.update(json.dumps({k: getattr(config, k) for k in STRUCTURE_CONFIG}, sort_keys=True).encode())
+    h.update(json.dumps({k: float(getattr(params, k)) for k in KEY_PARAMS}, sort_keys=True).encode())
+    h.update(json.dumps({k: getattr(config, k) for k in KEY_CONFIG}, sort_keys=True).encode())
     return h.hexdigest()[:24]
 
 
-def load_structure(
+def load_lists(
     network: RoadNetwork, rates: OdRates, params: Params, config: PredictConfig, *, use_cache: bool = True
-) -> Structure:
+) -> CachedLists:
     """The structure for these inputs: from the cache, else built (into the cache when ``use_cache``)."""
     if not use_cache:
         return _private_build(network, rates, params, config)
     root = cache_dir()
-    key = structure_key(network, rates, params, config)
+    key = lists_key(network, rates, params, config)
     final = root / f"predict-structure-{key}"
-    if _RECENT.get(key) is not None and _RECENT[key].directory.is_dir():
-        return _RECENT[key]
+    recent = _RECENT.get(key)
+    if recent is not None and recent.directory is not None and recent.directory.is_dir():
+        return recent
     _RECENT.clear()
-    found = _open_entry(final, len(rates))
+    found = _open_entry(final, network, rates, params, config)
     if found is not None:
         _RECENT[key] = found
         return found
     with _build_lock(root / f"predict-structure-{key}.lock", len(rates)):
-        found = _open_entry(final, len(rates))  # another process may have finished it meanwhile
+        found = _open_entry(final, network, rates, params, config)  # another process may have finished it meanwhile
         if found is not None:
             return found
-        print(
-            f"rpbench: building the seeker/taker prediction structure for {len(rates):,} OD pairs "
-            f"({rates.source}); once per machine, cached in {root}",
-            file=sys.stderr,
-        )
         tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}.", dir=root))
+
+        def announce(size: int) -> None:
+            print(
+                f"rpbench: building the seeker/taker prediction structure for {len(rates):,} OD pairs "
+                f"({rates.source}) in {root}, {_about(size)} on disk; once per machine, later runs reuse it",
+                file=sys.stderr,
+            )
+
         try:
-            structure = _build_into(tmp, network, rates, params, config)
+            structure = _build_into(tmp, network, rates, params, config, announce)
             os.replace(tmp, final)
         except BaseException as exc:  # disk full, Ctrl-C: no half entry left behind
             shutil.rmtree(tmp, ignore_errors=True)
@@ -128,12 +134,12 @@ def load_structure(
 
 
 def _remove_outdated(root: Path) -> None:
-    """Delete cache entries written by an older structure format (several GB each that no version of
-    this code reads again); entries of a newer format, or without a readable manifest, are left alone."""
+    """Delete cache entries written by an older structure format (up to several GB each that no version
+    of this code reads again); entries of a newer format, or without a readable manifest, are left alone."""
     for entry in root.glob("predict-structure-*"):
         try:
             version = json.loads((entry / "manifest.json").read_text()).get("version")
-            outdated = int(version) < int(STRUCTURE_VERSION)
+            outdated = int(version) < int(FORMAT_VERSION)
         except (OSError, ValueError, TypeError, AttributeError):
             continue
         if outdated:
@@ -146,21 +152,40 @@ def _remove_outdated(root: Path) -> None:
             )
 
 
-def _private_build(network, rates, params, config) -> Structure:
+def _private_build(network: RoadNetwork, rates: OdRates, params: Params, config: PredictConfig) -> CachedLists:
     """A build for this process only: the files are unlinked at once (the maps keep them alive)."""
     try:
         tmp = Path(tempfile.mkdtemp(prefix=".predict-structure-private.", dir=cache_dir()))
     except OSError:
         tmp = Path(tempfile.mkdtemp(prefix="rpbench-structure-"))
+
+    def announce(size: int) -> None:
+        print(
+            f"rpbench: building the seeker/taker prediction structure for {len(rates):,} OD pairs "
+            f"({rates.source}) for this process only, {_about(size)} in {tmp.parent}, removed at exit",
+            file=sys.stderr,
+        )
+
     try:
-        return dataclasses.replace(_build_into(tmp, network, rates, params, config), directory=None)
+        return dataclasses.replace(_build_into(tmp, network, rates, params, config, announce), directory=None)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
 
 
+def _about(size: int) -> str:
+    """``about 0.7 GB`` (``about 12 MB`` below a tenth of a gigabyte)."""
+    return f"about {size / 1e9:.1f} GB" if size >= 1e8 else f"about {max(1, round(size / 1e6))} MB"
+
+
 def _build_into(
-    directory: Path, network: RoadNetwork, rates: OdRates, params: Params, config: PredictConfig
-) -> Structure:
+    directory: Path,
+    network: RoadNetwork,
+    rates: OdRates,
+    params: Params,
+    config: PredictConfig,
+    announce: Callable[[int], None] | None = None,
+) -> CachedLists:
+    """Build the entry's files in ``directory``; ``announce`` gets the estimated bytes before the lists are built."""
     t0 = time.perf_counter()
     oracle = network.distances()
     dist = np.ascontiguousarray(oracle.dist)
@@ -169,22 +194,29 @@ def _build_into(
         network, oracle, rates, tau0_s=0.0, speed_mps=params.speed_mps, include_origin_state=config.include_origin_state
     )
     t2 = time.perf_counter()
-    matching = build_matching(space, rates, dist, params, config, directory)
+    states_bytes = sum(getattr(space, f.name).nbytes for f in dataclasses.fields(space))
+
+    def estimated(pairs: int, local_bytes: int) -> None:
+        if announce is not None:
+            # The lists, their blocks (a block's classes are a few per cent of its pairs) and the states.
+            announce(int(pairs * (local_bytes + 0.2)) + states_bytes)
+
+    matching = build_matching(space, rates, dist, params, config, directory, estimated)
     t3 = time.perf_counter()
     build_s = {"distances_s": t1 - t0, "states_s": t2 - t1, "matching_s": t3 - t2}
     np.savez(directory / "states.npz", **{f.name: getattr(space, f.name) for f in dataclasses.fields(space)})
     np.save(directory / "seeker_off.npy", matching.seeker_off)
     manifest = {
-        "version": STRUCTURE_VERSION,
+        "version": FORMAT_VERSION,
         "n_od": len(rates),
         "n_pairs": matching.n_pairs,
-        "columns": dict(COLUMNS, local=matching.local.dtype.str, piece=matching.piece.dtype.str),
+        "local": matching.local.dtype.str,
         "stats": matching.stats,
         "build_s": build_s,
     }
     (directory / "manifest.json").write_text(json.dumps(manifest, default=float, indent=1))
     _release_free_heap()
-    return Structure(space=space, matching=matching, build_s=build_s, directory=directory)
+    return CachedLists(space=space, matching=matching, build_s=build_s, directory=directory)
 
 
 def _release_free_heap() -> None:
@@ -194,20 +226,24 @@ def _release_free_heap() -> None:
         ctypes.CDLL("libc.so.6").malloc_trim(0)
 
 
-def _open_entry(directory: Path, n_od: int) -> Structure | None:
+def _open_entry(
+    directory: Path, network: RoadNetwork, rates: OdRates, params: Params, config: PredictConfig
+) -> CachedLists | None:
     """The cached structure in ``directory``, or None (absent, or damaged and then deleted)."""
     if not directory.is_dir():
         return None
+    n_od = len(rates)
     try:
         manifest = json.loads((directory / "manifest.json").read_text())
-        if manifest.get("version") != STRUCTURE_VERSION or manifest.get("n_od") != n_od:
+        if manifest.get("version") != FORMAT_VERSION or manifest.get("n_od") != n_od:
             raise ValueError("it was written for other inputs")
         with np.load(directory / "states.npz", allow_pickle=False) as data:
             space = StateSpace(**{f.name: data[f.name] for f in dataclasses.fields(StateSpace)})
         seeker_off = np.load(directory / "seeker_off.npy", allow_pickle=False)
         if len(seeker_off) != n_od + 1 or int(seeker_off[-1]) != manifest.get("n_pairs"):
             raise ValueError("its offsets do not match the manifest")
-        matching = Matching.open(directory, seeker_off, manifest.get("stats", {}), manifest["columns"])
+        geometry = ListGeometry.of(space, rates, params, config, lambda: network.distances().dist)
+        matching = Matching.open(directory, seeker_off, manifest.get("stats", {}), manifest["local"], geometry)
     except (OSError, ValueError, KeyError, TypeError, EOFError, zipfile.BadZipFile) as exc:  # npz: a zip
         print(
             f"rpbench: note: the cached prediction structure {directory.name} is unusable "
@@ -217,11 +253,11 @@ def _open_entry(directory: Path, n_od: int) -> Structure | None:
         shutil.rmtree(directory, ignore_errors=True)
         return None
     zero = {k: 0.0 for k in ("distances_s", "states_s", "matching_s")}
-    return Structure(space=space, matching=matching, build_s=zero, directory=directory)
+    return CachedLists(space=space, matching=matching, build_s=zero, directory=directory)
 
 
 @contextmanager
-def _build_lock(path: Path, n_od: int):
+def _build_lock(path: Path, n_od: int) -> Iterator[None]:
     """Exclusive lock of one entry's builders (released by the kernel if the process dies)."""
     try:
         fh = open(path, "a+")  # noqa: SIM115 (held for the lock's lifetime, closed below)
