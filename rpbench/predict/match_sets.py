@@ -629,7 +629,7 @@ def _priority(kind: str, e, pk, shared, seeker_detour, rest, l_b) -> np.ndarray:
     """Priority value of each entry, larger = served first (§2.4)."""
     if kind == "net_saving":
         return e - pk
-    if kind == "fl_utility":  # e²/(e+pk), the FL V1 utility (Eq. 15) without α^k;
+    if kind == "fl_utility":  # e²/(e+pk), the FL V1 utility (Eq. 13) without α^k;
         with np.errstate(divide="ignore", invalid="ignore"):  # e <= 0 (kept on request): e, continuous at 0
             return np.where(e > 0, e * e / (e + pk), e)
     if kind == "pickup":  # nearest first (the TR-B simulators)
