@@ -86,7 +86,6 @@ def run(args: argparse.Namespace) -> int:
         "dates_text": f"{dates[0]} .. {dates[-1]}" if len(dates) > 1 else dates[0],
         "strategies": strategies,
         "preset": preset.name,
-        "data_dir": str(data_dir),
         "ablation": mode,
         "version": None,
         **results.environment(),

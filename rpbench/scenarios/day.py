@@ -83,12 +83,11 @@ def build_day(
         start_time=start.isoformat(),
         synthetic=True,
         provenance={
-            "source": f"{data_dir}/samples_and_aggregates/data_dayly_hourly_count.csv + "
-            f"{data_dir}/demand_0800_0900/month_5_OD.csv.gz",
+            # in the data folder (no machine path)
+            "source": "samples_and_aggregates/data_dayly_hourly_count.csv + demand_0800_0900/month_5_OD.csv.gz",
             "date": day,
             "sample": sample,
             "orders_per_hour": per_hour.tolist(),
-            "data_dir": str(data_dir),
             "fleet_placement": fleet_placement,
         },
         demand=Demand(table="month", data_dir=str(data_dir), orders_per_hour=tuple(float(n) for n in per_hour)),

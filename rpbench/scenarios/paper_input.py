@@ -127,9 +127,8 @@ def load_paper_input(
         start_time=start.isoformat(),
         synthetic=False,
         provenance={
-            "source": str(source),
+            "source": str(source.relative_to(data_dir)) if source.is_relative_to(data_dir) else source.name,
             "date": day,
-            "data_dir": str(data_dir),
             "sample": float(sample),
             "rows_in_file": len(frame),
             "sampled": len(drawn),

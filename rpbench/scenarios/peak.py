@@ -78,9 +78,8 @@ def build_peak(
         start_time=start.isoformat(),
         synthetic=False,
         provenance={
-            "source": str(data_dir / "demand_0800_0900" / "orders" / f"{day}.csv.gz"),
+            "source": f"demand_0800_0900/orders/{day}.csv.gz",  # in the data folder (no machine path)
             "date": day,
-            "data_dir": str(data_dir),
             "sample": sample,
             "rows_in_hour": len(frame),
             "fleet_placement": fleet_placement,

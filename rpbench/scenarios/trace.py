@@ -92,9 +92,8 @@ def build_trace(
         start_time=start.isoformat(),
         synthetic=False,
         provenance={
-            "source": str(data_dir / "predecessor_trb2021_network"),
+            "source": "predecessor_trb2021_network",  # in the data folder (no machine path)
             "date": TRACE_DATE,
-            "data_dir": str(data_dir),
             "sample": sample,
             "fleet_placement": fleet_placement,
         },
