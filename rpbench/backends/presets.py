@@ -109,13 +109,19 @@ class Preset:
         backend.ensure_installed()
         return backend
 
+    def recorded_path(self) -> str:
+        """The preset's file as a results folder records it: ``solvers/NAME.toml`` for one of rpbench's
+        presets (wherever it is installed), else the path as it was given."""
+        entry = _preset_files().get(self.name)
+        return f"solvers/{self.name}.toml" if entry is not None and str(entry) == self.path else self.path
+
     def as_dict(self) -> dict:
         o = self.options
         return {
             "name": self.name,
             "backend": self.backend,
             "description": self.description,
-            "path": self.path,
+            "path": self.recorded_path(),
             "options": {
                 "threads": o.threads,
                 "time_limit_s": o.time_limit_s,
