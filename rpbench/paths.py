@@ -7,9 +7,10 @@ source tree when rpbench runs from a checkout), else the folder
 ``rpbench data fetch`` downloads into (``haikou`` in the user data directory,
 or in ``RPBENCH_DATA_HOME``), so a fresh machine without ``../shared`` runs
 the real data after one fetch.  Nothing here assumes which days exist in the
-folder.  When no folder is found, :func:`require_data_dir` fetches the pinned
-registry into that last folder first (:mod:`rpbench.data.first_run`), from
-``$RPBENCH_DATA_MIRROR`` when set.
+folder.  When no folder is found,
+:func:`rpbench.data.first_run.ensure_data_dir` fetches the pinned registry into
+that last folder first, from ``$RPBENCH_DATA_MIRROR`` when set; this module
+only finds folders.
 
 The cache (all-pairs distances, predictions) lives in the user cache
 directory, never in the repository; ``RPBENCH_CACHE`` overrides it.  A
@@ -106,25 +107,6 @@ def locate_data_dir(explicit: str | os.PathLike | None = None) -> tuple[Path | N
 def find_data_dir(explicit: str | os.PathLike | None = None) -> Path | None:
     """Return the data folder to use, or ``None`` when no folder exists (see :func:`locate_data_dir`)."""
     return locate_data_dir(explicit)[0]
-
-
-def require_data_dir(
-    explicit: str | os.PathLike | None = None, *, what: str = "this scenario", offline: bool = False
-) -> Path:
-    """Like :func:`find_data_dir`, but fetch the data when no folder is found, and raise a clear error
-    when that is not possible.
-
-    Without ``--data`` nor ``$RPBENCH_DATA`` and no folder found (or the
-    fetched folder incomplete), the pinned registry is fetched into
-    :func:`fetched_data_dir` as ``rpbench data fetch`` does; ``offline``
-    skips the fetch.  A folder that cannot be had is a
-    :class:`DataNotFoundError` saying why (see
-    :func:`rpbench.data.first_run.ensure_data_dir`).
-    """
-    # Imported here: the fetch reads the registry, whose module imports this one.
-    from rpbench.data.first_run import ensure_data_dir
-
-    return ensure_data_dir(explicit, what=what, offline=offline)
 
 
 def cache_dir() -> Path:

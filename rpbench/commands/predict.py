@@ -17,14 +17,15 @@ from pathlib import Path
 
 from rpbench.commands._common import (
     add_data_arg,
+    add_offline_arg,
     check_out_file,
     note,
     parse_param_overrides,
     print_json,
     write_out_file,
 )
+from rpbench.data.first_run import ensure_data_dir
 from rpbench.exceptions import ParameterError
-from rpbench.paths import require_data_dir
 from rpbench.predict import PredictConfig, build_model, predict, solve_model
 from rpbench.predict.compare import compare
 from rpbench.predict.config import ACCELERATIONS, PRIORITIES
@@ -50,6 +51,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--date", default=None, help=f"date for --rates day (default {DEFAULT_DATE})")
     add_data_arg(p)
+    add_offline_arg(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument(
         "--out",
@@ -114,7 +116,7 @@ def run(args: argparse.Namespace) -> int:
         raise ParameterError("--hours must be > 0, --min-samples >= 1 and --seed >= 0")
     # checked before the (minutes-long) solve: a bad --out must not cost it
     csv_path = check_out_file(args.out or str(default_csv(args.rates, args.date)), "--out")
-    data_dir = require_data_dir(args.data, what="rpbench predict")
+    data_dir = ensure_data_dir(args.data, what="rpbench predict", offline=args.offline)
     params = Params().replace(**parse_param_overrides(args.param))
     changes = {
         k: v for k, v in (("tau0_s", args.tau0), ("priority", args.priority), ("accel", args.accel)) if v is not None

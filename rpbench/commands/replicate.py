@@ -11,7 +11,7 @@ import pandas as pd
 from rpbench.backends.presets import load_preset
 from rpbench.commands._common import add_data_arg, add_offline_arg, command_line, print_json
 from rpbench.data import available_peak_dates
-from rpbench.paths import require_data_dir
+from rpbench.data.first_run import ensure_data_dir
 from rpbench.replication.report import criterion, markdown
 from rpbench.replication.runner import parse_strategies, replicate
 from rpbench.replication.switches import steps_for
@@ -64,7 +64,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     strategies = parse_strategies(args.strategies)
-    data_dir = require_data_dir(args.data, what="rpbench replicate", offline=args.offline)
+    data_dir = ensure_data_dir(args.data, what="rpbench replicate", offline=args.offline)
     have = available_peak_dates(data_dir)
     if args.date and args.dates:
         from rpbench.exceptions import ParameterError

@@ -20,16 +20,32 @@ there is no pick-up test between the two requests of a trip.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Any, Protocol
 
 import numpy as np
 
 from rpbench.model import TripPackingModel, quantize
+from rpbench.network import DistanceOracle
 from rpbench.replication.geometry import TakerGeometry
-from rpbench.replication.weights import AUTHORS_BONUS
+from rpbench.replication.switches import Switches
+from rpbench.replication.weights import AUTHORS_BONUS, StrategyRules
+from rpbench.scenarios.base import Scenario
 
-if TYPE_CHECKING:
-    from rpbench.replication.engine import AuthorsEngine
+
+class EngineView(Protocol):
+    """What a batch's trip packing reads of the engine (:class:`rpbench.replication.engine.AuthorsEngine`,
+    which calls it: a protocol here, so that the two modules do not import each other)."""
+
+    switches: Switches
+    scenario: Scenario
+    distances: DistanceOracle
+    origin: np.ndarray
+    destination: np.ndarray
+    solo_m: np.ndarray
+    vehicles: list[Any]
+    rules: StrategyRules
+
+    def one_taker_geometry(self, veh: Any, b: int, *, from_vehicle: bool) -> TakerGeometry[float]: ...
 
 #: Per column of a round's model: the vehicle's index in the fleet and the trip's passengers.
 Trip = tuple[int, tuple[int, ...]]
@@ -90,7 +106,7 @@ def _within(x: float, limit: float, strict: bool) -> bool:
 
 
 def build_round(
-    engine: AuthorsEngine, t: float, seekers: list[int], active: list[int]
+    engine: EngineView, t: float, seekers: list[int], active: list[int]
 ) -> tuple[TripPackingModel, list[Trip]]:
     """The round's trip-packing model and, per column, (vehicle index, request tuple)."""
     switches, params = engine.switches, engine.scenario.params

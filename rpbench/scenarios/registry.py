@@ -16,9 +16,8 @@ from pathlib import Path
 from typing import Any
 
 from rpbench.data import available_peak_dates, read_hourly_counts
-from rpbench.data.first_run import obtain_data_dir, warn_synthetic
+from rpbench.data.first_run import ensure_data_dir, obtain_data_dir, warn_synthetic
 from rpbench.exceptions import ParameterError
-from rpbench.paths import require_data_dir
 from rpbench.scenarios.base import Params, Scenario
 from rpbench.scenarios.day import build_day
 from rpbench.scenarios.paper_input import build_paper_input
@@ -107,7 +106,7 @@ def build_scenario(
     )
     if date is not None:
         kwargs["date"] = date
-    folder = require_data_dir(data_dir, what=f"scenario {name!r}") if spec.needs_data else None
+    folder = ensure_data_dir(data_dir, what=f"scenario {name!r}") if spec.needs_data else None
     return spec.build(folder, **kwargs)
 
 

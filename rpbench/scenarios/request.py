@@ -14,9 +14,9 @@ import datetime as dt
 from dataclasses import dataclass
 from typing import Any
 
+from rpbench.data.first_run import ensure_data_dir
 from rpbench.data.orders import parse_date
 from rpbench.exceptions import ParameterError
-from rpbench.paths import require_data_dir
 from rpbench.scenarios.base import Scenario
 from rpbench.scenarios.registry import build_scenario, scenario_spec
 
@@ -57,7 +57,7 @@ class ScenarioRequest:
         scenario that needs no data is returned as it is."""
         if self.data_dir is not None or not scenario_spec(self.name).needs_data:
             return self
-        return self.replace(data_dir=str(require_data_dir(None, what=f"scenario {self.name!r}")))
+        return self.replace(data_dir=str(ensure_data_dir(None, what=f"scenario {self.name!r}")))
 
     def build(self) -> Scenario:
         return build_scenario(
@@ -85,7 +85,7 @@ class ScenarioRequest:
         spec = scenario_spec(self.name)
         if spec.dates is None:
             raise ParameterError(f"--dates: scenario {self.name!r} has no dates to choose from")
-        folder = require_data_dir(self.data_dir, what="--dates")
+        folder = ensure_data_dir(self.data_dir, what="--dates")
         return parse_dates(text, spec.dates(folder))
 
 

@@ -22,8 +22,9 @@ from rpbench.cli import main
 from rpbench.data import fetch as fetch_mod
 from rpbench.data import first_run
 from rpbench.data.fetch import load_registry, verify
+from rpbench.data.first_run import ensure_data_dir
 from rpbench.exceptions import DataNotFoundError, DownloadError
-from rpbench.paths import fetched_data_dir, find_data_dir, require_data_dir
+from rpbench.paths import fetched_data_dir, find_data_dir
 
 REGISTRY = load_registry()
 NAMES = [e.name for e in REGISTRY]
@@ -117,7 +118,7 @@ def test_the_first_run_fetches_from_the_mirror_and_later_commands_find_it(
     assert info["data_dir"] == str(dest) and info["data_fetch_pending"] is None
     code, stdout, err = run_cli(capsys, "scenario", "haikou-peak", "--sample", "0.1", "--json")
     assert code == 0 and err == "" and json.loads(stdout)["scenario"] == "haikou-peak"
-    assert require_data_dir(what="rpbench predict") == dest
+    assert ensure_data_dir(what="rpbench predict") == dest
 
 
 def test_a_cut_fetch_is_resumed_by_the_next_command(capsys, monkeypatch, fresh_machine, mirror_folder):
@@ -143,12 +144,12 @@ def test_a_cut_fetch_is_resumed_by_the_next_command(capsys, monkeypatch, fresh_m
     assert verify(dest).ok == NAMES
 
 
-def test_require_data_dir_fetches_for_commands_that_need_the_data(capsys, monkeypatch, fresh_machine, mirror_folder):
-    """`rpbench predict` and `rpbench replicate` take their folder from require_data_dir."""
+def test_ensure_data_dir_fetches_for_commands_that_need_the_data(capsys, monkeypatch, fresh_machine, mirror_folder):
+    """`rpbench predict` and `rpbench replicate` take their folder from ensure_data_dir."""
     monkeypatch.setenv(first_run.DATA_MIRROR_ENV, str(mirror_folder))
-    assert require_data_dir(what="rpbench predict") == (fresh_machine / "haikou").resolve()
+    assert ensure_data_dir(what="rpbench predict") == (fresh_machine / "haikou").resolve()
     assert "fetching it once" in capsys.readouterr().err
-    assert require_data_dir(what="rpbench predict") == (fresh_machine / "haikou").resolve()
+    assert ensure_data_dir(what="rpbench predict") == (fresh_machine / "haikou").resolve()
     assert capsys.readouterr().err == ""
 
 
@@ -236,7 +237,7 @@ def test_offline_runs_the_toy_city_without_touching_the_network(capsys, no_netwo
         "or set $RPBENCH_DATA\n"
     )
     with pytest.raises(DataNotFoundError, match="--offline skips fetching it"):
-        require_data_dir(what="rpbench predict", offline=True)
+        ensure_data_dir(what="rpbench predict", offline=True)
 
 
 @pytest.mark.parametrize("command", ["run", "oracle", "snapshot", "sweep", "scenario"])
