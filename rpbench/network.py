@@ -7,7 +7,7 @@ rpbench uses (docs/algorithms.md §1: "the same distance oracle the simulator
 uses"): all-pairs shortest distances and a predecessor matrix from Dijkstra
 (``scipy.sparse.csgraph``), cached on disk in the user cache directory under
 a hash of the network content, with a SHA-256 digest that every load checks
-(:meth:`DistanceOracle.load_or_build`).  Shortest paths are read off the predecessor
+(:meth:`Distances.load_or_build`).  Shortest paths are read off the predecessor
 matrix, so the path a prediction assumes is the path the simulator drives.
 """
 
@@ -163,17 +163,17 @@ class RoadNetwork:
         return h.hexdigest()[:20]
 
     # ------------------------------------------------------------ distances
-    def distances(self, *, use_cache: bool = True) -> DistanceOracle:
+    def distances(self, *, use_cache: bool = True) -> Distances:
         """The all-pairs distance oracle (built once per network object)."""
         oracle = self._index.get("oracle")
         if oracle is None:
-            oracle = DistanceOracle.load_or_build(self, use_cache=use_cache)
+            oracle = Distances.load_or_build(self, use_cache=use_cache)
             self._index["oracle"] = oracle
         return oracle
 
 
 @dataclass(frozen=True, eq=False)
-class DistanceOracle:
+class Distances:
     """All-pairs shortest distances ``dist[o, d]`` (m) and predecessors ``pred[o, d]``."""
 
     network: RoadNetwork
@@ -183,7 +183,7 @@ class DistanceOracle:
     from_cache: bool = False
 
     @classmethod
-    def build(cls, network: RoadNetwork) -> DistanceOracle:
+    def build(cls, network: RoadNetwork) -> Distances:
         t0 = time.perf_counter()
         dist, pred = shortest_path(network.csr, method="D", directed=True, return_predecessors=True)
         pred = pred.astype(np.int32)
@@ -191,7 +191,7 @@ class DistanceOracle:
         return cls(network, dist, pred, build_s=time.perf_counter() - t0)
 
     @classmethod
-    def load_or_build(cls, network: RoadNetwork, *, use_cache: bool = True) -> DistanceOracle:
+    def load_or_build(cls, network: RoadNetwork, *, use_cache: bool = True) -> Distances:
         """The oracle from the disk cache when its content checks out, else built and cached.
 
         The cache holds ``apsp-<hash>-dist.npy``, ``-pred.npy`` and

@@ -7,7 +7,7 @@ import pytest
 
 from rpbench.data import read_peak_orders, read_raw_peak_orders
 from rpbench.exceptions import DataError, ParameterError
-from rpbench.network import DistanceOracle, great_circle_m, snap
+from rpbench.network import Distances, great_circle_m, snap
 from rpbench.scenarios.common import haikou_network
 from rpbench.scenarios.toy import grid_network
 
@@ -61,9 +61,9 @@ def test_paths_match_distances(haikou, sample_pairs):
 def test_cache_round_trip(tmp_path, monkeypatch):
     monkeypatch.setenv("RPBENCH_CACHE", str(tmp_path))
     net = grid_network(6)
-    cold = DistanceOracle.load_or_build(net)
+    cold = Distances.load_or_build(net)
     assert not cold.from_cache
-    warm = DistanceOracle.load_or_build(net)
+    warm = Distances.load_or_build(net)
     assert warm.from_cache
     assert np.array_equal(np.asarray(warm.dist), cold.dist) and np.array_equal(np.asarray(warm.pred), cold.pred)
     assert len(list(tmp_path.glob("apsp-*.npy"))) == 2

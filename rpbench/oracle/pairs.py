@@ -50,7 +50,7 @@ import pandas as pd
 
 from rpbench.exceptions import ParameterError
 from rpbench.geometry import ORDER_RULES, PoolResult, choose_order, pair_geometry
-from rpbench.network import DistanceOracle
+from rpbench.network import Distances
 from rpbench.scenarios.base import Orders, Params
 
 #: Pairs evaluated per numpy block (bounds memory to a few hundred MB).
@@ -174,7 +174,7 @@ class CandidatePairs:
 
 
 def find_candidates(
-    distances: DistanceOracle | np.ndarray, orders: Orders, rules: PairRules, *, block_pairs: int = BLOCK_PAIRS
+    distances: Distances | np.ndarray, orders: Orders, rules: PairRules, *, block_pairs: int = BLOCK_PAIRS
 ) -> CandidatePairs:
     """All feasible pairs of ``orders`` under ``rules`` (docs/algorithms.md §4.2).
 
@@ -183,14 +183,14 @@ def find_candidates(
     all-pairs matrix is accepted when ``allow_enroute`` is off.
     """
     t0 = time.perf_counter()
-    oracle = distances if isinstance(distances, DistanceOracle) else None
+    oracle = distances if isinstance(distances, Distances) else None
     if oracle is None and rules.allow_enroute:
         raise ParameterError(
             "allow_enroute needs the orders' shortest paths: pass the network's "
-            "DistanceOracle (network.distances()), not a bare distance matrix"
+            "Distances (network.distances()), not a bare distance matrix"
         )
     # a plain view: gathers from a memmap subclass are slower
-    dist = np.asarray(distances.dist if isinstance(distances, DistanceOracle) else distances)
+    dist = np.asarray(distances.dist if isinstance(distances, Distances) else distances)
     if block_pairs < 1:
         raise ParameterError(f"block_pairs = {block_pairs!r} must be >= 1")
     n = len(orders)
@@ -203,7 +203,7 @@ def find_candidates(
         if oracle is None:
             raise ParameterError(
                 "the upper bound needs the orders' shortest paths: pass the network's "
-                "DistanceOracle (network.distances()), not a bare distance matrix"
+                "Distances (network.distances()), not a bare distance matrix"
             )
         return _bound_candidates(oracle, dist, orders, rules, rank, t, o, d, solo, block_pairs, t0)
     k_bar = float(rules.planner_patience_s)
@@ -231,7 +231,7 @@ def find_candidates(
     return replace(cand, stats={"waiting": int((~cand.enroute).sum()), "enroute": int(cand.enroute.sum())})
 
 
-def _paths(distances: DistanceOracle, dist, o, d):
+def _paths(distances: Distances, dist, o, d):
     """``(offsets, nodes, cum)``: every order's shortest path and ``l(o_i, k-th node of P_i)`` along it."""
     offsets, nodes = distances.paths_batch(o, d)
     return (np.asarray(offsets, np.int64), np.asarray(nodes, np.intp), dist[np.repeat(o, np.diff(offsets)), nodes])
@@ -277,7 +277,7 @@ def bound_rules(params: Params) -> PairRules:
 
 
 def _bound_candidates(
-    distances: DistanceOracle, dist, orders: Orders, rules: PairRules, rank, t, o, d, solo, block_pairs: int, t0: float
+    distances: Distances, dist, orders: Orders, rules: PairRules, rank, t, o, d, solo, block_pairs: int, t0: float
 ) -> CandidatePairs:
     """Every pair the simulator can form, weighted by the largest saving it can realise (docs/bound.md)."""
     n = len(orders)

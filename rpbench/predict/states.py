@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rpbench.exceptions import ParameterError
-from rpbench.network import DistanceOracle, RoadNetwork
+from rpbench.network import Distances, RoadNetwork
 from rpbench.predict.rates import OdRates
 
 
@@ -71,7 +71,7 @@ class StateSpace:
 
 def build_states(
     network: RoadNetwork,
-    oracle: DistanceOracle,
+    oracle: Distances,
     rates: OdRates,
     *,
     tau0_s: float,

@@ -11,7 +11,7 @@ strategy does differently in the loop is its
 :class:`~rpbench.replication.weights.StrategyRules` (``self.rules``).
 
 The engine uses rpbench's building blocks: the network's all-pairs distances
-(:class:`~rpbench.network.DistanceOracle`), the solver-agnostic
+(:class:`~rpbench.network.Distances`), the solver-agnostic
 :class:`~rpbench.model.AssignmentModel` solved by any preset, and the
 scenario's orders and fleet.  It writes no event log for rpbench's checker:
 teleporting vehicles have no trajectory to check; :mod:`rpbench.results.check.replication`

@@ -25,7 +25,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from rpbench.model import TripPackingModel, quantize
-from rpbench.network import DistanceOracle
+from rpbench.network import Distances
 from rpbench.replication.geometry import TakerGeometry
 from rpbench.replication.switches import Switches
 from rpbench.replication.weights import AUTHORS_BONUS, StrategyRules
@@ -38,7 +38,7 @@ class EngineView(Protocol):
 
     switches: Switches
     scenario: Scenario
-    distances: DistanceOracle
+    distances: Distances
     origin: np.ndarray
     destination: np.ndarray
     solo_m: np.ndarray
@@ -46,6 +46,7 @@ class EngineView(Protocol):
     rules: StrategyRules
 
     def one_taker_geometry(self, veh: Any, b: int, *, from_vehicle: bool) -> TakerGeometry[float]: ...
+
 
 #: Per column of a round's model: the vehicle's index in the fleet and the trip's passengers.
 Trip = tuple[int, tuple[int, ...]]

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from rpbench.network import DistanceOracle, RoadNetwork
+from rpbench.network import Distances, RoadNetwork
 from rpbench.sim.lookahead import PlanWindows
 
 PICKUP, DROPOFF = 0, 1
@@ -54,7 +54,7 @@ class FleetState:
     def __init__(
         self,
         network: RoadNetwork,
-        distances: DistanceOracle,
+        distances: Distances,
         initial_nodes: np.ndarray,
         speed_mps: float,
         rng: np.random.Generator,

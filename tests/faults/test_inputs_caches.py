@@ -17,7 +17,7 @@ import pytest
 
 import rpbench.predict.cache as predict_cache
 from rpbench.exceptions import CacheError
-from rpbench.network import DistanceOracle, apsp_digest
+from rpbench.network import Distances, apsp_digest
 from rpbench.predict import OdRates, PredictConfig, predict
 from rpbench.scenarios.base import Params
 from rpbench.scenarios.toy import grid_network
@@ -87,21 +87,21 @@ APSP_DAMAGE = {
 
 @pytest.mark.parametrize("damage", APSP_DAMAGE)
 def test_damaged_distance_cache_is_rebuilt_to_the_fresh_table(cache, capsys, damage):
-    fresh = DistanceOracle.build(grid_network(5))
-    assert not DistanceOracle.load_or_build(grid_network(5)).from_cache  # writes the cache
+    fresh = Distances.build(grid_network(5))
+    assert not Distances.load_or_build(grid_network(5)).from_cache  # writes the cache
     APSP_DAMAGE[damage](apsp_files(cache))
-    rebuilt = DistanceOracle.load_or_build(grid_network(5))
+    rebuilt = Distances.load_or_build(grid_network(5))
     assert not rebuilt.from_cache
     assert np.array_equal(rebuilt.dist, fresh.dist) and np.array_equal(rebuilt.pred, fresh.pred)
     notes = capsys.readouterr().err.splitlines()
     assert len(notes) == 1 and notes[0].startswith("rpbench: note:") and "rebuilding" in notes[0]
-    again = DistanceOracle.load_or_build(grid_network(5))  # the rebuilt cache verifies
+    again = Distances.load_or_build(grid_network(5))  # the rebuilt cache verifies
     assert again.from_cache and np.array_equal(again.dist, fresh.dist)
     assert not leftovers(cache)
 
 
 def test_first_build_writes_a_digest_and_no_note(cache, capsys):
-    oracle = DistanceOracle.load_or_build(grid_network(4))
+    oracle = Distances.load_or_build(grid_network(4))
     files = apsp_files(cache)
     assert files["digest"].read_text().strip() == apsp_digest(oracle.dist, oracle.pred)
     assert capsys.readouterr().err == ""
@@ -270,7 +270,7 @@ def test_prediction_entry_written_before_the_manifest_is_still_used(cache, capsy
 
 def test_disk_full_while_writing_a_prediction(cache, monkeypatch):
     inputs = small_prediction_inputs()
-    DistanceOracle.load_or_build(inputs[0])  # the distances are cached already
+    Distances.load_or_build(inputs[0])  # the distances are cached already
 
     def fail(*a, **kw):
         raise OSError(errno.ENOSPC, "No space left on device")

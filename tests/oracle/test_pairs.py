@@ -243,7 +243,7 @@ def test_enroute_boundaries(grid):
 def test_enroute_needs_the_distance_oracle(grid):
     net, dist = grid
     orders = make_orders([0, 1], [10, 11], [0.0, 200.0])
-    with pytest.raises(ParameterError, match="DistanceOracle"):
+    with pytest.raises(ParameterError, match="Distances"):
         find_candidates(dist.dist, orders, PairRules(allow_enroute=True))
     assert len(find_candidates(dist.dist, orders, PairRules())) == 0  # a bare matrix is fine otherwise
 

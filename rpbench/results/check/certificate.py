@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from rpbench.network import DistanceOracle
+from rpbench.network import Distances
 from rpbench.results.check.core import CERT_TOL_M, DETOUR_TOL_M, TOL_M, TOL_S, RunCheck
 from rpbench.results.check.folder import Folder
 from rpbench.scenarios.base import Params
@@ -165,7 +165,7 @@ def edge_weights(f: Folder, a: np.ndarray, b: np.ndarray, a_first_only: bool = F
 
 
 def bound_weights(
-    distances: DistanceOracle,
+    distances: Distances,
     orders: pd.DataFrame,
     solo: np.ndarray,
     params: Params,
@@ -174,7 +174,7 @@ def bound_weights(
     a_first_only: bool = False,
 ) -> tuple[np.ndarray, np.ndarray]:
     """(weight, edge) of pairs (a, b) in the upper bound's graph (docs/bound.md), computed here, apart from
-    the enumeration of rpbench.oracle.pairs.  ``distances`` is the network's DistanceOracle; ``orders``
+    the enumeration of rpbench.oracle.pairs.  ``distances`` is the network's Distances; ``orders``
     holds request_s, patience_s, origin and destination."""
     f = Folder(
         Path("."),

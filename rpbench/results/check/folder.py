@@ -19,7 +19,7 @@ import pandas as pd
 
 from rpbench import results
 from rpbench.exceptions import ResultsError, RpbenchError, one_line
-from rpbench.network import DistanceOracle, RoadNetwork
+from rpbench.network import Distances, RoadNetwork
 from rpbench.results.check.core import (
     DIGEST_FILES,
     FLEET_COLUMNS,
@@ -79,7 +79,7 @@ class Folder:
     orders: pd.DataFrame
     fleet: pd.DataFrame
     network: RoadNetwork
-    distances: DistanceOracle
+    distances: Distances
     solo: np.ndarray
     kpis: pd.DataFrame
 
