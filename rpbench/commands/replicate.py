@@ -12,6 +12,7 @@ from rpbench.backends.presets import load_preset
 from rpbench.commands._common import add_data_arg, add_offline_arg, command_line, print_json
 from rpbench.data import available_peak_dates
 from rpbench.data.first_run import ensure_data_dir
+from rpbench.results.html import write_html
 from rpbench.replication.report import criterion, markdown
 from rpbench.replication.runner import parse_strategies, replicate
 from rpbench.replication.switches import steps_for
@@ -97,6 +98,7 @@ def run(args: argparse.Namespace) -> int:
         results.write_json(folder / "meta.json", meta)
         frame.to_csv(folder / "runs.csv", index=False)
         (folder / "report.md").write_text(text)
+        write_html(folder, name=final.name)
         (folder / audit.RECORDS_DIR).mkdir()
         for (date, strategy, engine), outcome in result.outcomes.items():
             if engine != "authors":

@@ -1,4 +1,5 @@
-"""``rpbench report RESULTS_DIR...``: render reports (markdown + PNG plots) from result files alone."""
+"""``rpbench report RESULTS_DIR...``: render reports (markdown + PNG plots, and with ``--html`` the interactive
+page) from result files alone."""
 
 from __future__ import annotations
 
@@ -22,6 +23,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("folders", nargs="+", metavar="RESULTS_DIR")
     p.add_argument("--metrics", default=None, help="comma-separated KPI names for the combined table")
     p.add_argument(
+        "--html",
+        action="store_true",
+        help="also write each folder's report.html, one self-contained interactive page with a map "
+        "(runs write it already; a published light copy's page has no map: re-render the full folder)",
+    )
+    p.add_argument(
         "--out",
         default=None,
         metavar="FILE",
@@ -34,15 +41,15 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     metrics = [m.strip() for m in args.metrics.split(",")] if args.metrics else None
     if args.out is None:
-        text, _ = render([Path(f) for f in args.folders], metrics)
+        text, _ = render([Path(f) for f in args.folders], metrics, page=args.html)
         print(text)
         return 0
     out = check_out_file(args.out, "--out")  # before rendering anything
     plots: list[Path] = []
     try:
         with tempfile.TemporaryDirectory(prefix="rpbench-report-") as tmp:
-            text, _ = render([Path(f) for f in args.folders], metrics, dest=Path(tmp))
-            for png in sorted(Path(tmp).glob("*.png")):
+            text, _ = render([Path(f) for f in args.folders], metrics, dest=Path(tmp), page=args.html)
+            for png in sorted([*Path(tmp).glob("*.png"), *Path(tmp).glob("*.html")]):
                 target = out.with_name(f"{out.stem}-{png.name}")
                 write_out_file(target, "--out", partial(shutil.copyfile, png))
                 plots.append(target)

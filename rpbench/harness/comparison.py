@@ -28,6 +28,7 @@ from rpbench.oracle.runs import ORACLE_RUNS
 from rpbench.oracle.solve import OracleResult
 from rpbench.results import metrics
 from rpbench.results.folder import StrategyRun, oracle_kpis, write_folder
+from rpbench.results.html import write_html
 from rpbench.results.report import with_competitive_ratios, write_report
 from rpbench.results.runs import run_label
 from rpbench.results.store import check_new_folder, new_results_folder, timestamp
@@ -73,6 +74,7 @@ def run_comparison(
             command=spec.command,
         )
         write_report(folder, name=final.name)
+        write_html(folder, name=final.name)
     return final, table
 
 

@@ -17,6 +17,7 @@ from rpbench.harness.comparison import ComparisonTask, run_task
 from rpbench.harness.parallel import run_tasks
 from rpbench.harness.spec import RunSpec
 from rpbench.results.folder import write_parent_meta
+from rpbench.results.html import write_html
 from rpbench.results.metrics import KPI_LABELS, KPI_ORDER
 from rpbench.results.parents import by_day_table, day_folders
 from rpbench.results.plots import per_day_figures
@@ -57,6 +58,7 @@ def run_days(
         )
         summarize(tmp)
         write_multiday_report(tmp, name=final.name)
+        write_html(tmp, name=final.name)
     return final
 
 

@@ -21,6 +21,7 @@ from rpbench.harness.multiday import write_multiday_report
 from rpbench.harness.sweep import write_sweep_report
 from rpbench.results import layout
 from rpbench.results.check import check_tree, format_report
+from rpbench.results.html import write_html
 from rpbench.results.report import write_report
 from rpbench.results.store import read_meta, write_json
 
@@ -53,12 +54,17 @@ def publish(source: str | Path, dest: str | Path) -> Path:
         _record_published_command(meta, dest.name)
     # reports re-rendered from the copy say it is a light copy (and point to check.txt)
     for folder, _ in verdicts:
-        write_report(tmp / folder.relative_to(source), folder.name)
+        copy = tmp / folder.relative_to(source)
+        write_report(copy, folder.name)
+        # the page is drawn from the full folder: its map needs the event logs the copy leaves out
+        write_html(folder, folder.name, dest=copy, published=True)
     kind = read_meta(tmp).get("kind")  # the multi-day or sweep summary, under the published name
     if kind == "multi-day":
         write_multiday_report(tmp, name=dest.name)
     elif kind == "sweep":
         write_sweep_report(tmp, name=dest.name)
+    if kind in ("multi-day", "sweep"):
+        write_html(tmp, name=dest.name)
     for folder, text in verdicts:
         (tmp / folder.relative_to(source) / layout.CHECK).write_text(
             "rpbench check on the full results folder before publishing (all checks passed):\n\n" + text + "\n"

@@ -10,6 +10,7 @@ from rpbench import results
 from rpbench.exceptions import ResultsError
 from rpbench.harness.multiday import write_multiday_report
 from rpbench.harness.sweep import write_sweep_report
+from rpbench.results.html import write_html
 from rpbench.results.layout import HEAVY, REPORT
 from rpbench.results.report import check_metrics, load_kpis, selected_markdown, write_report
 
@@ -17,14 +18,19 @@ from rpbench.results.report import check_metrics, load_kpis, selected_markdown, 
 PARENT_KINDS = ("multi-day", "sweep")
 
 
-def render(folders: list[Path], metrics: list[str] | None = None, dest: Path | None = None) -> tuple[str, list[Path]]:
+def render(
+    folders: list[Path], metrics: list[str] | None = None, dest: Path | None = None, *, page: bool = False
+) -> tuple[str, list[Path]]:
     """Re-render the report of each folder from its files; return (markdown, written report paths).
 
     One folder: its own report (comparison, multi-day or sweep).  Several
     comparison folders: a combined table with one column group per folder.
     Each folder's report and figures are rewritten in it; with ``dest`` the
     folders are only read: one folder's report and figures go to ``dest``,
-    several folders' combined table is only returned.
+    several folders' combined table is only returned.  ``page``: each folder's
+    ``report.html`` too (:func:`rpbench.results.html.write_html`), beside its
+    report.  A ``rpbench replicate`` folder's report.md is written by the
+    replication only: here it gets its page.
     """
     metrics = check_metrics(metrics)
     written = []
@@ -32,13 +38,27 @@ def render(folders: list[Path], metrics: list[str] | None = None, dest: Path | N
         if not folder.is_dir():
             raise ResultsError(f"results folder {str(folder)!r} does not exist")
         kind = results.read_meta(folder).get("kind", "comparison")
+        if kind == "replication":
+            if not page:
+                raise ResultsError(
+                    f"{str(folder)!r} is a rpbench replicate folder: its report.md is written by the replication; "
+                    "--html renders its page"
+                )
+            if dest is None or len(folders) == 1:
+                write_html(folder, dest=dest)
+                written.append(folder / REPORT)
+            continue
         if kind not in PARENT_KINDS and not results.run_names(folder) and not (folder / "kpis.csv").is_file():
             # a published light copy keeps kpis.csv but not the event logs under runs/
             raise ResultsError(f"results folder {str(folder)!r} holds no runs (no runs/ and no kpis.csv)")
         if dest is None:
             written.append(_write(folder, kind))
+            if page:
+                write_html(folder)
         elif len(folders) == 1:
             written.append(_write_elsewhere(folder, kind, dest))
+            if page:
+                write_html(folder, folder.name, dest=dest)
     if len(folders) == 1 and metrics is None:
         return written[0].read_text(), written
     blocks = []

@@ -24,6 +24,7 @@ from rpbench.exceptions import ParameterError
 from rpbench.harness.comparison import ComparisonTask, run_task
 from rpbench.harness.parallel import run_tasks
 from rpbench.harness.spec import RunSpec
+from rpbench.results.html import write_html
 from rpbench.results import layout
 from rpbench.results.folder import write_parent_meta
 from rpbench.results.metrics import KPI_LABELS
@@ -189,6 +190,7 @@ def run_sweep(
         )
         sweep_table(tmp).to_csv(tmp / layout.SWEEP, index=False)
         write_sweep_report(tmp, name=final.name)
+        write_html(tmp, name=final.name)
     return final
 
 

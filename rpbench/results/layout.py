@@ -15,6 +15,7 @@ A comparison folder (one scenario, several runs)::
     report.md                      the report, rendered from the files above, with its figures:
     kpis.png, timeline.png         the headline KPIs per run; waiting, served and pooled passengers over time
     hourly.png                     the KPIs per hour (scenarios of more than two hours)
+    report.html                    the report as one self-contained interactive page, with a map
 
 A parent folder (multi-day run, sweep) holds one comparison folder per day
 or point, its own ``meta.json`` and ``report.md``, and ``by_day.csv`` and
@@ -33,6 +34,7 @@ ORDERS = "orders.csv.gz"
 FLEET = "fleet.csv.gz"
 NETWORK = "network.npz"
 REPORT = "report.md"
+REPORT_HTML = "report.html"
 RUNS = "runs"
 EVENTS = "events.csv.gz"
 TRAJECTORIES = "trajectories.npz"

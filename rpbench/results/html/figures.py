@@ -1,0 +1,288 @@
+"""Interactive (Plotly) versions of the report's figures, each a pure function of tables read from result files.
+
+They mirror :mod:`rpbench.results.plots` panel for panel; every trace of a run shares the run's legend
+group, so a click on a legend entry hides or shows that run in every panel.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from rpbench.results.metrics import KPI_LABELS
+from rpbench.results.plots import (
+    HOURLY_PANELS,
+    KPI_PANELS,
+    TIMELINE_PANELS,
+    axis_label,
+    parameter_label,
+    run_colors,
+)
+from rpbench.results.runs import Styles, run_label
+
+FONT = {"family": "system-ui, -apple-system, Segoe UI, Roboto, Helvetica Neue, Arial, sans-serif", "size": 12}
+
+
+def css_colors(runs: Sequence[str], styles: Styles | None = None) -> dict[str, str]:
+    """Each run's colour (the report's matplotlib colour, as the hex code a browser reads)."""
+    from matplotlib.colors import to_hex
+
+    return {r: to_hex(c) for r, c in run_colors(list(runs), styles).items()}
+
+
+def _layout(fig: Any, title: str | None, height: int) -> Any:
+    fig.update_layout(
+        title={"text": title, "x": 0.01} if title else None,
+        height=height,
+        font=FONT,
+        template="plotly_white",
+        margin={"l": 60, "r": 20, "t": 70 if title else 40, "b": 50},
+        legend={"orientation": "h", "y": -0.12, "x": 0},
+        hovermode="closest",
+    )
+    return fig
+
+
+def _subplots(rows: int, cols: int, titles: Sequence[str], **kw: Any) -> Any:
+    from plotly.subplots import make_subplots
+
+    return make_subplots(rows=rows, cols=cols, subplot_titles=list(titles), **kw)
+
+
+def kpi_bars(table: pd.DataFrame, text: Callable[[str, float], str], styles: Styles | None = None) -> Any:
+    """The headline KPIs (:data:`~rpbench.results.plots.KPI_PANELS`), one bar per run, value on hover."""
+    import plotly.graph_objects as go
+
+    panels = [(k, name) for k, name in KPI_PANELS if k in table.index and table.loc[k].notna().any()]
+    runs = [str(r) for r in table.columns]
+    colors = css_colors(runs, styles)
+    cols = 3
+    rows = max(1, -(-len(panels) // cols))
+    fig = _subplots(rows, cols, [name for _, name in panels], vertical_spacing=0.16, horizontal_spacing=0.08)
+    shown: set[str] = set()
+    for i, (kpi, _) in enumerate(panels):
+        r, c = divmod(i, cols)
+        for run in runs:
+            value = table.loc[kpi, run]
+            if pd.isna(value):
+                continue
+            label = run_label(run, styles)
+            fig.add_trace(
+                go.Bar(
+                    x=[label],
+                    y=[float(value)],
+                    name=label,
+                    legendgroup=run,
+                    showlegend=run not in shown,
+                    marker_color=colors[run],
+                    text=[text(kpi, float(value))],
+                    textposition="outside",
+                    cliponaxis=False,
+                    hovertemplate=f"{label}<br>{KPI_LABELS.get(kpi, kpi)}: %{{text}}<extra></extra>",
+                ),
+                row=r + 1,
+                col=c + 1,
+            )
+            shown.add(run)
+        fig.update_yaxes(title_text=axis_label(kpi), row=r + 1, col=c + 1)
+    fig.update_xaxes(tickangle=-35)
+    return _layout(fig, None, 340 * rows + 80)
+
+
+def timeline(
+    table: pd.DataFrame, *, hours: bool, start: str | None, bin_s: float, horizon_s: float, styles: Styles | None = None
+) -> Any:
+    """The period's timeline: waiting, being served, riding pooled, cancelled so far; one line per run."""
+    import plotly.graph_objects as go
+
+    runs = list(dict.fromkeys(str(r) for r in table["run"]))
+    colors = css_colors(runs, styles)
+    scale = 3600.0 if hours else 60.0
+    fig = _subplots(2, 2, [name for _, name in TIMELINE_PANELS], shared_xaxes=True, vertical_spacing=0.1)
+    shown: set[str] = set()
+    for i, (state, _) in enumerate(TIMELINE_PANELS):
+        r, c = divmod(i, 2)
+        sel = table[table["state"] == state]
+        for run, g in sel.groupby("run", sort=False):
+            run = str(run)
+            label = run_label(run, styles)
+            fig.add_trace(
+                go.Scatter(
+                    x=(g["t_s"] / scale).round(4).to_numpy(),
+                    y=g["value"].round(3).to_numpy(),
+                    mode="lines",
+                    name=label,
+                    legendgroup=run,
+                    showlegend=run not in shown,
+                    line={"color": colors[run], "width": 1.6},
+                    hovertemplate=f"{label}: %{{y:.1f}}<extra></extra>",
+                ),
+                row=r + 1,
+                col=c + 1,
+            )
+            shown.add(run)
+        fig.add_vline(x=horizon_s / scale, line_dash="dot", line_color="grey", row=r + 1, col=c + 1)
+        width = f"{bin_s / 60:g}-min"
+        fig.update_yaxes(
+            title_text="passengers (total)" if state == "cancelled" else f"passengers ({width} mean)",
+            rangemode="tozero",
+            row=r + 1,
+            col=c + 1,
+        )
+    since = f" ({start})" if start else ""
+    for c in (1, 2):
+        fig.update_xaxes(title_text=f"{'hours' if hours else 'minutes'} since the scenario start{since}", row=2, col=c)
+    fig.update_layout(hovermode="x unified")
+    return _layout(fig, None, 640)
+
+
+def hourly(table: pd.DataFrame, styles: Styles | None = None) -> Any:
+    """The per-hour KPIs (``hourly.csv``): four panels, one line per run."""
+    import plotly.graph_objects as go
+
+    runs = list(dict.fromkeys(str(r) for r in table["run"]))
+    colors = css_colors(runs, styles)
+    fig = _subplots(2, 2, [name for _, name in HOURLY_PANELS], shared_xaxes=True, vertical_spacing=0.1)
+    shown: set[str] = set()
+    for i, (col, _) in enumerate(HOURLY_PANELS):
+        r, c = divmod(i, 2)
+        for run, g in table.groupby("run", sort=False):
+            run = str(run)
+            if not g[col].notna().any():
+                continue
+            label = run_label(run, styles)
+            fig.add_trace(
+                go.Scatter(
+                    x=g["hour"].to_numpy(),
+                    y=g[col].to_numpy(dtype=float),
+                    mode="lines+markers",
+                    name=label,
+                    legendgroup=run,
+                    showlegend=run not in shown,
+                    line={"color": colors[run]},
+                    marker={"size": 4},
+                    hovertemplate=f"{label}, hour %{{x}}: %{{y:.3~f}}<extra></extra>",
+                ),
+                row=r + 1,
+                col=c + 1,
+            )
+            shown.add(run)
+        fig.update_yaxes(title_text=axis_label(col), row=r + 1, col=c + 1)
+    for c in (1, 2):
+        fig.update_xaxes(title_text="hour of day (request time)", row=2, col=c)
+    return _layout(fig, None, 620)
+
+
+def round_times(rounds: pd.DataFrame, styles: Styles | None = None) -> Any:
+    """Every batch round's solve time against the time of the round, one series per run (log scale)."""
+    import plotly.graph_objects as go
+
+    runs = list(dict.fromkeys(str(r) for r in rounds["run"]))
+    colors = css_colors(runs, styles)
+    long = float(rounds["t_s"].max()) > 2 * 3600.0 if len(rounds) else False
+    scale, unit = (3600.0, "hours") if long else (60.0, "minutes")
+    fig = go.Figure()
+    for run, g in rounds.groupby("run", sort=False):
+        run = str(run)
+        label = run_label(run, styles)
+        fig.add_trace(
+            go.Scatter(
+                x=(g["t_s"] / scale).round(4).to_numpy(),
+                y=(np.maximum(g["solve_s"].to_numpy(dtype=float), 1e-7) * 1e3).round(4),
+                customdata=np.stack([g["cols"].to_numpy(), g["status"].astype(str).to_numpy()], axis=1),
+                mode="markers",
+                name=label,
+                legendgroup=run,
+                marker={"color": colors[run], "size": 4, "opacity": 0.7},
+                hovertemplate=f"{label}<br>solve %{{y:.3f}} ms<br>%{{customdata[0]}} columns, "
+                "%{customdata[1]}<extra></extra>",
+            )
+        )
+    fig.update_xaxes(title_text=f"{unit} since the scenario start")
+    fig.update_yaxes(title_text="solve time per round (ms)", type="log")
+    return _layout(fig, None, 420)
+
+
+def by_parameter(
+    table: pd.DataFrame, x: str, kpis: Sequence[str], x_title: str, styles: Styles | None = None, *, dates: bool = False
+) -> Any:
+    """A KPI chosen from a menu against days or a swept parameter (``table`` columns ``x``, run, kpi, value)."""
+    import plotly.graph_objects as go
+
+    runs = list(dict.fromkeys(str(r) for r in table["run"]))
+    colors = css_colors(runs, styles)
+    fig = go.Figure()
+    owner: list[str] = []
+    kpis = [k for k in kpis if ((table["kpi"] == k) & table["value"].notna()).any()]
+    for k in kpis:
+        sel = table[(table["kpi"] == k) & table["value"].notna()]
+        for run, g in sel.groupby("run", sort=False):
+            run = str(run)
+            label = run_label(run, styles)
+            fig.add_trace(
+                go.Scatter(
+                    x=g[x].astype(str).to_numpy() if dates else g[x].to_numpy(dtype=float),
+                    y=g["value"].to_numpy(dtype=float),
+                    mode="lines+markers",
+                    name=label,
+                    legendgroup=run,
+                    visible=k == kpis[0],
+                    line={"color": colors[run]},
+                    marker={"size": 5},
+                    hovertemplate=f"{label}, %{{x}}: %{{y:.4~g}}<extra></extra>",
+                )
+            )
+            owner.append(k)
+    buttons = [
+        {
+            "label": KPI_LABELS.get(k, k),
+            "method": "update",
+            "args": [{"visible": [o == k for o in owner]}, {"yaxis.title.text": axis_label(k)}],
+        }
+        for k in kpis
+    ]
+    fig.update_layout(
+        updatemenus=[{"buttons": buttons, "x": 0, "y": 1.18, "xanchor": "left", "yanchor": "top", "showactive": True}]
+    )
+    fig.update_xaxes(title_text=x_title, type="category" if dates else None)
+    fig.update_yaxes(title_text=axis_label(kpis[0]) if kpis else "")
+    return _layout(fig, None, 460)
+
+
+def sweep_panels(table: pd.DataFrame, parameter: str, kpis: Sequence[str], styles: Styles | None = None) -> Any:
+    """The sweep's KPIs against the swept parameter, one panel per KPI."""
+    import plotly.graph_objects as go
+
+    runs = list(dict.fromkeys(str(r) for r in table["run"]))
+    colors = css_colors(runs, styles)
+    cols = min(3, max(1, len(kpis)))
+    rows = -(-len(kpis) // cols)
+    fig = _subplots(rows, cols, [KPI_LABELS.get(k, k).split(" (")[0] for k in kpis], vertical_spacing=0.18)
+    shown: set[str] = set()
+    for i, k in enumerate(kpis):
+        r, c = divmod(i, cols)
+        sel = table[(table["kpi"] == k) & table["value"].notna()]
+        for run, g in sel.groupby("run", sort=False):
+            run = str(run)
+            label = run_label(run, styles)
+            fig.add_trace(
+                go.Scatter(
+                    x=g["point"].to_numpy(dtype=float),
+                    y=g["value"].to_numpy(dtype=float),
+                    mode="lines+markers",
+                    name=label,
+                    legendgroup=run,
+                    showlegend=run not in shown,
+                    line={"color": colors[run]},
+                    hovertemplate=f"{label}, %{{x}}: %{{y:.4~g}}<extra></extra>",
+                ),
+                row=r + 1,
+                col=c + 1,
+            )
+            shown.add(run)
+        fig.update_xaxes(title_text=parameter_label(parameter), row=r + 1, col=c + 1)
+        fig.update_yaxes(title_text=axis_label(k), row=r + 1, col=c + 1)
+    return _layout(fig, None, 330 * rows + 90)
