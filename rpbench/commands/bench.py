@@ -18,10 +18,11 @@ import sys
 from rpbench.backends.presets import load_preset
 from rpbench.bench.runner import format_table, run_benchmark
 from rpbench.bench.synthetic import SUITES, suite
-from rpbench.commands._common import check_out_file, note, print_json, write_out_file
+from rpbench.commands._common import check_out_file, command_line, note, print_json, write_out_file
 from rpbench.exceptions import ParameterError
 from rpbench.instances import load_instances
 from rpbench.model import OBJECTIVES, Structure
+from rpbench.results.html.bench import write_bench_html
 from rpbench.results.plots import bench_figure
 
 
@@ -93,6 +94,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--no-isolate", dest="isolate", action="store_false", help="solve in this process (no hard timeout)")
     p.add_argument("--csv", metavar="FILE", default=None, help="also write the table as CSV")
     p.add_argument("--plot", metavar="PNG", default=None, help="also plot solver time against model size")
+    p.add_argument(
+        "--html",
+        metavar="PAGE",
+        default=None,
+        help="also write one self-contained interactive page: per-preset shifted geometric means, the "
+        "performance profile, times against model size, every solve",
+    )
     p.add_argument("--json", action="store_true", help="print the table as JSON records")
     p.set_defaults(handler=run)
 
@@ -129,6 +137,7 @@ def run(args: argparse.Namespace) -> int:
     # output files checked before benchmarking: a bad path must not cost the run
     csv_out = check_out_file(args.csv, "--csv") if args.csv else None
     plot_out = check_out_file(args.plot, "--plot") if args.plot else None
+    html_out = check_out_file(args.html, "--html") if args.html else None
     presets = None if args.solver is None else [load_preset(name) for name in args.solver]  # fail before building
     wanted = None
     if args.structures is not None:  # checked before the (slow) synthetic suite is built
@@ -162,6 +171,9 @@ def run(args: argparse.Namespace) -> int:
     if plot_out is not None:
         title = f"rpbench bench: {len(models)} models x {table['preset'].nunique()} presets (time of proven optima)"
         write_out_file(plot_out, "--plot", lambda tmp: bench_figure(table, tmp, title))
+    if html_out is not None:
+        what = f"{len(models)} models x {table['preset'].nunique()} presets"
+        write_out_file(html_out, "--html", lambda tmp: write_bench_html(table, tmp, what, command_line()))
     if args.json:
         print_json(table.astype(object).where(table.notna(), None).to_dict(orient="records"))
     else:

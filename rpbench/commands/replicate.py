@@ -12,12 +12,12 @@ from rpbench.backends.presets import load_preset
 from rpbench.commands._common import add_data_arg, add_offline_arg, command_line, print_json
 from rpbench.data import available_peak_dates
 from rpbench.data.first_run import ensure_data_dir
-from rpbench.results.html import write_html
 from rpbench.replication.report import criterion, markdown
 from rpbench.replication.runner import parse_strategies, replicate
 from rpbench.replication.switches import steps_for
 from rpbench.results import store as results
 from rpbench.results.check import replication as audit
+from rpbench.results.html import write_html
 from rpbench.results.store import check_new_folder
 from rpbench.scenarios.request import parse_dates
 

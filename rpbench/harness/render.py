@@ -10,7 +10,9 @@ from rpbench import results
 from rpbench.exceptions import ResultsError
 from rpbench.harness.multiday import write_multiday_report
 from rpbench.harness.sweep import write_sweep_report
+from rpbench.results import layout
 from rpbench.results.html import write_html
+from rpbench.results.html.bench import bench_tables, write_bench_folder
 from rpbench.results.layout import HEAVY, REPORT
 from rpbench.results.report import check_metrics, load_kpis, selected_markdown, write_report
 
@@ -37,6 +39,10 @@ def render(
     for folder in folders:
         if not folder.is_dir():
             raise ResultsError(f"results folder {str(folder)!r} does not exist")
+        if page and not (folder / layout.META).is_file() and bench_tables(folder):
+            # a folder of `rpbench bench --csv` tables: its page only (there is no report.md to render)
+            written.append(write_bench_folder(folder, dest))
+            continue
         kind = results.read_meta(folder).get("kind", "comparison")
         if kind == "replication":
             if not page:
@@ -60,6 +66,8 @@ def render(
             if page:
                 write_html(folder, folder.name, dest=dest)
     if len(folders) == 1 and metrics is None:
+        if written[0].suffix == ".html":
+            return f"page written to {written[0]}", written
         return written[0].read_text(), written
     blocks = []
     for folder in folders:

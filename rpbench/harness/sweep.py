@@ -24,9 +24,9 @@ from rpbench.exceptions import ParameterError
 from rpbench.harness.comparison import ComparisonTask, run_task
 from rpbench.harness.parallel import run_tasks
 from rpbench.harness.spec import RunSpec
-from rpbench.results.html import write_html
 from rpbench.results import layout
 from rpbench.results.folder import write_parent_meta
+from rpbench.results.html import write_html
 from rpbench.results.metrics import KPI_LABELS
 from rpbench.results.parents import sweep_table
 from rpbench.results.plots import sweep_figure

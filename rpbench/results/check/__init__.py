@@ -17,6 +17,7 @@ Folder checks (reported as the run ``(folder)``):
   paths of the folder's network;
 * ``hourly`` — hourly.csv recomputed from the event logs and odometers;
 * ``report`` — the KPI tables of report.md are the rendering of kpis.csv;
+* ``report-html`` — report.html's comparison table shows kpis.csv (printed numbers and raw values);
 * ``parent-tables`` — a multi-day or sweep parent's tables are its children's KPIs.
 
 Simulation runs:

@@ -29,6 +29,7 @@ from rpbench.results.check.folder import (
 )
 from rpbench.results.check.kpis import check_hourly, check_report, compare_kpis, hourly_expected, simulation_kpis
 from rpbench.results.check.oracle import check_oracle
+from rpbench.results.check.page import check_page
 from rpbench.results.check.parents import check_parent
 from rpbench.results.check.replication import check_replication
 from rpbench.results.layout import EVENTS, META, RUNS, TRAJECTORIES
@@ -103,6 +104,7 @@ def _check_comparison(folder: Path) -> tuple[RunCheck, list[RunCheck]]:
     }
     check_hourly(fc, f, runs, hourly, per_hour)
     check_report(fc, f)
+    check_page(fc, f)
     return fc, runs
 
 

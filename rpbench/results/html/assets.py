@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import base64
 import gzip
-from functools import lru_cache
+from functools import cache, lru_cache
 from importlib import resources
 
 
@@ -30,7 +30,7 @@ def plotly_version() -> str:
     return str(plotly.__version__)
 
 
-@lru_cache(maxsize=None)
+@cache
 def text(name: str) -> str:
     """A file shipped beside this module (``page.js``, ``page.css``)."""
     return resources.files(__package__).joinpath(name).read_text(encoding="utf-8")

@@ -286,3 +286,57 @@ def sweep_panels(table: pd.DataFrame, parameter: str, kpis: Sequence[str], style
         fig.update_xaxes(title_text=parameter_label(parameter), row=r + 1, col=c + 1)
         fig.update_yaxes(title_text=axis_label(k), row=r + 1, col=c + 1)
     return _layout(fig, None, 330 * rows + 90)
+
+
+def performance_profile(profile: dict[str, tuple[np.ndarray, np.ndarray]]) -> Any:
+    """Dolan-Moré performance profiles, one step line per preset (log2 of the ratio to the fastest)."""
+    import plotly.graph_objects as go
+
+    fig = go.Figure()
+    for preset, (ratios, share) in profile.items():
+        x = np.concatenate([[1.0], ratios])
+        y = np.concatenate([[0.0], share])
+        fig.add_trace(
+            go.Scatter(
+                x=x,
+                y=y,
+                mode="lines+markers",
+                line_shape="hv",
+                name=preset,
+                marker={"size": 4},
+                hovertemplate=f"{preset}: %{{y:.0%}} of models within %{{x:.3g}}× the fastest<extra></extra>",
+            )
+        )
+    fig.update_xaxes(title_text="τ: time over the fastest preset's time (log scale)", type="log")
+    fig.update_yaxes(title_text="share of models solved within τ", range=[0, 1.05], tickformat=".0%")
+    return _layout(fig, None, 440)
+
+
+def bench_times(table: pd.DataFrame) -> Any:
+    """Solver time against model size, one series per preset, one symbol per structure (proven optimal only)."""
+    import plotly.graph_objects as go
+
+    done = table[table["status"] == "optimal"]
+    symbols = ["circle", "square", "diamond", "triangle-up", "cross"]
+    structures = list(dict.fromkeys(table["structure"]))
+    fig = go.Figure()
+    for preset, g in done.groupby("preset", sort=True):
+        for j, structure in enumerate(structures):
+            h = g[g["structure"] == structure].sort_values("cols")
+            if h.empty:
+                continue
+            fig.add_trace(
+                go.Scatter(
+                    x=h["cols"].to_numpy(),
+                    y=(h["total_s"].to_numpy(dtype=float) * 1e3),
+                    text=h["model"].to_numpy(),
+                    mode="lines+markers",
+                    name=f"{preset} ({structure})",
+                    legendgroup=str(preset),
+                    marker={"symbol": symbols[j % len(symbols)], "size": 7},
+                    hovertemplate=f"{preset}<br>%{{text}}<br>%{{x}} columns: %{{y:.3g}} ms<extra></extra>",
+                )
+            )
+    fig.update_xaxes(title_text="model columns (log scale)", type="log")
+    fig.update_yaxes(title_text="solver time, proven optimal (ms, log scale)", type="log")
+    return _layout(fig, None, 480)

@@ -110,7 +110,7 @@ class Page:
                 f"<style>{assets.text('page.css')}</style>",
                 "</head>",
                 "<body>",
-                '<main>',
+                "<main>",
                 '<p id="rpbench-status" class="status">Loading the figures…</p>',
                 *self.blocks,
                 "</main>",

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import html
 import re
+from collections.abc import Sequence
 from pathlib import Path
 
 import pandas as pd
@@ -263,7 +264,7 @@ def sweep_page(parent: Path, name: str | None = None) -> Page:
     return page
 
 
-def markdown_page(folder: Path, title: str, *, children: list[Path] = (), drop_images: bool = False) -> Page:
+def markdown_page(folder: Path, title: str, *, children: Sequence[Path] = (), drop_images: bool = False) -> Page:
     """A page showing ``folder``'s report.md (PNG figures left out when the page draws its own), with links
     to the pages of ``children``."""
     from markdown_it import MarkdownIt

@@ -17,7 +17,9 @@ from rpbench import results
 from rpbench.results.report import fmt
 from tests.results.html.test_mapdata import direct_layers
 
-playwright = pytest.importorskip("playwright.sync_api", reason="Playwright is not installed (pip install -e '.[browser]')")
+playwright = pytest.importorskip(
+    "playwright.sync_api", reason="Playwright is not installed (pip install -e '.[browser]')"
+)
 
 CHROMIUM_ARGS = [
     "--no-sandbox",  # CI runs as root
@@ -68,7 +70,9 @@ def test_the_page_draws_offline_with_the_folders_numbers(browser, toy_run, tmp_p
     assert [u for u in requests if not u.startswith(("file:", "data:", "blob:"))] == []
     assert (tmp_path / "page.png").stat().st_size > 10_000
     # every figure slot holds a drawn plot
-    drawn = page.evaluate("[...document.querySelectorAll('.plot')].map(d => [d.id, d.classList.contains('js-plotly-plot')])")
+    drawn = page.evaluate(
+        "[...document.querySelectorAll('.plot')].map(d => [d.id, d.classList.contains('js-plotly-plot')])"
+    )
     assert drawn and all(ok for _, ok in drawn), drawn
 
     # the comparison table shows kpis.csv, formatted as the report prints it

@@ -37,10 +37,18 @@ def test_layers_are_the_event_logs(toy_run):
         ev = events.set_index(["order", "event"])
         for i in range(len(pooled["t"])):
             a, b = pooled["orders"][2 * i : 2 * i + 2]
-            picks = sorted([(ev.loc[(a, "pickup"), "t_s"], ev.loc[(a, "pickup"), "node"]),
-                            (ev.loc[(b, "pickup"), "t_s"], ev.loc[(b, "pickup"), "node"])])
-            drops = sorted([(ev.loc[(a, "dropoff"), "t_s"], ev.loc[(a, "dropoff"), "node"]),
-                            (ev.loc[(b, "dropoff"), "t_s"], ev.loc[(b, "dropoff"), "node"])])
+            picks = sorted(
+                [
+                    (ev.loc[(a, "pickup"), "t_s"], ev.loc[(a, "pickup"), "node"]),
+                    (ev.loc[(b, "pickup"), "t_s"], ev.loc[(b, "pickup"), "node"]),
+                ]
+            )
+            drops = sorted(
+                [
+                    (ev.loc[(a, "dropoff"), "t_s"], ev.loc[(a, "dropoff"), "node"]),
+                    (ev.loc[(b, "dropoff"), "t_s"], ev.loc[(b, "dropoff"), "node"]),
+                ]
+            )
             assert pooled["nodes"][4 * i : 4 * i + 4] == [int(n) for _, n in picks + drops]
             assert abs(pooled["t"][i] - picks[0][0]) <= 0.05
         assert np.all(np.diff(pooled["t"]) >= 0)  # sorted by time, for the page's window filter
