@@ -176,22 +176,47 @@ def hourly(table: pd.DataFrame, styles: Styles | None = None) -> Any:
     return _layout(fig, None, 620)
 
 
+#: Above this many rounds per run (a full day has 8,640), the solve times are drawn per 10-minute bin
+#: (median and maximum) instead of one point per round.
+MAX_ROUND_POINTS = 2000
+ROUND_BIN_S = 600.0
+
+
 def round_times(rounds: pd.DataFrame, styles: Styles | None = None) -> Any:
-    """Every batch round's solve time against the time of the round, one series per run (log scale)."""
+    """Every batch round's solve time against the time of the round, one series per run (log scale); for
+    long scenarios (:data:`MAX_ROUND_POINTS`) the median and maximum per :data:`ROUND_BIN_S` bin."""
     import plotly.graph_objects as go
 
     runs = list(dict.fromkeys(str(r) for r in rounds["run"]))
     colors = css_colors(runs, styles)
     long = float(rounds["t_s"].max()) > 2 * 3600.0 if len(rounds) else False
     scale, unit = (3600.0, "hours") if long else (60.0, "minutes")
+    binned = bool(len(rounds)) and int(rounds.groupby("run").size().max()) > MAX_ROUND_POINTS
     fig = go.Figure()
     for run, g in rounds.groupby("run", sort=False):
         run = str(run)
         label = run_label(run, styles)
+        ms = np.maximum(g["solve_s"].to_numpy(dtype=float), 1e-7) * 1e3
+        if binned:
+            bins = pd.Series(ms).groupby((g["t_s"].to_numpy() // ROUND_BIN_S) * ROUND_BIN_S)
+            mid = (bins.median().index.to_numpy() + ROUND_BIN_S / 2) / scale
+            for stat, values, dash in (("median", bins.median(), None), ("max", bins.max(), "dot")):
+                fig.add_trace(
+                    go.Scatter(
+                        x=mid.round(4),
+                        y=values.to_numpy().round(4),
+                        mode="lines",
+                        name=f"{label} ({stat})",
+                        legendgroup=run,
+                        line={"color": colors[run], "dash": dash, "width": 1.4},
+                        hovertemplate=f"{label}, {stat} per {ROUND_BIN_S / 60:g} min: %{{y:.3f}} ms<extra></extra>",
+                    )
+                )
+            continue
         fig.add_trace(
             go.Scatter(
                 x=(g["t_s"] / scale).round(4).to_numpy(),
-                y=(np.maximum(g["solve_s"].to_numpy(dtype=float), 1e-7) * 1e3).round(4),
+                y=ms.round(4),
                 customdata=np.stack([g["cols"].to_numpy(), g["status"].astype(str).to_numpy()], axis=1),
                 mode="markers",
                 name=label,

@@ -3,7 +3,7 @@ pooled pairs, solo trips and cancelled requests, read off the event logs.
 
 No tile server: the roads are drawn from ``network.npz``'s node coordinates.  Stops are node indices into
 one coordinate table, so a run's layers cost a few numbers per passenger; the page's script filters them by
-time window and draws at most :data:`MAX_DRAWN` items of a layer at once (every k-th, said on the page),
+time window and draws at most :data:`MAX_DRAWN` items of a layer at once (one in k, said on the page),
 while the density layer counts them all.
 """
 
@@ -22,7 +22,7 @@ from rpbench.results import layout
 from rpbench.results.html.figures import FONT, css_colors
 from rpbench.results.runs import run_label, run_styles
 
-#: At most this many items of one layer are drawn at once (a window with more draws every k-th).
+#: At most this many items of one layer are drawn at once (a window with more draws one in k).
 MAX_DRAWN = 2500
 #: The time window of the slider: 10 minutes for scenarios of up to two hours, an hour beyond.
 SHORT_WINDOW_S, LONG_WINDOW_S, LONG_SCENARIO_S = 600.0, 3600.0, 2 * 3600.0
@@ -147,10 +147,11 @@ def _any_partner(assign: pd.DataFrame, n: int) -> np.ndarray:
 
 
 def _items(t: np.ndarray, stops: np.ndarray, orders: np.ndarray, k: int) -> dict[str, Any]:
-    """One layer's items sorted by time: times (0.1 s), ``k`` stops each (flat), their order ids (flat)."""
+    """One layer's items sorted by time: times (whole seconds: a window is minutes wide), ``k`` stops each
+    (flat), their order ids (flat)."""
     by_time = np.argsort(t, kind="stable")
     return {
-        "t": np.round(t[by_time], 1).tolist(),
+        "t": np.floor(t[by_time]).astype(int).tolist(),
         "nodes": stops[by_time].reshape(-1).astype(int).tolist(),
         "orders": orders[by_time].reshape(-1).astype(int).tolist(),
         "stops": k,

@@ -93,7 +93,7 @@
           const k = layer.stops;  // stops per item: 4 (pooled), 2 (solo), 1 (cancelled)
           for (const i of p.all) { dens.x.push(lon[layer.nodes[i * k]]); dens.y.push(lat[layer.nodes[i * k]]); }
           let s = p.all.length.toLocaleString("en") + " " + m.layer_names[name];
-          if (p.stride > 1) s += " (drawn: every " + p.stride + "th, " + p.drawn.length.toLocaleString("en") + ")";
+          if (p.stride > 1) s += " (drawn: 1 in " + p.stride + ", " + p.drawn.length.toLocaleString("en") + ")";
           sentences.push(s);
         }
       }
@@ -177,6 +177,7 @@
       if (data.map) jobs.push(setupMap(data.map, data.config));
       await Promise.all(jobs);
       status.remove();
+      root.dataset.readyMs = String(Math.round(performance.now()));  // navigation start to every figure drawn
       root.dataset.rpbench = "ready";
     } catch (err) {
       fail(err);

@@ -147,7 +147,14 @@ def comparison_page(folder: Path, name: str | None = None, *, published: bool = 
             ),
         )
         rounds = pd.read_csv(folder / layout.ROUNDS, usecols=["run", "t_s", "cols", "solve_s", "status"])
-        page.figure("fig-rounds", figures.round_times(rounds, styles), "Solve time of every batch round.")
+        many = int(rounds.groupby("run").size().max()) > figures.MAX_ROUND_POINTS if len(rounds) else False
+        caption = (
+            f"Solve time of the batch rounds: median and maximum per {figures.ROUND_BIN_S / 60:g} minutes "
+            f"(more than {figures.MAX_ROUND_POINTS:,} rounds per run)."
+            if many
+            else "Solve time of every batch round (hover: model columns and status)."
+        )
+        page.figure("fig-rounds", figures.round_times(rounds, styles), caption)
     else:
         page.paragraph("No per-round solver statistics in this folder.", "muted")
     for line in wall_lines(meta, styles):
@@ -216,7 +223,7 @@ def _map_section(page: Page, payload: dict) -> None:
         "four stops in the order served: first pick-up (dot), join (the second pick-up, diamond), drop-offs "
         "(crosses); a solo trip from pick-up to drop-off; a cancelled request at its origin. Lines join the "
         "stops straight, not along the roads driven. An item falls in the window of its first pick-up (or "
-        f"cancellation). A window with more than {payload['max_drawn']:,} items of a layer draws every k-th "
+        f"cancellation). A window with more than {payload['max_drawn']:,} items of a layer draws one in k "
         "(said above the map); the density layer counts them all.</figcaption></figure>"
     )
     if payload["offline"]:
