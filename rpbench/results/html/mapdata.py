@@ -181,7 +181,7 @@ def _layout(lat: np.ndarray, extent: tuple[list[float], list[float]]) -> dict[st
         "font": FONT,
         "paper_bgcolor": "#ffffff",
         "plot_bgcolor": "#ffffff",
-        "margin": {"l": 60, "r": 10, "t": 20, "b": 50},
+        "margin": {"l": 60, "r": 10, "t": 20, "b": 60},
         "xaxis": {"title": {"text": "longitude (° E)"}, "showgrid": False, "zeroline": False, "range": extent[0]},
         "yaxis": {
             "title": {"text": "latitude (° N)"},
@@ -191,7 +191,7 @@ def _layout(lat: np.ndarray, extent: tuple[list[float], list[float]]) -> dict[st
             "scaleanchor": "x",
             "scaleratio": 1.0 / max(math.cos(math.radians(mid)), 1e-6),
         },
-        "legend": {"orientation": "h", "y": -0.08},
+        "legend": {"orientation": "h", "y": -0.1, "yanchor": "top"},
         "uirevision": "map",
         "hovermode": "closest",
         "dragmode": "zoom",

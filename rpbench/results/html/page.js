@@ -134,7 +134,7 @@
         soloPick.text.push("order " + solo.orders[i] + ", solo, picked up " + clock(m, solo.t[i]));
       }
       out.push({ type: "scatter", mode: "lines", name: "solo: trip", x: soloPath.x, y: soloPath.y, hoverinfo: "skip",
-                 line: { color: "#6f7b91", width: 0.8 }, opacity: 0.45, visible: boxes.solo.checked, legendgroup: "solo" });
+                 line: { color: "#6f7b91", width: 1 }, opacity: 0.6, visible: boxes.solo.checked, legendgroup: "solo" });
       out.push({ type: "scatter", mode: "markers", name: "solo: pick-up", x: soloPick.x, y: soloPick.y, text: soloPick.text,
                  hovertemplate: "%{text}<extra></extra>", marker: { color: "#6f7b91", size: 5 },
                  visible: boxes.solo.checked, legendgroup: "solo", meta: { layer: "solo" } });
