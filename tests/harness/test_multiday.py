@@ -24,6 +24,9 @@ def test_multi_day_folder(two_day_data, tmp_path, workers):
     assert (summary["count"] == 2).all()
     report = (folder / "report.md").read_text()
     assert "Mean over days" in report and "2 peak hours" in report and (folder / "by_day_total_saving_km.png").is_file()
+    page = (folder / "report.html").read_text()  # the parent's page links each day's page, which exists
+    assert all(f'href="{d}/report.html"' in page and (folder / d / "report.html").is_file() for d in by_day["date"])
+    assert "Mean over days" in page and "fig-by-day" in page and "by_day_total_saving_km.png" not in page
     from rpbench.results.check import check_folder
 
     assert all(rc.ok for d in ("2017-05-01", "2017-05-02") for rc in check_folder(folder / d))

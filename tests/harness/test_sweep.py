@@ -67,5 +67,7 @@ def test_sweep_runs_end_to_end_on_the_toy_city(tmp_path):
     )
     assert (folder / "dt=10").is_dir() and (folder / "dt=30").is_dir()
     assert (folder / "sweep.png").is_file()
+    page = (folder / "report.html").read_text()
+    assert 'href="dt=10/report.html"' in page and "fig-sweep" in page and (folder / "dt=30" / "report.html").is_file()
     text, _ = render([folder])
     assert "| dt |" in text and text.count("\n| 10 |") + text.count("\n| 30 |") == 2
