@@ -18,8 +18,8 @@ from rpbench.harness.parallel import run_tasks
 from rpbench.harness.spec import RunSpec
 from rpbench.results.folder import write_parent_meta
 from rpbench.results.html import write_html
-from rpbench.results.metrics import KPI_LABELS, KPI_ORDER
-from rpbench.results.parents import by_day_table, day_folders
+from rpbench.results.metrics import KPI_LABELS
+from rpbench.results.parents import MULTIDAY_PLOT_KPIS, by_day_table, day_folders
 from rpbench.results.plots import per_day_figures
 from rpbench.results.report import RATIO_ROWS, findings, fmt, load_kpis, markdown_table, offline_notes
 from rpbench.results.runs import run_label, run_styles
@@ -68,12 +68,6 @@ def summarize(parent: Path) -> pd.DataFrame:
     stats = table.groupby(["run", "kpi"], sort=False)["value"].agg(["mean", "std", "min", "max", "count"])
     stats.reset_index().to_csv(parent / "summary.csv", index=False)
     return stats
-
-
-MULTIDAY_PLOT_KPIS = [k for k in KPI_ORDER if k != "platform_profit_cny"] + [
-    "competitive_ratio_bound",
-    "competitive_ratio",
-]
 
 
 def write_multiday_report(parent: Path, name: str | None = None) -> Path:

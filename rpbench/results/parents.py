@@ -12,7 +12,14 @@ import pandas as pd
 
 from rpbench import results
 from rpbench.exceptions import ResultsError
+from rpbench.results.metrics import KPI_ORDER
 from rpbench.results.report import load_kpis
+
+#: The KPIs of a multi-day report's per-day plots (PNG and report.html).
+MULTIDAY_PLOT_KPIS = [k for k in KPI_ORDER if k != "platform_profit_cny"] + [
+    "competitive_ratio_bound",
+    "competitive_ratio",
+]
 
 
 def day_folders(parent: Path) -> list[Path]:

@@ -1,5 +1,5 @@
 """``report.html`` of a solver benchmark (``rpbench bench --html``): the per-preset summary in the field's
-terms (:mod:`rpbench.bench.summary`), the performance profile, times against model size, the full table."""
+terms (:mod:`rpbench.results.benchmarks`), the performance profile, times against model size, the full table."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from rpbench.bench.summary import SHIFT_S, performance_profile, preset_summary
+from rpbench.results.benchmarks import SHIFT_S, performance_profile, preset_summary
 from rpbench.results.html import figures
 from rpbench.results.html.page import Cell, Page
 

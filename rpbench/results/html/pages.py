@@ -238,8 +238,7 @@ def _map_section(page: Page, payload: dict) -> None:
 
 
 def multiday_page(parent: Path, name: str | None = None) -> Page:
-    from rpbench.harness.multiday import MULTIDAY_PLOT_KPIS  # the harness writes parents; reports read them
-    from rpbench.results.parents import by_day_table, day_folders
+    from rpbench.results.parents import MULTIDAY_PLOT_KPIS, by_day_table, day_folders
 
     days = day_folders(parent)
     styles = run_styles(results.read_meta(days[0])) if days else {}

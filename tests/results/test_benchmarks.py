@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from rpbench.bench.summary import performance_profile, performance_ratios, preset_summary, shifted_geometric_mean
+from rpbench.results.benchmarks import performance_profile, performance_ratios, preset_summary, shifted_geometric_mean
 
 
 def table(rows):

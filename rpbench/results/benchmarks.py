@@ -1,4 +1,4 @@
-"""The solver-benchmarking field's summaries of a :func:`rpbench.bench.runner.run_benchmark` table.
+"""The solver-benchmarking field's summaries of a benchmark table (:func:`rpbench.bench.runner.run_benchmark`).
 
 * **Shifted geometric mean** of solve times (Achterberg 2007; Mittelmann's benchmarks): ``exp(mean(log(t +
   s))) - s``, the shift ``s`` damping the weight of the very fast models.  Over all models an unsolved one
