@@ -14,6 +14,7 @@ from rpbench.harness.comparison import run_comparison
 from rpbench.harness.multiday import run_days
 from rpbench.harness.spec import RunSpec
 from rpbench.results import layout
+from rpbench.results.layout import REPORT_HTML
 from rpbench.results.report import load_kpis, text_table
 from rpbench.results.runs import run_styles
 from rpbench.results.store import check_new_folder, read_meta
@@ -82,6 +83,7 @@ def run_one(args: argparse.Namespace, spec: RunSpec) -> int:
     title = f"{scenario.label} — solver preset {spec.preset}"
     print(text_table(table, title=title, unproven=unproven, styles=run_styles(read_meta(folder))))
     print(f"\nresults written to {folder}  (verify: rpbench check {folder})")
+    print(f"open {folder / REPORT_HTML} in a browser for the interactive report and the map")
     return 0
 
 
@@ -107,4 +109,5 @@ def run_many_days(args: argparse.Namespace, spec: RunSpec) -> int:
     title = f"Mean over {len(dates)} days of {name} ({dates[0]} .. {dates[-1]}), solver preset {spec.preset}"
     print(text_table(mean, title=title, unproven=unproven, styles=run_styles(read_meta(folder / dates[0]))))
     print(f"\nresults written to {folder}  (per-day folders inside; report: {folder / 'report.md'})")
+    print(f"open {folder / REPORT_HTML} in a browser for the interactive report, linking every day's")
     return 0

@@ -11,6 +11,7 @@ from rpbench.commands._runs import add_run_args, parse_runs, run_spec, split_lis
 from rpbench.exceptions import ParameterError
 from rpbench.harness.sweep import SWEEPS, SweepSpec, expand, parse_over, run_sweep
 from rpbench.results import layout
+from rpbench.results.layout import REPORT_HTML
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -79,5 +80,5 @@ def run(args: argparse.Namespace) -> int:
     sel = table[table["kpi"].isin(sweep.kpis) & table["run"].isin(spec.names)]
     wide = sel.pivot_table(index="point", columns=["kpi", "run"], values="value")
     print(wide.round(3).to_string())
-    print(f"\nresults written to {folder}  (report: {folder / 'report.md'})")
+    print(f"\nresults written to {folder}  (report: {folder / 'report.md'}; in a browser: {folder / REPORT_HTML})")
     return 0
