@@ -32,6 +32,7 @@ COMMANDS = (
     "snapshot",
     "bench",
     "sweep",
+    "evaluate",
     "report",
     "publish",
     "scenario",

@@ -21,6 +21,7 @@ from rpbench.harness.multiday import write_multiday_report
 from rpbench.harness.sweep import write_sweep_report
 from rpbench.results import layout
 from rpbench.results.check import check_tree, format_report
+from rpbench.results.evaluation import write_evaluation_report
 from rpbench.results.html import write_html
 from rpbench.results.report import write_report
 from rpbench.results.store import read_meta, write_json
@@ -63,7 +64,9 @@ def publish(source: str | Path, dest: str | Path) -> Path:
         write_multiday_report(tmp, name=dest.name)
     elif kind == "sweep":
         write_sweep_report(tmp, name=dest.name)
-    if kind in ("multi-day", "sweep"):
+    elif kind == "evaluate":
+        write_evaluation_report(tmp, name=dest.name)
+    if kind in ("multi-day", "sweep", "evaluate"):
         write_html(tmp, name=dest.name)
     for folder, text in verdicts:
         (tmp / folder.relative_to(source) / layout.CHECK).write_text(

@@ -11,13 +11,14 @@ from rpbench.exceptions import ResultsError
 from rpbench.harness.multiday import write_multiday_report
 from rpbench.harness.sweep import write_sweep_report
 from rpbench.results import layout
+from rpbench.results.evaluation import write_evaluation_report
 from rpbench.results.html import write_html
 from rpbench.results.html.bench import bench_tables, write_bench_folder
 from rpbench.results.layout import HEAVY, REPORT
 from rpbench.results.report import check_metrics, load_kpis, selected_markdown, write_report
 
 #: Folder kinds whose report is written by their own harness module (all others are comparisons).
-PARENT_KINDS = ("multi-day", "sweep")
+PARENT_KINDS = ("multi-day", "sweep", "evaluate")
 
 
 def render(
@@ -91,6 +92,8 @@ def _write(folder: Path, kind: str, name: str | None = None) -> Path:
         return write_multiday_report(folder, name)
     if kind == "sweep":
         return write_sweep_report(folder, name)
+    if kind == "evaluate":
+        return write_evaluation_report(folder, name)
     return write_report(folder, name)
 
 

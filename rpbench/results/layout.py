@@ -19,8 +19,9 @@ A comparison folder (one scenario, several runs)::
 
 A parent folder (multi-day run, sweep) holds one comparison folder per day
 or point, its own ``meta.json`` and ``report.md``, and ``by_day.csv`` and
-``summary.csv`` (multi-day) or ``sweep.csv`` (sweep).  A published light
-copy (``rpbench publish``) keeps no ``runs/`` nor inputs (:data:`HEAVY`) and
+``summary.csv`` (multi-day) or ``sweep.csv`` (sweep).  An evaluation (``rpbench evaluate``) holds one
+comparison folder per (day, seed), ``units.csv`` (their KPIs), ``leaderboard.csv`` and ``paired.csv``.
+A published light copy (``rpbench publish``) keeps no ``runs/`` nor inputs (:data:`HEAVY`) and
 adds ``check.txt``, the checker's verdict on the full folder.
 """
 
@@ -42,6 +43,9 @@ PAIRS = "pairs.csv.gz"
 BY_DAY = "by_day.csv"
 SUMMARY = "summary.csv"
 SWEEP = "sweep.csv"
+UNITS = "units.csv"
+LEADERBOARD = "leaderboard.csv"
+PAIRED = "paired.csv"
 CHECK = "check.txt"
 KPIS_PNG = "kpis.png"
 TIMELINE_PNG = "timeline.png"

@@ -27,7 +27,7 @@ CERT_TOL_M = 1e-3
 FOLDER = "(folder)"
 #: ``rpbench check`` exit statuses.
 EXIT_OK, EXIT_FAILED, EXIT_UNREADABLE = 0, 1, 2
-PARENT_KINDS = ("multi-day", "sweep")
+PARENT_KINDS = ("multi-day", "sweep", "evaluate")
 #: Input files whose bytes meta.json's ``inputs_digest`` pins.
 DIGEST_FILES = (ORDERS, FLEET, NETWORK)
 #: The fields of a run's meta.json record that decide what the checker checks (digested per run).

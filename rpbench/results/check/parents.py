@@ -1,5 +1,6 @@
-"""A multi-day or sweep parent folder's own checks: ``manifest`` (every listed day or point folder is
-there) and ``parent-tables`` (by_day.csv and summary.csv, or sweep.csv, are its children's KPIs).
+"""A multi-day, sweep or evaluation parent folder's own checks: ``manifest`` (every listed day, point or
+unit folder is there) and ``parent-tables`` (by_day.csv and summary.csv, sweep.csv, or an evaluation's
+units.csv, leaderboard.csv and paired.csv, recomputed from its children's KPIs).
 
 The children themselves are comparison folders, checked one by one by the entry points.
 """
@@ -13,7 +14,8 @@ import pandas as pd
 from rpbench import results
 from rpbench.exceptions import ResultsError, RpbenchError, one_line
 from rpbench.results.check.core import FOLDER, KNOWN_KPIS, RATIO_KPIS, FolderResult, RunCheck, as_number, same, show
-from rpbench.results.layout import BY_DAY, KPIS, META, SUMMARY, SWEEP
+from rpbench.results.evaluation import tables as evaluation_tables
+from rpbench.results.layout import BY_DAY, KPIS, LEADERBOARD, META, PAIRED, SUMMARY, SWEEP, UNITS
 from rpbench.results.parents import by_day_table, sweep_table
 
 
@@ -36,7 +38,7 @@ def check_parent(parent: Path, meta: dict) -> tuple[FolderResult, list[Path]]:
     """A multi-day or sweep parent: every listed child folder is there (a deleted day or point fails
     ``manifest``), and its summary tables are its children's KPIs.  Returns the children to check."""
     fc = RunCheck(FOLDER)
-    what = "day" if meta["kind"] == "multi-day" else "sweep point"
+    what = {"multi-day": "day", "evaluate": "evaluation unit"}.get(meta["kind"], "sweep point")
     found = {p.relative_to(parent).as_posix(): p for p in results.run_folders(parent) if p != parent}
     listed = _listed_children(meta)
     if listed is None:
@@ -58,7 +60,14 @@ def _check_parent_tables(fc: RunCheck, parent: Path, meta: dict) -> None:
     """by_day.csv and summary.csv (multi-day) or sweep.csv are the children's kpis.csv, reshaped and averaged;
     the children's own checks verify those."""
     try:
-        if meta["kind"] == "multi-day":
+        if meta["kind"] == "evaluate":
+            units, board, pairs = evaluation_tables(parent)
+            _compare_table(fc, parent / UNITS, units, ["day", "seed", "run", "kpi"], ["value"])
+            stats = ["mean", "ci_low", "ci_high", "days", "seeds"]
+            _compare_table(fc, parent / LEADERBOARD, board, ["run", "kpi"], stats)
+            tests = ["mean_diff", "ci_low", "ci_high", "wilcoxon_p", "days_a_above", "days_a_below", "days_tied"]
+            _compare_table(fc, parent / PAIRED, pairs, ["a", "b", "kpi"], tests)
+        elif meta["kind"] == "multi-day":
             table = by_day_table(parent)
             _compare_table(fc, parent / BY_DAY, table, ["date", "run", "kpi"], ["value"])
             stats = table.groupby(["run", "kpi"], sort=False)["value"].agg(["mean", "std", "min", "max", "count"])
@@ -90,7 +99,9 @@ def _compare_table(fc: RunCheck, path: Path, expected: pd.DataFrame, keys: list[
         return
 
     def keyed(table: pd.DataFrame) -> pd.DataFrame:
-        return table.assign(**{k: table[k].astype(str) for k in keys}).set_index(keys)[values]
+        # an undated evaluation's day is empty, read back from a CSV as NaN
+        text = {k: table[k].astype(object).where(table[k].notna(), "").astype(str) for k in keys}
+        return table.assign(**text).set_index(keys)[values]
 
     have, want = keyed(found), keyed(expected)
     if have.index.has_duplicates:

@@ -365,3 +365,47 @@ def bench_times(table: pd.DataFrame) -> Any:
     fig.update_xaxes(title_text="model columns (log scale)", type="log")
     fig.update_yaxes(title_text="solver time, proven optimal (ms, log scale)", type="log")
     return _layout(fig, None, 480)
+
+
+def leaderboard_bars(board: pd.DataFrame, metrics: Sequence[str], styles: Styles | None = None) -> Any:
+    """Each run's mean of a metric (chosen in the menu) with its bootstrap interval as error bars."""
+    import plotly.graph_objects as go
+
+    runs = list(dict.fromkeys(str(r) for r in board["run"]))
+    colors = css_colors(runs, styles)
+    fig = go.Figure()
+    owner: list[str] = []
+    metrics = [m for m in metrics if (board["kpi"] == m).any()]
+    for k in metrics:
+        sel = board[board["kpi"] == k]
+        fig.add_trace(
+            go.Bar(
+                x=[run_label(str(r), styles) for r in sel["run"]],
+                y=sel["mean"].to_numpy(dtype=float),
+                error_y={
+                    "type": "data",
+                    "symmetric": False,
+                    "array": (sel["ci_high"] - sel["mean"]).to_numpy(dtype=float),
+                    "arrayminus": (sel["mean"] - sel["ci_low"]).to_numpy(dtype=float),
+                },
+                marker_color=[colors[str(r)] for r in sel["run"]],
+                visible=k == metrics[0],
+                name=KPI_LABELS.get(k, k),
+                customdata=np.stack([sel["ci_low"], sel["ci_high"]], axis=1),
+                hovertemplate="%{x}: %{y:.4~g} [%{customdata[0]:.4~g}, %{customdata[1]:.4~g}]<extra></extra>",
+            )
+        )
+        owner.append(k)
+    buttons = [
+        {
+            "label": KPI_LABELS.get(k, k),
+            "method": "update",
+            "args": [{"visible": [o == k for o in owner]}, {"yaxis.title.text": axis_label(k)}],
+        }
+        for k in metrics
+    ]
+    fig.update_layout(
+        updatemenus=[{"buttons": buttons, "x": 0, "y": 1.18, "xanchor": "left", "yanchor": "top"}], showlegend=False
+    )
+    fig.update_yaxes(title_text=axis_label(metrics[0]) if metrics else "")
+    return _layout(fig, None, 440)

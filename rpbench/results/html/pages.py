@@ -50,6 +50,8 @@ def write_html(folder: Path, name: str | None = None, dest: Path | None = None, 
         page = multiday_page(folder, name)
     elif kind == "sweep":
         page = sweep_page(folder, name)
+    elif kind == "evaluate":
+        page = evaluation_page(folder)
     elif kind == "replication":
         page = markdown_page(folder, "rpbench replicate", children=_subfolders(folder))
     else:
@@ -266,6 +268,21 @@ def sweep_page(parent: Path, name: str | None = None) -> Page:
         "fig-sweep",
         figures.sweep_panels(table[table["run"].isin(meta["strategies"])], meta["parameter"], meta["kpis"], styles),
         "One panel per KPI; click a legend entry to hide or show a run in every panel.",
+    )
+    return page
+
+
+def evaluation_page(folder: Path) -> Page:
+    meta = results.read_meta(folder)
+    children = [folder / c for c in meta.get("children", [])]
+    styles = run_styles(results.read_meta(children[0])) if children else {}
+    page = markdown_page(folder, "rpbench evaluation", children=children)
+    board = results.read_csv(folder / layout.LEADERBOARD)
+    page.heading("Leaderboard (interactive)", 2)
+    page.figure(
+        "fig-leaderboard",
+        figures.leaderboard_bars(board, meta["protocol"]["metrics"], styles),
+        "Each strategy's mean over the (day, seed) runs with its bootstrap interval; choose the metric in the menu.",
     )
     return page
 

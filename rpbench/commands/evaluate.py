@@ -1,0 +1,52 @@
+"""``rpbench evaluate PROTOCOL``: a fixed protocol's runs over days and seeds, and its leaderboard."""
+
+from __future__ import annotations
+
+import argparse
+
+from rpbench.commands._common import add_data_arg, add_offline_arg, command_line, note
+from rpbench.data.first_run import ensure_data_dir
+from rpbench.exceptions import ParameterError
+from rpbench.harness.evaluate import run_evaluation
+from rpbench.protocols import builtin_names, load_protocol
+from rpbench.results.layout import REPORT, REPORT_HTML
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "evaluate",
+        help="run a named evaluation protocol (days x seeds) and rank the strategies with intervals",
+        description="Run every (day, seed) comparison of a protocol, in parallel, and write its leaderboard: "
+        "per strategy the mean of each metric with a bootstrap interval, and paired differences with "
+        "Wilcoxon tests. Run again on the same --out to resume what is missing. Built-in protocols: "
+        + ", ".join(builtin_names())
+        + " (or a path to a protocol TOML file).",
+    )
+    p.add_argument("protocol", metavar="PROTOCOL", help="a built-in protocol name or a protocol .toml file")
+    p.add_argument("--out", default=None, help="evaluation folder (an existing one of the same protocol is resumed)")
+    p.add_argument("--workers", type=int, default=None, help="parallel workers (default one per core)")
+    p.add_argument(
+        "--scheduler",
+        default=None,
+        metavar="ADDRESS",
+        help="an existing Dask scheduler, e.g. tcp://host:8786 (needs the dask extra: pip install 'rpbench[dask]')",
+    )
+    add_data_arg(p)
+    add_offline_arg(p)
+    p.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    protocol = load_protocol(args.protocol)
+    if args.workers is not None and args.workers < 1:
+        raise ParameterError(f"--workers {args.workers} must be >= 1")
+    data = None
+    if protocol.scenario != "toy":
+        data = str(ensure_data_dir(args.data, what=f"protocol {protocol.name!r}", offline=args.offline))
+    folder, ran = run_evaluation(
+        protocol, args.out, data_dir=data, workers=args.workers, scheduler=args.scheduler, command=command_line()
+    )
+    note(f"{ran} run(s) made now; the others were already in the folder" if ran else "every run was already there")
+    print((folder / REPORT).read_text())
+    print(f"results written to {folder}  (verify: rpbench check {folder}; in a browser: {folder / REPORT_HTML})")
+    return 0

@@ -1,0 +1,88 @@
+"""``rpbench evaluate``: a protocol's (day, seed) comparisons, in parallel, then its leaderboard.
+
+An evaluation folder holds one ordinary results folder per (day, seed) — each written whole or not at all,
+and checkable with ``rpbench check`` — plus ``units.csv`` (day, seed, run, kpi, value: every child's
+KPIs), ``leaderboard.csv`` and ``paired.csv`` (:mod:`rpbench.results.leaderboard`), report.md and
+report.html.  A second invocation on the same folder runs only the children that are missing (an
+interrupted evaluation resumes), and refuses a folder of another protocol.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from rpbench import results
+from rpbench.exceptions import ParameterError, ResultsError
+from rpbench.harness.comparison import ComparisonTask, run_task
+from rpbench.harness.parallel import run_tasks
+from rpbench.harness.spec import RunSpec
+from rpbench.protocols import Protocol
+from rpbench.results import layout
+from rpbench.results.evaluation import summarize, unit_name, write_evaluation_report
+from rpbench.results.folder import write_parent_meta
+from rpbench.results.html import write_html
+from rpbench.results.store import DEFAULT_PARENT, remove_stale_partials
+from rpbench.scenarios import ScenarioRequest
+
+
+def units_of(protocol: Protocol, request: ScenarioRequest) -> list[tuple[str | None, int]]:
+    """The protocol's (day, seed) units: its dates (a dated scenario) times its seeds."""
+    dates: list[str | None] = list(request.dates(protocol.dates)) if protocol.dates else [None]
+    return [(d, s) for d in dates for s in protocol.seeds]
+
+
+def run_evaluation(
+    protocol: Protocol,
+    out: str | os.PathLike | None = None,
+    *,
+    data_dir: str | None = None,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    command: str | None = None,
+) -> tuple[Path, int]:
+    """Run (or resume) ``protocol`` into ``out``; returns the folder and how many units ran now."""
+    request = ScenarioRequest(protocol.scenario, sample=protocol.sample, data_dir=data_dir).resolved()
+    spec = RunSpec.of(
+        request, list(protocol.strategies), preset=protocol.preset, oracle_preset=protocol.oracle_preset,
+        command=command,
+    )  # fmt: skip
+    units = units_of(protocol, request)
+    names = [unit_name(d, s) for d, s in units]
+    folder = Path(out) if out is not None else Path.cwd() / DEFAULT_PARENT / f"evaluate-{protocol.name}"
+    record = protocol.record()
+    if folder.exists():
+        _check_resumable(folder, record)
+    else:
+        try:
+            folder.mkdir(parents=True)
+        except OSError as exc:
+            raise ResultsError(f"cannot create evaluation folder {str(folder)!r}: {exc.strerror or exc}") from None
+        write_parent_meta(folder, "evaluate", names, {"protocol": record, "strategies": spec.names, "command": command})
+    remove_stale_partials(folder)
+    todo = [
+        ComparisonTask(spec.for_request(request.replace(date=d, seed=s)), str(folder / name))
+        for (d, s), name in zip(units, names, strict=True)
+        if not (folder / name / layout.KPIS).is_file()
+    ]
+    if todo:
+        run_tasks(run_task, todo, workers=workers, scheduler=scheduler, label=f"evaluate {protocol.name}")
+    summarize(folder)
+    write_evaluation_report(folder, folder.name)
+    write_html(folder, folder.name)
+    return folder, len(todo)
+
+
+def _check_resumable(folder: Path, record: dict) -> None:
+    if not folder.is_dir() or not (folder / layout.META).is_file():
+        raise ParameterError(f"--out {str(folder)!r} exists and is not an evaluation folder to resume")
+    meta = results.read_meta(folder)
+    if meta.get("kind") != "evaluate" or not isinstance(meta.get("protocol"), dict):
+        raise ParameterError(f"--out {str(folder)!r} exists and is not an evaluation folder to resume")
+    theirs = meta["protocol"]
+    if theirs.get("digest") != record["digest"]:
+        raise ParameterError(
+            f"--out {str(folder)!r} holds protocol {theirs.get('name')!r} version {theirs.get('version')} "
+            f"(digest {theirs.get('digest')}), not {record['name']!r} version {record['version']} "
+            f"(digest {record['digest']}): choose another folder"
+        )

@@ -1,0 +1,152 @@
+"""An evaluation folder's tables and report, from its (day, seed) children alone.
+
+``units.csv`` gathers every child's KPI table (the competitive ratio rows included); ``leaderboard.csv``
+and ``paired.csv`` are :func:`rpbench.results.leaderboard.leaderboard` and
+:func:`~rpbench.results.leaderboard.paired` of it under the protocol recorded in meta.json, so the checker
+recomputes all three from the children.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+
+from rpbench import results
+from rpbench.exceptions import ResultsError
+from rpbench.results import layout
+from rpbench.results.leaderboard import RATIO_OF_MEANS, Bootstrap, leaderboard, paired
+from rpbench.results.metrics import KPI_LABELS
+from rpbench.results.report import fmt, load_kpis
+from rpbench.results.runs import run_label, run_styles
+
+
+def unit_name(day: str | None, seed: int) -> str:
+    """The child folder of a (day, seed) unit."""
+    return f"{day}_seed{seed}" if day else f"seed{seed}"
+
+
+def units_table(folder: Path) -> pd.DataFrame:
+    """Tidy (day, seed, run, kpi, value) over the children meta.json lists, in its order."""
+    meta = results.read_meta(folder)
+    frames = []
+    for name in meta.get("children", []):
+        child = folder / name
+        if not (child / layout.KPIS).is_file():
+            raise ResultsError(f"{str(child)!r}: the evaluation's unit has no results (resume the evaluation)")
+        args = results.read_meta(child)["scenario"].get("args", {})
+        wide = load_kpis(child)
+        tidy = wide.reset_index().melt(id_vars="kpi", var_name="run", value_name="value")
+        frames.append(tidy.assign(day=args.get("date") or "", seed=int(args.get("seed", 0))))
+    if not frames:
+        raise ResultsError(f"{str(folder)!r} holds no evaluation units")
+    return pd.concat(frames, ignore_index=True)[["day", "seed", "run", "kpi", "value"]]
+
+
+def bootstrap_of(meta: dict) -> Bootstrap:
+    boot = meta["protocol"]["bootstrap"]
+    return Bootstrap(resamples=int(boot["resamples"]), seed=int(boot["seed"]), level=float(boot["level"]))
+
+
+def tables(folder: Path) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame]:
+    """(units, leaderboard, paired) recomputed from the children."""
+    meta = results.read_meta(folder)
+    units = units_table(folder)
+    units["day"] = units["day"].fillna("").astype(str)
+    runs = list(meta["protocol"]["strategies"])
+    metrics = list(meta["protocol"]["metrics"])
+    boot = bootstrap_of(meta)
+    board = leaderboard(units, runs, metrics, boot)
+    online = [r for r in runs if results.read_meta(folder / meta["children"][0])["runs"][r]["kind"] == "simulation"]
+    return units, board, paired(units, online, metrics, boot)
+
+
+def summarize(folder: Path) -> None:
+    """Write units.csv, leaderboard.csv and paired.csv (each whole or not at all)."""
+    units, board, pairs = tables(folder)
+    for name, table in ((layout.UNITS, units), (layout.LEADERBOARD, board), (layout.PAIRED, pairs)):
+        tmp = folder / f".{name}.partial"
+        table.to_csv(tmp, index=False)
+        tmp.replace(folder / name)
+
+
+def write_evaluation_report(folder: Path, name: str | None = None) -> Path:
+    """report.md: the protocol, the leaderboard (mean [interval]) ranked by its first metric, the paired
+    comparisons of that metric, and where each unit's folder is."""
+    meta = results.read_meta(folder)
+    protocol = meta["protocol"]
+    board = results.read_csv(folder / layout.LEADERBOARD)
+    pairs = results.read_csv(folder / layout.PAIRED)
+    styles = run_styles(results.read_meta(folder / meta["children"][0]))
+    metrics = list(protocol["metrics"])
+    rank = metrics[0]
+    level = f"{protocol['bootstrap']['level']:.0%}"
+    unit = "days" if protocol.get("dates") else "seeds"  # the independent draws: the bootstrap's clusters
+    lines = [
+        f"# rpbench evaluation: protocol `{protocol['name']}` version {protocol['version']}",
+        "",
+        f"- {protocol['description']}",
+        f"- scenario `{protocol['scenario']}`,"
+        f" dates {protocol.get('dates') or '(undated)'}, sample "
+        f"{protocol.get('sample')}, seeds {', '.join(map(str, protocol['seeds']))}; {len(meta['children'])} runs "
+        f"per strategy; solver presets `{protocol['preset']}` / `{protocol.get('oracle_preset') or protocol['preset']}`"
+        " (offline runs)",
+        f"- rpbench {meta['versions']['rpbench']}, commit `{meta.get('git_commit')}`; protocol digest "
+        f"`{protocol['digest']}`",
+        "",
+    ]
+    if meta.get("command"):
+        lines += ["Command:", "", f"    {meta['command']}", ""]
+    lines += [
+        "## Leaderboard",
+        "",
+        f"Mean over the (day, seed) runs and its {level} interval: a two-stage bootstrap over days, then seeds "
+        f"within a day (undated: over seeds; {protocol['bootstrap']['resamples']} resamples, generator seed "
+        f"{protocol['bootstrap']['seed']}). Ranked by {KPI_LABELS.get(rank, rank)}. The competitive ratio is the "
+        "mean over runs of saving / bound (a mean of ratios); the last column is mean saving / mean bound "
+        "saving (a ratio of means).",
+        "",
+    ]
+    cols = [*metrics, RATIO_OF_MEANS]
+    head = ["Strategy"] + [KPI_LABELS.get(k, "Saving: ratio of means") for k in cols]
+    order = board[board["kpi"] == rank].sort_values("mean", ascending=False)["run"].tolist()
+    order += [r for r in protocol["strategies"] if r not in order]
+    lines += ["| " + " | ".join(head) + " |", "|---|" + "---:|" * len(cols)]
+    cell = board.set_index(["run", "kpi"])
+    for run in order:
+        row = [run_label(run, styles)]
+        for k in cols:
+            if (run, k) in cell.index:
+                r = cell.loc[(run, k)]
+                key = "competitive_ratio_bound" if k == RATIO_OF_MEANS else k
+                row.append(f"{fmt(key, r['mean'])} [{fmt(key, r['ci_low'])}, {fmt(key, r['ci_high'])}]")
+            else:
+                row.append("/")
+        lines.append("| " + " | ".join(row) + " |")
+    lines.append("")
+    sel = pairs[pairs["kpi"] == rank]
+    if len(sel):
+        lines += [
+            f"## Paired differences: {KPI_LABELS.get(rank, rank)}",
+            "",
+            f"A - B over the same (day, seed) runs, mean and {level} bootstrap interval; Wilcoxon signed-rank "
+            f"test (two-sided) of the per-{unit[:-1]} mean differences; {unit} where A is above / below B.",
+            "",
+            f"| A | B | mean A - B | interval | Wilcoxon p | {unit} A above / below / tied |",
+            "|---|---|---:|---:|---:|---:|",
+        ]
+        for _, r in sel.iterrows():
+            lines.append(
+                f"| {run_label(r['a'], styles)} | {run_label(r['b'], styles)} | {fmt(rank, r['mean_diff'])} | "
+                f"[{fmt(rank, r['ci_low'])}, {fmt(rank, r['ci_high'])}] | {r['wilcoxon_p']:.3g} | "
+                f"{int(r['days_a_above'])} / {int(r['days_a_below'])} / {int(r['days_tied'])} |"
+            )
+        lines += ["", f"Every metric's paired differences: `{layout.PAIRED}`; every run's KPIs: `{layout.UNITS}`.", ""]
+    lines += [
+        "Each (day, seed) run is an ordinary results folder: `rpbench check PATH`, PATH being the path to "
+        f"`{name or folder.name}`, checks them all and recomputes these tables from them.",
+        "",
+    ]
+    path = folder / layout.REPORT
+    path.write_text("\n".join(lines))
+    return path

@@ -1,0 +1,108 @@
+"""``rpbench evaluate``: a protocol's units run once, an interrupted evaluation resumes to the same tables,
+and the checker recomputes the leaderboard from the units."""
+
+from __future__ import annotations
+
+import os
+import shutil
+
+import pandas as pd
+import pytest
+
+from rpbench.cli import main
+from rpbench.exceptions import ParameterError
+from rpbench.harness.evaluate import run_evaluation
+from rpbench.protocols import load_protocol
+from rpbench.results.check import check_tree
+
+PROTOCOL = """
+name = "toy-test"
+version = 1
+description = "a tiny toy protocol"
+scenario = "toy"
+sample = 0.1
+seeds = [0, 1, 2]
+strategies = ["mb", "fl", "bound"]
+metrics = ["total_saving_km", "competitive_ratio_bound", "pairing_ratio"]
+[bootstrap]
+resamples = 200
+seed = 3
+level = 0.9
+"""
+
+
+@pytest.fixture(scope="module")
+def protocol(tmp_path_factory):
+    path = tmp_path_factory.mktemp("protocol") / "toy-test.toml"
+    path.write_text(PROTOCOL)
+    return load_protocol(str(path))
+
+
+@pytest.fixture(scope="module")
+def evaluated(protocol, tmp_path_factory):
+    folder, ran = run_evaluation(protocol, tmp_path_factory.mktemp("eval") / "whole", workers=1)
+    assert ran == 3
+    return folder
+
+
+def without_timing(path):
+    table = pd.read_csv(path)
+    return table[~table["kpi"].isin(["wall_s", "prepare_s"]) & ~table["kpi"].str.endswith("_s", na=False)
+                 | table["kpi"].isin(["avg_response_time_s", "avg_pickup_time_s"])].reset_index(drop=True)  # fmt: skip
+
+
+def test_an_evaluation_folder(evaluated):
+    assert sorted(p.name for p in evaluated.iterdir() if p.is_dir()) == ["seed0", "seed1", "seed2"]
+    board = pd.read_csv(evaluated / "leaderboard.csv").set_index(["run", "kpi"])
+    assert board.loc[("bound", "competitive_ratio_bound"), "mean"] == 1.0
+    assert (board["ci_low"] <= board["mean"] + 1e-12).all() and (board["mean"] <= board["ci_high"] + 1e-12).all()
+    assert ("fl", "saving_ratio_of_means") in board.index and (board["seeds"] == 1).all()  # undated: seeds cluster
+    pairs = pd.read_csv(evaluated / "paired.csv")
+    assert set(zip(pairs["a"], pairs["b"], strict=True)) == {("mb", "fl")}  # online runs only
+    report = (evaluated / "report.md").read_text()
+    assert "## Leaderboard" in report and "Wilcoxon" in report and "ratio of means" in report
+    assert "fig-leaderboard" in (evaluated / "report.html").read_text()
+    assert all(r.status == "ok" for r in check_tree(evaluated))
+
+
+def test_an_interrupted_evaluation_resumes_to_the_same_tables(protocol, evaluated, tmp_path):
+    folder = tmp_path / "resumed"
+    shutil.copytree(evaluated, folder)
+    shutil.rmtree(folder / "seed1")  # units are written whole or not at all: an interruption loses whole units
+    stale = folder / ".seed1.partial-999999999"  # and may leave a dead process's partial folder
+    stale.mkdir()
+    os.utime(stale, (0, 0))  # old: a folder of a live run is never swept
+    for name in ("units.csv", "leaderboard.csv", "paired.csv"):
+        (folder / name).unlink()
+    again, ran = run_evaluation(protocol, folder, workers=1)
+    assert ran == 1 and not (folder / ".seed1.partial-999999999").exists()
+    for name in ("leaderboard.csv", "paired.csv"):
+        assert (again / name).read_bytes() == (evaluated / name).read_bytes()
+    pd.testing.assert_frame_equal(without_timing(again / "units.csv"), without_timing(evaluated / "units.csv"))
+    assert run_evaluation(protocol, folder, workers=1)[1] == 0  # complete: nothing reruns
+
+
+def test_another_protocol_does_not_resume_a_folder(evaluated, tmp_path):
+    other = tmp_path / "other.toml"
+    other.write_text(PROTOCOL.replace("seeds = [0, 1, 2]", "seeds = [0, 1]"))
+    with pytest.raises(ParameterError, match="holds protocol 'toy-test' version 1"):
+        run_evaluation(load_protocol(str(other)), evaluated, workers=1)
+
+
+def test_an_edited_leaderboard_fails_the_check(evaluated, tmp_path):
+    folder = tmp_path / "edited"
+    shutil.copytree(evaluated, folder)
+    board = pd.read_csv(folder / "leaderboard.csv")
+    board.loc[(board["run"] == "fl") & (board["kpi"] == "total_saving_km"), "ci_high"] *= 1.5
+    board.to_csv(folder / "leaderboard.csv", index=False)
+    (parent, *_) = check_tree(folder)
+    assert "parent-tables" in parent.folder_check.violations
+    assert any("leaderboard.csv: ci_high of ('fl', 'total_saving_km')" in m
+               for m in parent.folder_check.violations["parent-tables"])  # fmt: skip
+
+
+def test_bad_input_is_one_line(capsys, tmp_path):
+    assert main(["evaluate", "no-such-protocol"]) == 2
+    assert "unknown protocol 'no-such-protocol'" in capsys.readouterr().err
+    (tmp_path / "file").write_text("x")
+    assert main(["evaluate", "toy-quick", "--out", str(tmp_path / "file")]) == 2
