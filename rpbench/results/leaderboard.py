@@ -1,8 +1,8 @@
 """An evaluation's statistics over its (day, seed) runs: means with bootstrap intervals, and paired comparisons.
 
 The units of an evaluation are its runs, one per (day, seed).  Days are the independent draws (each day
-its own demand); seeds within a day share that day's orders and differ in the sample and the patience
-draws.  Hence:
+its own demand); seeds within a day share that day's orders and differ in the sample, the patience draws
+and the fleet's starting nodes.  Hence:
 
 * **Interval of a mean** — a two-stage (cluster) bootstrap: resample the days with replacement, then
   within each drawn day its seeds with replacement, and take the mean of the drawn values; the interval is
@@ -74,19 +74,18 @@ def leaderboard(units: pd.DataFrame, runs: Sequence[str], kpis: Sequence[str], b
     """Per run and metric: the mean over units, its interval, and the number of days and seeds.  With a bound
     run, also each run's :data:`RATIO_OF_MEANS` (mean saving / mean bound saving) with its interval."""
     rows = []
-    cache: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}
     for run in runs:
         for kpi in kpis:
             values = unit_matrix(units, run, kpi)
             if not values.size or np.isnan(values).any():
                 continue  # a run without this metric (an offline run's response rate) or with gaps
-            draws = cache.setdefault(values.shape, draw_indices(*values.shape, boot))
+            draws = draw_indices(values.shape[0], values.shape[1], boot)
             low, high = interval(resampled_means(values, draws), boot.level)
             rows.append(_row(run, kpi, values, low, high))
         if "bound" in runs and run != "bound":
             saving, bound = unit_matrix(units, run, "total_saving_km"), unit_matrix(units, "bound", "total_saving_km")
             if saving.size and saving.shape == bound.shape and not np.isnan(saving).any():
-                draws = cache.setdefault(saving.shape, draw_indices(*saving.shape, boot))
+                draws = draw_indices(saving.shape[0], saving.shape[1], boot)
                 ratio = resampled_means(saving, draws) / resampled_means(bound, draws)
                 low, high = interval(ratio, boot.level)
                 row = _row(run, RATIO_OF_MEANS, saving, low, high)
@@ -120,7 +119,8 @@ def paired(units: pd.DataFrame, runs: Sequence[str], kpis: Sequence[str], boot: 
                 if not va.size or va.shape != vb.shape or np.isnan(va).any() or np.isnan(vb).any():
                     continue
                 diff = va - vb
-                low, high = interval(resampled_means(diff, draw_indices(*diff.shape, boot)), boot.level)
+                draws = draw_indices(diff.shape[0], diff.shape[1], boot)
+                low, high = interval(resampled_means(diff, draws), boot.level)
                 per_day = diff.mean(axis=1)
                 nonzero = per_day[per_day != 0]
                 p = float(wilcoxon(nonzero).pvalue) if len(nonzero) else 1.0
