@@ -27,7 +27,8 @@ def add_run_args(parser: argparse.ArgumentParser, *, strategies: str | None = DE
     parser.add_argument(
         "--strategies",
         default=strategies,
-        help=f"comma-separated strategies and offline runs{default}; a plug-in by entry-point name or MODULE:CLASS",
+        help=f"comma-separated strategies and offline runs{default}; a plug-in by entry-point name or MODULE:CLASS; "
+        "a variant of a strategy as NAME@OPTION=VALUE (e.g. fl@tau0_s=200), a run of its own",
     )
     parser.add_argument("--solver", default="highs", help="solver preset, solvers/NAME.toml (default highs)")
     parser.add_argument(
@@ -58,11 +59,16 @@ def parse_opt_items(items: Sequence[str], entries: Sequence[RunEntry]) -> list[R
     with, followed by a dot: names and ``module:Class`` sources may contain
     dots themselves (``--opt mypkg.rules:Greedy.threshold=3``).
     """
-    by_prefix = {e.name: e.name for e in entries} | {e.source: e.name for e in entries}
-    raw: dict[str, dict[str, str]] = {e.name: {} for e in entries}
+    # a variant (``fl@tau0_s=200``) is reached by its name only: its source is its strategy's
+    by_prefix = {e.source: e.name for e in entries if not e.settings} | {e.name: e.name for e in entries}
+    raw: dict[str, dict[str, str]] = {e.name: dict(e.settings) for e in entries}
     for item in items:
-        key, sep, value = item.partition("=")
-        prefix, option = split_option_key(key, list(by_prefix))
+        named = next((p for p in sorted(by_prefix, key=len, reverse=True) if item.startswith(f"{p}.")), None)
+        if named is not None:  # a variant's name holds '=' itself: split after the run name
+            prefix, (option, sep, value) = named, item[len(named) + 1 :].partition("=")
+        else:
+            key, sep, value = item.partition("=")
+            prefix, option = split_option_key(key, list(by_prefix))
         if not sep or not prefix or not option.strip():
             raise ParameterError(f"--opt {item!r}: expected RUN.KEY=VALUE, e.g. rtv.c_ko=large")
         if prefix not in by_prefix:

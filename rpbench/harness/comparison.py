@@ -161,7 +161,7 @@ def simulate_strategy(
     finally:
         if bar is not None:
             bar.close()
-    return evaluate(scenario, sim, entry, label=cls.label, color=cls.color)
+    return evaluate(scenario, sim, entry, label=entry.label_of(cls.label), color=entry.color_of(cls.color))
 
 
 def evaluate(scenario: Scenario, sim: SimResult, entry: RunEntry, *, label: str, color: str | None) -> StrategyRun:

@@ -14,6 +14,10 @@ prefix and its column in ``kpis.csv``.  A built-in strategy or offline run is
 named as typed (``mb``, ``bound``); a plug-in strategy, given as an entry point
 or as ``module:Class``, runs under its class's ``name`` attribute, and its
 *source* (the text it was found by) is what worker processes resolve.
+
+A *variant* runs a strategy a second time under other options: ``fl@tau0_s=200`` (several settings:
+``fl@tau0_s=200@accel=damped``) is a run of its own, named as typed, labelled "FL (tau0_s=200)", drawn
+in a colour of its own, with those options set (``--opt`` may set more).
 """
 
 from __future__ import annotations
@@ -34,6 +38,10 @@ from rpbench.strategies.options import RunOptions
 
 #: A run name is a folder name and an ``--opt`` prefix: letters, digits and ``._-``, not starting with a dot.
 _RUN_NAME = re.compile(r"^[A-Za-z0-9_-][A-Za-z0-9._-]*$")
+#: Separates a variant's settings from its strategy (``fl@tau0_s=200``).
+VARIANT_SEP = "@"
+#: A variant setting ``KEY=VALUE``: an option name, and a value that stays a plain folder-name part.
+_SETTING = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)=([A-Za-z0-9._+-]+)$")
 
 
 @dataclass(frozen=True)
@@ -43,10 +51,19 @@ class RunEntry:
     name: str
     source: str  # what finds its class: a built-in name, an entry-point name or ``module:Class``
     options: RunOptions
+    settings: tuple[tuple[str, str], ...] = ()  # a variant's options as typed (``fl@tau0_s=200``)
 
     @property
     def offline(self) -> bool:
         return self.name in ORACLE_RUNS
+
+    def label_of(self, label: str) -> str:
+        """The run's label from its class's: a variant says its settings ("FL (tau0_s=200)")."""
+        return f"{label} ({', '.join(f'{k}={v}' for k, v in self.settings)})" if self.settings else label
+
+    def color_of(self, color: str | None) -> str | None:
+        """The run's colour from its class's: a variant takes the next free colour (None), not its strategy's."""
+        return None if self.settings else color
 
     def strategy_class(self) -> type[Strategy]:
         """The strategy class of a simulated run (resolved from :attr:`source`, also in a worker process)."""
@@ -97,7 +114,7 @@ class RunSpec:
         unknown = [name for name in given if name not in {e.name for e in entries}]
         if unknown:
             raise ParameterError(f"options for {unknown[0]!r}, which is not one of the runs ({', '.join(given)})")
-        entries = [dataclasses.replace(e, options=typed_options(e, given.get(e.name))) for e in entries]
+        entries = [dataclasses.replace(e, options=typed_options(e, _merged(e, given.get(e.name)))) for e in entries]
         return cls(
             request=request,
             runs=tuple(entries),
@@ -135,6 +152,13 @@ class RunSpec:
         return dataclasses.replace(self, runs=tuple(self.entry(n) for n in names))
 
 
+def _merged(entry: RunEntry, given: RunOptions | Mapping[str, Any] | None) -> RunOptions | Mapping[str, Any] | None:
+    """A variant's settings under the options given for it (which win)."""
+    if isinstance(given, RunOptions) or not entry.settings:
+        return given
+    return {**dict(entry.settings), **dict(given or {})}
+
+
 def options_class(entry_source: str) -> type[RunOptions]:
     """The declared options of an offline run or a strategy."""
     if entry_source in ORACLE_RUNS:
@@ -167,29 +191,60 @@ def resolve_runs(items: Sequence[str]) -> list[RunEntry]:
     plain name of its own: not a built-in's, not another run's.  Classes are
     imported here, so an import error is reported before any run.
     """
-    sources = [s.strip() if is_spec(s) else s.strip().lower() for s in items if s.strip()]
-    if not sources:
+    typed = [s.strip() for s in items if s.strip()]
+    if not typed:
         raise ParameterError(f"unknown strategy '(none)'; choose from {', '.join(known_runs())}")
+    sources = []
     entries: list[RunEntry] = []
-    for source in sources:
-        if source in ORACLE_RUNS or source in STRATEGY_REGISTRY:
-            entries.append(RunEntry(source, source, options_class(source)()))
-            continue
-        if not is_spec(source) and source not in plugin_names():
-            raise ParameterError(
-                f"unknown strategy {source!r}; choose from {', '.join(known_runs())}, "
-                "or give a strategy class as MODULE:CLASS (e.g. mypkg.rules:Greedy)"
-            )
-        cls = strategy_class(source)
-        entries.append(RunEntry(_plugin_run_name(source, cls), source, cls.Options()))
+    for text in typed:
+        base, *settings = text.split(VARIANT_SEP)
+        source = base.strip() if is_spec(base) else base.strip().lower()
+        sources.append(source)
+        entry = _resolve_one(source)
+        if settings:
+            entry = _variant(entry, text, settings)
+        entries.append(entry)
     seen: dict[str, str] = {}
     for e in entries:
         if e.name in seen:
             first = seen[e.name]
             what = f"names {e.name!r} twice" if first == e.source else f"runs {first!r} and {e.source!r} as {e.name!r}"
-            raise ParameterError(f"strategy list {','.join(sources)} {what}; every run needs its own name")
+            raise ParameterError(f"strategy list {','.join(typed)} {what}; every run needs its own name")
         seen[e.name] = e.source
     return entries
+
+
+def _resolve_one(source: str) -> RunEntry:
+    if source in ORACLE_RUNS or source in STRATEGY_REGISTRY:
+        return RunEntry(source, source, options_class(source)())
+    if not is_spec(source) and source not in plugin_names():
+        raise ParameterError(
+            f"unknown strategy {source!r}; choose from {', '.join(known_runs())}, "
+            "or give a strategy class as MODULE:CLASS (e.g. mypkg.rules:Greedy)"
+        )
+    cls = strategy_class(source)
+    return RunEntry(_plugin_run_name(source, cls), source, cls.Options())
+
+
+def _variant(entry: RunEntry, text: str, settings: Sequence[str]) -> RunEntry:
+    """``entry`` under the settings of ``text`` (``fl@tau0_s=200``), named after them."""
+    if entry.offline:
+        raise ParameterError(f"{text!r}: the offline runs take no variants (give their options with --opt)")
+    parsed = []
+    for setting in settings:
+        match = _SETTING.match(setting.strip())
+        if match is None:
+            raise ParameterError(
+                f"{text!r}: a variant's settings are OPTION=VALUE after {VARIANT_SEP!r} (letters, digits and "
+                f"'._+-' in the value), e.g. fl{VARIANT_SEP}tau0_s=200; got {setting!r}"
+            )
+        parsed.append((match[1], match[2]))
+    keys = [k for k, _ in parsed]
+    if len(set(keys)) != len(keys):
+        raise ParameterError(f"{text!r}: a variant sets an option twice")
+    name = VARIANT_SEP.join([entry.name, *(f"{k}={v}" for k, v in parsed)])
+    variant = RunEntry(name, entry.source, entry.options, tuple(parsed))
+    return dataclasses.replace(variant, options=typed_options(variant, dict(parsed)))
 
 
 def _plugin_run_name(source: str, cls: type[Strategy]) -> str:

@@ -98,8 +98,11 @@ def _save(plt: Any, fig: Any, path: Path, title: str, rect: tuple[float, float, 
 
 def run_colors(runs: Sequence[str], styles: Styles | None = None) -> dict[str, str]:
     """Each run's colour: its own, else a cycle colour no styled run of ``runs`` uses (stable per figure)."""
+    from matplotlib.colors import to_hex
+
     own = {r: run_color(r, styles) for r in runs}
-    spare = [c for c in _TAB10 if c not in set(own.values())] or _TAB10
+    taken = {to_hex(c) for c in own.values() if c is not None}  # "tab:blue" is _TAB10's "#1f77b4"
+    spare = [c for c in _TAB10 if c not in taken] or _TAB10
     out, k = {}, 0
     for r in runs:
         color = own[r]

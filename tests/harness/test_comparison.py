@@ -65,3 +65,25 @@ def test_fully_specified_fl_needs_no_calibration(toy_request, tmp_path, monkeypa
     spec = RunSpec.of(toy_request, ["fl"], options={"fl": {"tau0_s": 60.0, "mean_pickup_m": 500.0}})
     run_comparison(spec, tmp_path / "r", progress=False)
     assert calls == ["fl"]
+
+
+def test_two_variants_of_one_strategy_in_one_run(tmp_path):
+    """Each variant is simulated with its own options, labelled and coloured apart, and checked."""
+    from rpbench.harness.comparison import run_comparison
+    from rpbench.harness.spec import RunSpec
+    from rpbench.results.check import check_folder
+    from rpbench.results.plots import run_colors
+    from rpbench.results.runs import run_styles
+    from rpbench.results.store import read_meta
+    from rpbench.scenarios import ScenarioRequest
+
+    spec = RunSpec.of(ScenarioRequest("toy", sample=0.1, seed=2), ["fl", "fl@tau0_s=30", "fl@tau0_s=600"])
+    folder, table = run_comparison(spec, tmp_path / "variants", progress=False)
+    meta = read_meta(folder)
+    assert [meta["runs"][r]["options"]["tau0_s"] for r in ("fl@tau0_s=30", "fl@tau0_s=600")] == [30.0, 600.0]
+    assert meta["runs"]["fl@tau0_s=30"]["label"] == "FL (tau0_s=30)"
+    colors = run_colors(list(meta["runs"]), run_styles(meta))
+    assert len(set(colors.values())) == 3
+    assert (folder / "runs" / "fl@tau0_s=600" / "events.csv.gz").is_file()
+    assert all(rc.ok for rc in check_folder(folder))
+    assert "FL (tau0_s=600)" in (folder / "report.md").read_text()

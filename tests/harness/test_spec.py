@@ -55,3 +55,36 @@ def test_two_runs_under_one_name_are_refused():
     (mb,) = resolve_runs(["mb"])
     with pytest.raises(ParameterError, match="appears twice"):
         RunSpec(request=ScenarioRequest("toy"), runs=(mb, mb))
+
+
+# ------------------------------------------------------------------------------------------- variants
+def test_a_variant_is_a_run_of_its_own_with_its_settings():
+    from rpbench.commands._runs import parse_runs
+
+    fl, variant, two = parse_runs("fl,fl@tau0_s=200,fl@tau0_s=200@accel=none", ["fl.accel=none"])
+    assert (variant.name, variant.source, variant.settings) == ("fl@tau0_s=200", "fl", (("tau0_s", "200"),))
+    assert variant.options.tau0_s == 200.0 and variant.options.accel == "anderson"  # --opt fl. is FL's only
+    assert fl.options.accel == "none" and fl.options.tau0_s is None
+    assert two.options.tau0_s == 200.0 and two.options.accel == "none"
+    assert variant.label_of("FL") == "FL (tau0_s=200)" and fl.label_of("FL") == "FL"
+    assert variant.color_of("tab:green") is None and fl.color_of("tab:green") == "tab:green"
+    (more,) = parse_runs("fl@tau0_s=200", ["fl@tau0_s=200.rates=month"])  # --opt reaches a variant by its name
+    assert more.options.rates == "month" and more.options.tau0_s == 200.0
+    spec = RunSpec.of("toy", ["mb@order_rule=min_then_check"], options={"mb@order_rule=min_then_check": {}})
+    assert spec.runs[0].options.order_rule == "min_then_check"
+
+
+@pytest.mark.parametrize(
+    ("strategies", "message"),
+    [
+        ("fl@tau0_s", "a variant's settings are OPTION=VALUE"),
+        ("fl@tau0_s=a/b", "a variant's settings are OPTION=VALUE"),
+        ("bound@window=x", "the offline runs take no variants"),
+        ("fl@tau0_s=1@tau0_s=2", "sets an option twice"),
+        ("fl@nope=1", "unknown option 'nope'"),
+        ("fl@tau0_s=200,fl@tau0_s=200", "names 'fl@tau0_s=200' twice"),
+    ],
+)
+def test_a_bad_variant_is_one_error(strategies, message):
+    with pytest.raises(ParameterError, match=message):
+        resolve_runs(strategies.split(","))
