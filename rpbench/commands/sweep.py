@@ -23,7 +23,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         "in local worker processes (or on an existing Dask cluster, --scheduler).",
     )
     p.add_argument("sweep", nargs="?", choices=list(SWEEPS), help="predefined sweep")
-    p.add_argument("--over", default=None, metavar="NAME=V1,V2,...", help="sweep any parameter instead")
+    p.add_argument(
+        "--over",
+        default=None,
+        metavar="NAME=V1,V2,...",
+        help="sweep any scenario parameter instead, or a run's option as RUN.OPTION=V1,V2,... "
+        "(e.g. fl.tau0_s=60,120,240)",
+    )
     p.add_argument("--values", default=None, help="override a predefined sweep's values, e.g. 60,90,120")
     add_scenario_args(p)
     add_run_args(p, strategies=None)
@@ -60,8 +66,10 @@ def build_spec(args: argparse.Namespace) -> SweepSpec:
 
 def run(args: argparse.Namespace) -> int:
     sweep = build_spec(args)
-    points = expand(sweep.parameter, sweep.values)
     spec = run_spec(args, scenario_request(args), runs=parse_runs(list(sweep.strategies), args.opt))
+    points = expand(sweep.parameter, sweep.values, spec.names)
+    for point in points:  # a run option's values are checked before anything runs
+        point.spec_of(spec, spec.request)
     note(f"sweep {sweep.name}: {len(points)} points x {', '.join(spec.names)} on {spec.request.name}")
     folder = run_sweep(sweep, points, spec, args.out, workers=args.workers, scheduler=args.scheduler)
     table = pd.read_csv(folder / layout.SWEEP)

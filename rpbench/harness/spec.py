@@ -147,6 +147,13 @@ class RunSpec:
         """The same comparison on another scenario request (a day of a multi-day run, a sweep point)."""
         return dataclasses.replace(self, request=request)
 
+    def with_options(self, name: str, values: Mapping[str, Any]) -> RunSpec:
+        """The comparison with run ``name``'s options ``values`` changed (the others kept), checked."""
+        entry = self.entry(name)
+        options = typed_options(entry, {**entry.options.as_dict(), **values})
+        runs = tuple(dataclasses.replace(r, options=options) if r.name == name else r for r in self.runs)
+        return dataclasses.replace(self, runs=runs)
+
     def with_runs(self, names: Sequence[str]) -> RunSpec:
         """The comparison restricted to (or reordered as) ``names``; entries keep their options."""
         return dataclasses.replace(self, runs=tuple(self.entry(n) for n in names))

@@ -16,6 +16,7 @@ on the same scenario.  The paper's sweeps are predefined:
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -33,6 +34,7 @@ from rpbench.results.plots import sweep_figure
 from rpbench.results.report import fmt
 from rpbench.results.runs import run_label, run_styles
 from rpbench.results.store import check_new_folder
+from rpbench.scenarios import ScenarioRequest
 from rpbench.scenarios.base import Params
 
 ALIASES = {
@@ -110,7 +112,24 @@ SWEEPS: dict[str, SweepSpec] = {
 class SweepPoint:
     label: str  # folder name, e.g. "K=90"
     value: float
-    overrides: dict[str, float] = field(default_factory=dict)
+    overrides: dict[str, float] = field(default_factory=dict)  # scenario parameters
+    options: dict[str, dict[str, float]] = field(default_factory=dict)  # run name -> its options at this point
+
+    def spec_of(self, spec: RunSpec, request: ScenarioRequest) -> RunSpec:
+        """The point's comparison: ``spec`` on ``request`` with the point's parameters and run options."""
+        point = spec.for_request(request.with_overrides(self.overrides))
+        for run, values in self.options.items():
+            point = point.with_options(run, values)
+        return point
+
+
+def option_target(parameter: str, runs: Sequence[str]) -> tuple[str, str] | None:
+    """``RUN.OPTION`` -> (RUN, OPTION) when the sweep parameter names a run's option (the longest run name
+    followed by a dot), else None: a scenario parameter."""
+    for run in sorted(runs, key=len, reverse=True):
+        if parameter.startswith(f"{run}.") and len(parameter) > len(run) + 1:
+            return run, parameter[len(run) + 1 :]
+    return None
 
 
 def parameter_fields(parameter: str) -> tuple[str, ...]:
@@ -126,16 +145,23 @@ def parameter_fields(parameter: str) -> tuple[str, ...]:
     return (parameter,)
 
 
-def expand(parameter: str, values: list[float] | tuple[float, ...]) -> list[SweepPoint]:
-    """One point per value, with every field the parameter sets; validated against Params."""
-    fields = parameter_fields(parameter)
+def expand(parameter: str, values: list[float] | tuple[float, ...], runs: Sequence[str] = ()) -> list[SweepPoint]:
+    """One point per value: every field a scenario parameter sets, validated against Params; or, for
+    ``RUN.OPTION`` with RUN one of ``runs`` (``fl.tau0_s``), that run's option (checked per point when the
+    point's specification is built, before anything runs)."""
+    target = option_target(parameter, runs)
+    fields = () if target else parameter_fields(parameter)
     if not values:
         raise ParameterError(f"sweep over {parameter!r} has no values")
     points = []
     for v in values:
+        label = f"{parameter}={v:g}"
+        if target:
+            points.append(SweepPoint(label=label, value=float(v), options={target[0]: {target[1]: float(v)}}))
+            continue
         overrides = {f: float(v) for f in fields}
         Params().replace(**overrides)  # fail early on out-of-range values
-        points.append(SweepPoint(label=f"{parameter}={v:g}", value=float(v), overrides=overrides))
+        points.append(SweepPoint(label=label, value=float(v), overrides=overrides))
     if len({p.label for p in points}) != len(points):
         raise ParameterError(f"sweep over {parameter!r} repeats a value")
     return points
@@ -168,9 +194,7 @@ def run_sweep(
     request = spec.request.resolved()
     default = f"{results.timestamp()}_sweep-{sweep.name}_{request.name}_{spec.preset}"
     with results.new_results_folder(out, default) as (tmp, final):
-        tasks = [
-            ComparisonTask(spec.for_request(request.with_overrides(p.overrides)), str(tmp / p.label)) for p in points
-        ]
+        tasks = [ComparisonTask(p.spec_of(spec, request), str(tmp / p.label)) for p in points]
         run_tasks(run_task, tasks, workers=workers, scheduler=scheduler, label=f"sweep {sweep.name}")
         write_parent_meta(
             tmp,
@@ -179,7 +203,9 @@ def run_sweep(
             {
                 "sweep": sweep.name,
                 "parameter": sweep.parameter,
-                "points": [{"label": p.label, "value": p.value, "overrides": p.overrides} for p in points],
+                "points": [
+                    {"label": p.label, "value": p.value, "overrides": p.overrides, "options": p.options} for p in points
+                ],
                 "strategies": spec.names,
                 "kpis": list(sweep.kpis),
                 "scenario": request.name,

@@ -71,3 +71,22 @@ def test_sweep_runs_end_to_end_on_the_toy_city(tmp_path):
     assert 'href="dt=10/report.html"' in page and "fig-sweep" in page and (folder / "dt=30" / "report.html").is_file()
     text, _ = render([folder])
     assert "| dt |" in text and text.count("\n| 10 |") + text.count("\n| 30 |") == 2
+
+
+def test_a_sweep_over_a_strategy_option(tmp_path, capsys):
+    """``--over fl.tau0_s=...``: each point runs FL with that option (recorded in the point's meta.json),
+    the other runs as given; a bad option or value is one line before anything runs."""
+    from rpbench.cli import main
+    from rpbench.results.check import check_tree
+    from rpbench.results.store import read_meta
+
+    out = tmp_path / "sw"
+    argv = ["sweep", "--scenario", "toy", "--sample", "0.1", "--strategies", "mb,fl", "--workers", "1"]
+    assert main([*argv, "--over", "fl.tau0_s=30,300", "--out", str(out)]) == 0
+    for label, tau0 in (("fl.tau0_s=30", 30.0), ("fl.tau0_s=300", 300.0)):
+        runs = read_meta(out / label)["runs"]
+        assert runs["fl"]["options"]["tau0_s"] == tau0 and runs["mb"]["options"] == {"order_rule": "min_feasible"}
+    assert all(r.status == "ok" for r in check_tree(out))
+    assert main([*argv, "--over", "fl.nope=1,2", "--out", str(tmp_path / "bad")]) == 2
+    assert "unknown option 'nope'" in capsys.readouterr().err and not (tmp_path / "bad").exists()
+    assert main([*argv, "--over", "fl.tau0_s=-5,10", "--out", str(tmp_path / "bad")]) == 2
