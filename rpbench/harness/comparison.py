@@ -171,6 +171,7 @@ def evaluate(scenario: Scenario, sim: SimResult, entry: RunEntry, *, label: str,
     tab = metrics.passenger_table(sim.events, solo, orders.request_s, sim.trajectories)
     occupied = metrics.occupied_distance_m(sim.events, sim.trajectories)
     kpis = metrics.kpis(tab, occupied, scenario.params)
+    kpis.update(metrics.decision_kpis(sim.rounds, scenario.params.dt_s))
     kpis["wall_s"] = sim.wall_s
     return StrategyRun(
         name=entry.name,

@@ -19,7 +19,7 @@ from typing import Any
 
 from rpbench.exceptions import ParameterError
 from rpbench.results.leaderboard import Bootstrap
-from rpbench.results.metrics import KPI_ORDER
+from rpbench.results.metrics import DECISION_KPIS, KPI_ORDER
 
 
 @dataclass(frozen=True)
@@ -45,8 +45,8 @@ class Protocol:
         return out
 
 
-#: What a protocol's metrics may name: the comparison table's KPIs and the competitive ratio.
-METRICS = (*KPI_ORDER, "competitive_ratio_bound")
+#: What a protocol's metrics may name: the comparison table's KPIs, the competitive ratio, decision times.
+METRICS = (*KPI_ORDER, "competitive_ratio_bound", *DECISION_KPIS)
 
 
 def builtin_names() -> list[str]:

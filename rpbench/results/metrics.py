@@ -62,6 +62,10 @@ KPI_LABELS = {
     "total_saving_km": "Total distance saving due to ride-pooling (km)",
     "competitive_ratio_bound": "Competitive ratio (saving / proven upper bound)",
     "competitive_ratio": "Saving / Oracle-1 (paper: same-window pairs; not a bound)",
+    "decision_p50_s": "Decision time per round, median (s)",
+    "decision_p95_s": "Decision time per round, 95th percentile (s)",
+    "decision_max_s": "Decision time per round, maximum (s)",
+    "rounds_over_dt": "Rounds slower than the batch interval",
 }
 EXTRA_KPIS = [
     "orders",
@@ -205,6 +209,28 @@ def kpis(tab: pd.DataFrame, occupied_m: np.ndarray, params: Params) -> dict[str,
         "total_solo_served_km": solo_served_km,
         # Σ over pairs of l_A + l_B - L: no pair, no saving (the difference of two equal sums is float noise)
         "total_saving_km": solo_served_km - occupied_km if n_pooled else 0.0,
+    }
+
+
+#: A round's decision time: the strategy building its model, the solver building, solving and decoding it.
+DECISION_PARTS = ("strategy_build_s", "solver_build_s", "solve_s", "extract_s")
+#: The decision-time KPIs of a simulation run, from its rounds (rounds.csv.gz).
+DECISION_KPIS = ("decision_p50_s", "decision_p95_s", "decision_max_s", "rounds_over_dt")
+
+
+def decision_kpis(rounds: pd.DataFrame, dt_s: float) -> dict[str, float]:
+    """The median, 95th percentile (linear interpolation) and maximum of the rounds' decision times
+    (:data:`DECISION_PARTS` summed), and how many rounds decided more slowly than the batch interval
+    ``dt_s`` (a dispatcher must decide within it). No round: NaN times and 0 rounds."""
+    if rounds.empty:
+        return {"decision_p50_s": np.nan, "decision_p95_s": np.nan, "decision_max_s": np.nan, "rounds_over_dt": 0.0}
+    decision = rounds[list(DECISION_PARTS)].to_numpy(dtype=float).sum(axis=1)
+    p50, p95 = np.quantile(decision, [0.5, 0.95])
+    return {
+        "decision_p50_s": float(p50),
+        "decision_p95_s": float(p95),
+        "decision_max_s": float(decision.max()),
+        "rounds_over_dt": float((decision > dt_s).sum()),
     }
 
 

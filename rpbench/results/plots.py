@@ -39,6 +39,10 @@ KPI_AXES = {
     "total_saving_km": "distance saving (km)",
     "competitive_ratio_bound": "saving / proven upper bound",
     "competitive_ratio": "saving / Oracle-1's saving",
+    "decision_p50_s": "decision time per round (s)",
+    "decision_p95_s": "decision time per round (s)",
+    "decision_max_s": "decision time per round (s)",
+    "rounds_over_dt": "rounds slower than Δt",
 }
 #: The headline KPIs of a comparison's bar panels (:func:`kpi_figure`): key, panel title.
 KPI_PANELS = [

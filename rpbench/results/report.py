@@ -21,6 +21,7 @@ from rpbench import paper, results
 from rpbench.exceptions import ResultsError
 from rpbench.results import layout
 from rpbench.results.metrics import (
+    DECISION_PARTS,
     EXTRA_KPIS,
     KPI_LABELS,
     KPI_ORDER,
@@ -171,13 +172,16 @@ def markdown_table(
 
 
 def solver_summary(folder: Path) -> pd.DataFrame | None:
-    """Per run: rounds solved, model size and solve time percentiles, statuses."""
+    """Per run: rounds solved, model size, solve and decision time percentiles (a round's decision: the
+    strategy's build plus the solver's build, solve and decoding), rounds slower than Δt, statuses."""
     path = folder / "rounds.csv.gz"
     if not path.is_file():
         return None
     rounds = pd.read_csv(path)
     if rounds.empty:
         return None
+    dt = float(results.read_meta(folder).get("params", {}).get("dt_s", float("nan")))
+    rounds = rounds.assign(decision_s=rounds[list(DECISION_PARTS)].sum(axis=1))
     g = rounds.groupby("run", sort=False)
     return pd.DataFrame(
         {
@@ -188,6 +192,10 @@ def solver_summary(folder: Path) -> pd.DataFrame | None:
             "solve p50 (ms)": (g["solve_s"].median() * 1e3).round(3),
             "solve p95 (ms)": (g["solve_s"].quantile(0.95) * 1e3).round(3),
             "solver total (s)": (g["solver_build_s"].sum() + g["solve_s"].sum() + g["extract_s"].sum()).round(3),
+            "decision p50 (ms)": (g["decision_s"].median() * 1e3).round(3),
+            "decision p95 (ms)": (g["decision_s"].quantile(0.95) * 1e3).round(3),
+            "decision max (ms)": (g["decision_s"].max() * 1e3).round(3),
+            f"rounds > Δt ({dt:g} s)": g["decision_s"].apply(lambda s: int((s > dt).sum())),
             "not optimal": g["status"].apply(lambda s: int((s != "optimal").sum())),
             "tie moves": g["tie_moves"].sum(),
         }

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pandas as pd
 import pytest
-from hypothesis import given
+from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from rpbench.results.benchmarks import performance_profile, performance_ratios, preset_summary, shifted_geometric_mean
@@ -37,6 +37,7 @@ def test_shifted_geometric_mean():
     assert math.isnan(shifted_geometric_mean(np.array([])))
 
 
+@settings(deadline=None, suppress_health_check=[HealthCheck.too_slow], derandomize=True)  # a shared machine
 @given(st.lists(st.floats(1e-6, 1e3), min_size=1, max_size=20), st.floats(0.0, 10.0))
 def test_the_mean_lies_between_the_extremes(times, shift):
     m = shifted_geometric_mean(np.array(times), shift)

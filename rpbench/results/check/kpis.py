@@ -16,7 +16,7 @@ from rpbench import results
 from rpbench.exceptions import ResultsError, RpbenchError, one_line
 from rpbench.results.check.core import UNVERIFIED_KPIS, RunCheck, as_number, same, show
 from rpbench.results.check.folder import Folder
-from rpbench.results.layout import HOURLY, KPIS, META, REPORT
+from rpbench.results.layout import HOURLY, KPIS, META, REPORT, ROUNDS
 from rpbench.results.report import report_markdown
 from rpbench.scenarios.base import Params
 
@@ -133,6 +133,46 @@ def compare_kpis(
         if number is not None and not (np.isnan(number) or 0 <= number < np.inf):
             rc.fail("kpi", f"KPI {key}: reported {number!r}, not a time or size (finite, >= 0)")
     rc.checked["kpis"] = len(recomputed)
+
+
+# ----------------------------------------------------------------------- decision time
+#: The decision-time KPIs (rpbench.results.metrics.DECISION_KPIS), recomputed here from rounds.csv.gz.
+DECISION_KPIS = ("decision_p50_s", "decision_p95_s", "decision_max_s", "rounds_over_dt")
+_DECISION_COLUMNS = ("strategy_build_s", "solver_build_s", "solve_s", "extract_s")
+
+
+def decision_expected(rc: RunCheck, f: Folder, run: str, reported: pd.DataFrame) -> dict:
+    """A run's decision-time KPIs from the folder's per-round table (median and 95th percentile by linear
+    interpolation between order statistics, the maximum, rounds slower than Δt); nothing, and said so, for a
+    folder written before rpbench reported them."""
+    if not set(DECISION_KPIS) & set(reported["kpi"]):
+        rc.skip("kpi", "no decision-time KPIs: the folder was written before rpbench reported them")
+        return {}
+    path = f.path / ROUNDS
+    if not path.is_file():
+        rc.fail("kpi", f"decision-time KPIs are reported but the folder has no {ROUNDS} to recompute them from")
+        return {}
+    rounds = results.read_csv(path)
+    mine = rounds[rounds["run"] == run]
+    if mine.empty:
+        return dict.fromkeys(DECISION_KPIS[:3], float("nan")) | {"rounds_over_dt": 0.0}
+    total = np.zeros(len(mine))
+    for column in _DECISION_COLUMNS:
+        total = total + mine[column].to_numpy(dtype=float)
+    ordered = np.sort(total)
+
+    def at(q: float) -> float:  # the linear-interpolation quantile, spelled out
+        pos = q * (len(ordered) - 1)
+        low = int(np.floor(pos))
+        high = min(low + 1, len(ordered) - 1)
+        return float(ordered[low] + (ordered[high] - ordered[low]) * (pos - low))
+
+    return {
+        "decision_p50_s": at(0.5),
+        "decision_p95_s": at(0.95),
+        "decision_max_s": float(ordered[-1]),
+        "rounds_over_dt": float(np.count_nonzero(total > f.params.dt_s)),
+    }
 
 
 # ----------------------------------------------------------------------- hourly

@@ -27,7 +27,14 @@ from rpbench.results.check.folder import (
     read_folder,
     read_table,
 )
-from rpbench.results.check.kpis import check_hourly, check_report, compare_kpis, hourly_expected, simulation_kpis
+from rpbench.results.check.kpis import (
+    check_hourly,
+    check_report,
+    compare_kpis,
+    decision_expected,
+    hourly_expected,
+    simulation_kpis,
+)
 from rpbench.results.check.oracle import check_oracle
 from rpbench.results.check.page import check_page
 from rpbench.results.check.parents import check_parent
@@ -135,7 +142,9 @@ def _check_simulation(f: Folder, name: str, run_dir: Path, bound: float | None) 
     events = check_event_log(rc, events, f, len(f.fleet))
     tab = check_events(rc, events, f, traj)
     kpis = simulation_kpis(tab, f.solo, f.params, bound)
-    compare_kpis(rc, "simulation", kpis, f.reported(name))
+    reported = f.reported(name)
+    kpis |= decision_expected(rc, f, name, reported)
+    compare_kpis(rc, "simulation", kpis, reported)
     check_certificate(rc, tab, f, kpis["total_saving_km"], bound)
     rc.checked["orders"] = f.n
     rc.checked["served"] = int(tab["served"].sum())

@@ -258,3 +258,32 @@ def test_a_row_deleted_from_report_md_is_reported_as_not_compared(folder):
         "report.md rows not compared" in found.folder_check.skipped["report"]
         and "Pairing ratio" in found.folder_check.skipped["report"]
     )
+
+
+# ------------------------------------------------------------------ decision time
+@pytest.mark.parametrize("kpi", ["decision_p50_s", "decision_p95_s", "decision_max_s", "rounds_over_dt"])
+def test_a_decision_time_kpi_edited_fails(folder, kpi):
+    """The decision-time KPIs are recomputed from rounds.csv.gz: an edited one fails ``kpi``."""
+    set_kpi(folder, "mb", kpi, nudge)
+    assert_fails(folder, "kpi", f"KPI {kpi}: reported", run="mb")
+
+
+def test_decision_times_are_the_rounds_table(folder):
+    """The writer's definition (rpbench.results.metrics) and the checker's agree on the folder's rounds."""
+    from rpbench.results.metrics import DECISION_KPIS, decision_kpis
+    from rpbench.results.store import read_meta
+
+    rounds = pd.read_csv(folder / "rounds.csv.gz")
+    reported = pd.read_csv(folder / "kpis.csv").set_index(["run", "kpi"])["value"]
+    dt = read_meta(folder)["params"]["dt_s"]
+    for run in ("mb", "fl"):
+        expected = decision_kpis(rounds[rounds["run"] == run], dt)
+        assert [reported[(run, k)] for k in DECISION_KPIS] == pytest.approx([expected[k] for k in DECISION_KPIS])
+    assert (
+        reported[("mb", "decision_p50_s")] <= reported[("mb", "decision_p95_s")] <= reported[("mb", "decision_max_s")]
+    )
+
+
+def test_a_folder_from_before_decision_times_is_said_not_failed(folder):
+    edit_csv(folder / "kpis.csv", lambda t: t[~t["kpi"].str.startswith(("decision_", "rounds_over"))])
+    assert "kpi" not in violations(folder)
