@@ -32,7 +32,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--out",
         default=None,
         metavar="FILE",
-        help="write the markdown to FILE, and its plots beside it as FILE's name + '-' + the plot's name, "
+        help="write the markdown to FILE, and its plots (PNG, SVG, PDF), tables (table.tex, table.csv) and page "
+        "beside it as FILE's name + '-' + the file's name, "
         "instead of printing it; the results folders are then left as they are",
     )
     p.set_defaults(handler=run)
@@ -49,7 +50,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         with tempfile.TemporaryDirectory(prefix="rpbench-report-") as tmp:
             text, _ = render([Path(f) for f in args.folders], metrics, dest=Path(tmp), page=args.html)
-            for png in sorted([*Path(tmp).glob("*.png"), *Path(tmp).glob("*.html")]):
+            for png in sorted(p for p in Path(tmp).iterdir() if p.is_file() and p.name != "report.md"):
                 target = out.with_name(f"{out.stem}-{png.name}")
                 write_out_file(target, "--out", partial(shutil.copyfile, png))
                 plots.append(target)

@@ -17,6 +17,9 @@ from rpbench.results.html.bench import bench_tables, write_bench_folder
 from rpbench.results.layout import HEAVY, REPORT
 from rpbench.results.report import check_metrics, load_kpis, selected_markdown, write_report
 
+#: A report's figures: PNG, and the vector copies beside each.
+FIGURE_SUFFIXES = (".png", *layout.VECTOR_SUFFIXES)
+FIGURE_PATTERNS = tuple(f"*{s}" for s in FIGURE_SUFFIXES)
 #: Folder kinds whose report is written by their own harness module (all others are comparisons).
 PARENT_KINDS = ("multi-day", "sweep", "evaluate")
 
@@ -107,9 +110,9 @@ def _write_elsewhere(folder: Path, kind: str, dest: Path) -> Path:
         return write_report(folder, folder.name, dest)
     with tempfile.TemporaryDirectory(dir=dest) as tmp:
         copy = Path(tmp) / folder.name
-        shutil.copytree(folder, copy, ignore=shutil.ignore_patterns(*HEAVY, REPORT, "*.png"))
+        shutil.copytree(folder, copy, ignore=shutil.ignore_patterns(*HEAVY, REPORT, *FIGURE_PATTERNS))
         _write(copy, kind, folder.name)
         for path in copy.iterdir():
-            if path.name == REPORT or path.suffix == ".png":
+            if path.name == REPORT or path.suffix in FIGURE_SUFFIXES:
                 shutil.move(path, dest / path.name)
     return dest / REPORT

@@ -15,6 +15,8 @@ A comparison folder (one scenario, several runs)::
     report.md                      the report, rendered from the files above, with its figures:
     kpis.png, timeline.png         the headline KPIs per run; waiting, served and pooled passengers over time
     hourly.png                     the KPIs per hour (scenarios of more than two hours)
+    *.svg, *.pdf                   every figure again as vector graphics
+    table.tex, table.csv           the comparison table as LaTeX (booktabs) and with raw values
     report.html                    the report as one self-contained interactive page, with a map
 
 A parent folder (multi-day run, sweep) holds one comparison folder per day
@@ -50,6 +52,10 @@ CHECK = "check.txt"
 KPIS_PNG = "kpis.png"
 TIMELINE_PNG = "timeline.png"
 HOURLY_PNG = "hourly.png"
+TABLE_TEX = "table.tex"
+TABLE_CSV = "table.csv"
+#: Every figure is also written as SVG and PDF beside its PNG (vector copies for papers).
+VECTOR_SUFFIXES = (".svg", ".pdf")
 
 #: Inputs and logs a published light copy leaves out (the checker's raw material; the recorded command
 #: regenerates them).

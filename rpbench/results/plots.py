@@ -91,11 +91,22 @@ def _pyplot() -> Any:
     return plt
 
 
+def _savefig(fig: Any, path: Path) -> None:
+    """The PNG, and the same figure as SVG and PDF beside it (:data:`~rpbench.results.layout.VECTOR_SUFFIXES`),
+    written without a date, so that the same tables give the same files."""
+    import matplotlib
+
+    fig.savefig(path, dpi=110)
+    with matplotlib.rc_context({"svg.hashsalt": "rpbench"}):
+        fig.savefig(path.with_suffix(".svg"), metadata={"Date": None})
+    fig.savefig(path.with_suffix(".pdf"), metadata={"CreationDate": None, "ModDate": None})
+
+
 def _save(plt: Any, fig: Any, path: Path, title: str, rect: tuple[float, float, float, float] | None = None) -> Path:
     """Title (wrapped: scenario labels are long), lay out, write the PNG, free the figure."""
     fig.suptitle("\n".join(textwrap.wrap(title, 110)), fontsize=10)
     fig.tight_layout(rect=rect)
-    fig.savefig(path, dpi=110)
+    _savefig(fig, path)
     plt.close(fig)
     return path
 
@@ -171,33 +182,43 @@ def hourly_figure(hourly: pd.DataFrame, path: Path, title: str, styles: Styles |
 
 
 def per_day_figures(by_day: pd.DataFrame, folder: Path, kpis: list[str], styles: Styles | None = None) -> list[Path]:
-    """One PNG per KPI: value per day, one line per run (``by_day`` columns date, run, kpi, value)."""
+    """One figure per KPI: value per day, one series per run (``by_day`` columns date, run, kpi, value).
+
+    Days are discrete: one tick per day on a categorical axis, and markers, not lines, since nothing lies
+    between two days; runs are offset a little within a day so that equal values stay visible."""
     plt = _pyplot()
     paths = []
     colors = run_colors(list(dict.fromkeys(by_day["run"])), styles)
+    days = sorted(set(by_day["date"].astype(str)))
+    position = {d: i for i, d in enumerate(days)}
+    runs = list(dict.fromkeys(str(r) for r in by_day["run"]))
+    width = 0.6 / max(len(runs), 1)
     for kpi in kpis:
         sel = by_day[(by_day["kpi"] == kpi) & by_day["value"].notna()]  # only runs with data are drawn
         if sel.empty:
             continue
         fig, ax = plt.subplots(figsize=(9.5, 3.6))
         for run, g in sel.groupby("run", sort=False):
+            shift = (runs.index(str(run)) - (len(runs) - 1) / 2) * width
             ax.plot(
-                pd.to_datetime(g["date"]),
+                [position[str(d)] + shift for d in g["date"]],
                 g["value"],
                 marker="o",
-                ms=3,
+                ms=4,
+                linestyle="none",
                 label=run_label(str(run), styles),
                 color=colors[str(run)],
             )
+        ax.set_xticks(range(len(days)), days, rotation=45, ha="right", fontsize=8)
+        ax.set_xlim(-0.5, len(days) - 0.5)
         ax.set_title(KPI_LABELS.get(kpi, kpi), fontsize=10)
-        ax.set_xlabel("date", fontsize=9)
+        ax.set_xlabel("day", fontsize=9)
         ax.set_ylabel(axis_label(kpi), fontsize=9)
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.01, 0.5))  # beside: lines fill the plot
-        fig.autofmt_xdate()
+        ax.grid(alpha=0.3, axis="y")
+        ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.01, 0.5))  # beside: markers fill the plot
         fig.tight_layout()
         path = folder / f"by_day_{kpi}.png"
-        fig.savefig(path, dpi=110)
+        _savefig(fig, path)
         plt.close(fig)
         paths.append(path)
     return paths

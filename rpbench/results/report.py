@@ -32,6 +32,7 @@ from rpbench.results.metrics import (
 )
 from rpbench.results.plots import hourly_figure, kpi_figure, timeline_figure
 from rpbench.results.runs import Styles, run_label, run_styles
+from rpbench.results.tables import csv_table, latex_table
 
 #: Competitive-ratio rows: KPI name -> the oracle run whose total saving is the denominator.
 #: Ratio rows: KPI name -> the offline run whose total saving is the denominator.  Only the first is a
@@ -372,9 +373,25 @@ def write_report(folder: Path, name: str | None = None, dest: Path | None = None
     is then only read); ``name``: the folder's final name, for the text.  Returns the report's path."""
     dest = folder if dest is None else dest
     text = report_markdown(folder, name, figure_lines(folder, dest))
+    write_paper_tables(folder, dest)
     path = dest / "report.md"
     path.write_text(text)
     return path
+
+
+def write_paper_tables(folder: Path, dest: Path) -> None:
+    """``table.tex`` and ``table.csv``: the comparison table for a paper (:mod:`rpbench.results.tables`)."""
+    meta = results.read_meta(folder)
+    table = load_kpis(folder)
+    styles = run_styles(meta)
+    rows = table_rows(table)
+    caption = (
+        f"{meta['scenario']['label']}: rpbench {meta['versions']['rpbench']}, solver preset {meta['preset']['name']}"
+    )
+    tex = latex_table(table, rows, fmt, caption=caption, unproven=unproven_runs(folder), mark=UNPROVEN_MARK,
+                      styles=styles)  # fmt: skip
+    (dest / layout.TABLE_TEX).write_text(tex)
+    csv_table(table, rows, styles).to_csv(dest / layout.TABLE_CSV)
 
 
 def figure_lines(folder: Path, dest: Path) -> list[str]:
@@ -388,13 +405,17 @@ def figure_lines(folder: Path, dest: Path) -> list[str]:
     lines = [
         "## Figures",
         "",
+        f"Every figure is also beside its PNG as SVG and PDF; the comparison table is `{layout.TABLE_TEX}` (LaTeX, "
+        f"booktabs) and `{layout.TABLE_CSV}` (raw values).",
+        "",
         f"![headline KPIs per run]({KPIS_PNG})",
         "",
         "Headline KPIs of the comparison table, one bar per run; a panel leaves out the runs without that KPI "
         f"(offline runs have no response rate nor pick-up time){no_ratio}.",
         "",
     ]
-    (dest / TIMELINE_PNG).unlink(missing_ok=True)  # a light copy's timeline would no longer be the folder's
+    for suffix in (".png", *layout.VECTOR_SUFFIXES):  # a light copy's timeline would no longer be the folder's
+        (dest / TIMELINE_PNG).with_suffix(suffix).unlink(missing_ok=True)
     timeline = timeline_of(folder)
     if isinstance(timeline, str):
         lines += [timeline, ""]

@@ -102,8 +102,11 @@ def test_per_day_axes_list_only_runs_with_data(tmp_path, figures):
     rate, saving = figures
     assert_labelled(rate)
     assert_labelled(saving)
-    assert rate.axes[0].get_xlabel() == "date" and rate.axes[0].get_ylabel() == "response rate (served / orders)"
+    assert rate.axes[0].get_xlabel() == "day" and rate.axes[0].get_ylabel() == "response rate (served / orders)"
     assert legend_runs(rate.axes[0]) == ["MB"] and legend_runs(saving.axes[0]) == ["MB", "Oracle-1"]
+    # discrete days: one tick each on a categorical axis, markers without lines joining the days
+    assert [t.get_text() for t in saving.axes[0].get_xticklabels()] == ["2017-05-01", "2017-05-02"]
+    assert all(line.get_linestyle() == "None" and line.get_marker() == "o" for line in saving.axes[0].get_lines())
 
 
 def test_sweep_axes_name_the_parameter_with_its_unit(tmp_path, figures):
