@@ -216,6 +216,20 @@ def kpis(tab: pd.DataFrame, occupied_m: np.ndarray, params: Params) -> dict[str,
 DECISION_PARTS = ("strategy_build_s", "solver_build_s", "solve_s", "extract_s")
 #: The decision-time KPIs of a simulation run, from its rounds (rounds.csv.gz).
 DECISION_KPIS = ("decision_p50_s", "decision_p95_s", "decision_max_s", "rounds_over_dt")
+#: KPIs measured on the clock: they differ from one run of the same inputs to the next (every other KPI is
+#: a function of the inputs and seeds alone).
+TIMING_KPIS = (
+    "wall_s",
+    "prepare_s",
+    *DECISION_KPIS,
+    # an offline run's phases
+    "candidates_s",
+    "model_s",
+    "build_s",
+    "solve_s",
+    "extract_s",
+    "total_s",
+)
 
 
 def decision_kpis(rounds: pd.DataFrame, dt_s: float) -> dict[str, float]:

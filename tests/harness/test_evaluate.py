@@ -14,6 +14,7 @@ from rpbench.exceptions import ParameterError
 from rpbench.harness.evaluate import run_evaluation
 from rpbench.protocols import load_protocol
 from rpbench.results.check import check_tree
+from rpbench.results.metrics import TIMING_KPIS
 
 PROTOCOL = """
 name = "toy-test"
@@ -47,8 +48,7 @@ def evaluated(protocol, tmp_path_factory):
 
 def without_timing(path):
     table = pd.read_csv(path)
-    return table[~table["kpi"].isin(["wall_s", "prepare_s"]) & ~table["kpi"].str.endswith("_s", na=False)
-                 | table["kpi"].isin(["avg_response_time_s", "avg_pickup_time_s"])].reset_index(drop=True)  # fmt: skip
+    return table[~table["kpi"].isin(TIMING_KPIS)].reset_index(drop=True)
 
 
 def test_an_evaluation_folder(evaluated):

@@ -9,6 +9,7 @@ from helpers import line_network, network_from_edges, scenario_of
 
 from rpbench.backends.presets import load_preset
 from rpbench.harness.comparison import simulate_strategy
+from rpbench.results.metrics import TIMING_KPIS
 
 
 @pytest.fixture(scope="module")
@@ -88,8 +89,8 @@ def test_same_seed_same_kpis(preset):
 
     a = simulate_strategy(build_scenario("toy", sample=0.25, seed=5), "mb", preset, progress=False)
     b = simulate_strategy(build_scenario("toy", sample=0.25, seed=5), "mb", preset, progress=False)
-    ka = {k: v for k, v in a.kpis.items() if k != "wall_s"}
-    kb = {k: v for k, v in b.kpis.items() if k != "wall_s"}
+    ka = {k: v for k, v in a.kpis.items() if k not in TIMING_KPIS}
+    kb = {k: v for k, v in b.kpis.items() if k not in TIMING_KPIS}
     assert pd.Series(ka).equals(pd.Series(kb))
     pd.testing.assert_frame_equal(a.sim.events, b.sim.events)
 

@@ -8,6 +8,7 @@ import pytest
 
 from rpbench.backends.presets import load_preset, preset_names
 from rpbench.harness.comparison import simulate_strategy
+from rpbench.results.metrics import TIMING_KPIS
 from rpbench.scenarios import build_scenario
 from rpbench.strategies import strategy_class
 
@@ -38,9 +39,9 @@ def test_identical_kpis_events_and_round_objectives(runs, strategy):
     by_preset = {preset: run for (preset, name), run in runs.items() if name == strategy}
     assert len(by_preset) >= 2, "need at least two presets to compare"
     ref_name, ref = next(iter(by_preset.items()))
-    ref_kpis = {k: v for k, v in ref.kpis.items() if k != "wall_s"}
+    ref_kpis = {k: v for k, v in ref.kpis.items() if k not in TIMING_KPIS}
     for preset, run in by_preset.items():
-        kpis = {k: v for k, v in run.kpis.items() if k != "wall_s"}
+        kpis = {k: v for k, v in run.kpis.items() if k not in TIMING_KPIS}
         assert pd.Series(kpis).equals(pd.Series(ref_kpis)), f"{preset} differs from {ref_name}"
         pd.testing.assert_frame_equal(run.sim.events, ref.sim.events)
         assert np.array_equal(run.sim.rounds["objective_m"].to_numpy(), ref.sim.rounds["objective_m"].to_numpy())
