@@ -112,19 +112,36 @@ def _save(plt: Any, fig: Any, path: Path, title: str, rect: tuple[float, float, 
 
 
 def run_colors(runs: Sequence[str], styles: Styles | None = None) -> dict[str, str]:
-    """Each run's colour: its own, else a cycle colour no styled run of ``runs`` uses (stable per figure)."""
+    """Each run's colour: its own, unless a built-in (or an earlier run) of ``runs`` declares it too; else a
+    cycle colour no kept colour of ``runs`` is (stable per figure)."""
     from matplotlib.colors import to_hex
 
     own = {r: run_color(r, styles) for r in runs}
-    taken = {to_hex(c) for c in own.values() if c is not None}  # "tab:blue" is _TAB10's "#1f77b4"
+    # a colour a run declares is kept by the first run declaring it (built-ins come first): a later run
+    # declaring the same colour, a plug-in say, is drawn in a spare one, as a run without a colour is
+    first: dict[str, str] = {}
+    for r in sorted(runs, key=lambda r: (_is_plugin(r), runs.index(r))):
+        color = own[r]
+        if color is not None and to_hex(color) not in first:
+            first[to_hex(color)] = r
+    keeps = set(first.values())
+    taken = set(first)  # "tab:blue" is _TAB10's "#1f77b4"
     spare = [c for c in _TAB10 if c not in taken] or _TAB10
     out, k = {}, 0
     for r in runs:
-        color = own[r]
+        color = own[r] if r in keeps else None
         if color is None:
             color, k = spare[k % len(spare)], k + 1
         out[r] = color
     return out
+
+
+def _is_plugin(run: str) -> bool:
+    """A run that is neither a built-in strategy nor an offline run (its colour yields to theirs)."""
+    from rpbench.oracle.runs import ORACLE_RUNS
+    from rpbench.strategies import REGISTRY
+
+    return run not in REGISTRY and run not in ORACLE_RUNS
 
 
 def axis_label(kpi: str) -> str:

@@ -230,3 +230,19 @@ def test_np_saves_exactly_nothing_and_the_checker_agrees(toy_run):
     assert table.loc["total_saving_km", "np"] == 0.0 and table.loc["competitive_ratio_bound", "np"] == 0.0
     assert json.loads((toy_run / "meta.json").read_text())["runs"]["np"]["kind"] == "simulation"
     assert all(rc.ok for rc in check_folder(toy_run))
+
+
+def test_a_plugin_declaring_a_builtins_colour_is_drawn_in_another():
+    """MB keeps its blue even when a plug-in listed before it declares blue too; runs without a colour of
+    their own, and the plug-in, get spare colours no kept run uses."""
+    from matplotlib.colors import to_hex
+
+    from rpbench.results.plots import run_colors
+
+    styles = {"mine": ("Mine", "tab:blue"), "other": ("Other", None)}
+    colors = run_colors(["mine", "mb", "rtv", "other"], styles)
+    assert colors["mb"] == "tab:blue" and colors["rtv"] == "tab:orange"
+    hexes = [to_hex(c) for c in colors.values()]
+    assert len(set(hexes)) == 4  # every run its own colour
+    builtins = run_colors(["np", "mb", "rtv", "fl-nd", "fl", "bound", "oracle1", "oracle2"])
+    assert builtins["fl"] == "tab:green" and builtins["oracle2"] == "tab:purple"  # built-ins unchanged
