@@ -32,6 +32,17 @@ def add_data_arg(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def add_parallel_args(parser: argparse.ArgumentParser) -> None:
+    """``--workers`` and ``--scheduler``: where the comparisons of a sweep or an evaluation run."""
+    parser.add_argument("--workers", type=int, default=None, help="parallel workers (default one per core)")
+    parser.add_argument(
+        "--scheduler",
+        default=None,
+        metavar="ADDRESS",
+        help="an existing Dask scheduler, e.g. tcp://host:8786 (needs the dask extra: pip install 'rpbench[dask]')",
+    )
+
+
 def add_offline_arg(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--offline",

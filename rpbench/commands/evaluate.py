@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from rpbench.commands._common import add_data_arg, add_offline_arg, command_line, note
+from rpbench.commands._common import add_data_arg, add_offline_arg, add_parallel_args, command_line, note
 from rpbench.data.first_run import ensure_data_dir
 from rpbench.exceptions import ParameterError
 from rpbench.harness.evaluate import run_evaluation
@@ -24,13 +24,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("protocol", metavar="PROTOCOL", help="a built-in protocol name or a protocol .toml file")
     p.add_argument("--out", default=None, help="evaluation folder (an existing one of the same protocol is resumed)")
-    p.add_argument("--workers", type=int, default=None, help="parallel workers (default one per core)")
-    p.add_argument(
-        "--scheduler",
-        default=None,
-        metavar="ADDRESS",
-        help="an existing Dask scheduler, e.g. tcp://host:8786 (needs the dask extra: pip install 'rpbench[dask]')",
-    )
+    add_parallel_args(p)
     add_data_arg(p)
     add_offline_arg(p)
     p.set_defaults(handler=run)

@@ -6,7 +6,14 @@ import argparse
 
 import pandas as pd
 
-from rpbench.commands._common import add_scenario_args, note, note_unproven, print_json, scenario_request
+from rpbench.commands._common import (
+    add_parallel_args,
+    add_scenario_args,
+    note,
+    note_unproven,
+    print_json,
+    scenario_request,
+)
 from rpbench.commands._runs import add_run_args, parse_runs, run_spec, split_list
 from rpbench.exceptions import ParameterError
 from rpbench.harness.sweep import SWEEPS, SweepSpec, expand, parse_over, run_sweep
@@ -34,13 +41,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_scenario_args(p)
     add_run_args(p, strategies=None)
     p.add_argument("--out", default=None, help="sweep folder to create")
-    p.add_argument("--workers", type=int, default=None, help="parallel workers (default one per core)")
-    p.add_argument(
-        "--scheduler",
-        default=None,
-        metavar="ADDRESS",
-        help="an existing Dask scheduler, e.g. tcp://host:8786 (needs the dask extra: pip install 'rpbench[dask]')",
-    )
+    add_parallel_args(p)
     p.add_argument("--json", action="store_true", help="print the sweep table as one JSON object")
     p.set_defaults(handler=run)
 

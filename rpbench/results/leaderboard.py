@@ -112,6 +112,7 @@ def paired(units: pd.DataFrame, runs: Sequence[str], kpis: Sequence[str], boot: 
     from scipy.stats import wilcoxon
 
     rows = []
+    draws: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}  # every pair and metric: the same draws
     for i, a in enumerate(runs):
         for b in runs[i + 1 :]:
             for kpi in kpis:
@@ -119,8 +120,10 @@ def paired(units: pd.DataFrame, runs: Sequence[str], kpis: Sequence[str], boot: 
                 if not va.size or va.shape != vb.shape or np.isnan(va).any() or np.isnan(vb).any():
                     continue
                 diff = va - vb
-                draws = draw_indices(diff.shape[0], diff.shape[1], boot)
-                low, high = interval(resampled_means(diff, draws), boot.level)
+                shape = (diff.shape[0], diff.shape[1])
+                if shape not in draws:
+                    draws[shape] = draw_indices(*shape, boot)
+                low, high = interval(resampled_means(diff, draws[shape]), boot.level)
                 per_day = diff.mean(axis=1)
                 nonzero = per_day[per_day != 0]
                 p = float(wilcoxon(nonzero).pvalue) if len(nonzero) else 1.0

@@ -42,3 +42,13 @@ def test_dates_of_the_synthetic_full_day(fake_data, tmp_path):
     meta = __import__("json").loads((folder / dates[0] / "meta.json").read_text())
     assert meta["scenario"]["name"] == "haikou-day" and meta["scenario"]["args"]["date"] == dates[0]
     assert "scenario `haikou-day`" in (folder / "report.md").read_text()
+
+
+def test_a_published_parent_page_is_titled_with_its_name(two_day_data, tmp_path):
+    """The parent's page is written while the copy has a temporary name: its title names the published one."""
+    from rpbench.harness.publish import publish
+
+    request = ScenarioRequest("haikou-peak", sample=0.3, data_dir=str(two_day_data))
+    folder = run_days(RunSpec.of(request, ["mb"], command="test"), ["2017-05-01"], str(tmp_path / "days"), workers=1)
+    out = publish(folder, tmp_path / "published-days")
+    assert "<title>rpbench multi-day results: published-days</title>" in (out / "report.html").read_text()

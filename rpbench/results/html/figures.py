@@ -261,6 +261,13 @@ def by_parameter(
                 )
             )
             owner.append(k)
+    _kpi_menu(fig, kpis, owner)
+    fig.update_xaxes(title_text=x_title, type="category" if dates else None)
+    return _layout(fig, None, 460)
+
+
+def _kpi_menu(fig: Any, kpis: Sequence[str], owner: Sequence[str]) -> None:
+    """A menu choosing which KPI the figure shows: ``owner[i]`` is the KPI of trace i (the first KPI shown)."""
     buttons = [
         {
             "label": KPI_LABELS.get(k, k),
@@ -269,12 +276,9 @@ def by_parameter(
         }
         for k in kpis
     ]
-    fig.update_layout(
-        updatemenus=[{"buttons": buttons, "x": 0, "y": 1.18, "xanchor": "left", "yanchor": "top", "showactive": True}]
-    )
-    fig.update_xaxes(title_text=x_title, type="category" if dates else None)
+    menu = {"buttons": buttons, "x": 0, "y": 1.18, "xanchor": "left", "yanchor": "top", "showactive": True}
+    fig.update_layout(updatemenus=[menu])
     fig.update_yaxes(title_text=axis_label(kpis[0]) if kpis else "")
-    return _layout(fig, None, 460)
 
 
 def sweep_panels(table: pd.DataFrame, parameter: str, kpis: Sequence[str], styles: Styles | None = None) -> Any:
@@ -396,16 +400,6 @@ def leaderboard_bars(board: pd.DataFrame, metrics: Sequence[str], styles: Styles
             )
         )
         owner.append(k)
-    buttons = [
-        {
-            "label": KPI_LABELS.get(k, k),
-            "method": "update",
-            "args": [{"visible": [o == k for o in owner]}, {"yaxis.title.text": axis_label(k)}],
-        }
-        for k in metrics
-    ]
-    fig.update_layout(
-        updatemenus=[{"buttons": buttons, "x": 0, "y": 1.18, "xanchor": "left", "yanchor": "top"}], showlegend=False
-    )
-    fig.update_yaxes(title_text=axis_label(metrics[0]) if metrics else "")
+    _kpi_menu(fig, metrics, owner)
+    fig.update_layout(showlegend=False)
     return _layout(fig, None, 440)

@@ -51,9 +51,9 @@ def write_html(folder: Path, name: str | None = None, dest: Path | None = None, 
     elif kind == "sweep":
         page = sweep_page(folder, name)
     elif kind == "evaluate":
-        page = evaluation_page(folder)
+        page = evaluation_page(folder, name)
     elif kind == "replication":
-        page = markdown_page(folder, "rpbench replicate", children=_subfolders(folder))
+        page = markdown_page(folder, "rpbench replicate", name, children=_subfolders(folder))
     else:
         page = comparison_page(folder, name, published=published)
     path = dest / REPORT_HTML
@@ -244,7 +244,7 @@ def multiday_page(parent: Path, name: str | None = None) -> Page:
 
     days = day_folders(parent)
     styles = run_styles(results.read_meta(days[0])) if days else {}
-    page = markdown_page(parent, "rpbench multi-day results", children=days, drop_images=True)
+    page = markdown_page(parent, "rpbench multi-day results", name, children=days, drop_images=True)
     table = by_day_table(parent)
     page.heading("Per-day KPIs (interactive)", 2)
     page.figure(
@@ -261,7 +261,7 @@ def sweep_page(parent: Path, name: str | None = None) -> Page:
     meta = results.read_meta(parent)
     points = [parent / p["label"] for p in meta["points"]]
     styles = run_styles(results.read_meta(points[0])) if points else {}
-    page = markdown_page(parent, f"rpbench sweep {meta['sweep']}", children=points, drop_images=True)
+    page = markdown_page(parent, f"rpbench sweep {meta['sweep']}", name, children=points, drop_images=True)
     table = sweep_table(parent)
     page.heading("The sweep (interactive)", 2)
     page.figure(
@@ -272,11 +272,11 @@ def sweep_page(parent: Path, name: str | None = None) -> Page:
     return page
 
 
-def evaluation_page(folder: Path) -> Page:
+def evaluation_page(folder: Path, name: str | None = None) -> Page:
     meta = results.read_meta(folder)
     children = [folder / c for c in meta.get("children", [])]
     styles = run_styles(results.read_meta(children[0])) if children else {}
-    page = markdown_page(folder, "rpbench evaluation", children=children)
+    page = markdown_page(folder, "rpbench evaluation", name, children=children)
     board = results.read_csv(folder / layout.LEADERBOARD)
     page.heading("Leaderboard (interactive)", 2)
     page.figure(
@@ -287,9 +287,11 @@ def evaluation_page(folder: Path) -> Page:
     return page
 
 
-def markdown_page(folder: Path, title: str, *, children: Sequence[Path] = (), drop_images: bool = False) -> Page:
+def markdown_page(
+    folder: Path, title: str, name: str | None = None, *, children: Sequence[Path] = (), drop_images: bool = False
+) -> Page:
     """A page showing ``folder``'s report.md (PNG figures left out when the page draws its own), with links
-    to the pages of ``children``."""
+    to the pages of ``children``; ``name``: the folder's final name (it may be written under a temporary one)."""
     from markdown_it import MarkdownIt
 
     text = (folder / layout.REPORT).read_text(encoding="utf-8") if (folder / layout.REPORT).is_file() else ""
@@ -297,7 +299,7 @@ def markdown_page(folder: Path, title: str, *, children: Sequence[Path] = (), dr
         text = re.sub(r"^!\[[^\]]*\]\([^)]*\)\s*$", "", text, flags=re.MULTILINE)
     else:  # a PNG is a separate file: the page, copied alone, names it instead of showing a broken image
         text = re.sub(r"!\[([^\]]*)\]\(([^)]*)\)", r"(figure `\2` beside report.md: \1)", text)
-    page = Page(f"{title}: {folder.name}")
+    page = Page(f"{title}: {name or folder.name}")
     body = MarkdownIt("commonmark", {"html": False}).enable("table").render(text)
     page.markup(body or f"<h1>{html.escape(title)}</h1>")
     if children:

@@ -52,6 +52,7 @@ def test_a_page_is_rewritten_identically_from_the_files(toy_run, tmp_path):
 def test_a_published_copy_keeps_the_map(toy_run, tmp_path):
     out = publish(toy_run, tmp_path / "published")
     page = (out / "report.html").read_text()
+    assert "partial" not in page.split("</title>")[0]  # written under a temporary name, titled with its own
     assert '"map":{' in page and "published light copy" in page
     render([out], page=True)  # re-rendered from the light copy: the map cannot be drawn, and it says why
     again = (out / "report.html").read_text()
