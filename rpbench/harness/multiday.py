@@ -16,14 +16,16 @@ from rpbench import results
 from rpbench.harness.comparison import ComparisonTask, run_task
 from rpbench.harness.parallel import run_tasks
 from rpbench.harness.spec import RunSpec
+from rpbench.results import layout
 from rpbench.results.folder import write_parent_meta
 from rpbench.results.html import write_html
 from rpbench.results.metrics import KPI_LABELS
 from rpbench.results.parents import MULTIDAY_PLOT_KPIS, by_day_table, day_folders
 from rpbench.results.plots import per_day_figures
-from rpbench.results.report import RATIO_ROWS, findings, fmt, load_kpis, markdown_table, offline_notes
+from rpbench.results.report import RATIO_ROWS, findings, fmt, load_kpis, markdown_table, offline_notes, table_rows
 from rpbench.results.runs import run_label, run_styles
 from rpbench.results.store import check_new_folder
+from rpbench.results.tables import csv_table, latex_table
 from rpbench.scenarios import SCENARIOS
 
 
@@ -54,6 +56,7 @@ def run_days(
                 "seed": request.seed,
                 "params": request.overrides,
                 "command": spec.command,
+                **({"decision_budget_s": spec.decision_budget_s} if spec.decision_budget_s is not None else {}),
             },
         )
         summarize(tmp)
@@ -93,6 +96,14 @@ def write_multiday_report(parent: Path, name: str | None = None) -> Path:
     if meta.get("command"):
         lines += ["Command:", "", f"    {meta['command']}", ""]
     lines += ["## Mean over days", "", markdown_table(mean, styles=styles), ""] + offline_notes(mean, {})
+    caption = (
+        f"rpbench, scenario {scenario} (sample {sample}): mean over {len(days)} {what}, "
+        f"{meta['dates'][0]} .. {meta['dates'][-1]}"
+    )
+    (parent / layout.TABLE_TEX).write_text(latex_table(mean, table_rows(mean), fmt, caption=caption, styles=styles))
+    csv_table(mean, table_rows(mean), styles).to_csv(parent / layout.TABLE_CSV)
+    lines += [f"The mean table is also `{layout.TABLE_TEX}` (LaTeX, booktabs) and `{layout.TABLE_CSV}` (raw values).",
+              ""]  # fmt: skip
     key = ["total_saving_km", "avg_detour_m", "response_rate", "pairing_ratio"]
     for kpi in key + [r for r in RATIO_ROWS if r in set(table["kpi"])]:
         wide = table[table["kpi"] == kpi].pivot(index="date", columns="run", values="value")[runs]

@@ -54,12 +54,19 @@ def publish(source: str | Path, dest: str | Path) -> Path:
     for meta in tmp.rglob(layout.META):  # the folder and each day's or point's
         _record_published_command(meta, dest.name)
     # reports re-rendered from the copy say it is a light copy (and point to check.txt)
+    kind = read_meta(tmp).get("kind")  # the multi-day or sweep summary, under the published name
+    # an evaluation's units (tens of them) keep their tables and report but neither figures nor page:
+    # the evaluation's own page and figures summarise them, and a page is megabytes (its plotting library)
+    units = {tmp / child for child in read_meta(tmp).get("children", [])} if kind == "evaluate" else set()
     for folder, _ in verdicts:
         copy = tmp / folder.relative_to(source)
+        if copy in units:
+            write_report(copy, folder.name, figures=False)
+            (copy / layout.REPORT_HTML).unlink(missing_ok=True)
+            continue
         write_report(copy, folder.name)
         # the page is drawn from the full folder: its map needs the event logs the copy leaves out
         write_html(folder, folder.name, dest=copy, published=True)
-    kind = read_meta(tmp).get("kind")  # the multi-day or sweep summary, under the published name
     if kind == "multi-day":
         write_multiday_report(tmp, name=dest.name)
     elif kind == "sweep":

@@ -34,6 +34,7 @@ from rpbench.results.plots import sweep_figure
 from rpbench.results.report import fmt
 from rpbench.results.runs import run_label, run_styles
 from rpbench.results.store import check_new_folder
+from rpbench.results.tables import booktabs, latex_escape
 from rpbench.scenarios import ScenarioRequest
 from rpbench.scenarios.base import Params
 
@@ -212,6 +213,7 @@ def run_sweep(
                 "scenario_args": request.meta(),
                 "preset": spec.preset,
                 "command": spec.command,
+                **({"decision_budget_s": spec.decision_budget_s} if spec.decision_budget_s is not None else {}),
             },
         )
         sweep_table(tmp).to_csv(tmp / layout.SWEEP, index=False)
@@ -247,9 +249,10 @@ def write_sweep_report(parent: Path, name: str | None = None) -> Path:
         f"{KPI_LABELS.get(k, k).split(' (')[0]} {run_label(r, styles)}" for k in kpis for r in runs
     ]
     lines += ["| " + " | ".join(head) + " |", "|---|" + "---:|" * (len(head) - 1)]
+    body = []
     for p in meta["points"]:
         sel = table[table["label"] == p["label"]].set_index(["kpi", "run"])["value"]
-        cells = []
+        cells = [f"{p['value']:g}"]
         for k in kpis:
             for r in runs:
                 cell = fmt(k, sel.get((k, r), float("nan")))
@@ -257,8 +260,12 @@ def write_sweep_report(parent: Path, name: str | None = None) -> Path:
                     ref = paper_table.get(_paper_key(p["value"]), {}).get(r, {}).get(k, float("nan"))
                     cell += f" ({fmt(k, ref)})"
                 cells.append(cell)
-        lines.append(f"| {p['value']:g} | " + " | ".join(cells) + " |")
+        body.append(cells)
+        lines.append("| " + " | ".join(cells) + " |")
     lines.append("")
+    caption = f"rpbench sweep {meta['sweep']} over {meta['parameter']}" + (" (paper in brackets)" if with_paper else "")
+    latex = [[latex_escape(cell) for cell in row] for row in [head, *body]]
+    (parent / layout.TABLE_TEX).write_text(booktabs(latex[0], latex[1:], caption=caption, what="the sweep table"))
     plot = sweep_figure(
         table[table["run"].isin(runs)],
         meta["parameter"],

@@ -17,8 +17,13 @@ from rpbench.exceptions import ResultsError
 from rpbench.results import layout
 from rpbench.results.leaderboard import RATIO_OF_MEANS, Bootstrap, leaderboard, paired
 from rpbench.results.metrics import KPI_LABELS
+from rpbench.results.plots import leaderboard_figure, seeds_by_day_figure
 from rpbench.results.report import fmt, load_kpis
 from rpbench.results.runs import run_label, run_styles
+from rpbench.results.tables import booktabs, latex_escape
+
+#: The leaderboard's figure (and its SVG and PDF beside it).
+LEADERBOARD_PNG = "leaderboard.png"
 
 
 def unit_name(day: str | None, seed: int) -> str:
@@ -107,23 +112,10 @@ def write_evaluation_report(folder: Path, name: str | None = None) -> Path:
         "saving (a ratio of means).",
         "",
     ]
-    cols = [*metrics, RATIO_OF_MEANS]
-    head = ["Strategy"] + [KPI_LABELS.get(k, "Saving: ratio of means") for k in cols]
-    order = board[board["kpi"] == rank].sort_values("mean", ascending=False)["run"].tolist()
-    order += [r for r in protocol["strategies"] if r not in order]
-    lines += ["| " + " | ".join(head) + " |", "|---|" + "---:|" * len(cols)]
-    cell = board.set_index(["run", "kpi"])
-    for run in order:
-        row = [run_label(run, styles)]
-        for k in cols:
-            if (run, k) in cell.index:
-                r = cell.loc[(run, k)]
-                key = "competitive_ratio_bound" if k == RATIO_OF_MEANS else k
-                row.append(f"{fmt(key, r['mean'])} [{fmt(key, r['ci_low'])}, {fmt(key, r['ci_high'])}]")
-            else:
-                row.append("/")
-        lines.append("| " + " | ".join(row) + " |")
-    lines.append("")
+    head, body = leaderboard_rows(board, protocol, styles)
+    lines += ["| " + " | ".join(head) + " |", "|---|" + "---:|" * (len(head) - 1)]
+    lines += ["| " + " | ".join(row) + " |" for row in body]
+    lines += ["", *_figure_lines(folder, board, protocol, styles, level)]
     sel = pairs[pairs["kpi"] == rank]
     if len(sel):
         lines += [
@@ -147,6 +139,59 @@ def write_evaluation_report(folder: Path, name: str | None = None) -> Path:
         f"`{name or folder.name}`, checks them all and recomputes these tables from them.",
         "",
     ]
+    caption = f"rpbench evaluation {protocol['name']} version {protocol['version']}: mean [{level} interval]"
+    latex = [[latex_escape(cell) for cell in row] for row in [head, *body]]
+    (folder / layout.TABLE_TEX).write_text(booktabs(latex[0], latex[1:], caption=caption, what="the leaderboard"))
     path = folder / layout.REPORT
     path.write_text("\n".join(lines))
     return path
+
+
+def leaderboard_rows(board: pd.DataFrame, protocol: dict, styles) -> tuple[list[str], list[list[str]]]:
+    """The leaderboard as printed: a header (strategy, each metric, the ratio of means) and a row per run,
+    ranked by the protocol's first metric, each cell "mean [low, high]" as the report formats the KPI."""
+    metrics = list(protocol["metrics"])
+    cols = [*metrics, RATIO_OF_MEANS]
+    head = ["Strategy"] + [KPI_LABELS.get(k, "Saving: ratio of means") for k in cols]
+    order = board[board["kpi"] == metrics[0]].sort_values("mean", ascending=False)["run"].tolist()
+    order += [r for r in protocol["strategies"] if r not in order]
+    cell = board.set_index(["run", "kpi"])
+    body = []
+    for run in order:
+        row = [run_label(run, styles)]
+        for k in cols:
+            if (run, k) in cell.index:
+                r = cell.loc[(run, k)]
+                key = "competitive_ratio_bound" if k == RATIO_OF_MEANS else k
+                row.append(f"{fmt(key, r['mean'])} [{fmt(key, r['ci_low'])}, {fmt(key, r['ci_high'])}]")
+            else:
+                row.append("/")
+        body.append(row)
+    return head, body
+
+
+def _figure_lines(folder: Path, board: pd.DataFrame, protocol: dict, styles, level: str) -> list[str]:
+    """Draw the leaderboard and the first metric per day; return the report lines embedding them."""
+    title = f"rpbench evaluation {protocol['name']} version {protocol['version']}"
+    leaderboard_figure(board, protocol["metrics"], folder / LEADERBOARD_PNG, f"{title}: mean and {level} interval",
+                       styles)  # fmt: skip
+    lines = [
+        f"![leaderboard: mean and {level} interval]({LEADERBOARD_PNG})",
+        "",
+    ]
+    rank = protocol["metrics"][0]
+    units = results.read_csv(folder / layout.UNITS)
+    units["day"] = units["day"].astype(object).fillna("").astype(str)  # undated units have no day
+    name = f"by_day_{rank}.png"
+    label = KPI_LABELS.get(rank, rank)
+    drawn = seeds_by_day_figure(units, rank, protocol["strategies"], folder / name,
+                                f"{title}: {label}, mean over the seeds of each day (bars: their range)",
+                                styles)  # fmt: skip
+    if drawn is not None:
+        lines += [f"![{label} per day]({name})", ""]
+    lines += [
+        f"Every figure is also beside its PNG as SVG and PDF; the leaderboard is `{layout.TABLE_TEX}` (LaTeX, "
+        f"booktabs) and `{layout.LEADERBOARD}` (raw values).",
+        "",
+    ]
+    return lines

@@ -241,6 +241,68 @@ def per_day_figures(by_day: pd.DataFrame, folder: Path, kpis: list[str], styles:
     return paths
 
 
+def leaderboard_figure(
+    board: pd.DataFrame, metrics: Sequence[str], path: Path, title: str, styles: Styles | None = None
+) -> Path:
+    """An evaluation's leaderboard (``leaderboard.csv`` layout): one panel per metric, each run's mean as a bar
+    with its bootstrap interval as an error bar; a panel shows only the runs with a value."""
+    plt = _pyplot()
+    metrics = [m for m in metrics if (board["kpi"] == m).any()]
+    ncols = min(3, max(len(metrics), 1))
+    nrows = max(1, -(-len(metrics) // ncols))
+    fig, axes = plt.subplots(nrows, ncols, figsize=(4 * ncols, 3.6 * nrows), squeeze=False)
+    colors = run_colors(list(dict.fromkeys(str(r) for r in board["run"])), styles)
+    for ax, kpi in zip(axes.ravel(), metrics, strict=False):
+        sel = board[(board["kpi"] == kpi) & board["mean"].notna()]
+        runs = [str(r) for r in sel["run"]]
+        mean = sel["mean"].to_numpy(dtype=float)
+        below = mean - sel["ci_low"].to_numpy(dtype=float)
+        above = sel["ci_high"].to_numpy(dtype=float) - mean
+        x = np.arange(len(runs))
+        ax.bar(x, mean, color=[colors[r] for r in runs], width=0.7)
+        ax.errorbar(x, mean, yerr=np.vstack([below, above]), fmt="none", ecolor="black", elinewidth=1, capsize=3)
+        ax.set_xticks(x, [run_label(r, styles) for r in runs], rotation=35, ha="right", fontsize=8)
+        ax.set_title(KPI_LABELS.get(kpi, kpi).split(" (")[0], fontsize=10)
+        ax.set_ylabel(axis_label(kpi), fontsize=9)
+        ax.axhline(0, color="black", lw=0.6)
+        ax.grid(alpha=0.3, axis="y")
+    for ax in axes.ravel()[len(metrics) :]:
+        ax.set_visible(False)
+    return _save(plt, fig, path, title)
+
+
+def seeds_by_day_figure(
+    units: pd.DataFrame, kpi: str, runs: Sequence[str], path: Path, title: str, styles: Styles | None = None
+) -> Path | None:
+    """One metric of an evaluation per day (``units.csv`` layout: day, seed, run, kpi, value): each run's mean
+    over the day's seeds as a marker, the seeds' range as an error bar; days on a categorical axis."""
+    sel = units[(units["kpi"] == kpi) & units["run"].isin(list(runs)) & units["value"].notna()]
+    if sel.empty:
+        return None
+    plt = _pyplot()
+    stats = sel.groupby(["run", "day"], sort=False)["value"].agg(["mean", "min", "max"]).reset_index()
+    days = sorted(set(stats["day"].astype(str)))
+    position = {d: i for i, d in enumerate(days)}
+    drawn = [r for r in runs if (stats["run"] == r).any()]
+    colors = run_colors(list(drawn), styles)
+    width = 0.6 / max(len(drawn), 1)
+    fig, ax = plt.subplots(figsize=(9.5, 3.8))
+    for i, run in enumerate(drawn):
+        g = stats[stats["run"] == run]
+        x = np.array([position[str(d)] for d in g["day"]]) + (i - (len(drawn) - 1) / 2) * width
+        mean = g["mean"].to_numpy(dtype=float)
+        yerr = np.vstack([mean - g["min"].to_numpy(dtype=float), g["max"].to_numpy(dtype=float) - mean])
+        ax.errorbar(x, mean, yerr=yerr, fmt="o", ms=4, capsize=2, elinewidth=1, color=colors[run],
+                    label=run_label(run, styles))  # fmt: skip
+    ax.set_xticks(range(len(days)), [d or "(undated)" for d in days], rotation=45, ha="right", fontsize=8)
+    ax.set_xlim(-0.5, len(days) - 0.5)
+    ax.set_xlabel("day", fontsize=9)
+    ax.set_ylabel(axis_label(kpi), fontsize=9)
+    ax.grid(alpha=0.3, axis="y")
+    ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.01, 0.5))
+    return _save(plt, fig, path, title)
+
+
 def sweep_figure(
     table: pd.DataFrame, parameter: str, kpis: list[str], path: Path, title: str, styles: Styles | None = None
 ) -> Path:

@@ -50,6 +50,14 @@ UNPROVEN_MARK = "*"
 #: per-hour KPIs of folders covering more than two hours.
 KPIS_PNG, TIMELINE_PNG, HOURLY_PNG = layout.KPIS_PNG, layout.TIMELINE_PNG, layout.HOURLY_PNG
 FIGURES = (KPIS_PNG, TIMELINE_PNG, HOURLY_PNG)
+#: The figure section of a published evaluation unit (:func:`write_report` with ``figures=False``).
+UNIT_FIGURES = [
+    "## Figures",
+    "",
+    "This run is one unit of a published evaluation: its figures and page are left out of the copy (the "
+    "evaluation's own are in the folder above); rerun the command above to draw them.",
+    "",
+]
 #: A scenario longer than this is drawn in hours (the timeline's axis), not minutes.
 LONG_SCENARIO_S = 2 * 3600.0
 #: Timeline bin widths (s), the narrowest giving at most :data:`TIMELINE_MAX_BINS` bins over the period.
@@ -368,11 +376,18 @@ def _has_tabulate() -> bool:
     return True
 
 
-def write_report(folder: Path, name: str | None = None, dest: Path | None = None) -> Path:
+def write_report(folder: Path, name: str | None = None, dest: Path | None = None, *, figures: bool = True) -> Path:
     """Write ``report.md`` and its figures (:data:`FIGURES`) into ``folder``, or into ``dest`` (``folder``
-    is then only read); ``name``: the folder's final name, for the text.  Returns the report's path."""
+    is then only read); ``name``: the folder's final name, for the text.  ``figures=False``: a published
+    unit of an evaluation, whose figures (and any left in ``dest``) are left out.  Returns the report's path."""
     dest = folder if dest is None else dest
-    text = report_markdown(folder, name, figure_lines(folder, dest))
+    if figures:
+        text = report_markdown(folder, name, figure_lines(folder, dest))
+    else:
+        for figure in FIGURES:
+            for suffix in (".png", *layout.VECTOR_SUFFIXES):
+                (dest / figure).with_suffix(suffix).unlink(missing_ok=True)
+        text = report_markdown(folder, name, UNIT_FIGURES)
     write_paper_tables(folder, dest)
     path = dest / "report.md"
     path.write_text(text)

@@ -46,19 +46,24 @@ def latex_table(
     runs = [str(c) for c in table.columns]
     unproven = unproven or {}
     head = ["Metric"] + [latex_escape(run_label(r, styles)) + (f"$^{{{mark}}}$" if r in unproven else "") for r in runs]
+    body = [[latex_escape(KPI_LABELS.get(k, k))] + [latex_escape(fmt(k, table.loc[k, r])) for r in runs] for k in rows]
+    return booktabs(head, body, caption=caption, what="the comparison table")
+
+
+def booktabs(head: list[str], body: list[list[str]], *, caption: str, what: str) -> str:
+    """A booktabs ``table`` environment: ``head`` and ``body`` cells already LaTeX (escaped), the first column
+    left-aligned, the others right-aligned; ``what`` names the table in its leading comment."""
     lines = [
-        "% rpbench: the comparison table (needs \\usepackage{booktabs})",
+        f"% rpbench: {what} (needs \\usepackage{{booktabs}})",
         "\\begin{table}[ht]",
         "\\centering",
         f"\\caption{{{latex_escape(caption)}}}",
-        "\\begin{tabular}{l" + "r" * len(runs) + "}",
+        "\\begin{tabular}{l" + "r" * (len(head) - 1) + "}",
         "\\toprule",
         " & ".join(head) + " \\\\",
         "\\midrule",
     ]
-    for k in rows:
-        cells = [latex_escape(KPI_LABELS.get(k, k))] + [latex_escape(fmt(k, table.loc[k, r])) for r in runs]
-        lines.append(" & ".join(cells) + " \\\\")
+    lines += [" & ".join(row) + " \\\\" for row in body]
     lines += ["\\bottomrule", "\\end{tabular}", "\\end{table}", ""]
     return "\n".join(lines)
 

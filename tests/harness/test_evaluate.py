@@ -15,6 +15,7 @@ from rpbench.harness.evaluate import run_evaluation
 from rpbench.protocols import load_protocol
 from rpbench.results.check import check_tree
 from rpbench.results.metrics import TIMING_KPIS
+from rpbench.results.report import fmt
 
 PROTOCOL = """
 name = "toy-test"
@@ -62,7 +63,33 @@ def test_an_evaluation_folder(evaluated):
     report = (evaluated / "report.md").read_text()
     assert "## Leaderboard" in report and "Wilcoxon" in report and "ratio of means" in report
     assert "fig-leaderboard" in (evaluated / "report.html").read_text()
+    for figure in ("leaderboard", "by_day_total_saving_km"):  # intervals and the seeds' spread, drawn
+        assert f"]({figure}.png)" in report
+        assert all((evaluated / f"{figure}{suffix}").is_file() for suffix in (".png", ".svg", ".pdf"))
+    tex = (evaluated / "table.tex").read_text()
+    assert "\\toprule" in tex and tex.count("\\\\") == 1 + 3  # a header and a row per run
+    fl = board.loc[("fl", "total_saving_km")]
+    cell = " [".join([fmt("total_saving_km", fl["mean"]), fmt("total_saving_km", fl["ci_low"])])
+    assert f"{cell}, {fmt('total_saving_km', fl['ci_high'])}]" in tex  # the report's cell, as printed
     assert all(r.status == "ok" for r in check_tree(evaluated))
+
+
+def test_a_published_evaluation_keeps_its_units_light(evaluated, tmp_path):
+    """The units of a published evaluation keep their tables and report, not their figures nor page; the
+    evaluation's page links their reports instead, and its tables still check against them."""
+    from rpbench.harness.publish import publish
+
+    dest = publish(evaluated, tmp_path / "published")
+    for unit in ("seed0", "seed1", "seed2"):
+        kept = {p.name for p in (dest / unit).iterdir()}
+        assert {"kpis.csv", "meta.json", "report.md", "check.txt", "table.tex"} <= kept
+        assert not kept & {"report.html", "kpis.png", "kpis.svg", "timeline.png"}
+        assert "unit of a published evaluation" in (dest / unit / "report.md").read_text()
+    page = (dest / "report.html").read_text()
+    assert 'href="seed0/report.md"' in page and 'href="seed0/report.html"' not in page
+    assert (dest / "leaderboard.png").is_file() and (dest / "table.tex").is_file()
+    (parent, *_) = check_tree(dest)
+    assert parent.status == "ok" and parent.folder_check.checked["leaderboard"] > 0
 
 
 def test_an_interrupted_evaluation_resumes_to_the_same_tables(protocol, evaluated, tmp_path):

@@ -24,6 +24,10 @@ def test_multi_day_folder(two_day_data, tmp_path, workers):
     assert (summary["count"] == 2).all()
     report = (folder / "report.md").read_text()
     assert "Mean over days" in report and "2 peak hours" in report and (folder / "by_day_total_saving_km.png").is_file()
+    means = pd.read_csv(folder / "table.csv", index_col="kpi")  # the mean table for a paper, raw and in LaTeX
+    mb = summary.set_index(["run", "kpi"])["mean"]
+    assert means.loc["total_saving_km", "mb"] == pytest.approx(mb[("mb", "total_saving_km")])
+    assert "\\toprule" in (folder / "table.tex").read_text()
     page = (folder / "report.html").read_text()  # the parent's page links each day's page, which exists
     assert all(f'href="{d}/report.html"' in page and (folder / d / "report.html").is_file() for d in by_day["date"])
     assert "Mean over days" in page and "fig-by-day" in page and "by_day_total_saving_km.png" not in page

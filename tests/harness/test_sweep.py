@@ -66,7 +66,9 @@ def test_sweep_runs_end_to_end_on_the_toy_city(tmp_path):
         spec, expand("dt", spec.values), RunSpec.of(request, ["mb"], command="test"), str(tmp_path / "sw"), workers=1
     )
     assert (folder / "dt=10").is_dir() and (folder / "dt=30").is_dir()
-    assert (folder / "sweep.png").is_file()
+    assert all((folder / f"sweep{suffix}").is_file() for suffix in (".png", ".svg", ".pdf"))
+    tex = (folder / "table.tex").read_text()  # the report's table in LaTeX: a header and a row per point
+    assert "\\toprule" in tex and tex.count("\\\\") == 3 and "\n10 & " in tex and "\n30 & " in tex
     page = (folder / "report.html").read_text()
     assert 'href="dt=10/report.html"' in page and "fig-sweep" in page and (folder / "dt=30" / "report.html").is_file()
     text, _ = render([folder])

@@ -15,7 +15,15 @@ from rpbench.harness.comparison import run_comparison
 from rpbench.harness.spec import RunSpec
 from rpbench.results.check import check_folder
 from rpbench.results.metrics import count_at, state_spells
-from rpbench.results.plots import bench_figure, hourly_figure, kpi_figure, per_day_figures, sweep_figure
+from rpbench.results.plots import (
+    bench_figure,
+    hourly_figure,
+    kpi_figure,
+    leaderboard_figure,
+    per_day_figures,
+    seeds_by_day_figure,
+    sweep_figure,
+)
 from rpbench.results.report import fmt, load_kpis, timeline_of
 from rpbench.scenarios import ScenarioRequest
 
@@ -107,6 +115,48 @@ def test_per_day_axes_list_only_runs_with_data(tmp_path, figures):
     # discrete days: one tick each on a categorical axis, markers without lines joining the days
     assert [t.get_text() for t in saving.axes[0].get_xticklabels()] == ["2017-05-01", "2017-05-02"]
     assert all(line.get_linestyle() == "None" and line.get_marker() == "o" for line in saving.axes[0].get_lines())
+
+
+def test_leaderboard_bars_carry_their_intervals(tmp_path, figures):
+    board = pd.DataFrame(
+        [
+            {"run": "mb", "kpi": "total_saving_km", "mean": 10.0, "ci_low": 8.0, "ci_high": 13.0},
+            {"run": "fl", "kpi": "total_saving_km", "mean": 12.0, "ci_low": 11.0, "ci_high": 12.5},
+            {"run": "mb", "kpi": "response_rate", "mean": 0.9, "ci_low": 0.85, "ci_high": 0.95},
+            {"run": "bound", "kpi": "response_rate", "mean": np.nan, "ci_low": np.nan, "ci_high": np.nan},
+        ]
+    )
+    leaderboard_figure(board, ["total_saving_km", "response_rate"], tmp_path / "lb.png", "leaderboard")
+    (fig,) = figures
+    assert_labelled(fig, categorical_x=True)
+    saving, rate = panels(fig)
+    assert [t.get_text() for t in saving.get_xticklabels()] == ["MB", "FL"]
+    assert [t.get_text() for t in rate.get_xticklabels()] == ["MB"]  # the bound has no response rate
+    (bars,) = saving.collections  # the error bars span each interval
+    spans = sorted((round(min(seg[:, 1]), 9), round(max(seg[:, 1]), 9)) for seg in bars.get_segments())
+    assert spans == [(8.0, 13.0), (11.0, 12.5)]
+    assert all((tmp_path / f"lb{suffix}").is_file() for suffix in (".png", ".svg", ".pdf"))
+
+
+def test_seeds_per_day_are_a_mean_and_the_seeds_range(tmp_path, figures):
+    units = pd.DataFrame(
+        [
+            {"day": d, "seed": s, "run": r, "kpi": "total_saving_km", "value": v + s}
+            for d, v in (("2017-05-01", 10.0), ("2017-05-02", 20.0))
+            for s in (0, 1, 2)
+            for r in ("mb", "fl")
+        ]
+    )
+    seeds_by_day_figure(units, "total_saving_km", ["mb", "fl", "np"], tmp_path / "d.png", "per day")
+    (fig,) = figures
+    (ax,) = panels(fig)
+    assert legend_runs(ax) == ["MB", "FL"] and ax.get_xlabel() == "day"
+    assert [t.get_text() for t in ax.get_xticklabels()] == ["2017-05-01", "2017-05-02"]
+    means = sorted(float(y) for line in ax.get_lines() if line.get_marker() == "o" for y in line.get_ydata())
+    assert means == [11.0, 11.0, 21.0, 21.0]  # seeds 0-2 around each day's value
+    spans = {(round(min(seg[:, 1]), 9), round(max(seg[:, 1]), 9)) for c in ax.collections for seg in c.get_segments()}
+    assert spans == {(10.0, 12.0), (20.0, 22.0)}
+    assert seeds_by_day_figure(units, "response_rate", ["mb"], tmp_path / "none.png", "none") is None
 
 
 def test_sweep_axes_name_the_parameter_with_its_unit(tmp_path, figures):

@@ -303,8 +303,9 @@ def markdown_page(
     body = MarkdownIt("commonmark", {"html": False}).enable("table").render(text)
     page.markup(body or f"<h1>{html.escape(title)}</h1>")
     if children:
-        links = "".join(
-            f'<li><a href="{html.escape(c.name)}/{REPORT_HTML}">{html.escape(c.name)}</a></li>'
+        links = "".join(  # a published evaluation's units have a report.md but no page
+            f'<li><a href="{html.escape(c.name)}/{REPORT_HTML if (c / REPORT_HTML).is_file() else layout.REPORT}">'
+            f"{html.escape(c.name)}</a></li>"
             for c in children
             if (c / layout.META).is_file()
         )
