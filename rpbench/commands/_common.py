@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import secrets
 import shlex
@@ -16,7 +17,7 @@ from typing import Any
 from rpbench.data.first_run import ensure_data_dir
 from rpbench.exceptions import ParameterError, RpbenchError
 from rpbench.results import run_folders, to_jsonable
-from rpbench.results.report import unproven_runs
+from rpbench.results.report import over_budget_runs, unproven_runs
 from rpbench.results.runs import run_label
 from rpbench.scenarios import ScenarioRequest, default_scenario_name, scenario_spec
 from rpbench.scenarios.base import Params
@@ -163,6 +164,42 @@ def note_unproven(folder: Path) -> dict[str, str]:
             )
             marked.setdefault(run, why)
     return marked
+
+
+# ---------------------------------------------------------- decision budget
+def add_decision_budget_arg(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--decision-budget",
+        default=None,
+        metavar="SECONDS",
+        help="flag the rounds whose decision (strategy build plus solver build, solve and decoding) takes longer "
+        "than SECONDS: the KPI rounds_over_budget, an over_budget column in rounds.csv.gz and a note per run; "
+        "the simulation is unchanged (default: no budget)",
+    )
+
+
+def decision_budget(args: argparse.Namespace) -> float | None:
+    """``--decision-budget`` as seconds (None without it); anything but a finite number > 0 is one error line
+    (parsed here, not by argparse, whose error is a usage block)."""
+    text = getattr(args, "decision_budget", None)
+    if text is None:
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise ParameterError(f"--decision-budget {text!r} must be a finite number of seconds > 0")
+    return value
+
+
+def note_over_budget(folder: Path) -> None:
+    """One note line per run of ``folder`` (and of each day / sweep point / unit below it) with rounds slower
+    than the folder's decision budget."""
+    for sub in run_folders(folder):
+        where = "" if sub == folder else f"{sub.name}: "
+        for run, what in over_budget_runs(sub).items():
+            note(f"rpbench: note: {where}{run}: {what}")
 
 
 # ------------------------------------------------------------- output files

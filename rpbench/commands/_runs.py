@@ -3,7 +3,8 @@
 ``--strategies a,b,...`` names the runs (:func:`~rpbench.harness.spec.resolve_runs`
 resolves them), ``--opt RUN.OPTION=VALUE`` sets a run's option (RUN is the
 run's name, or the source it was given by), ``--solver`` / ``--oracle-solver``
-name the presets and ``--strict`` the policy for unproven solves.
+name the presets, ``--strict`` the policy for unproven solves and ``--decision-budget`` the time a round's
+decision may take before it is flagged.
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ import argparse
 import dataclasses
 from collections.abc import Sequence
 
-from rpbench.commands._common import add_strict_arg, command_line
+from rpbench.commands._common import add_decision_budget_arg, add_strict_arg, command_line, decision_budget
 from rpbench.exceptions import ParameterError
 from rpbench.harness.spec import RunEntry, RunSpec, resolve_runs, typed_options
 from rpbench.scenarios import ScenarioRequest
@@ -22,7 +23,7 @@ DEFAULT_STRATEGIES = "np,mb,rtv,fl-nd,fl,bound,oracle1,oracle2"
 
 
 def add_run_args(parser: argparse.ArgumentParser, *, strategies: str | None = DEFAULT_STRATEGIES) -> None:
-    """``--strategies``, ``--solver``, ``--oracle-solver``, ``--opt`` and ``--strict``."""
+    """``--strategies``, ``--solver``, ``--oracle-solver``, ``--opt``, ``--strict`` and ``--decision-budget``."""
     default = f" (default {strategies})" if strategies else ""
     parser.add_argument(
         "--strategies",
@@ -45,6 +46,7 @@ def add_run_args(parser: argparse.ArgumentParser, *, strategies: str | None = DE
         help="a run's option, e.g. --opt rtv.c_ko=large (repeatable; `rpbench list` names them)",
     )
     add_strict_arg(parser)
+    add_decision_budget_arg(parser)
 
 
 def split_list(text: str) -> list[str]:
@@ -105,4 +107,5 @@ def run_spec(args: argparse.Namespace, request: ScenarioRequest, *, runs: Sequen
         oracle_preset=getattr(args, "oracle_solver", None),
         strict=bool(getattr(args, "strict", False)),
         command=command_line(),
+        decision_budget_s=decision_budget(args),
     )

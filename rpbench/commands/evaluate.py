@@ -4,7 +4,16 @@ from __future__ import annotations
 
 import argparse
 
-from rpbench.commands._common import add_data_arg, add_offline_arg, add_parallel_args, command_line, note
+from rpbench.commands._common import (
+    add_data_arg,
+    add_decision_budget_arg,
+    add_offline_arg,
+    add_parallel_args,
+    command_line,
+    decision_budget,
+    note,
+    note_over_budget,
+)
 from rpbench.data.first_run import ensure_data_dir
 from rpbench.exceptions import ParameterError
 from rpbench.harness.evaluate import run_evaluation
@@ -25,12 +34,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("protocol", metavar="PROTOCOL", help="a built-in protocol name or a protocol .toml file")
     p.add_argument("--out", default=None, help="evaluation folder (an existing one of the same protocol is resumed)")
     add_parallel_args(p)
+    add_decision_budget_arg(p)
     add_data_arg(p)
     add_offline_arg(p)
     p.set_defaults(handler=run)
 
 
 def run(args: argparse.Namespace) -> int:
+    budget = decision_budget(args)
     protocol = load_protocol(args.protocol)
     if args.workers is not None and args.workers < 1:
         raise ParameterError(f"--workers {args.workers} must be >= 1")
@@ -38,8 +49,15 @@ def run(args: argparse.Namespace) -> int:
     if protocol.scenario != "toy":
         data = str(ensure_data_dir(args.data, what=f"protocol {protocol.name!r}", offline=args.offline))
     folder, ran = run_evaluation(
-        protocol, args.out, data_dir=data, workers=args.workers, scheduler=args.scheduler, command=command_line()
+        protocol,
+        args.out,
+        data_dir=data,
+        workers=args.workers,
+        scheduler=args.scheduler,
+        command=command_line(),
+        decision_budget_s=budget,
     )
+    note_over_budget(folder)
     note(f"{ran} run(s) made now; the others were already in the folder" if ran else "every run was already there")
     print((folder / REPORT).read_text())
     print(f"results written to {folder}  (verify: rpbench check {folder}; in a browser: {folder / REPORT_HTML})")

@@ -1,5 +1,5 @@
 """``rpbench report RESULTS_DIR...``: render reports (markdown + PNG plots, and with ``--html`` the interactive
-page) from result files alone."""
+page) from result files alone; several comparison folders of one scenario combine into one comparison."""
 
 from __future__ import annotations
 
@@ -16,17 +16,22 @@ from rpbench.harness.render import render
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "report",
-        help="render reports from results folders",
-        description="Re-render report.md and plots of results folders (comparisons, multi-day "
-        "runs, sweeps) from their files alone; several folders give a combined table.",
+        help="render reports from results folders, or combine comparisons of one scenario",
+        description="Re-render the report.md and plots of a results folder (comparison, multi-day "
+        "run, sweep) from its files alone. Several comparison folders of one scenario (the same input files "
+        "and parameters) combine into one comparison: one table of every run of every folder, a run found in "
+        "several folders shown once when it is the same run, else once per folder; it is printed, and "
+        "nothing is written in the folders (--out FILE writes it with its figure and tables). Folders of "
+        "different scenarios, or a multi-day, sweep or evaluation folder among several, are refused.",
     )
     p.add_argument("folders", nargs="+", metavar="RESULTS_DIR")
-    p.add_argument("--metrics", default=None, help="comma-separated KPI names for the combined table")
+    p.add_argument("--metrics", default=None, help="comma-separated KPI names: the table shows only these")
     p.add_argument(
         "--html",
         action="store_true",
-        help="also write each folder's report.html, one self-contained interactive page with a map "
-        "(runs write it already; a published light copy's page has no map: re-render the full folder)",
+        help="also write the folder's report.html, one self-contained interactive page with a map "
+        "(runs write it already; a published light copy's page has no map: re-render the full folder); "
+        "one folder only",
     )
     p.add_argument(
         "--out",
@@ -34,7 +39,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="FILE",
         help="write the markdown to FILE, and its plots (PNG, SVG, PDF), tables (table.tex, table.csv) and page "
         "beside it as FILE's name + '-' + the file's name, "
-        "instead of printing it; the results folders are then left as they are",
+        "instead of printing it; the results folders are then left as they are (several folders: the "
+        "combined table and its headline-KPI figure)",
     )
     p.set_defaults(handler=run)
 

@@ -6,7 +6,15 @@ import argparse
 
 import pandas as pd
 
-from rpbench.commands._common import add_scenario_args, note, note_unproven, print_json, scenario_request
+from rpbench.commands._common import (
+    add_scenario_args,
+    decision_budget,
+    note,
+    note_over_budget,
+    note_unproven,
+    print_json,
+    scenario_request,
+)
 from rpbench.commands._runs import add_run_args, run_spec
 from rpbench.data.first_run import FETCH_COMMAND
 from rpbench.exceptions import ParameterError
@@ -57,6 +65,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     if args.dates and args.date:
         raise ParameterError("--dates and --date exclude each other; drop --date")
+    decision_budget(args)  # a bad --decision-budget fails before anything runs or downloads
     check_new_folder(args.out)  # before a first run's data download: a bad --out must cost nothing
     spec = run_spec(args, scenario_request(args).resolved())
     code = run_many_days(args, spec) if args.dates else run_one(args, spec)
@@ -70,6 +79,7 @@ def run_one(args: argparse.Namespace, spec: RunSpec) -> int:
     note(scenario.label)
     folder, table = run_comparison(spec, args.out, scenario=scenario, progress=False if args.no_progress else None)
     unproven = note_unproven(folder)
+    note_over_budget(folder)
     if args.json:
         print_json(
             {
@@ -95,6 +105,7 @@ def run_many_days(args: argparse.Namespace, spec: RunSpec) -> int:
     summary = pd.read_csv(folder / layout.SUMMARY)
     mean = summary.pivot(index="kpi", columns="run", values="mean")[spec.names]
     unproven = note_unproven(folder)
+    note_over_budget(folder)
     if args.json:
         print_json(
             {

@@ -9,7 +9,9 @@ import pandas as pd
 from rpbench.commands._common import (
     add_parallel_args,
     add_scenario_args,
+    decision_budget,
     note,
+    note_over_budget,
     note_unproven,
     print_json,
     scenario_request,
@@ -66,6 +68,7 @@ def build_spec(args: argparse.Namespace) -> SweepSpec:
 
 
 def run(args: argparse.Namespace) -> int:
+    decision_budget(args)  # a bad --decision-budget fails before anything runs or downloads
     sweep = build_spec(args)
     spec = run_spec(args, scenario_request(args), runs=parse_runs(list(sweep.strategies), args.opt))
     points = expand(sweep.parameter, sweep.values, spec.names)
@@ -75,6 +78,7 @@ def run(args: argparse.Namespace) -> int:
     folder = run_sweep(sweep, points, spec, args.out, workers=args.workers, scheduler=args.scheduler)
     table = pd.read_csv(folder / layout.SWEEP)
     unproven = note_unproven(folder)
+    note_over_budget(folder)
     if args.json:
         print_json(
             {

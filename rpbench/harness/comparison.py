@@ -45,7 +45,8 @@ def run_comparison(
     ``scenario`` is the scenario ``spec.request`` builds (pass it when it is built already);
     ``progress``: a progress bar per strategy (default: when stderr is a terminal).  With
     ``spec.strict``, any round or offline run the solver did not prove optimal is an error, before
-    anything is written.
+    anything is written.  With ``spec.decision_budget_s``, the rounds slower than it are flagged
+    (:func:`with_decision_budget`).
     """
     check_new_folder(out)  # a bad --out must fail now, not after the whole simulation
     preset = load_preset(spec.preset)
@@ -72,6 +73,7 @@ def run_comparison(
             preset=preset,
             scenario_args=spec.request.meta(),
             command=spec.command,
+            decision_budget_s=spec.decision_budget_s,
         )
         write_report(folder, name=final.name)
         write_html(folder, name=final.name)
@@ -109,8 +111,18 @@ def simulate_all(spec: RunSpec, scenario: Scenario, preset: Preset, progress: bo
         if run.name != entry.name:
             run = dataclasses.replace(run, name=entry.name)
         done.setdefault(entry.source, run)
+        if spec.decision_budget_s is not None:
+            run = with_decision_budget(run, spec.decision_budget_s)
         runs.append(run)
     return runs
+
+
+def with_decision_budget(run: StrategyRun, budget_s: float) -> StrategyRun:
+    """``run`` with its rounds slower than ``budget_s`` flagged: the ``over_budget`` column of its rounds and
+    the KPI :data:`~rpbench.results.metrics.BUDGET_KPI` (read off the recorded rounds: nothing is re-run)."""
+    flags = metrics.over_budget(run.sim.rounds, budget_s)
+    sim = dataclasses.replace(run.sim, rounds=run.sim.rounds.assign(over_budget=flags))
+    return dataclasses.replace(run, sim=sim, kpis={**run.kpis, metrics.BUDGET_KPI: float(flags.sum())})
 
 
 def calibrated(

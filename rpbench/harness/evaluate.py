@@ -4,13 +4,15 @@ An evaluation folder holds one ordinary results folder per (day, seed) — each 
 and checkable with ``rpbench check`` — plus ``units.csv`` (day, seed, run, kpi, value: every child's
 KPIs), ``leaderboard.csv`` and ``paired.csv`` (:mod:`rpbench.results.leaderboard`), report.md and
 report.html.  A second invocation on the same folder runs only the children that are missing (an
-interrupted evaluation resumes), and refuses a folder of another protocol.
+interrupted evaluation resumes), and refuses a folder of another protocol or of another decision budget
+(every unit's ``rounds_over_budget`` counts against the same one).
 """
 
 from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import Any
 
 from rpbench import results
 from rpbench.exceptions import ParameterError, ResultsError
@@ -40,25 +42,31 @@ def run_evaluation(
     workers: int | None = None,
     scheduler: str | None = None,
     command: str | None = None,
+    decision_budget_s: float | None = None,
 ) -> tuple[Path, int]:
-    """Run (or resume) ``protocol`` into ``out``; returns the folder and how many units ran now."""
+    """Run (or resume) ``protocol`` into ``out``; returns the folder and how many units ran now.
+
+    ``decision_budget_s``: flag the rounds slower than it in every unit (the simulation is unchanged)."""
     request = ScenarioRequest(protocol.scenario, sample=protocol.sample, data_dir=data_dir).resolved()
     spec = RunSpec.of(
         request, list(protocol.strategies), preset=protocol.preset, oracle_preset=protocol.oracle_preset,
-        command=command,
+        command=command, decision_budget_s=decision_budget_s,
     )  # fmt: skip
     units = units_of(protocol, request)
     names = [unit_name(d, s) for d, s in units]
     folder = Path(out) if out is not None else Path.cwd() / DEFAULT_PARENT / f"evaluate-{protocol.name}"
     record = protocol.record()
     if folder.exists():
-        _check_resumable(folder, record)
+        _check_resumable(folder, record, decision_budget_s)
     else:
         try:
             folder.mkdir(parents=True)
         except OSError as exc:
             raise ResultsError(f"cannot create evaluation folder {str(folder)!r}: {exc.strerror or exc}") from None
-        write_parent_meta(folder, "evaluate", names, {"protocol": record, "strategies": spec.names, "command": command})
+        fields: dict[str, Any] = {"protocol": record, "strategies": spec.names, "command": command}
+        if decision_budget_s is not None:
+            fields["decision_budget_s"] = decision_budget_s
+        write_parent_meta(folder, "evaluate", names, fields)
     remove_stale_partials(folder)
     todo = [
         ComparisonTask(spec.for_request(request.replace(date=d, seed=s)), str(folder / name))
@@ -73,7 +81,7 @@ def run_evaluation(
     return folder, len(todo)
 
 
-def _check_resumable(folder: Path, record: dict) -> None:
+def _check_resumable(folder: Path, record: dict, decision_budget_s: float | None) -> None:
     if not folder.is_dir() or not (folder / layout.META).is_file():
         raise ParameterError(f"--out {str(folder)!r} exists and is not an evaluation folder to resume")
     meta = results.read_meta(folder)
@@ -86,3 +94,13 @@ def _check_resumable(folder: Path, record: dict) -> None:
             f"(digest {theirs.get('digest')}), not {record['name']!r} version {record['version']} "
             f"(digest {record['digest']}): choose another folder"
         )
+    theirs_budget = meta.get("decision_budget_s")
+    if theirs_budget != decision_budget_s:
+        raise ParameterError(
+            f"--out {str(folder)!r} was evaluated with {_budget_text(theirs_budget)}, not "
+            f"{_budget_text(decision_budget_s)}: resume it with the same --decision-budget, or choose another folder"
+        )
+
+
+def _budget_text(budget: object) -> str:
+    return "no decision budget" if budget is None else f"a decision budget of {budget} s"

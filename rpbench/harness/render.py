@@ -1,4 +1,5 @@
-"""Render the report of any results folder (comparison, multi-day or sweep) from its files alone."""
+"""Render the report of any results folder (comparison, multi-day or sweep) from its files alone, or combine
+several comparison folders of one scenario into one comparison."""
 
 from __future__ import annotations
 
@@ -11,11 +12,13 @@ from rpbench.exceptions import ResultsError
 from rpbench.harness.multiday import write_multiday_report
 from rpbench.harness.sweep import write_sweep_report
 from rpbench.results import layout
+from rpbench.results.combine import combine, combined_markdown, write_combined
 from rpbench.results.evaluation import write_evaluation_report
 from rpbench.results.html import write_html
 from rpbench.results.html.bench import bench_tables, write_bench_folder
 from rpbench.results.layout import HEAVY, REPORT
 from rpbench.results.report import check_metrics, load_kpis, selected_markdown, write_report
+from rpbench.results.runs import run_styles
 
 #: A report's figures: PNG, and the vector copies beside each.
 FIGURE_SUFFIXES = (".png", *layout.VECTOR_SUFFIXES)
@@ -27,67 +30,87 @@ PARENT_KINDS = ("multi-day", "sweep", "evaluate")
 def render(
     folders: list[Path], metrics: list[str] | None = None, dest: Path | None = None, *, page: bool = False
 ) -> tuple[str, list[Path]]:
-    """Re-render the report of each folder from its files; return (markdown, written report paths).
+    """Render the report of one folder, or combine several; return (markdown, written paths).
 
-    One folder: its own report (comparison, multi-day or sweep).  Several
-    comparison folders: a combined table with one column group per folder.
-    Each folder's report and figures are rewritten in it; with ``dest`` the
-    folders are only read: one folder's report and figures go to ``dest``,
-    several folders' combined table is only returned.  ``page``: each folder's
-    ``report.html`` too (:func:`rpbench.results.html.write_html`), beside its
-    report.  A ``rpbench replicate`` folder's report.md is written by the
-    replication only: here it gets its page.
+    One folder: its own report (comparison, multi-day or sweep), rewritten in it from its files, or
+    with ``dest`` written into ``dest`` (the folder is then only read); ``page``: its ``report.html``
+    too (:func:`rpbench.results.html.write_html`).  A ``rpbench replicate`` folder's report.md is
+    written by the replication only: here it gets its page.  Several folders: comparison folders of
+    one scenario combined into one comparison (:mod:`rpbench.results.combine`); nothing is written in
+    them, and with ``dest`` the combined table and figure go there.
     """
     metrics = check_metrics(metrics)
-    written = []
     for folder in folders:
         if not folder.is_dir():
             raise ResultsError(f"results folder {str(folder)!r} does not exist")
-        if page and not (folder / layout.META).is_file() and bench_tables(folder):
-            # a folder of `rpbench bench --csv` tables: its page only (there is no report.md to render)
-            written.append(write_bench_folder(folder, dest))
-            continue
-        kind = results.read_meta(folder).get("kind", "comparison")
-        if kind == "replication":
-            if not page:
-                raise ResultsError(
-                    f"{str(folder)!r} is a rpbench replicate folder: its report.md is written by the replication; "
-                    "--html renders its page"
-                )
-            if dest is None or len(folders) == 1:
-                write_html(folder, dest=dest)
-                written.append(folder / REPORT)
-            continue
-        if kind not in PARENT_KINDS and not results.run_names(folder) and not (folder / "kpis.csv").is_file():
-            # a published light copy keeps kpis.csv but not the event logs under runs/
-            raise ResultsError(f"results folder {str(folder)!r} holds no runs (no runs/ and no kpis.csv)")
-        if dest is None:
-            written.append(_write(folder, kind))
-            if page:
-                write_html(folder)
-        elif len(folders) == 1:
-            written.append(_write_elsewhere(folder, kind, dest))
-            if page:
-                write_html(folder, folder.name, dest=dest)
-    if len(folders) == 1 and metrics is None:
-        if written[0].suffix == ".html":
-            return f"page written to {written[0]}", written
-        return written[0].read_text(), written
-    blocks = []
-    for folder in folders:
-        meta = results.read_meta(folder)
-        if meta.get("kind", "comparison") != "comparison":
-            blocks.append(f"## {folder.name}\n\nsee {folder / 'report.md'}\n")
-            continue
+    if len(folders) > 1:
+        return _render_combined(folders, metrics, dest, page=page)
+    folder = folders[0]
+    written = _render_one(folder, dest, page=page)
+    if metrics is not None:
+        return _selected(folder, metrics), [written]
+    if written.suffix == ".html":
+        return f"page written to {written}", [written]
+    return written.read_text(), [written]
+
+
+def _render_one(folder: Path, dest: Path | None, *, page: bool) -> Path:
+    """Write one folder's report (and page) into it, or into ``dest``; returns the report's (or page's) path."""
+    if page and not (folder / layout.META).is_file() and bench_tables(folder):
+        # a folder of `rpbench bench --csv` tables: its page only (there is no report.md to render)
+        return write_bench_folder(folder, dest)
+    kind = results.read_meta(folder).get("kind", "comparison")
+    if kind == "replication":
+        if not page:
+            raise ResultsError(
+                f"{str(folder)!r} is a rpbench replicate folder: its report.md is written by the replication; "
+                "--html renders its page"
+            )
+        write_html(folder, dest=dest)
+        return folder / REPORT
+    if kind not in PARENT_KINDS and not results.run_names(folder) and not (folder / "kpis.csv").is_file():
+        # a published light copy keeps kpis.csv but not the event logs under runs/
+        raise ResultsError(f"results folder {str(folder)!r} holds no runs (no runs/ and no kpis.csv)")
+    if dest is None:
+        written = _write(folder, kind)
+        if page:
+            write_html(folder)
+        return written
+    written = _write_elsewhere(folder, kind, dest)
+    if page:
+        write_html(folder, folder.name, dest=dest)
+    return written
+
+
+def _selected(folder: Path, metrics: list[str]) -> str:
+    """One folder's table of the KPIs ``metrics`` only (a parent folder's: where its report is)."""
+    meta = results.read_meta(folder)
+    if meta.get("kind", "comparison") != "comparison":
+        block = f"## {folder.name}\n\nsee {folder / 'report.md'}\n"
+    else:
         table = load_kpis(folder)
-        if metrics is not None:
-            table = table.loc[[m for m in metrics if m in table.index]]
-        blocks.append(
+        table = table.loc[[m for m in metrics if m in table.index]]
+        block = (
             f"## {folder.name}\n\n{meta['scenario']['label']}, preset `{meta['preset']['name']}`\n\n"
-            + selected_markdown(table)
+            + selected_markdown(table, run_styles(meta))
             + "\n"
         )
-    return "# rpbench results\n\n" + "\n".join(blocks), written
+    return "# rpbench results\n\n" + block
+
+
+def _render_combined(
+    folders: list[Path], metrics: list[str] | None, dest: Path | None, *, page: bool
+) -> tuple[str, list[Path]]:
+    """Several comparison folders as one comparison: its markdown, and with ``dest`` its table and figure
+    written there.  The folders are only read: a page would be a page of one of them."""
+    if page:
+        raise ResultsError(
+            "--html renders one folder's page: several folders combine into one markdown report; "
+            "render each folder's page alone (rpbench report DIR --html)"
+        )
+    combined = combine(folders)
+    written = [] if dest is None else write_combined(combined, dest, metrics)
+    return combined_markdown(combined, metrics, figures=dest is not None), written
 
 
 def _write(folder: Path, kind: str, name: str | None = None) -> Path:

@@ -3,7 +3,8 @@
 A :class:`RunSpec` names the scenario (a :class:`~rpbench.scenarios.ScenarioRequest`),
 the runs in column order (:class:`RunEntry`: strategies and offline runs,
 each under its name with its typed options), the solver presets, the strict
-policy and the command line to record.  ``rpbench run`` builds one from its
+policy, the decision budget (rounds slower than it are flagged, never changed) and the command line to
+record.  ``rpbench run`` builds one from its
 arguments (:mod:`rpbench.commands._runs`); the multi-day runner and sweeps
 derive one per day or point (:meth:`RunSpec.for_request`) and hand it to worker
 processes as it is (it pickles); Python callers build one with
@@ -23,6 +24,7 @@ in a colour of its own, with those options set (``--opt`` may set more).
 from __future__ import annotations
 
 import dataclasses
+import math
 import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -80,8 +82,14 @@ class RunSpec:
     oracle_preset: str | None = None  # None: the comparison's own preset
     strict: bool = False  # an answer the solver did not prove optimal is an error, not a note
     command: str | None = None  # the command line recorded in results folders
+    decision_budget_s: float | None = None  # flag rounds deciding slower than this (None: no budget)
 
     def __post_init__(self) -> None:
+        budget = self.decision_budget_s
+        if budget is not None and not (
+            isinstance(budget, (int, float)) and not isinstance(budget, bool) and math.isfinite(budget) and budget > 0
+        ):
+            raise ParameterError(f"decision budget {budget!r} must be a finite number of seconds > 0")
         if not self.runs:
             raise ParameterError("a comparison needs at least one strategy or offline run")
         names = [r.name for r in self.runs]
@@ -100,6 +108,7 @@ class RunSpec:
         oracle_preset: str | None = None,
         strict: bool = False,
         command: str | None = None,
+        decision_budget_s: float | None = None,
     ) -> RunSpec:
         """A spec from run names (or plug-in sources) and per-run options keyed by run name.
 
@@ -122,6 +131,7 @@ class RunSpec:
             oracle_preset=oracle_preset,
             strict=strict,
             command=command,
+            decision_budget_s=decision_budget_s,
         )
 
     @property

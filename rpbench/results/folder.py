@@ -6,7 +6,8 @@ the inputs, one folder per run, the KPI, round and hourly tables and
 ``meta.json``.  ``meta.json`` records, per run, what the checker holds it to
 (kind, options, rules, status: digested in ``inputs_digest``) and what a
 report needs to show it without importing its class (label, colour, source),
-so that a folder re-renders from its files alone, plug-ins included.
+so that a folder re-renders from its files alone, plug-ins included.  A run given a decision budget
+records it as ``decision_budget_s`` (absent otherwise): the checker and the reports read it there.
 """
 
 from __future__ import annotations
@@ -33,6 +34,10 @@ from rpbench.strategies.options import RunOptions
 
 #: Format version of ``meta.json`` (``rpbench_results``).
 RESULTS_FORMAT = 1
+#: The inputs meta.json digests are gzip files written without a time in their header, so that one scenario
+#: written twice gives the same bytes and the same digests (folders of one instance then combine even as
+#: published light copies, which keep only the digests).
+REPRODUCIBLE_GZIP = {"method": "gzip", "mtime": 0}
 
 
 @dataclass
@@ -93,8 +98,10 @@ def write_folder(
     preset: Preset,
     scenario_args: dict[str, Any],
     command: str | None,
+    decision_budget_s: float | None = None,
 ) -> None:
-    """Write the comparison of ``runs`` and ``offline`` on ``scenario`` into ``folder`` (``order``: columns)."""
+    """Write the comparison of ``runs`` and ``offline`` on ``scenario`` into ``folder`` (``order``: columns;
+    ``decision_budget_s``: the budget the runs' ``over_budget`` flags were set against, recorded in meta.json)."""
     orders = scenario.orders
     solo = scenario.network.distances()(orders.origin, orders.destination)
     pd.DataFrame(
@@ -106,10 +113,10 @@ def write_folder(
             "patience_s": orders.patience_s,
             "solo_m": solo,
         }
-    ).to_csv(folder / layout.ORDERS, index=False)
+    ).to_csv(folder / layout.ORDERS, index=False, compression=REPRODUCIBLE_GZIP)
     save_network(folder / layout.NETWORK, scenario.network)
     pd.DataFrame({"vehicle": np.arange(len(scenario.fleet)), "initial_node": scenario.fleet.initial_node}).to_csv(
-        folder / layout.FLEET, index=False
+        folder / layout.FLEET, index=False, compression=REPRODUCIBLE_GZIP
     )
     tidy: list[dict[str, Any]] = []
     rounds, hourly = [], []
@@ -180,6 +187,8 @@ def write_folder(
             "network_hash": scenario.network.content_hash,
         },
         "params": scenario.params.as_dict(),
+        # only with a budget: without one, meta.json holds what it held before budgets existed
+        **({"decision_budget_s": decision_budget_s} if decision_budget_s is not None else {}),
         "preset": preset.as_dict(),
         "strategies": list(order),
         "runs": meta_runs,

@@ -66,6 +66,7 @@ KPI_LABELS = {
     "decision_p95_s": "Decision time per round, 95th percentile (s)",
     "decision_max_s": "Decision time per round, maximum (s)",
     "rounds_over_dt": "Rounds slower than the batch interval",
+    "rounds_over_budget": "Rounds slower than the decision budget",
 }
 EXTRA_KPIS = [
     "orders",
@@ -216,12 +217,15 @@ def kpis(tab: pd.DataFrame, occupied_m: np.ndarray, params: Params) -> dict[str,
 DECISION_PARTS = ("strategy_build_s", "solver_build_s", "solve_s", "extract_s")
 #: The decision-time KPIs of a simulation run, from its rounds (rounds.csv.gz).
 DECISION_KPIS = ("decision_p50_s", "decision_p95_s", "decision_max_s", "rounds_over_dt")
+#: The rounds slower than the run's decision budget (``--decision-budget``): reported only with a budget.
+BUDGET_KPI = "rounds_over_budget"
 #: KPIs measured on the clock: they differ from one run of the same inputs to the next (every other KPI is
 #: a function of the inputs and seeds alone).
 TIMING_KPIS = (
     "wall_s",
     "prepare_s",
     *DECISION_KPIS,
+    BUDGET_KPI,
     # an offline run's phases
     "candidates_s",
     "model_s",
@@ -238,7 +242,7 @@ def decision_kpis(rounds: pd.DataFrame, dt_s: float) -> dict[str, float]:
     ``dt_s`` (a dispatcher must decide within it). No round: NaN times and 0 rounds."""
     if rounds.empty:
         return {"decision_p50_s": np.nan, "decision_p95_s": np.nan, "decision_max_s": np.nan, "rounds_over_dt": 0.0}
-    decision = rounds[list(DECISION_PARTS)].to_numpy(dtype=float).sum(axis=1)
+    decision = decision_times(rounds)
     p50, p95 = np.quantile(decision, [0.5, 0.95])
     return {
         "decision_p50_s": float(p50),
@@ -246,6 +250,17 @@ def decision_kpis(rounds: pd.DataFrame, dt_s: float) -> dict[str, float]:
         "decision_max_s": float(decision.max()),
         "rounds_over_dt": float((decision > dt_s).sum()),
     }
+
+
+def decision_times(rounds: pd.DataFrame) -> np.ndarray:
+    """Each round's decision time (s): :data:`DECISION_PARTS` summed."""
+    return rounds[list(DECISION_PARTS)].to_numpy(dtype=float).sum(axis=1)
+
+
+def over_budget(rounds: pd.DataFrame, budget_s: float) -> np.ndarray:
+    """Per round, whether it decided more slowly than ``budget_s`` (strictly, as ``rounds_over_dt``
+    against Δt): the ``over_budget`` column of rounds.csv.gz, summed as :data:`BUDGET_KPI`."""
+    return decision_times(rounds) > budget_s
 
 
 def hourly(tab: pd.DataFrame, start_hour: int = 0) -> pd.DataFrame:

@@ -43,6 +43,7 @@ KPI_AXES = {
     "decision_p95_s": "decision time per round (s)",
     "decision_max_s": "decision time per round (s)",
     "rounds_over_dt": "rounds slower than Δt",
+    "rounds_over_budget": "rounds slower than the decision budget",
 }
 #: The headline KPIs of a comparison's bar panels (:func:`kpi_figure`): key, panel title.
 KPI_PANELS = [

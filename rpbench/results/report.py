@@ -182,16 +182,24 @@ def markdown_table(
 
 def solver_summary(folder: Path) -> pd.DataFrame | None:
     """Per run: rounds solved, model size, solve and decision time percentiles (a round's decision: the
-    strategy's build plus the solver's build, solve and decoding), rounds slower than Δt, statuses."""
+    strategy's build plus the solver's build, solve and decoding), rounds slower than Δt (and than the
+    decision budget, when the folder records one), statuses."""
     path = folder / "rounds.csv.gz"
     if not path.is_file():
         return None
     rounds = pd.read_csv(path)
     if rounds.empty:
         return None
-    dt = float(results.read_meta(folder).get("params", {}).get("dt_s", float("nan")))
+    meta = results.read_meta(folder)
+    dt = float(meta.get("params", {}).get("dt_s", float("nan")))
+    budget = decision_budget_of(meta)
     rounds = rounds.assign(decision_s=rounds[list(DECISION_PARTS)].sum(axis=1))
     g = rounds.groupby("run", sort=False)
+    over_budget = (
+        {f"rounds > budget ({budget:g} s)": g["decision_s"].apply(lambda s: int((s > budget).sum()))}
+        if budget is not None
+        else {}
+    )
     return pd.DataFrame(
         {
             "rounds": g.size(),
@@ -205,6 +213,7 @@ def solver_summary(folder: Path) -> pd.DataFrame | None:
             "decision p95 (ms)": (g["decision_s"].quantile(0.95) * 1e3).round(3),
             "decision max (ms)": (g["decision_s"].max() * 1e3).round(3),
             f"rounds > Δt ({dt:g} s)": g["decision_s"].apply(lambda s: int((s > dt).sum())),
+            **over_budget,
             "not optimal": g["status"].apply(lambda s: int((s != "optimal").sum())),
             "tie moves": g["tie_moves"].sum(),
         }
@@ -234,6 +243,36 @@ def unproven_runs(folder: Path) -> dict[str, str]:
             )
     order = meta.get("strategies", [])
     return dict(sorted(found.items(), key=lambda kv: order.index(kv[0]) if kv[0] in order else len(order)))
+
+
+def decision_budget_of(meta: dict[str, Any]) -> float | None:
+    """The decision budget (s) a folder's meta.json records, None without one (or with one that is not a
+    number > 0, which ``rpbench check`` fails)."""
+    budget = meta.get("decision_budget_s")
+    if isinstance(budget, bool) or not isinstance(budget, (int, float)) or not 0 < budget < math.inf:
+        return None
+    return float(budget)
+
+
+def over_budget_runs(folder: Path) -> dict[str, str]:
+    """The runs of a results folder with rounds slower than its decision budget (meta.json's
+    ``decision_budget_s``), each with how many and the slowest ("3 of 346 rounds decided slower than the
+    0.5 s budget (slowest 1.21 s)"), in the folder's run order; nothing without a budget."""
+    budget = decision_budget_of(results.read_meta(folder))
+    path = folder / "rounds.csv.gz"
+    if budget is None or not path.is_file():
+        return {}
+    rounds = pd.read_csv(path)
+    rounds = rounds.assign(decision_s=rounds[list(DECISION_PARTS)].sum(axis=1))
+    found = {}
+    for run, decision in rounds.groupby("run", sort=False)["decision_s"]:
+        over = int((decision > budget).sum())
+        if over:
+            found[str(run)] = (
+                f"{over} of {len(decision)} rounds decided slower than the {budget:g} s budget "
+                f"(slowest {decision.max():.3g} s)"
+            )
+    return found
 
 
 def unproven_notes(unproven: dict[str, str], styles: Styles | None = None) -> list[str]:
@@ -290,6 +329,7 @@ def report_markdown(folder: Path, name: str | None = None, figures: list[str] | 
             summary.to_markdown() if _has_tabulate() else "```\n" + summary.to_string() + "\n```",
             "",
         ]
+        lines += budget_lines(meta)
     lines += wall_lines(meta, styles)
     if results.run_names(folder):
         verify = (
@@ -303,6 +343,19 @@ def report_markdown(folder: Path, name: str | None = None, figures: list[str] | 
         )
     lines += [f"KPI definitions: see `rpbench/results/metrics.py` (and the README). {verify}", ""]
     return "\n".join(lines)
+
+
+def budget_lines(meta: dict[str, Any]) -> list[str]:
+    """The sentence under the solver table of a folder run with a decision budget (nothing without one)."""
+    budget = decision_budget_of(meta)
+    if budget is None:
+        return []
+    return [
+        f"Decision budget {budget:g} s (`--decision-budget`): a round deciding more slowly is flagged "
+        "(`over_budget` in `rounds.csv.gz`) and counted in the KPI `rounds_over_budget`; the simulation is "
+        "the same as without it.",
+        "",
+    ]
 
 
 def synthetic_banner(scenario: dict[str, Any]) -> list[str]:

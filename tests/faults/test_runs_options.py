@@ -69,3 +69,39 @@ def test_a_good_option_still_runs(capsys, tmp_path):
     code, _, err = run_cli(capsys, "run", *TOY, "--strategies", "rtv", "--opt", "rtv.c_ko=large", "--out", out)
     assert code == 0, err
     assert (out / "meta.json").is_file()
+
+
+#: Every command taking --decision-budget: a run, a multi-day run, a sweep, an evaluation.
+BUDGET_COMMANDS = {
+    "run": ("run", *TOY, "--strategies", "mb"),
+    "run-without-a-scenario": ("run", "--strategies", "mb"),  # fails before the data would be fetched
+    "multi-day": ("run", *TOY, "--strategies", "mb", "--dates", "2017-05-01..2017-05-02"),
+    "sweep": (*SWEEP, "--strategies", "mb"),
+    "evaluate": ("evaluate", "toy-quick", "--workers", "1"),
+}
+
+
+@pytest.mark.parametrize("command", list(BUDGET_COMMANDS))
+@pytest.mark.parametrize("value", ["0", "-1", "nan", "inf", "abc", "1e999", ""])
+def test_a_bad_decision_budget_is_one_line_and_writes_nothing(capsys, tmp_path, command, value):
+    out = tmp_path / "out"
+    code, stdout, err = run_cli(capsys, *BUDGET_COMMANDS[command], f"--decision-budget={value}", "--out", out)
+    line = assert_one_error(code, err, f"--decision-budget {value!r} must be a finite number of seconds > 0")
+    assert err.strip() == line and stdout == ""
+    assert_nothing_written(tmp_path, out)
+
+
+def test_a_good_decision_budget_notes_each_flagged_run_and_keeps_json_one_object(capsys, tmp_path):
+    import json
+
+    out = tmp_path / "out"
+    argv = ("run", *TOY, "--strategies", "mb,rtv,oracle1", "--decision-budget", "1e-9", "--json", "--out", out)
+    code, stdout, err = run_cli(capsys, *argv)
+    assert code == 0, err
+    kpis = json.loads(stdout)["kpis"]
+    notes = [line for line in err.splitlines() if "decided slower than" in line]
+    assert [line.split(": ")[2] for line in notes] == ["mb", "rtv"]  # the offline run has no rounds
+    for line in notes:
+        run = line.split(": ")[2]
+        n = int(kpis[run]["rounds_over_budget"])
+        assert f"{n} of {n} rounds decided slower than the 1e-09 s budget (slowest " in line

@@ -2,13 +2,19 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
+import pandas as pd
 import pytest
 
 from rpbench.harness import comparison
 from rpbench.harness.comparison import run_comparison
 from rpbench.harness.spec import RunSpec
+from rpbench.results.check import check_folder
+from rpbench.results.metrics import TIMING_KPIS
+from rpbench.results.report import over_budget_runs
+from rpbench.results.store import read_meta
 from rpbench.scenarios import ScenarioRequest
 from rpbench.strategies.forward import ForwardOptions
 
@@ -87,3 +93,55 @@ def test_two_variants_of_one_strategy_in_one_run(tmp_path):
     assert (folder / "runs" / "fl@tau0_s=600" / "events.csv.gz").is_file()
     assert all(rc.ok for rc in check_folder(folder))
     assert "FL (tau0_s=600)" in (folder / "report.md").read_text()
+
+
+# ------------------------------------------------------------------ decision budget
+@pytest.fixture(scope="module")
+def budget_folders(tmp_path_factory):
+    """The same comparison without a budget, with a budget no round meets and with one every round meets."""
+    root = tmp_path_factory.mktemp("budget")
+    spec = RunSpec.of(ScenarioRequest("toy", sample=0.1, seed=4), ["mb", "fl", "oracle1"])
+    specs = {budget: dataclasses.replace(spec, decision_budget_s=budget) for budget in (None, 1e-9, 1e9)}
+    return {budget: run_comparison(s, root / str(budget), progress=False)[0] for budget, s in specs.items()}
+
+
+def test_a_tiny_budget_flags_every_solved_round_and_a_huge_one_none(budget_folders):
+    """Every round in rounds.csv.gz was solved; the KPI counts its run's flags; the folder checks clean."""
+    for budget, flagged in ((1e-9, True), (1e9, False)):
+        folder = budget_folders[budget]
+        rounds = pd.read_csv(folder / "rounds.csv.gz")
+        assert rounds["over_budget"].dtype == bool and (rounds["over_budget"] == flagged).all()
+        kpis = pd.read_csv(folder / "kpis.csv").set_index(["run", "kpi"])["value"]
+        for run in ("mb", "fl"):
+            assert kpis[(run, "rounds_over_budget")] == (rounds["run"] == run).sum() * flagged
+        assert ("oracle1", "rounds_over_budget") not in kpis.index  # an offline run has no rounds
+        assert read_meta(folder)["decision_budget_s"] == budget
+        assert all(rc.ok for rc in check_folder(folder))
+    report = (budget_folders[1e-9] / "report.md").read_text()
+    assert "rounds > budget (1e-09 s)" in report and "Decision budget 1e-09 s" in report
+
+
+def test_without_a_budget_nothing_is_added_and_a_budget_changes_no_simulation(budget_folders):
+    plain = budget_folders[None]
+    assert "decision_budget_s" not in read_meta(plain)
+    assert "over_budget" not in pd.read_csv(plain / "rounds.csv.gz").columns
+    assert "rounds_over_budget" not in set(pd.read_csv(plain / "kpis.csv")["kpi"])
+    assert "budget" not in (plain / "report.md").read_text()
+    assert over_budget_runs(plain) == {}
+    for budget in (1e-9, 1e9):
+        for run in ("mb", "fl"):
+            log = f"runs/{run}/events.csv.gz"
+            assert pd.read_csv(budget_folders[budget] / log).equals(pd.read_csv(plain / log))
+        kpis = pd.read_csv(budget_folders[budget] / "kpis.csv")
+        same = kpis[~kpis["kpi"].isin(TIMING_KPIS)].reset_index(drop=True)
+        before = pd.read_csv(plain / "kpis.csv")
+        assert same.equals(before[~before["kpi"].isin(TIMING_KPIS)].reset_index(drop=True))
+
+
+def test_the_note_names_each_run_with_rounds_over_the_budget(budget_folders):
+    notes = over_budget_runs(budget_folders[1e-9])
+    rounds = pd.read_csv(budget_folders[1e-9] / "rounds.csv.gz")
+    assert list(notes) == ["mb", "fl"]
+    n = int((rounds["run"] == "mb").sum())
+    assert notes["mb"].startswith(f"{n} of {n} rounds decided slower than the 1e-09 s budget (slowest ")
+    assert over_budget_runs(budget_folders[1e9]) == {}

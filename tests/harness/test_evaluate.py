@@ -16,6 +16,7 @@ from rpbench.protocols import load_protocol
 from rpbench.results.check import check_tree
 from rpbench.results.metrics import TIMING_KPIS
 from rpbench.results.report import fmt
+from rpbench.results.store import read_meta
 
 PROTOCOL = """
 name = "toy-test"
@@ -133,3 +134,28 @@ def test_bad_input_is_one_line(capsys, tmp_path):
     assert "unknown protocol 'no-such-protocol'" in capsys.readouterr().err
     (tmp_path / "file").write_text("x")
     assert main(["evaluate", "toy-quick", "--out", str(tmp_path / "file")]) == 2
+
+
+def test_another_decision_budget_does_not_resume_a_folder(protocol, evaluated):
+    """Every unit's rounds_over_budget counts against the one budget the evaluation records (none here)."""
+    with pytest.raises(ParameterError, match="evaluated with no decision budget, not a decision budget of 0.5 s"):
+        run_evaluation(protocol, evaluated, workers=1, decision_budget_s=0.5)
+
+
+def test_an_evaluation_with_a_decision_budget(tmp_path, capsys):
+    """Each unit is flagged against the budget the parent records; the tree checks clean; a resume with the
+    same budget runs nothing, without one is refused."""
+    path = tmp_path / "one.toml"
+    path.write_text(PROTOCOL.replace("seeds = [0, 1, 2]", "seeds = [0]").replace('"mb", "fl", "bound"', '"mb"'))
+    protocol = load_protocol(str(path))
+    out = tmp_path / "budget"
+    assert main(["evaluate", str(path), "--out", str(out), "--workers", "1", "--decision-budget", "1e-9"]) == 0
+    err = capsys.readouterr().err
+    assert "rpbench: note: seed0: mb: " in err and "rounds decided slower than the 1e-09 s budget" in err
+    assert read_meta(out)["decision_budget_s"] == read_meta(out / "seed0")["decision_budget_s"] == 1e-9
+    units = pd.read_csv(out / "units.csv")
+    assert (units["kpi"] == "rounds_over_budget").sum() == 1
+    assert all(found.status == "ok" for found in check_tree(out))
+    assert run_evaluation(protocol, out, workers=1, decision_budget_s=1e-9)[1] == 0
+    with pytest.raises(ParameterError, match="evaluated with a decision budget of 1e-09 s, not no decision budget"):
+        run_evaluation(protocol, out, workers=1)

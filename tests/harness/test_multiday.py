@@ -56,3 +56,24 @@ def test_a_published_parent_page_is_titled_with_its_name(two_day_data, tmp_path)
     folder = run_days(RunSpec.of(request, ["mb"], command="test"), ["2017-05-01"], str(tmp_path / "days"), workers=1)
     out = publish(folder, tmp_path / "published-days")
     assert "<title>rpbench multi-day results: published-days</title>" in (out / "report.html").read_text()
+
+
+def test_every_day_is_flagged_against_the_decision_budget(two_day_data, tmp_path, capsys):
+    """``rpbench run --dates --decision-budget``: each day's folder records the budget and counts against it,
+    one note per day and run on stderr, and the tree checks clean."""
+    from rpbench.cli import main
+    from rpbench.results.check import check_tree
+    from rpbench.results.store import read_meta
+
+    out = tmp_path / "days"
+    argv = ["run", "--scenario", "haikou-peak", "--data", str(two_day_data), "--strategies", "mb", "--workers", "1"]
+    argv += ["--dates", "2017-05-01..2017-05-02", "--decision-budget", "1e-9", "--out", str(out)]
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    for day in ("2017-05-01", "2017-05-02"):
+        assert read_meta(out / day)["decision_budget_s"] == 1e-9
+        assert f"rpbench: note: {day}: mb: " in err
+    assert read_meta(out)["decision_budget_s"] == 1e-9
+    summary = pd.read_csv(out / "summary.csv").set_index(["run", "kpi"])
+    assert summary.loc[("mb", "rounds_over_budget"), "count"] == 2
+    assert all(found.status == "ok" for found in check_tree(out))

@@ -88,3 +88,16 @@ def test_a_variant_is_a_run_of_its_own_with_its_settings():
 def test_a_bad_variant_is_one_error(strategies, message):
     with pytest.raises(ParameterError, match=message):
         resolve_runs(strategies.split(","))
+
+
+@pytest.mark.parametrize("budget", [0, -1.0, float("nan"), float("inf"), True, "0.5"])
+def test_a_decision_budget_is_a_finite_number_of_seconds_above_zero(budget):
+    with pytest.raises(ParameterError, match="must be a finite number of seconds > 0"):
+        RunSpec.of("toy", ["mb"], decision_budget_s=budget)
+
+
+def test_the_decision_budget_is_kept_per_day_and_point():
+    spec = RunSpec.of("toy", ["mb"], decision_budget_s=0.5)
+    assert spec.for_request(ScenarioRequest("toy", seed=2)).decision_budget_s == 0.5
+    assert pickle.loads(pickle.dumps(spec)).decision_budget_s == 0.5
+    assert RunSpec.of("toy", ["mb"]).decision_budget_s is None

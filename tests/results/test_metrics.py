@@ -25,16 +25,22 @@ import pandas as pd
 import pytest
 
 from rpbench.results.metrics import (
+    BUDGET_KPI,
     EXTRA_KPIS,
+    KPI_LABELS,
     KPI_ORDER,
     TIMELINE_STATES,
+    TIMING_KPIS,
     _pair_length,
     count_at,
+    decision_kpis,
+    decision_times,
     hourly,
     kpis,
     mean_count,
     occupied_distance_m,
     odometer_at,
+    over_budget,
     passenger_table,
     state_spells,
 )
@@ -339,3 +345,27 @@ def test_timeline_of_an_empty_log():
     spells = state_spells(EVENTS.iloc[:0])
     assert all(count_at(spells[s], np.array([5.0])).tolist() == [0] for s in TIMELINE_STATES)
     assert mean_count(spells["waiting"], np.array([0.0, 60.0])).tolist() == [0.0]
+
+
+# ------------------------------------------------------------------ decision budget
+def hand_made_rounds(parts: list[tuple[float, float, float, float]]) -> pd.DataFrame:
+    """Rounds with the given (strategy build, solver build, solve, extract) seconds."""
+    return pd.DataFrame(parts, columns=["strategy_build_s", "solver_build_s", "solve_s", "extract_s"])
+
+
+def test_rounds_over_the_decision_budget_are_the_strictly_slower_ones():
+    """A round's decision is its four parts summed; one taking exactly the budget is within it."""
+    rounds = hand_made_rounds([(0.1, 0.0, 0.2, 0.0), (0.25, 0.05, 0.5, 0.2), (0.5, 0.0, 0.0, 0.0), (0.0,) * 4])
+    assert decision_times(rounds) == pytest.approx([0.3, 1.0, 0.5, 0.0])
+    assert over_budget(rounds, 0.5).tolist() == [False, True, False, False]
+    assert over_budget(rounds, 1e-9).tolist() == [True, True, True, False]
+    assert not over_budget(rounds, 1e9).any()
+    assert over_budget(rounds.iloc[:0], 0.5).tolist() == []
+    # the budget counts like rounds_over_dt against Δt: the same rounds for the same threshold
+    assert decision_kpis(rounds, 0.5)["rounds_over_dt"] == float(over_budget(rounds, 0.5).sum())
+
+
+def test_the_budget_kpi_is_labelled_and_a_timing_kpi():
+    """It depends on the clock, so tests comparing runs leave it out with the other timings."""
+    assert BUDGET_KPI == "rounds_over_budget" and BUDGET_KPI in TIMING_KPIS
+    assert KPI_LABELS[BUDGET_KPI] == "Rounds slower than the decision budget"

@@ -163,8 +163,10 @@ def test_wall_time_and_one_off_preparation(tmp_path):
 
 def test_selected_metrics_and_unknown_metric(tmp_path):
     folder = fixture_folder(tmp_path)
-    md, _ = render([folder, folder], metrics=["response_rate"])
+    md, _ = render([folder], metrics=["response_rate"])
     assert "Response rate" in md and "Average detour" not in md
+    md, _ = render([folder, fixture_folder(tmp_path, name="again")], metrics=["response_rate"])  # combined
+    assert "Response rate" in md and "Average detour" not in md and "combined comparison" in md
     with pytest.raises(ResultsError, match="unknown metric 'happiness'"):
         render([folder], metrics=["happiness"])
 

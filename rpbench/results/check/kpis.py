@@ -1,5 +1,5 @@
-"""Every number a reader is shown, recomputed: ``kpi`` (kpis.csv), ``hourly`` (hourly.csv) and ``report``
-(the KPI tables of report.md).
+"""Every number a reader is shown, recomputed: ``kpi`` (kpis.csv), ``decision-budget`` (the ``over_budget``
+flags of rounds.csv.gz), ``hourly`` (hourly.csv) and ``report`` (the KPI tables of report.md).
 
 The KPIs are recomputed from the per-order table of :func:`.events.check_events` (event times, and
 odometers read at the matched trajectory entries), by code of their own: the occupied distance is the union
@@ -156,10 +156,7 @@ def decision_expected(rc: RunCheck, f: Folder, run: str, reported: pd.DataFrame)
     mine = rounds[rounds["run"] == run]
     if mine.empty:
         return dict.fromkeys(DECISION_KPIS[:3], float("nan")) | {"rounds_over_dt": 0.0}
-    total = np.zeros(len(mine))
-    for column in _DECISION_COLUMNS:
-        total = total + mine[column].to_numpy(dtype=float)
-    ordered = np.sort(total)
+    ordered = np.sort(_decision_totals(mine))
 
     def at(q: float) -> float:  # the linear-interpolation quantile, spelled out
         pos = q * (len(ordered) - 1)
@@ -171,8 +168,64 @@ def decision_expected(rc: RunCheck, f: Folder, run: str, reported: pd.DataFrame)
         "decision_p50_s": at(0.5),
         "decision_p95_s": at(0.95),
         "decision_max_s": float(ordered[-1]),
-        "rounds_over_dt": float(np.count_nonzero(total > f.params.dt_s)),
+        "rounds_over_dt": float(np.count_nonzero(ordered > f.params.dt_s)),
     }
+
+
+def _decision_totals(rounds: pd.DataFrame) -> np.ndarray:
+    """Each round's decision time: its parts added in :data:`_DECISION_COLUMNS` order."""
+    total = np.zeros(len(rounds))
+    for column in _DECISION_COLUMNS:
+        total = total + rounds[column].to_numpy(dtype=float)
+    return total
+
+
+#: The KPI and the rounds.csv.gz column of a folder run with a decision budget (meta.json's decision_budget_s).
+BUDGET_KPI, BUDGET_COLUMN, BUDGET_FIELD = "rounds_over_budget", "over_budget", "decision_budget_s"
+
+
+def budget_expected(rc: RunCheck, f: Folder, run: str, reported: pd.DataFrame) -> tuple[dict, dict[str, str | None]]:
+    """A run's ``rounds_over_budget`` recounted from its rounds' decision times and the budget meta.json
+    records, and its rounds' ``over_budget`` flags checked against them (``decision-budget``); returns the
+    recomputed KPI and the claims :func:`compare_kpis` allows.  Without a recorded budget there must be
+    neither the KPI nor the column."""
+    budget = f.meta.get(BUDGET_FIELD)
+    path = f.path / ROUNDS
+    rounds = results.read_csv(path) if path.is_file() else None
+    mine = rounds[rounds["run"] == run] if rounds is not None else None
+    if budget is None:
+        if rounds is not None and BUDGET_COLUMN in rounds.columns and mine is not None and len(mine):
+            rc.fail("decision-budget", f"{ROUNDS} has an {BUDGET_COLUMN} column but {META} records no decision budget")
+        if BUDGET_KPI in set(reported["kpi"]):
+            return {}, {BUDGET_KPI: f"KPI {BUDGET_KPI} is reported but {META} records no decision budget"}
+        return {}, {}
+    if isinstance(budget, bool) or not isinstance(budget, (int, float)) or not 0 < budget < np.inf:
+        rc.fail("decision-budget", f"{META}'s {BUDGET_FIELD} {budget!r} is not a finite number of seconds > 0")
+        return {}, {BUDGET_KPI: None}  # not recountable: the failure above says why
+    if mine is None:
+        rc.fail("decision-budget", f"{META} records a decision budget but the folder has no {ROUNDS}")
+        return {}, {BUDGET_KPI: None}
+    totals = _decision_totals(mine)
+    over = totals > budget
+    if BUDGET_COLUMN not in mine.columns:
+        rc.fail("decision-budget", f"{ROUNDS} lacks the {BUDGET_COLUMN} column of the {budget:g} s budget")
+    else:
+        flags = mine[BUDGET_COLUMN].map({True: True, False: False, "True": True, "False": False})
+        text = flags.isna().to_numpy()
+        wrong = np.flatnonzero(~text & (flags.fillna(False).to_numpy(dtype=bool) != over))
+        if text.any():
+            first = mine[BUDGET_COLUMN].to_numpy()[np.flatnonzero(text)[0]]
+            rc.fail("decision-budget", f"{ROUNDS}: {BUDGET_COLUMN} holds {show(first)}, not True/False")
+        if len(wrong):
+            k = wrong[0]
+            rc.fail(
+                "decision-budget",
+                f"{len(wrong)} round(s) of {ROUNDS} flagged {BUDGET_COLUMN} against their decision time and the "
+                f"{budget:g} s budget, e.g. round {mine['round'].to_numpy()[k]}: {BUDGET_COLUMN} "
+                f"{bool(flags.to_numpy()[k])}, decision {float(totals[k])!r} s",
+            )
+        rc.checked["budget_rounds"] = len(mine)
+    return {BUDGET_KPI: float(np.count_nonzero(over))}, {}
 
 
 # ----------------------------------------------------------------------- hourly

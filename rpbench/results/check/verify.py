@@ -28,6 +28,7 @@ from rpbench.results.check.folder import (
     read_table,
 )
 from rpbench.results.check.kpis import (
+    budget_expected,
     check_hourly,
     check_report,
     compare_kpis,
@@ -144,7 +145,8 @@ def _check_simulation(f: Folder, name: str, run_dir: Path, bound: float | None) 
     kpis = simulation_kpis(tab, f.solo, f.params, bound)
     reported = f.reported(name)
     kpis |= decision_expected(rc, f, name, reported)
-    compare_kpis(rc, "simulation", kpis, reported)
+    budget, claims = budget_expected(rc, f, name, reported)
+    compare_kpis(rc, "simulation", kpis | budget, reported, claims)
     check_certificate(rc, tab, f, kpis["total_saving_km"], bound)
     rc.checked["orders"] = f.n
     rc.checked["served"] = int(tab["served"].sum())

@@ -6,19 +6,27 @@ odometers, so an edit of any reported figure is caught, whatever it is.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pandas as pd
 import pytest
 
 from results.check.tamper import (
     assert_fails,
+    assert_passes,
     cli,
+    copy,
     edit_csv,
+    edit_meta,
     run_violations,
     set_kpi,
     violations,
 )
+from rpbench.harness.comparison import run_comparison
+from rpbench.harness.spec import RunSpec
 from rpbench.results.check import check_tree
+from rpbench.scenarios import ScenarioRequest
 
 
 def nudge(value):
@@ -287,3 +295,93 @@ def test_decision_times_are_the_rounds_table(folder):
 def test_a_folder_from_before_decision_times_is_said_not_failed(folder):
     edit_csv(folder / "kpis.csv", lambda t: t[~t["kpi"].str.startswith(("decision_", "rounds_over"))])
     assert "kpi" not in violations(folder)
+
+
+# ------------------------------------------------------------------ decision budget
+@pytest.fixture(scope="module")
+def budget_run(tmp_path_factory) -> Path:
+    """A small clean folder run with a decision budget no round meets: every round is flagged."""
+    spec = RunSpec.of(ScenarioRequest("toy", sample=0.25, seed=3), ["mb", "rtv", "oracle1"], decision_budget_s=1e-9)
+    folder, _ = run_comparison(spec, tmp_path_factory.mktemp("budget") / "clean", progress=False)
+    return folder
+
+
+@pytest.fixture
+def budget_copy(budget_run, tmp_path) -> Path:
+    return copy(budget_run, tmp_path)
+
+
+def set_flag(folder: Path, run: str, value) -> None:
+    """Set the over_budget flag of the run's first round to ``value``."""
+
+    def edit(table):
+        table["over_budget"] = table["over_budget"].astype(object)
+        table.loc[table.index[table["run"] == run][0], "over_budget"] = value
+
+    edit_csv(folder / "rounds.csv.gz", edit)
+
+
+def test_a_folder_with_a_budget_checks_clean(budget_run, capsys):
+    found = assert_passes(budget_run, capsys)
+    mb = next(rc for rc in found[0].runs if rc.run == "mb")
+    assert mb.checked["budget_rounds"] > 0
+
+
+def test_a_tampered_budget_count_fails_kpi(budget_copy, capsys):
+    set_kpi(budget_copy, "mb", "rounds_over_budget", lambda v: float(v) - 1)
+    assert_fails(budget_copy, "kpi", "KPI rounds_over_budget: reported", run="mb")
+    assert cli(["check", str(budget_copy)], capsys)[0] == 1
+
+
+def test_a_missing_budget_count_fails_kpi(budget_copy):
+    edit_csv(budget_copy / "kpis.csv", lambda t: t[~((t["run"] == "rtv") & (t["kpi"] == "rounds_over_budget"))])
+    assert_fails(budget_copy, "kpi", "KPI rounds_over_budget is not reported", run="rtv")
+
+
+@pytest.mark.parametrize(
+    "value, fragment",
+    [
+        (False, "1 round(s) of rounds.csv.gz flagged over_budget against their decision time and the 1e-09 s budget"),
+        ("maybe", "over_budget holds 'maybe', not True/False"),
+    ],
+)
+def test_a_tampered_over_budget_flag_fails_decision_budget(budget_copy, value, fragment):
+    set_flag(budget_copy, "rtv", value)
+    found = assert_fails(budget_copy, "decision-budget", fragment, run="rtv")
+    assert "kpi" not in found  # the count is the decision times', which are untouched
+
+
+def test_a_dropped_over_budget_column_fails_decision_budget(budget_copy):
+    edit_csv(budget_copy / "rounds.csv.gz", lambda t: t.drop(columns="over_budget"))
+    assert_fails(budget_copy, "decision-budget", "rounds.csv.gz lacks the over_budget column", run="mb")
+
+
+def test_a_raised_budget_in_meta_json_fails(budget_copy):
+    """Every round is within a budget of 1e9 s: the reported count and the flags no longer hold."""
+    edit_meta(budget_copy, lambda meta: meta.update(decision_budget_s=1e9))
+    assert_fails(budget_copy, "kpi", "KPI rounds_over_budget: reported", run="mb")
+    assert_fails(budget_copy, "decision-budget", "flagged over_budget", run="mb")
+
+
+@pytest.mark.parametrize("budget", ["abc", 0, -1, True])
+def test_a_malformed_budget_in_meta_json_fails_decision_budget(budget_copy, budget):
+    edit_meta(budget_copy, lambda meta: meta.update(decision_budget_s=budget))
+    found = assert_fails(budget_copy, "decision-budget", "is not a finite number of seconds > 0", run="mb")
+    assert "kpi" not in found
+
+
+def test_a_budget_removed_from_meta_json_fails_its_kpi_and_column(budget_copy):
+    edit_meta(budget_copy, lambda meta: meta.pop("decision_budget_s"))
+    assert_fails(budget_copy, "kpi", "KPI rounds_over_budget is reported but meta.json records no decision budget")
+    assert_fails(budget_copy, "decision-budget", "rounds.csv.gz has an over_budget column but meta.json records")
+
+
+def test_a_folder_without_a_budget_needs_neither_kpi_nor_column(clean_copy):
+    """A folder of before budgets (or run without one) checks clean; a budget KPI added to it fails."""
+    assert "over_budget" not in pd.read_csv(clean_copy / "rounds.csv.gz").columns
+    assert_passes(clean_copy)
+    edit_csv(
+        clean_copy / "kpis.csv",
+        lambda t: pd.concat([t, pd.DataFrame([{"run": "mb", "kpi": "rounds_over_budget", "value": 0.0}])]),
+    )
+    assert_fails(clean_copy, "kpi", "KPI rounds_over_budget is reported but meta.json records no decision budget")
