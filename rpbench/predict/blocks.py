@@ -20,12 +20,14 @@ already wrote).
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
 from typing import BinaryIO
 
 import numpy as np
+from numba import get_num_threads
 
 from rpbench.predict import kernels
 
@@ -86,7 +88,11 @@ class ClassBlocks:
             blocks = cls(seeker_off=data["seeker_off"], cls=data["cls"], cls_off=data["cls_off"])
         so, co = blocks.seeker_off, blocks.cls_off
         if (
-            len(so) != len(co)
+            so.dtype != np.int64
+            or co.dtype != np.int64
+            or blocks.cls.dtype != np.int32
+            or so.ndim != 1
+            or len(so) != len(co)
             or len(so) < 1
             or so[0] != 0
             or so[-1] != n_od
@@ -96,7 +102,28 @@ class ClassBlocks:
             or np.any(np.diff(co) < 0)
         ):
             raise ValueError("its class blocks are inconsistent")
+        if n_classes is not None and len(blocks.cls) and (blocks.cls.min() < 0 or blocks.cls.max() >= n_classes):
+            raise ValueError(f"its class blocks name classes outside 0..{n_classes - 1}")
         return blocks
+
+    def local_problem(self, local: np.ndarray, pair_off: np.ndarray) -> str | None:
+        """Where ``local`` names a number beyond its block's classes (None: every pair is in range).
+
+        One compiled pass over the lists (:func:`.kernels.first_bad_block`), split between
+        threads; ``pair_off`` and the blocks' offsets must be checked first.
+        """
+        threads = max(1, get_num_threads())
+        bounds = self.chunks(pair_off, max(1, int(pair_off[-1]) // threads + 1))
+        with ThreadPoolExecutor(threads) as pool:  # the kernel releases the GIL
+            found = pool.map(
+                lambda b: kernels.first_bad_block(pair_off, local, self.seeker_off, self.cls_off, b[0], b[1]),
+                zip(bounds[:-1].tolist(), bounds[1:].tolist(), strict=True),
+            )
+            bad = next((int(b) for b in found if b >= 0), -1)
+        if bad < 0:
+            return None
+        width = int(self.cls_off[bad + 1] - self.cls_off[bad])
+        return f"a pair of block {bad} names a class beyond the block's {width}"
 
 
 class Localizer:

@@ -7,9 +7,13 @@ arrays and rates, the network-side parameters (R̄, D̄, v), every
 the model's arithmetic changes).  Only the per-OD and per-state results are
 stored (a few MB for the full 39,510-OD table); the matching sets are not.
 Entries are plain arrays: :mod:`.prediction` turns them back into a
-:class:`~.prediction.Prediction`.  A truncated, corrupt or incomplete entry
-is deleted and recomputed (one note on stderr), never an error that repeats
-on every run.
+:class:`~.prediction.Prediction`.  The manifest stored beside them names each
+member's dtype, shape and SHA-256 (computed from the arrays before the entry
+is renamed into place), and every load checks the members it reads against
+it, so a value changed on disk is caught, not used.  A truncated, corrupt,
+incomplete or changed entry, or one without digests (written by an older
+rpbench), is deleted and recomputed (one note on stderr), never an error
+that repeats on every run.
 """
 
 from __future__ import annotations
@@ -28,7 +32,7 @@ import numpy as np
 
 from rpbench.exceptions import one_line
 from rpbench.network import RoadNetwork
-from rpbench.paths import cache_dir, cache_write_error
+from rpbench.paths import cache_dir, cache_write_error, temporary_file
 from rpbench.predict.config import PredictConfig
 from rpbench.predict.rates import OdRates
 from rpbench.scenarios.base import Params
@@ -69,16 +73,16 @@ READ_ERRORS = (
 def save(key: str, arrays: dict[str, np.ndarray], info: dict) -> Path:
     """Write a prediction's arrays and facts atomically (a crash never leaves a half-written entry).
 
-    A manifest of the arrays (name, dtype, shape) is stored beside them, so a
-    load can tell a complete entry from a damaged one.  A cache that cannot be
-    written is a :class:`~rpbench.exceptions.CacheError`.
+    A manifest of the members (name, dtype, shape, SHA-256) is stored beside
+    them, so a load can tell a complete, unchanged entry from a damaged one.
+    A cache that cannot be written is a :class:`~rpbench.exceptions.CacheError`.
     """
-    payload: dict[str, Any] = dict(arrays)  # Any: numpy's stub would match a member against savez's flags
-    manifest = {name: [np.asarray(a).dtype.str, list(np.shape(a))] for name, a in arrays.items()}
+    payload: dict[str, Any] = {name: np.asarray(a) for name, a in arrays.items()}  # Any: numpy's savez stub
     payload["info_json"] = _json_bytes(info)
+    manifest = {name: [a.dtype.str, list(a.shape), member_digest(a)] for name, a in payload.items()}
     payload["manifest_json"] = _json_bytes(manifest)
     path = cache_path(key)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    tmp = temporary_file(path)
     try:
         with open(tmp, "wb") as fh:
             np.savez(fh, **payload)
@@ -91,16 +95,24 @@ def save(key: str, arrays: dict[str, np.ndarray], info: dict) -> Path:
     return path
 
 
+def member_digest(a: np.ndarray) -> str:
+    """SHA-256 of one stored member: its dtype, shape and bytes."""
+    a = np.ascontiguousarray(a)
+    h = hashlib.sha256(f"{a.dtype.str}|{a.shape}|".encode())
+    h.update(a.data.cast("B"))
+    return h.hexdigest()
+
+
 def load(key: str, n_ods: int, *, skip: frozenset[str] = frozenset()) -> tuple[dict[str, np.ndarray], dict] | None:
     """The cached (arrays, facts) of a prediction over ``n_ods`` ODs, or None when it must be computed.
 
-    The arrays named in ``skip`` are not read (an ``.npz`` is read member by
-    member): a dispatcher needs the per-OD arrays only, a few MB instead of
-    about 100 MB of per-state arrays for the month table.
+    The arrays named in ``skip`` are neither read nor checked (an ``.npz`` is
+    read member by member): a dispatcher needs the per-OD arrays only, a few
+    MB instead of about 100 MB of per-state arrays for the month table.
 
-    An entry that cannot be read or is incomplete is deleted (with one note
-    on stderr) so the caller recomputes and rewrites it, instead of failing
-    on it forever.
+    An entry that cannot be read, is incomplete or does not match its
+    digests is deleted (with one note on stderr) so the caller recomputes and
+    rewrites it, instead of failing on it, or using changed values, forever.
     """
     path = cache_path(key)
     try:
@@ -108,10 +120,11 @@ def load(key: str, n_ods: int, *, skip: frozenset[str] = frozenset()) -> tuple[d
     except OSError:
         return None  # not cached (yet)
     try:
-        arrays, info, manifest = _read_entry(path, skip)
-        if manifest is not None:
-            manifest = {name: spec for name, spec in manifest.items() if name not in skip}
-        problem = _entry_problem(arrays, manifest, n_ods)
+        arrays, info_bytes, manifest = _read_entry(path, skip)
+        problem = _entry_problem(arrays, info_bytes, manifest, skip, n_ods)
+        info = json.loads(bytes(info_bytes).decode()) if problem is None else {}
+        if problem is None and not isinstance(info, dict):
+            problem = "is unreadable (its facts are not a JSON object)"
     except READ_ERRORS as exc:
         problem = f"is unreadable ({type(exc).__name__}: {one_line(exc)})"
     if problem is None:
@@ -124,24 +137,32 @@ def _json_bytes(obj) -> np.ndarray:
     return np.frombuffer(json.dumps(obj, default=float).encode(), dtype=np.uint8)
 
 
-def _read_entry(path: Path, skip: frozenset[str] = frozenset()) -> tuple[dict[str, np.ndarray], dict, dict | None]:
-    """(arrays, facts, manifest) of an entry; the manifest is None in entries written before it existed."""
+def _read_entry(path: Path, skip: frozenset[str] = frozenset()) -> tuple[dict[str, np.ndarray], np.ndarray, Any]:
+    """(arrays, the facts' JSON bytes, manifest) of an entry; the manifest is None when the entry has none."""
     with np.load(path, allow_pickle=False) as data:
         arrays = {name: data[name] for name in data.files if not name.endswith("_json") and name not in skip}
-        info = json.loads(bytes(data["info_json"]).decode())
+        info = data["info_json"]
         manifest = json.loads(bytes(data["manifest_json"]).decode()) if "manifest_json" in data.files else None
-    if not isinstance(info, dict) or not isinstance(manifest, (dict, type(None))):
-        raise ValueError("info_json or manifest_json is not a JSON object")
     return arrays, info, manifest
 
 
-def _entry_problem(arrays: dict[str, np.ndarray], manifest: dict | None, n_ods: int) -> str | None:
-    """What makes a readable entry unusable (None when it is complete)."""
-    # Entries written before the manifest existed are protected by the zip's per-member CRC only.
-    for name, (dtype, shape) in (manifest or {}).items():
-        a = arrays.get(name)
+def _entry_problem(
+    arrays: dict[str, np.ndarray], info: np.ndarray, manifest: Any, skip: frozenset[str], n_ods: int
+) -> str | None:
+    """What makes a readable entry unusable (None when it is complete and matches its digests)."""
+    if not isinstance(manifest, dict) or not all(isinstance(v, list) and len(v) == 3 for v in manifest.values()):
+        return "has no content digests (written by an older rpbench)"
+    if "info_json" not in manifest or set(arrays) - set(manifest):
+        return "is incomplete (its manifest does not list every member)"
+    members = {**arrays, "info_json": info}
+    for name, (dtype, shape, digest) in manifest.items():
+        if name in skip:
+            continue
+        a = members.get(name)
         if a is None or a.dtype.str != dtype or list(a.shape) != shape:
             return f"is incomplete (array {name!r} is missing or has the wrong type or shape)"
+        if member_digest(a) != digest:
+            return f"does not match its SHA-256 digest (array {name!r} changed on disk)"
     if len(arrays.get("od_p_seeker", ())) != n_ods:
         return f"does not hold {n_ods} ODs"
     return None

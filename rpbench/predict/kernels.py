@@ -356,6 +356,26 @@ def localize(
 
 
 @njit(cache=True, nogil=True)
+def first_bad_block(off, local, block_seeker, block_cls_off, b0, b1):  # pragma: no cover - compiled
+    """The first of blocks ``b0..b1-1`` one of whose pairs holds a local number outside its classes, or -1:
+    the check that lets the sweeps index a block's table without bounds checks.  A min/max reduction per
+    block (vectorised), one pass over the lists."""
+    for b in range(b0, b1):
+        width = block_cls_off[b + 1] - block_cls_off[b]
+        i0, i1 = off[block_seeker[b]], off[block_seeker[b + 1]]
+        if i1 <= i0:
+            continue
+        lo = hi = local[i0]
+        for i in range(i0, i1):
+            v = local[i]
+            lo = min(lo, v)
+            hi = max(hi, v)
+        if np.int64(lo) < 0 or np.int64(hi) >= width:
+            return b
+    return -1
+
+
+@njit(cache=True, nogil=True)
 def count_at_most(a, lo, size, t):  # pragma: no cover - compiled
     """``(k, searched)``: k = how many of the ascending ``a[lo:lo + size]`` are ``<= t`` (size >= 1).
 

@@ -14,13 +14,23 @@ Layout of ``<cache>/predict-structure-<key>/``: ``states.npz`` (the
 :class:`~.states.StateSpace` with τ_0 = 0 in the origin states),
 ``seeker_off.npy``, ``local.bin`` (each pair's class as a block-local number,
 with ``blocks.npz``: see :mod:`.blocks`; a pair's distances are recomputed
-from the distance matrix, see :mod:`.match_sets`) and ``manifest.json``
-(sizes, the local numbers' dtype and build facts).  An entry is built in a
-temporary folder beside it and renamed into place, so it is complete or
-absent; concurrent builders take an exclusive lock on
-``predict-structure-<key>.lock``, and the losers wait and then reuse the
-winner's entry.  A damaged entry (a file of the wrong size, an unreadable
-manifest) is deleted and rebuilt, with a note.
+from the distance matrix, see :mod:`.match_sets`), ``manifest.json``
+(sizes, the local numbers' dtype, build facts, each file's size and SHA-256,
+and the manifest's own SHA-256) and ``verified.json`` (the stamp: the size,
+mtime, ctime and inode of each file when its digest last matched).  An entry
+is built in a temporary folder beside it (its name carries the builder's pid,
+so :func:`rpbench.paths.sweep_stale_temporaries` removes a killed build's)
+and renamed into place, so it is complete or absent; concurrent builders
+take an exclusive lock on ``predict-structure-<key>.lock``, and the losers
+wait and then reuse the winner's entry.
+
+Opening an entry re-hashes its files only when the stamp no longer matches
+them (about 0.7 GB for the month table: the build stamps its entry, so that
+is after a file was changed or copied); every open checks the manifest's
+digest, the file sizes and, cheaply, every index the compiled sweeps follow
+(offsets monotone and ending at the array lengths, class numbers and local
+numbers in range), so damaged values are never a crash.  A damaged entry is
+deleted and rebuilt, with one note.
 """
 
 from __future__ import annotations
@@ -46,7 +56,7 @@ import numpy as np
 
 from rpbench.exceptions import one_line
 from rpbench.network import RoadNetwork
-from rpbench.paths import cache_dir, cache_write_error
+from rpbench.paths import cache_dir, cache_write_error, temporary_folder
 from rpbench.predict.config import PredictConfig
 from rpbench.predict.match_sets import ListGeometry, Matching, build_matching
 from rpbench.predict.rates import OdRates
@@ -54,7 +64,7 @@ from rpbench.predict.states import StateSpace, build_states
 from rpbench.scenarios.base import Params
 
 #: Bump when the files, or the states or lists they hold for the same inputs, change.
-FORMAT_VERSION = "4"
+FORMAT_VERSION = "5"  # 5: file digests in the manifest, the verified stamp
 #: The network-side parameters and the configuration fields the structure depends on.
 KEY_PARAMS = ("max_pickup_m", "max_detour_m", "speed_mps")
 KEY_CONFIG = ("include_origin_state", "priority", "keep_nonpositive", "order_rule")
@@ -111,7 +121,7 @@ def load_lists(
         found = _open_entry(final, network, rates, params, config)  # another process may have finished it meanwhile
         if found is not None:
             return found
-        tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}.", dir=root))
+        tmp = temporary_folder(final)
 
         def announce(size: int) -> None:
             print(
@@ -155,7 +165,7 @@ def _remove_outdated(root: Path) -> None:
 def _private_build(network: RoadNetwork, rates: OdRates, params: Params, config: PredictConfig) -> CachedLists:
     """A build for this process only: the files are unlinked at once (the maps keep them alive)."""
     try:
-        tmp = Path(tempfile.mkdtemp(prefix=".predict-structure-private.", dir=cache_dir()))
+        tmp = temporary_folder(cache_dir() / "predict-structure-private")
     except OSError:
         tmp = Path(tempfile.mkdtemp(prefix="rpbench-structure-"))
 
@@ -213,8 +223,12 @@ def _build_into(
         "local": matching.local.dtype.str,
         "stats": matching.stats,
         "build_s": build_s,
+        "files": {name: [(directory / name).stat().st_size, _file_digest(directory / name)] for name in ENTRY_FILES},
     }
-    (directory / "manifest.json").write_text(json.dumps(manifest, default=float, indent=1))
+    manifest = json.loads(json.dumps(manifest, default=float))  # as it reads back, for its digest
+    manifest["digest"] = _manifest_digest(manifest)
+    (directory / "manifest.json").write_text(json.dumps(manifest, indent=1))
+    _write_stamp(directory, manifest)
     _release_free_heap()
     return CachedLists(space=space, matching=matching, build_s=build_s, directory=directory)
 
@@ -226,6 +240,15 @@ def _release_free_heap() -> None:
         ctypes.CDLL("libc.so.6").malloc_trim(0)
 
 
+#: The entry's data files, each with its size and SHA-256 in the manifest.
+ENTRY_FILES = ("states.npz", "seeker_off.npy", "blocks.npz", "local.bin")
+STAMP = "verified.json"
+
+
+class DamagedEntry(ValueError):
+    """A cache entry whose content does not check out (the message says why)."""
+
+
 def _open_entry(
     directory: Path, network: RoadNetwork, rates: OdRates, params: Params, config: PredictConfig
 ) -> CachedLists | None:
@@ -235,25 +258,94 @@ def _open_entry(
     n_od = len(rates)
     try:
         manifest = json.loads((directory / "manifest.json").read_text())
-        if manifest.get("version") != FORMAT_VERSION or manifest.get("n_od") != n_od:
-            raise ValueError("it was written for other inputs")
+        if not isinstance(manifest, dict) or manifest.get("version") != FORMAT_VERSION or manifest.get("n_od") != n_od:
+            raise DamagedEntry("it was written for other inputs")
+        _verify_files(directory, manifest)
         with np.load(directory / "states.npz", allow_pickle=False) as data:
             space = StateSpace(**{f.name: data[f.name] for f in dataclasses.fields(StateSpace)})
+        problem = space.problem(n_od, network.n_nodes, network.n_arcs)
+        if problem is not None:
+            raise DamagedEntry(f"its states are inconsistent ({problem})")
         seeker_off = np.load(directory / "seeker_off.npy", allow_pickle=False)
-        if len(seeker_off) != n_od + 1 or int(seeker_off[-1]) != manifest.get("n_pairs"):
-            raise ValueError("its offsets do not match the manifest")
+        if (
+            seeker_off.dtype != np.int64
+            or seeker_off.shape != (n_od + 1,)
+            or seeker_off[0] != 0
+            or int(seeker_off[-1]) != manifest.get("n_pairs")
+            or np.any(np.diff(seeker_off) < 0)
+        ):
+            raise DamagedEntry("its offsets are not monotone from 0 to the manifest's pair count")
         geometry = ListGeometry.of(space, rates, params, config, lambda: network.distances().dist)
-        matching = Matching.open(directory, seeker_off, manifest.get("stats", {}), manifest["local"], geometry)
+        matching = Matching.open(
+            directory, seeker_off, manifest.get("stats", {}), manifest["local"], geometry, n_classes=space.n_classes
+        )
     except (OSError, ValueError, KeyError, TypeError, EOFError, zipfile.BadZipFile) as exc:  # npz: a zip
+        why = str(exc) if isinstance(exc, DamagedEntry) else f"{type(exc).__name__}: {one_line(exc)}"
         print(
-            f"rpbench: note: the cached prediction structure {directory.name} is unusable "
-            f"({type(exc).__name__}: {one_line(exc)}); rebuilding it",
+            f"rpbench: note: the cached prediction structure {directory.name} is unusable ({why}); rebuilding it",
             file=sys.stderr,
         )
         shutil.rmtree(directory, ignore_errors=True)
         return None
     zero = {k: 0.0 for k in ("distances_s", "states_s", "matching_s")}
     return CachedLists(space=space, matching=matching, build_s=zero, directory=directory)
+
+
+def _verify_files(directory: Path, manifest: dict) -> None:
+    """Check the manifest's digest and each file's size; re-hash the files unless the stamp vouches for them."""
+    if manifest.get("digest") != _manifest_digest(manifest):
+        raise DamagedEntry("its manifest does not match its SHA-256 digest")
+    files = manifest.get("files")
+    if not isinstance(files, dict) or sorted(files) != sorted(ENTRY_FILES):
+        raise DamagedEntry("its manifest does not list its files")
+    for name, (size, _) in files.items():
+        actual = (directory / name).stat().st_size
+        if actual != size:
+            raise DamagedEntry(f"its file {name} holds {actual} bytes, expected {size}")
+    if _read_stamp(directory) == _stamp(directory, manifest):
+        return
+    for name, (_, digest) in files.items():
+        if _file_digest(directory / name) != digest:
+            raise DamagedEntry(f"its file {name} does not match its SHA-256 digest (changed on disk)")
+    with contextlib.suppress(OSError):  # a read-only cache: verified again next time
+        _write_stamp(directory, manifest)
+
+
+def _file_digest(path: Path) -> str:
+    with open(path, "rb") as fh:
+        return hashlib.file_digest(fh, "sha256").hexdigest()
+
+
+def _manifest_digest(manifest: dict) -> str:
+    body = {k: v for k, v in manifest.items() if k != "digest"}
+    return hashlib.sha256(json.dumps(body, sort_keys=True).encode()).hexdigest()
+
+
+def _stamp(directory: Path, manifest: dict) -> dict:
+    """What the stamp of a verified entry holds: the manifest's digest and each file's identity on disk
+    (``ctime`` changes with any write, and cannot be set back the way ``mtime`` can)."""
+    identity = {}
+    for name in ENTRY_FILES:
+        st = (directory / name).stat()
+        identity[name] = [st.st_size, st.st_mtime_ns, st.st_ctime_ns, st.st_ino]
+    return {"manifest": manifest.get("digest"), "files": identity}
+
+
+def _read_stamp(directory: Path) -> object:
+    try:
+        return json.loads((directory / STAMP).read_text())
+    except (OSError, ValueError):
+        return None
+
+
+def _write_stamp(directory: Path, manifest: dict) -> None:
+    """Record that the files' digests matched (atomically: a torn stamp only costs a re-hash)."""
+    tmp = directory / f".{STAMP}.{os.getpid()}.tmp"
+    try:
+        tmp.write_text(json.dumps(_stamp(directory, manifest)))
+        os.replace(tmp, directory / STAMP)
+    finally:
+        tmp.unlink(missing_ok=True)
 
 
 @contextmanager

@@ -276,15 +276,27 @@ class Matching:
 
     @classmethod
     def open(
-        cls, directory: Path, seeker_off: np.ndarray, stats: dict, local_dtype: str, geometry: ListGeometry
+        cls,
+        directory: Path,
+        seeker_off: np.ndarray,
+        stats: dict,
+        local_dtype: str,
+        geometry: ListGeometry,
+        *,
+        n_classes: int | None = None,
     ) -> Matching:
         """The matching whose lists lie in ``directory`` (a read-only memory map); ``local_dtype`` names the
-        dtype of the local class numbers."""
+        dtype of the local class numbers.  With ``n_classes`` (a cache entry, not a fresh build) every
+        class and local number is checked to be in range (``seeker_off`` must be checked by the caller)."""
         n, n_od = int(seeker_off[-1]), len(seeker_off) - 1
         if np.dtype(local_dtype) not in (np.dtype("<u2"), np.dtype("<i4")):
             raise ValueError(f"local class numbers of type {local_dtype!r} are not supported")
         local = _open_column(directory / "local.bin", local_dtype, n)
-        blocks = ClassBlocks.load(directory, n_od)
+        blocks = ClassBlocks.load(directory, n_od, n_classes)
+        if n_classes is not None:
+            problem = blocks.local_problem(local, seeker_off)
+            if problem is not None:
+                raise ValueError(f"local.bin is inconsistent: {problem}")
         return cls(seeker_off=seeker_off, local=local, blocks=blocks, geometry=geometry, stats=stats)
 
 

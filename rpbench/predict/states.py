@@ -68,6 +68,45 @@ class StateSpace:
     def class_size(self) -> np.ndarray:
         return np.diff(self.class_off)
 
+    def problem(self, n_od: int, n_nodes: int, n_arcs: int) -> str | None:
+        """What makes states read from disk unsafe to sweep (None when every index is in range).
+
+        Vectorised checks of every index the compiled kernels follow without
+        bounds checks: array types and lengths, offsets monotone from 0 to the
+        array they cut, state, class, node and arc numbers in range.
+        """
+        n, c = self.n_states, self.n_classes
+        per_state = ("od", "k", "head", "arc", "pre_m", "tau_s", "delta_m", "cls", "class_members")
+        per_class = ("class_head", "class_dest", "class_pre_m", "class_rest_m")
+        lengths = {"od_state_off": n_od + 1, "solo_m": n_od, "class_off": c + 1}
+        lengths.update({name: n for name in per_state} | {name: c for name in per_class})
+        for name, length in lengths.items():
+            a = getattr(self, name)
+            if a.ndim != 1 or len(a) != length:
+                return f"{name} has shape {a.shape}, expected ({length},)"
+        for name in ("od", "k", "head", "arc", "cls", "class_head", "class_dest", "class_members"):
+            if getattr(self, name).dtype.kind != "i":
+                return f"{name} is of type {getattr(self, name).dtype}, expected integers"
+        for name, total in (("od_state_off", n), ("class_off", n)):
+            off = getattr(self, name)
+            if off.dtype != np.int64 or off[0] != 0 or off[-1] != total or np.any(np.diff(off) < 0):
+                return f"{name} is not monotone from 0 to {total}"
+        ranges = {
+            "od": (0, n_od),
+            "k": (0, None),
+            "head": (0, n_nodes),
+            "arc": (-1, n_arcs),
+            "cls": (0, c),
+            "class_head": (0, n_nodes),
+            "class_dest": (0, n_nodes),
+            "class_members": (0, n),
+        }
+        for name, (lo, hi) in ranges.items():
+            a = getattr(self, name)
+            if len(a) and (a.min() < lo or (hi is not None and a.max() >= hi)):
+                return f"{name} holds values outside [{lo}, {hi if hi is not None else 'inf'})"
+        return None
+
 
 def build_states(
     network: RoadNetwork,

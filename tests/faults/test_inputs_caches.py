@@ -259,13 +259,24 @@ def test_damaged_prediction_cache_is_deleted_and_recomputed(cache, capsys, damag
     assert not leftovers(cache)
 
 
-def test_prediction_entry_written_before_the_manifest_is_still_used(cache, capsys):
+def old_manifest(members: dict) -> dict:
+    """The manifest an older rpbench wrote: dtype and shape of each array, no digest."""
+    arrays = {k: v for k, v in members.items() if not k.endswith("_json")}
+    return {**members, "manifest_json": json_member({k: [v.dtype.str, list(v.shape)] for k, v in arrays.items()})}
+
+
+@pytest.mark.parametrize("change", [without("manifest_json"), old_manifest], ids=["no manifest", "no digests"])
+def test_prediction_entry_without_digests_is_recomputed_once(cache, capsys, change):
     inputs = small_prediction_inputs()
     first = predict(*inputs)
-    rewrite_entry(entry_path(inputs), without("manifest_json"))
+    rewrite_entry(entry_path(inputs), change)
+    again = predict(*inputs)
+    assert not again.from_cache
+    notes = capsys.readouterr().err.splitlines()
+    assert len(notes) == 1 and "has no content digests (written by an older rpbench); recomputing" in notes[0]
+    np.testing.assert_array_equal(again.od.pairing_prob, first.od.pairing_prob)
     hit = predict(*inputs)
     assert hit.from_cache and capsys.readouterr().err == ""
-    np.testing.assert_array_equal(hit.od.pairing_prob, first.od.pairing_prob)
 
 
 def test_disk_full_while_writing_a_prediction(cache, monkeypatch):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import fcntl
+import hashlib
 import json
 import os
 import subprocess
@@ -83,10 +84,13 @@ def test_an_entry_holds_the_class_lists_and_the_states_only(cache):
         "manifest.json",
         "seeker_off.npy",
         "states.npz",
+        "verified.json",
     ]
     assert (lists.directory / "local.bin").stat().st_size == 2 * lists.matching.n_pairs
     manifest = json.loads((lists.directory / "manifest.json").read_text())
     assert manifest["version"] == list_cache.FORMAT_VERSION and manifest["local"] == "<u2"
+    local = lists.directory / "local.bin"
+    assert manifest["files"]["local.bin"] == [local.stat().st_size, hashlib.sha256(local.read_bytes()).hexdigest()]
 
 
 def test_a_build_announces_what_where_and_its_size_in_one_line_and_nothing_else(cache, capsys):
