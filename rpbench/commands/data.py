@@ -2,7 +2,8 @@
 
 The pinned file list and the download logic are :mod:`rpbench.data.fetch`.
 Summaries go to stdout (one JSON object with ``--json``), the progress bar
-to stderr; a network error or a checksum mismatch is one line and exit 2.
+to stderr; a network error, a checksum mismatch, a body longer than the
+registry's size and a full disk are each one line and exit 2.
 Commands that need the data fetch it the same way by themselves when no
 folder is found (:mod:`rpbench.data.first_run`).
 """

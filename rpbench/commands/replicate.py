@@ -12,6 +12,8 @@ from rpbench.backends.presets import load_preset
 from rpbench.commands._common import add_data_arg, add_offline_arg, command_line, print_json
 from rpbench.data import available_peak_dates
 from rpbench.data.first_run import ensure_data_dir
+from rpbench.replication.folder import engine_folder, file_manifest, write_engine_folder
+from rpbench.replication.reference import has_committed
 from rpbench.replication.report import criterion, markdown
 from rpbench.replication.runner import parse_strategies, replicate
 from rpbench.replication.switches import steps_for
@@ -76,8 +78,16 @@ def run(args: argparse.Namespace) -> int:
     check_new_folder(args.out)
     mode = "none" if args.no_ablation else args.ablation
     steps_for(mode)  # a bad --ablation is one line before anything runs
+    own: list = []  # rpbench's own engine's runs, kept as results folders that rpbench check verifies
     result = replicate(
-        data_dir, dates, strategies, preset, ablation=mode, rpbench_engine=not args.no_rpbench, progress=args.progress
+        data_dir,
+        dates,
+        strategies,
+        preset,
+        ablation=mode,
+        rpbench_engine=not args.no_rpbench,
+        progress=args.progress,
+        keep=lambda *run: own.append(run),
     )
     frame = pd.DataFrame(result.rows)
     meta = {
@@ -92,7 +102,10 @@ def run(args: argparse.Namespace) -> int:
         **results.environment(),
     }
     meta["version"] = meta["versions"]["rpbench"]
-    text = markdown(frame, meta)
+    # A fetched data folder has no committed outputs: the criterion is then not evaluated, not failed.
+    reference = has_committed(data_dir)
+    meta["reference_outputs"] = reference  # the checker re-renders report.md as it was rendered
+    text = markdown(frame, meta, reference=reference)
     default = f"{results.timestamp()}_replicate"
     with results.new_results_folder(args.out, default) as (folder, final):
         results.write_json(folder / "meta.json", meta)
@@ -112,8 +125,13 @@ def run(args: argparse.Namespace) -> int:
             partner = rec["partner"].to_numpy()
             rec["partner"] = [int(orders.order_id[p]) if p >= 0 else -1 for p in partner]
             rec.drop(columns=["order"]).to_csv(audit.records_file(folder, date, strategy, engine), index=False)
+        for date, strategy, engine, strategy_run, scenario in own:
+            dest = engine_folder(folder, date, strategy, engine)
+            write_engine_folder(dest, scenario, strategy_run, preset, meta["command"])
+        # Last: the SHA-256 of every file written, so that an edited, deleted or added file fails rpbench check.
+        results.write_json(folder / "meta.json", {**meta, "manifest": {"files": file_manifest(folder)}})
     if args.json:
-        print_json({"runs": result.rows, "criterion": criterion(frame), "folder": str(final)})
+        print_json({"runs": result.rows, "criterion": criterion(frame, reference=reference), "folder": str(final)})
     else:
         print(text)
         print(f"rpbench: wrote {final}", file=sys.stderr)

@@ -24,6 +24,14 @@ corrupt download never leaves a file under the final name.  Files already
 present with the right content are skipped, which makes a second run free and
 an interrupted one resumable (file by file; the largest file is 2.3 MB).
 
+Sizes: a download is held to the registry.  Reading stops as soon as more
+bytes arrive than the entry's content (``size``) can take: the content itself
+from the pinned sources, the gzip of it from a mirror (:func:`gzip_bound`),
+whose content is counted as it inflates, so an endless body or a gzip bomb is
+refused after at most one chunk past the bound, never stored nor inflated
+whole.  A full disk (``ENOSPC``, ``EDQUOT``) is a :class:`DiskFullError`
+naming the folder, not a network error.
+
 Connecting (and the TLS handshake) times out after :data:`CONNECT_TIMEOUT_S`,
 so a host that does not answer fails in seconds; once connected, each read
 may take :data:`READ_TIMEOUT_S` (a slow link is fine, a stalled one is not).
@@ -41,6 +49,7 @@ GET, which urllib does in a few lines without pulling in ``requests``.
 from __future__ import annotations
 
 import contextlib
+import errno
 import gzip
 import hashlib
 import http.client
@@ -54,6 +63,7 @@ import urllib.error
 import urllib.parse
 import urllib.request
 import zlib
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from importlib import resources
 from pathlib import Path, PurePosixPath
@@ -63,7 +73,7 @@ from tqdm import tqdm
 
 from rpbench import __version__
 from rpbench.data.orders import PEAK_DIR
-from rpbench.exceptions import ChecksumError, DataError, DownloadError, ParameterError
+from rpbench.exceptions import ChecksumError, DataError, DownloadError, ParameterError, RpbenchError
 from rpbench.paths import DATA_MIRROR_ENV, fetched_data_dir
 
 REGISTRY_RESOURCE = "registry.toml"
@@ -75,8 +85,15 @@ READ_TIMEOUT_S = 60.0
 # Files of the data folder that are documentation of the folder, not data.
 NOT_DATA = ("SOURCE.md",)
 
+#: The errno values of a full device: no space left, or the user's disk quota used up.
+DISK_FULL_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT})
+
 _SHA256_RE = re.compile(r"^[0-9a-f]{64}$")
 _PEAK_DAY_RE = re.compile(rf"^{re.escape(PEAK_DIR.as_posix())}/\d{{4}}-\d{{2}}-\d{{2}}\.csv\.gz$")
+
+
+class DiskFullError(RpbenchError, OSError):
+    """The device holding the data folder is full (or the disk quota is used up) while a file is stored."""
 
 
 @dataclass(frozen=True)
@@ -204,13 +221,16 @@ def content_problem(path: Path, entry: RegistryEntry) -> str | None:
     digest, size = hashlib.sha256(), 0
     try:
         with gzip.open(path, "rb") if entry.transform == "gzip" else open(path, "rb") as fh:
-            while chunk := fh.read(CHUNK):
+            # Never read (or inflate) past the registered size: a bigger file is wrong whatever follows.
+            while size <= entry.size and (chunk := fh.read(min(CHUNK, entry.size - size + 1))):
                 digest.update(chunk)
                 size += len(chunk)
     except (gzip.BadGzipFile, EOFError, zlib.error) as exc:
         return f"not a valid gzip file ({_one_line(exc)})"
     except OSError as exc:
         return f"unreadable ({_one_line(exc)})"
+    if size > entry.size:
+        return f"its content is longer than the registry's {entry.size:,} bytes"
     return _mismatch(entry, digest.hexdigest(), size)
 
 
@@ -232,9 +252,11 @@ def fetch(
     """Download every registry file missing from ``dest`` (default: :func:`rpbench.paths.fetched_data_dir`).
 
     Files already there with the right content are skipped; a file with the
-    wrong content is downloaded again.  The first network error or checksum
-    mismatch stops the run with a :class:`DownloadError` or :class:`ChecksumError`
-    naming the file; the files stored before it are kept, so rerunning resumes.
+    wrong content is downloaded again.  The first network error, checksum
+    mismatch (or body longer than the registry allows) or full disk stops the
+    run with a :class:`DownloadError`, :class:`ChecksumError` or
+    :class:`DiskFullError` naming the file; the files stored before it are
+    kept, so rerunning resumes.
     """
     folder = Path(dest).expanduser() if dest is not None else fetched_data_dir()
     if folder.exists() and not folder.is_dir():
@@ -267,8 +289,16 @@ def fetch(
             for entry in todo:
                 bar.set_postfix_str(entry.name)
                 target = folder / entry.name
-                _make_dirs(target.parent, created)
-                download(entry, source_url(entry, base), target, served_as_stored=base is not None, bar=bar)
+                try:
+                    _make_dirs(target.parent, created)
+                    download(entry, source_url(entry, base), target, served_as_stored=base is not None, bar=bar)
+                except OSError as exc:
+                    if exc.errno not in DISK_FULL_ERRNOS:
+                        raise
+                    raise DiskFullError(
+                        f"no space left on the device holding {str(folder)!r} while storing {entry.name} "
+                        f"({_one_line(exc.strerror or exc)}); nothing half-written was kept{DISK_FULL_HINT}"
+                    ) from None
                 report.downloaded.append(entry.name)
                 report.content_bytes += entry.size
     except BaseException:
@@ -286,6 +316,8 @@ def _make_dirs(path: Path, created: list[Path]) -> None:
     try:
         path.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
+        if exc.errno in DISK_FULL_ERRNOS:
+            raise  # fetch names the full device
         raise ParameterError(
             f"cannot create the folder {str(path)!r} ({_one_line(exc)}); pass --dest DIR with a writable folder"
         ) from None
@@ -297,11 +329,15 @@ def download(entry: RegistryEntry, url: str, target: Path, *, served_as_stored: 
 
     ``served_as_stored``: the URL serves the file as the data folder stores it
     (a mirror: gzipped where the transform is gzip); otherwise it serves the
-    upstream content and the transform is applied here.
+    upstream content and the transform is applied here.  A full device raises
+    its ``OSError`` (``errno`` in :data:`DISK_FULL_ERRNOS`) as it is, the
+    partial file removed: :func:`fetch` names the folder.
     """
     try:
         fd, tmp_name = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".part")
     except OSError as exc:
+        if exc.errno in DISK_FULL_ERRNOS:
+            raise
         raise ParameterError(
             f"cannot write into {str(target.parent)!r} ({_one_line(exc)}); pass --dest DIR with a writable folder"
         ) from None
@@ -325,17 +361,29 @@ def download(entry: RegistryEntry, url: str, target: Path, *, served_as_stored: 
 def _stream(
     entry: RegistryEntry, url: str, out: BinaryIO, *, served_as_stored: bool, bar: tqdm | None
 ) -> tuple[str, int]:
-    """Copy ``url`` into ``out`` as the folder stores it; return the content's SHA-256 and size."""
+    """Copy ``url`` into ``out`` as the folder stores it; return the content's SHA-256 and size.
+
+    Raises a :class:`ChecksumError` as soon as the body is longer than the
+    registry allows (see the module's docstring), before storing the excess.
+    """
     digest, size = hashlib.sha256(), 0
+    gzipped = entry.transform == "gzip" and served_as_stored
+    wire_limit = gzip_bound(entry.size) if gzipped else entry.size
     try:
         # The stack closes the gzip wrappers before ``out`` is closed (closing a
         # writer adds the gzip trailer to ``out`` and leaves ``out`` open).
         with _open_url(url) as response, contextlib.ExitStack() as stack:
+            declared = _content_length(response)
+            if declared is not None and declared > wire_limit:
+                raise _too_long(entry, url, wire_limit, gzipped=gzipped, declared=declared)
             content: gzip.GzipFile | BinaryIO
             sink: gzip.GzipFile | BinaryIO | None
-            if entry.transform == "gzip" and served_as_stored:
+            if gzipped:
                 # Store the served gzip bytes as they are, hash what they decompress to.
-                content = stack.enter_context(gzip.GzipFile(fileobj=_Tee(response, out), mode="rb"))
+                tee = _Tee(
+                    response, out, limit=wire_limit, refuse=lambda: _too_long(entry, url, wire_limit, gzipped=True)
+                )
+                content = stack.enter_context(gzip.GzipFile(fileobj=tee, mode="rb"))
                 sink = None
             elif entry.transform == "gzip":
                 # filename="" and mtime=0: no temp-file name nor time in the header, as `gzip -9n`.
@@ -343,9 +391,12 @@ def _stream(
                 sink = stack.enter_context(gzip.GzipFile(filename="", mode="wb", fileobj=out, compresslevel=9, mtime=0))
             else:
                 content, sink = response, out
-            while chunk := content.read(CHUNK):
-                digest.update(chunk)
+            # One byte past the registered size is enough to refuse: never ask for more.
+            while chunk := content.read(min(CHUNK, entry.size - size + 1)):
                 size += len(chunk)
+                if size > entry.size:
+                    raise _too_long(entry, url, entry.size, gzipped=gzipped, inflated=gzipped)
+                digest.update(chunk)
                 if sink is not None:
                     sink.write(chunk)
                 if bar is not None:
@@ -364,6 +415,8 @@ def _stream(
             f"could not download {entry.name} from {url}: {_one_line(exc.reason)}{RERUN_HINT}"
         ) from None
     except (http.client.HTTPException, OSError) as exc:
+        if isinstance(exc, OSError) and exc.errno in DISK_FULL_ERRNOS:
+            raise  # writing failed, not the network: fetch names the full device
         raise DownloadError(
             f"could not download {entry.name} from {url}: {_one_line(exc) or type(exc).__name__}{RERUN_HINT}"
         ) from None
@@ -375,6 +428,41 @@ RERUN_HINT = (
     f"; check the network (or the mirror: --mirror, ${DATA_MIRROR_ENV}) and run `rpbench data fetch` again "
     "(stored files are kept)"
 )
+#: The end of a full disk's message.
+DISK_FULL_HINT = "; free space there (or pass --dest DIR on another device) and run `rpbench data fetch` again"
+
+
+def gzip_bound(size: int) -> int:
+    """The most bytes a gzip of ``size`` content bytes takes, generously.
+
+    Deflate's worst case adds 5 bytes per 16 KiB stored block (zlib's
+    ``deflateBound``); 1/256 of the size plus 64 KiB also leaves room for a
+    header with a file name, or a few gzip members.
+    """
+    return size + size // 256 + (64 << 10)
+
+
+def _content_length(response) -> int | None:
+    headers = getattr(response, "headers", None)
+    value = headers.get("Content-Length") if headers is not None else None
+    try:
+        return int(value) if value is not None else None
+    except ValueError:
+        return None
+
+
+def _too_long(
+    entry: RegistryEntry, url: str, limit: int, *, gzipped: bool, inflated: bool = False, declared: int | None = None
+) -> ChecksumError:
+    """The refusal of a body longer than ``limit``, the most the registry allows (``declared``: its Content-Length)."""
+    verb = f"declares {declared:,} bytes, more than" if declared is not None else "sent more than"
+    if inflated:
+        what = f"inflates to more than the registered {limit:,} bytes"
+    elif gzipped:
+        what = f"{verb} the {limit:,} bytes a gzip of the registered {entry.size:,} bytes can take"
+    else:
+        what = f"{verb} the registered {limit:,} bytes"
+    return ChecksumError(f"{entry.name} from {url} {what}; refused (the file was not stored)")
 
 
 def _open_url(url: str):
@@ -413,16 +501,23 @@ class _HTTPSHandler(urllib.request.HTTPSHandler):
 
 
 class _Tee(io.RawIOBase):
-    """A readable stream that copies every byte read from ``source`` into ``copy``."""
+    """A readable stream that copies every byte read from ``source`` into ``copy``, at most ``limit`` of them.
 
-    def __init__(self, source: BinaryIO, copy: BinaryIO) -> None:
+    Past ``limit`` it raises ``refuse()`` instead of reading further or copying the excess.
+    """
+
+    def __init__(self, source: BinaryIO, copy: BinaryIO, *, limit: int, refuse: Callable[[], Exception]) -> None:
         self._source, self._copy = source, copy
+        self._limit, self._refuse, self._seen = limit, refuse, 0
 
     def readable(self) -> bool:
         return True
 
     def readinto(self, buffer) -> int:
-        data = self._source.read(len(buffer))
+        data = self._source.read(min(len(buffer), self._limit - self._seen + 1))
+        self._seen += len(data)
+        if self._seen > self._limit:
+            raise self._refuse()
         buffer[: len(data)] = data
         if data:
             self._copy.write(data)

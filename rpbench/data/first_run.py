@@ -25,7 +25,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from rpbench import paths
-from rpbench.data.fetch import RERUN_HINT, RegistryEntry, fetch, load_registry, mirror_base
+from rpbench.data.fetch import DISK_FULL_HINT, RERUN_HINT, RegistryEntry, fetch, load_registry, mirror_base
 from rpbench.exceptions import DataNotFoundError, RpbenchError
 from rpbench.paths import DATA_ENV, DATA_MIRROR_ENV, describe_candidate, fetched_data_dir, locate_data_dir
 
@@ -170,7 +170,7 @@ def _mb(n: int) -> str:
 
 def _one_line(exc: BaseException) -> str:
     # The errors here name the command to rerun themselves.
-    return " ".join(str(exc).removesuffix(RERUN_HINT).split())
+    return " ".join(str(exc).removesuffix(RERUN_HINT).removesuffix(DISK_FULL_HINT).split())
 
 
 def _stderr(line: str) -> None:

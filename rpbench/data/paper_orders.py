@@ -32,6 +32,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from rpbench.data._table import open_csv
 from rpbench.data.orders import parse_date, peak_order_path
 from rpbench.exceptions import DataError
 
@@ -69,7 +70,10 @@ def read_paper_orders(data_dir: Path, date: str) -> pd.DataFrame:
     day = parse_date(date).isoformat()
     path = paper_order_source(data_dir, day)
     try:
-        raw = pd.read_csv(path)
+        with open_csv(path, "order") as source:
+            raw = pd.read_csv(source, compression=None)
+    except DataError:
+        raise
     except (OSError, ValueError) as exc:
         raise DataError(f"cannot read the order file {str(path)!r}: {exc}") from None
     if path.name == ARRIVE_TIME_FILE.name:
@@ -137,8 +141,9 @@ def _od_predictions(data_dir: Path) -> pd.DataFrame:
             columns=list(PREDICTION_COLUMNS),
             index=pd.MultiIndex.from_arrays([[], []], names=["origin_id", "destination_id"]),
         )
-    od = pd.read_csv(od_path)
-    pred = pd.read_csv(pred_path)
+    with open_csv(od_path, "OD") as od_source, open_csv(pred_path, "prediction") as pred_source:
+        od = pd.read_csv(od_source, compression=None)
+        pred = pd.read_csv(pred_source, compression=None)
     _require(od, ["OD_id", "origin_id", "destination_id"], od_path)
     _require(pred, ["OD_id", *PREDICTION_COLUMNS], pred_path)
     table = od.merge(pred, on="OD_id")

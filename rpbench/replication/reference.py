@@ -69,10 +69,15 @@ TABLE2_DATE = "2017-05-01"
 KPIS = ("response_rate", "pairing_ratio", "total_saving_km", "avg_detour_m", "avg_shared_m")
 
 
+def has_committed(data_dir: Path) -> bool:
+    """Whether ``data_dir`` holds the committed outputs (a fetched data folder does not: no registry entry)."""
+    return (data_dir / REFERENCE_FILE).is_file()
+
+
 def read_committed(data_dir: Path) -> pd.DataFrame:
     """Committed outputs as rows (strategy, date, kpi, value); empty when the file is absent."""
     path = data_dir / REFERENCE_FILE
-    if not path.is_file():
+    if not has_committed(data_dir):
         return pd.DataFrame(columns=["strategy", "date", "kpi", "value"])
     raw = pd.read_csv(path)
     by_method = {v: k for k, v in METHODS.items()}

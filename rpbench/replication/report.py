@@ -5,11 +5,17 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from rpbench.replication.reference import REFERENCE_FILE
+
 #: The agreement criterion with the committed outputs: MB and RTV within REL_TOL on pairing ratio and total
-#: saving, NP's response rate within NP_RESPONSE_TOL.
+#: saving, NP's response rate within NP_RESPONSE_TOL, on at least REQUIRED_DAYS of every OF_DAYS days that
+#: have committed outputs (in proportion, rounded up, for fewer days).
 REL_TOL = 0.15
 NP_RESPONSE_TOL = 0.03
 CRITERION_STRATEGIES = ("mb", "rtv")
+REQUIRED_DAYS, OF_DAYS = 10, 14
+#: What the criterion says when the data folder has no committed outputs at all (a fetched one has none).
+NO_REFERENCE = "no reference outputs to compare with"
 
 
 def _fmt(x, digits: int = 3) -> str:
@@ -25,32 +31,102 @@ def _rel(a, b) -> float:
 
 
 def agreement(frame: pd.DataFrame) -> pd.DataFrame:
-    """Per date and strategy: the authors' engine beside the committed output, with relative differences."""
+    """Per date and strategy: the authors' engine beside the committed output, with relative differences.
+
+    ``within`` is NaN where there is nothing to compare: a strategy outside the criterion, or a day
+    without the committed values the criterion compares.
+    """
     a = frame[frame["engine"] == "authors"].copy()
     a["rel_pairing"] = [_rel(x, y) for x, y in zip(a["pairing_ratio"], a["committed_pairing_ratio"], strict=True)]
     a["rel_saving"] = [_rel(x, y) for x, y in zip(a["total_saving_km"], a["committed_total_saving_km"], strict=True)]
-    a["diff_response"] = a["response_rate"] - a["committed_response_rate"].astype(float)
-    a["within"] = [
-        (abs(rp) <= REL_TOL and abs(rs) <= REL_TOL)
-        if s in CRITERION_STRATEGIES
-        else (abs(dr) <= NP_RESPONSE_TOL if s == "np" else np.nan)
-        for s, rp, rs, dr in zip(a["strategy"], a["rel_pairing"], a["rel_saving"], a["diff_response"], strict=True)
-    ]
+    a["diff_response"] = a["response_rate"].astype(float) - a["committed_response_rate"].astype(float)
+    columns = (a["strategy"], a["rel_pairing"], a["rel_saving"], a["diff_response"])
+    a["within"] = [_within(*row) for row in zip(*columns, strict=True)]
     return a
 
 
-def criterion(frame: pd.DataFrame) -> dict[str, str]:
-    """Days within tolerance per strategy of the criterion (MB, RTV: pairing and saving within 15 %; NP:
-    response within 0.03)."""
+def _within(strategy: str, rel_pairing: float, rel_saving: float, diff_response: float) -> float:
+    """1.0 / 0.0 whether one day is within the criterion's tolerance, NaN when it cannot be compared."""
+    compared: tuple[float, ...]
+    if strategy in CRITERION_STRATEGIES:
+        compared = (rel_pairing, rel_saving)
+        tol = REL_TOL
+    elif strategy == "np":
+        compared = (diff_response,)
+        tol = NP_RESPONSE_TOL
+    else:
+        return np.nan
+    if not all(np.isfinite(x) for x in compared):
+        return np.nan
+    return float(all(abs(x) <= tol for x in compared))
+
+
+def required_days(days: int) -> int:
+    """Days within tolerance the criterion asks of ``days`` compared: REQUIRED_DAYS of OF_DAYS in proportion."""
+    return -(-REQUIRED_DAYS * days // OF_DAYS)
+
+
+def _day(n: int) -> str:
+    return "day" if n == 1 else "days"
+
+
+def _days_text(dates: list[str]) -> str:
+    if len(dates) <= 3:
+        return ", ".join(dates)
+    return f"{len(dates)} days ({dates[0]} .. {dates[-1]})"
+
+
+def criterion(frame: pd.DataFrame, *, reference: bool = True) -> dict[str, str]:
+    """Per strategy of the criterion that ran: ``met: K of N days within ...``, ``not met: ...`` or ``not
+    evaluated: ...`` (``reference`` false: the data folder has no committed outputs; or none for these days).
+
+    Only the days with committed outputs count: N is their number, the bar :func:`required_days` of it.
+    """
     a = agreement(frame)
     out = {}
     for s in ("mb", "rtv", "np"):
         part = a[a["strategy"] == s]
         if not len(part):
             continue
-        ok = int(np.nansum(part["within"].astype(float)))
-        out[s] = f"{ok} of {len(part)} days"
+        if not reference:
+            out[s] = f"not evaluated: {NO_REFERENCE}"
+            continue
+        compared = part[part["within"].notna()]
+        missing = sorted(set(part["date"]) - set(compared["date"]))
+        if not len(compared):
+            out[s] = f"not evaluated: no committed outputs for {_days_text(missing)}"
+            continue
+        ok, n = int(compared["within"].sum()), len(compared)
+        need = required_days(n)
+        text = f"{'met' if ok >= need else 'not met'}: {ok} of {n} {_day(n)} within (at least {need} needed)"
+        if missing:
+            text += f"; no committed outputs for {_days_text(missing)}, not counted"
+        out[s] = text
     return out
+
+
+def criterion_text(frame: pd.DataFrame, *, reference: bool = True) -> str:
+    """The criterion as the report states it, its day count taken from the days with committed outputs."""
+    if not reference:
+        return (
+            f"No reference outputs to compare with: the data folder has no `{REFERENCE_FILE.as_posix()}` (a fetched "
+            "data folder has none: the registry does not pin it), so the criterion is not evaluated."
+        )
+    a = agreement(frame)
+    ran = a[a["strategy"].isin((*CRITERION_STRATEGIES, "np"))]
+    days = sorted(set(ran.loc[ran["within"].notna(), "date"]))
+    if len(ran) and not days:
+        return (
+            f"No committed outputs for {_days_text(sorted(set(ran['date'])))}: the criterion is not evaluated "
+            "(the authors' outputs cover 2017-05-01 .. 2017-05-14)."
+        )
+    n = len(days) if days else OF_DAYS
+    scaled = "" if n == OF_DAYS else f"; {REQUIRED_DAYS} of {OF_DAYS} in proportion"
+    return (
+        f"Criterion: MB and RTV within {REL_TOL * 100:.0f} % on pairing ratio and total saving, NP's response rate "
+        f"within {NP_RESPONSE_TOL}, each on at least {required_days(n)} of {n} {_day(n)} (the days with committed "
+        f"outputs{scaled})."
+    )
 
 
 def agreement_table(frame: pd.DataFrame) -> str:
@@ -183,8 +259,9 @@ def conclusions(frame: pd.DataFrame) -> str:
     return "\n".join(lines)
 
 
-def markdown(frame: pd.DataFrame, meta: dict) -> str:
-    crit = criterion(frame)
+def markdown(frame: pd.DataFrame, meta: dict, *, reference: bool = True) -> str:
+    """The report; ``reference`` false: the data folder has no committed outputs (the criterion is not evaluated)."""
+    crit = criterion(frame, reference=reference)
     parts = [
         f"# rpbench replicate: {meta.get('dates_text', '')}",
         "",
@@ -196,13 +273,12 @@ def markdown(frame: pd.DataFrame, meta: dict) -> str:
         "",
         "## Agreement of the authors' engine with the committed outputs",
         "",
-        (
-            "Criterion: MB and RTV within 15 % on pairing ratio and total saving on at least 10 of "
-            "14 days; NP's response rate within 0.03."
-        ),
+        criterion_text(frame, reference=reference),
         "",
     ]
-    parts += [f"- {s}: {v}" for s, v in crit.items()] + ["", agreement_table(frame), ""]
+    parts += [f"- {s}: {v}" for s, v in crit.items()] + [""]
+    if reference:
+        parts += [agreement_table(frame), ""]
     parts += [
         "## Ablation (means over the dates; one mechanism off at a time)",
         "",

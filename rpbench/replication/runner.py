@@ -18,6 +18,7 @@ with its origin.  Engines:
 from __future__ import annotations
 
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -81,9 +82,11 @@ def load_inputs(data_dir: Path, date: str) -> Inputs:
 
 def _peak_predictions(data_dir: Path, date: str, scenario: Scenario) -> pd.DataFrame:
     """The order file's per-order predictions aligned with a haikou-peak scenario's orders."""
+    from rpbench.data._table import open_csv
     from rpbench.data.orders import peak_order_path
 
-    raw = pd.read_csv(peak_order_path(data_dir, date))
+    with open_csv(peak_order_path(data_dir, date), "peak-hour order") as source:
+        raw = pd.read_csv(source, compression=None)
     raw = raw.drop_duplicates("dwv_order_make_haikou_1.order_id").set_index("dwv_order_make_haikou_1.order_id")
     cols = [c for c in PREDICTION_COLUMNS if c in raw.columns]
     return raw.loc[scenario.orders.order_id, cols].reset_index(drop=True)
@@ -132,9 +135,11 @@ def replicate(
     ablation: str = "single",
     rpbench_engine: bool = True,
     progress: bool = False,
+    keep: Callable[[str, str, str, Any, Scenario], None] | None = None,
 ) -> Replication:
     """Every (date, strategy): the authors' engine and the ablation steps of ``ablation`` (single, cumulative,
-    both, none), then rpbench's engine on both inputs unless ``rpbench_engine`` is false."""
+    both, none), then rpbench's engine on both inputs unless ``rpbench_engine`` is false.  ``keep(date,
+    strategy, engine, run, scenario)`` receives each run of rpbench's engine (its StrategyRun) once made."""
     committed = reference.read_committed(data_dir)
     steps = steps_for(ablation)
     out = Replication()
@@ -159,6 +164,8 @@ def replicate(
             if rpbench_engine:
                 for name, chosen, cache in (("rpbench", inputs.paper, done), ("rpbench-peak", inputs.peak, done_peak)):
                     kpis = run_rpbench(chosen, strategy, preset, cache)
+                    if keep is not None:
+                        keep(date, strategy, name, cache[strategy], chosen.scenario)
                     out.rows.append(_row(name, strategy, date, kpis, ["(rpbench's simulator)"], committed))
                     if progress:
                         print(

@@ -44,6 +44,9 @@ Simulation runs:
   own code from the event log and the odometers; none missing, unknown or text
   (timings such as ``wall_s`` and ``prepare_s``, which no file reproduces, are
   only held to be finite and >= 0);
+* ``decision-budget`` — with a decision budget in meta.json, a number > 0, every round's ``over_budget``
+  flag in rounds.csv.gz says whether its decision took longer (``rounds_over_budget`` is recounted by
+  ``kpi``); without one, no such column;
 * ``bound-certificate`` — every pair the run formed is an edge of the upper
   bound's graph (docs/bound.md) whose weight covers its realised saving (read
   off the odometers, + :data:`.core.CERT_TOL_M`); with a ``bound`` run in the
@@ -57,9 +60,16 @@ network, feasible and in the rule's service and pick-up order; the bound's
 pairs are bound edges of the largest weight), ``max-detour`` and ``kpi``
 (recomputed from the recomputed pairs; the solver's objective re-summed).
 
+The bound run also gets ``bound-optimal`` (:mod:`.matching`): its value is at
+least the maximum-weight matching of the bound's graph, which the checker
+enumerates itself, proven by a dual certificate verified here.
+
 A ``rpbench replicate`` folder (the authors' engine, whose vehicles teleport):
-``assignment`` and ``accounting`` from its passenger records; every check
-built on trajectories is skipped by name, with the reason.
+``manifest``, ``paths`` and ``report`` over its files; ``records``,
+``assignment`` and ``accounting`` from the authors' passenger records;
+rpbench's own runs as full results folders (``engine-rows``); every check
+built on trajectories is skipped by name, with the reason.  A run none of
+whose checks could be made is reported skipped, never OK.
 
 A folder that cannot be read — a file missing, truncated or unparseable, a
 column missing or not numeric, meta.json without its parameters — is
@@ -70,9 +80,9 @@ position, never per event.
 
 The modules, in import order: :mod:`.core` (verdicts, tolerances, schemas),
 :mod:`.folder` (reading, the digest, the folder checks), :mod:`.events`
-(movement, event log, service rules), :mod:`.kpis` (kpi, hourly, report),
+(movement, event log, service rules), :mod:`.kpis` (kpi, decision-budget, hourly, report),
 :mod:`.certificate` (the checker's pair geometry, bound-certificate),
-:mod:`.oracle`, :mod:`.parents`, :mod:`.replication` (a ``rpbench replicate``
+:mod:`.matching` (bound-optimal), :mod:`.oracle`, :mod:`.parents`, :mod:`.replication` (a ``rpbench replicate``
 folder) and :mod:`.verify` (the entry points).
 """
 

@@ -136,8 +136,13 @@ class RunCheck:
         return not self.violations
 
     @property
+    def ran(self) -> bool:
+        """Did any check run (count something)?  A run whose every check was skipped is not OK, only skipped."""
+        return any(v for v in self.checked.values())
+
+    @property
     def status(self) -> str:
-        return "ok" if self.ok else "failed"
+        return "failed" if not self.ok else "ok" if self.ran else "skipped"
 
 
 @dataclass
@@ -168,11 +173,13 @@ def exit_status(found: list[FolderResult]) -> int:
 
 
 def format_report(checks: list[RunCheck]) -> str:
-    """The verdicts as ``rpbench check`` prints them: per run OK with its counts, or FAILED with the first
-    three messages of each failed check; then the skipped checks and why."""
+    """The verdicts as ``rpbench check`` prints them: per run OK with its counts, SKIPPED when no check could
+    be made, or FAILED with the first three messages of each failed check; then the skipped checks and why."""
     lines = []
     for rc in checks:
-        if rc.ok:
+        if rc.ok and not rc.ran:
+            lines.append(f"{rc.run}: SKIPPED (no check could be made)")
+        elif rc.ok:
             facts = ", ".join(f"{k} {v}" for k, v in rc.checked.items())
             lines.append(f"{rc.run}: OK ({facts})")
         else:

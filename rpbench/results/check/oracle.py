@@ -28,6 +28,7 @@ from rpbench.results.check.core import (
 )
 from rpbench.results.check.folder import Folder, read_table
 from rpbench.results.check.kpis import compare_kpis
+from rpbench.results.check.matching import bound_graph, prove_maximum, unit_values
 from rpbench.results.layout import META, ORDERS, PAIRS
 from rpbench.scenarios.base import Params
 
@@ -70,11 +71,44 @@ def check_oracle(f: Folder, name: str, run_dir: Path) -> tuple[RunCheck, pd.Data
     rc.checked.update({"pairs": len(pairs), "orders": f.n})
     if rules["window"] != "bound":
         return rc, None
+    check_bound_optimal(rc, f, float(rec.get("unit_m", 0.01)), f.reported(name))
     hour = np.floor(np.minimum(request[a], request[b]) / 3600.0).astype(np.int64)
     by_hour = pd.Series(pairs["saving_m"].to_numpy() / 1000.0).groupby(hour).sum()
     table = pd.DataFrame({column: np.nan for column in HOURLY_COLUMNS}, index=by_hour.index)
     table["total_saving_km"] = by_hour  # the bound's rows of hourly.csv: only its matching's saving
     return rc, table
+
+
+def check_bound_optimal(rc: RunCheck, f: Folder, unit_m: float, reported: pd.DataFrame) -> None:
+    """``bound-optimal``: the reported bound U is at least the maximum-weight matching of the bound's graph
+    as the checker enumerates it (:mod:`.matching`): a bound lowered below the optimum, or computed on a
+    graph missing some pairs, fails here."""
+    value = reported.loc[reported["kpi"] == "total_saving_km", "value"]
+    bound_km = as_number(value.iloc[0]) if len(value) else None
+    if bound_km is None or not np.isfinite(bound_km):
+        rc.skip("bound-optimal", "the run reports no finite bound (see [kpi])")
+        return
+    a, b, weight = bound_graph(f)
+    values = unit_values(weight, unit_m)
+    keep = values > 0  # an edge worth nothing never raises a matching's weight
+    target = bound_km * 1000.0 / unit_m
+    proof = prove_maximum(f.n, a[keep], b[keep], values[keep], target)
+    tol = 1e-9 * max(1.0, abs(target))
+    if proof.best > target + tol:
+        rc.fail(
+            "bound-optimal",
+            f"a matching of the bound's graph (enumerated here: {int(keep.sum())} pairs of positive weight) saves "
+            f"{proof.best * unit_m / 1000.0:.3f} km, more than the reported bound {bound_km:.3f} km: "
+            "the bound is not the maximum",
+        )
+    elif not proof.upper < np.floor(target + tol) + 1 - 1e-6:
+        rc.fail(
+            "bound-optimal",
+            f"no proof that the reported bound {bound_km:.3f} km covers every matching of the bound's graph: "
+            f"the best upper bound found is {proof.upper * unit_m / 1000.0:.3f} km ({proof.method})",
+        )
+    rc.checked["bound_graph_pairs"] = len(a)
+    rc.checked["odd_sets"] = proof.odd_sets
 
 
 def _oracle_rules(rc: RunCheck, recorded: dict, params: Params) -> dict:

@@ -1,4 +1,12 @@
-"""``rpbench check`` for a replication folder: the checks that still apply to the authors' engine.
+"""``rpbench check`` for a replication folder: its files, its report, and the checks that still apply to the
+authors' engine.
+
+Folder checks (the run ``(folder)``): ``manifest`` — every file meta.json lists is there with its SHA-256,
+and no file was added under records/ or engines/; ``paths`` — no name read from the folder (a listed file,
+a row's date, strategy or engine) leads outside it (``..``, an absolute path, a symbolic link out);
+``report`` — report.md's tables are their rendering from runs.csv.  rpbench's own engine's rows: its run's
+results folder (``engines/``) passes the full checker (``engine-folder`` when it cannot be read), and the
+row shows that folder's KPIs (``engine-rows``).
 
 The authors' vehicles teleport (they jump to the last node of their route), so
 there is no trajectory to hold a run to: every check built on vehicle positions
@@ -17,15 +25,35 @@ re-verified from the folder's own files:
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from rpbench.exceptions import ResultsError, RpbenchError, one_line
-from rpbench.results.check.core import FolderResult, RunCheck
+from rpbench.results import store as results
+from rpbench.results.check.core import FOLDER, KPI_COLUMNS, FolderResult, RunCheck, as_number, same
+from rpbench.results.check.folder import file_sha256, read_table
+from rpbench.results.layout import FLEET, KPIS, META
 
 RECORDS_DIR = "records"
+#: rpbench's own engine's runs, one results folder each.
+ENGINES_DIR = "engines"
+#: A date, strategy or engine name as the folder's file names use it: no separator, no ``..``.
+NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
+#: The KPIs of rpbench's own engine that runs.csv shows, read off its results folder's kpis.csv.
+ENGINE_KPIS = (
+    "orders",
+    "served",
+    "pooled_passengers",
+    "pairing_ratio",
+    "total_saving_km",
+    "avg_detour_m",
+    "avg_shared_m",
+    "avg_response_time_s",
+    "avg_pickup_time_s",
+)
 TOL_M = 1e-3
 ROUND_S = 10.0
 
@@ -39,6 +67,11 @@ SKIPPED = {
     "bound-certificate": "the upper bound (docs/bound.md) assumes rpbench's movement rules",
     "digest": "the engine reads the scenario from the data folder; the input is named in meta.json",
 }
+
+
+def engine_folder(folder: Path, date: str, strategy: str, engine: str) -> Path:
+    """Where a replication folder keeps one run of rpbench's own engine (a results folder)."""
+    return folder / ENGINES_DIR / f"{date}_{strategy}_{engine}"
 
 
 def records_file(folder: Path, date: str, strategy: str, engine: str) -> Path:
@@ -114,61 +147,212 @@ def audit_run(records: pd.DataFrame, row: dict) -> tuple[dict[str, list[str]], d
     return bad, checked
 
 
-def audit_folder(folder: Path) -> list[tuple[str, dict, dict, dict]]:
-    """(run name, violations, checked, skipped) per run with records; rows without records are listed too."""
+def audit_folder(folder: Path) -> tuple[RunCheck, list[RunCheck]]:
+    """The folder's own checks (``manifest``, ``paths``, ``report``) and one verdict per row of runs.csv."""
+    meta = results.read_meta(folder)
+    root = folder.resolve()
+    fc = RunCheck(FOLDER)
+    manifest = check_manifest(fc, folder, root, meta)
     runs_csv = folder / "runs.csv"
     if not runs_csv.is_file():
         raise ResultsError(f"replication folder {str(folder)!r} has no runs.csv")
+    if not inside(root, runs_csv):
+        raise ResultsError(f"{str(runs_csv)!r} leads outside the replication folder (a symbolic link)")
     try:
         rows = pd.read_csv(runs_csv)
     except (OSError, ValueError) as exc:
         raise ResultsError(f"cannot read {str(runs_csv)!r}: {exc}") from None
-    out: list[tuple[str, dict, dict, dict]] = []
-    for row in rows.to_dict("records"):
-        name = f"{row['date']}/{row['strategy']}/{row['engine']}"
-        path = records_file(folder, row["date"], row["strategy"], row["engine"])
-        if str(row["engine"]).startswith("rpbench"):
-            out.append(
-                (
-                    name,
-                    {},
-                    {},
-                    {
-                        "all": "rpbench's own engine: check its results folder "
-                        "(rpbench run --scenario haikou-paper-input) with rpbench check"
-                    },
-                )
-            )
+    missing = [c for c in ("date", "strategy", "engine") if c not in rows.columns]
+    if missing:
+        raise ResultsError(f"{str(runs_csv)!r} lacks the column(s) {', '.join(missing)}")
+    check_report(fc, folder, root, rows, meta)
+    dates = {str(d) for d in meta.get("dates") or []}
+    out = [audit_row(folder, root, row, manifest, dates) for row in rows.to_dict("records")]
+    return fc, out
+
+
+def audit_row(folder: Path, root: Path, row: dict, manifest: dict | None, dates: set[str]) -> RunCheck:
+    """One row of runs.csv: its records audited (an authors' run), its results folder checked and compared
+    (rpbench's engine), or skipped with the reason (an ablation step)."""
+    date, strategy, engine = str(row["date"]), str(row["strategy"]), str(row["engine"])
+    rc = RunCheck(f"{date}/{strategy}/{engine}")
+    bad_name = [v for v in (date, strategy, engine) if not NAME.fullmatch(v)]
+    if bad_name or (dates and date not in dates):
+        what = f"names {bad_name[0]!r}, not a plain name" if bad_name else f"date {date!r} is not one of {META}'s dates"
+        rc.fail("paths", f"runs.csv {what}: no file of the folder is read for it")
+        return rc
+    if engine.startswith("rpbench"):
+        audit_engine(rc, folder, root, row, manifest)
+        return rc
+    path = records_file(folder, date, strategy, engine)
+    if not inside(root, path):
+        rc.fail("paths", f"{path.relative_to(folder).as_posix()} leads outside the folder (a symbolic link)")
+        return rc
+    name = path.relative_to(folder).as_posix()
+    expected = (manifest is not None and name in manifest) or engine == "authors"
+    if not path.is_file():
+        if expected:
+            rc.fail("records", f"{name} is missing (deleted?): the replication wrote the records of this run")
+        else:
+            for check in ("assignment", "accounting"):
+                rc.skip(check, "records not kept for this ablation step")
+        return rc
+    try:
+        records = pd.read_csv(path)
+    except (OSError, ValueError) as exc:
+        raise ResultsError(f"cannot read {str(path)!r}: {exc}") from None
+    bad, checked = audit_run(records, row)
+    rc.violations.update(bad)
+    rc.checked.update(checked)
+    for check, reason in SKIPPED.items():
+        rc.skip(check, reason)
+    return rc
+
+
+def audit_engine(rc: RunCheck, folder: Path, root: Path, row: dict, manifest: dict | None) -> None:
+    """rpbench's own engine: its results folder passes the full checker, and the row shows its KPIs."""
+    from rpbench.results.check.verify import check_results  # the entry point imports this module
+
+    path = engine_folder(folder, str(row["date"]), str(row["strategy"]), str(row["engine"]))
+    name = path.relative_to(folder).as_posix()
+    if not inside(root, path):
+        rc.fail("paths", f"{name} leads outside the folder (a symbolic link)")
+        return
+    if not path.is_dir():
+        if manifest is None:
+            rc.skip("engine-rows", "a folder written before rpbench kept its own engine's runs (rerun replicate)")
+        else:
+            rc.fail("engine-rows", f"{name}/ is missing (deleted?): the replication wrote this run's results folder")
+        return
+    found = check_results(path)
+    if found.error is not None:
+        rc.fail("engine-folder", f"{name}: {found.error}")
+        return
+    for check in found.checks:
+        for key, messages in check.violations.items():
+            rc.violations.setdefault(key, []).extend(f"{name} {check.run}: {m}" for m in messages)
+        for key, value in check.checked.items():
+            rc.checked[key] = rc.checked.get(key, 0) + value
+        for key, reason in check.skipped.items():
+            rc.skip(key, reason)
+    compare_engine_row(rc, path, name, row)
+
+
+def compare_engine_row(rc: RunCheck, path: Path, name: str, row: dict) -> None:
+    """The row's KPIs are its results folder's (which the checker recomputed), the response rate over the
+    row's denominator, the vehicles its fleet."""
+    try:
+        kpis = read_table(path / KPIS, KPI_COLUMNS)
+        fleet = pd.read_csv(path / FLEET)
+    except (RpbenchError, OSError, ValueError) as exc:
+        rc.fail("engine-rows", f"{name}: {one_line(exc)}")
+        return
+    strategy = str(row["strategy"])
+    mine = kpis[kpis["run"] == strategy]
+    have = dict(zip(mine["kpi"].astype(str), mine["value"], strict=True))
+    expected: dict[str, float | None] = {k: as_number(have.get(k)) for k in ENGINE_KPIS}
+    served, denominator = as_number(have.get("served")), as_number(row.get("response_denominator"))
+    expected["response_rate"] = served / denominator if served is not None and denominator else float("nan")
+    expected["vehicles"] = float(len(fleet))
+    for key, value in expected.items():
+        if key not in row:
+            rc.fail("engine-rows", f"runs.csv has no {key} for this run")
             continue
+        reported = as_number(row[key])
+        if value is None or reported is None or not same(reported, value):
+            rc.fail("engine-rows", f"{key}: runs.csv shows {row[key]!r}, {name} gives {value!r}")
+    rc.checked["engine_rows"] = len(expected)
+
+
+def inside(root: Path, path: Path) -> bool:
+    """Does ``path``, symbolic links followed, stay inside the folder ``root`` (resolved)?"""
+    try:
+        path.resolve().relative_to(root)
+    except (ValueError, OSError, RuntimeError):
+        return False
+    return True
+
+
+def check_manifest(fc: RunCheck, folder: Path, root: Path, meta: dict) -> dict[str, str] | None:
+    """``manifest``: every file meta.json lists is there with its SHA-256, and nothing was added under
+    records/ or engines/; ``paths``: no listed name leads outside the folder.  None: no manifest."""
+    manifest = meta.get("manifest")
+    if manifest is None:
+        fc.skip(
+            "manifest",
+            f"{META} lists no files (a folder written before rpbench recorded them): an edited or deleted "
+            "file is caught only where another check breaks",
+        )
+        return None
+    files = manifest.get("files") if isinstance(manifest, dict) else None
+    if not isinstance(files, dict) or not all(isinstance(v, str) for v in files.values()):
+        fc.fail("manifest", f'{META}\'s manifest is malformed (expected {{"files": {{path: sha256}}}})')
+        return {}
+    ok: dict[str, str] = {}
+    for name, digest in files.items():
+        path = folder / name
+        if not inside(root, path) or Path(name).is_absolute() or ".." in Path(name).parts:
+            fc.fail("paths", f"{META} lists {name!r}, which leads outside the folder: not read")
+            continue
+        ok[name] = digest
         if not path.is_file():
-            out.append(
-                (
-                    name,
-                    {},
-                    {},
-                    {
-                        "assignment": "records not kept for this ablation step",
-                        "accounting": "records not kept for this ablation step",
-                    },
-                )
-            )
-            continue
-        try:
-            records = pd.read_csv(path)
-        except (OSError, ValueError) as exc:
-            raise ResultsError(f"cannot read {str(path)!r}: {exc}") from None
-        bad, checked = audit_run(records, row)
-        out.append((name, bad, checked, dict(SKIPPED)))
-    return out
+            fc.fail("manifest", f"{name} listed in {META} is missing (deleted?)")
+        elif file_sha256(path) != digest:
+            fc.fail("manifest", f"{name} is not the file the replication wrote (its SHA-256 differs from {META}'s)")
+    for top in (RECORDS_DIR, ENGINES_DIR):
+        for path in sorted((folder / top).rglob("*")) if (folder / top).is_dir() else []:
+            name = path.relative_to(folder).as_posix()
+            if path.is_symlink() and not inside(root, path):
+                fc.fail("paths", f"{name} is a symbolic link out of the folder")
+            elif path.is_file() and name not in files:
+                fc.fail("manifest", f"{name} is not a file the replication wrote ({META} does not list it)")
+    for name in ("runs.csv", "report.md", "report.html"):
+        if name not in files and (name == "runs.csv" or (folder / name).exists()):
+            fc.fail("manifest", f"{META}'s manifest does not list {name}")
+    fc.checked["files"] = len(ok)
+    return ok
+
+
+def check_report(fc: RunCheck, folder: Path, root: Path, rows: pd.DataFrame, meta: dict) -> None:
+    """``report``: the tables of report.md are their rendering from runs.csv (and meta.json)."""
+    from rpbench.replication.report import markdown
+
+    path = folder / "report.md"
+    if not path.is_file() or not inside(root, path):
+        fc.skip("report", "the folder has no report.md")
+        return
+    shown = _table_lines(path.read_text(errors="replace"))
+    flags = [meta["reference_outputs"]] if isinstance(meta.get("reference_outputs"), bool) else [True, False]
+    try:
+        renderings = [_table_lines(markdown(rows, meta, reference=flag)) for flag in flags]
+    except (KeyError, ValueError, TypeError, IndexError) as exc:
+        fc.fail("report", f"runs.csv cannot be rendered ({type(exc).__name__}: {one_line(exc)})")
+        return
+    if shown in renderings:
+        fc.checked["report_lines"] = len(shown)
+        return
+    want = renderings[0]
+    diff = [(k, a, b) for k, (a, b) in enumerate(zip(shown, want, strict=False)) if a != b]
+    if diff:
+        k, a, b = diff[0]
+        fc.fail("report", f"report.md table line {k + 1} shows {a!r}; runs.csv renders {b!r}")
+    else:
+        fc.fail("report", f"report.md has {len(shown)} table lines, runs.csv renders {len(want)}")
+
+
+def _table_lines(text: str) -> list[str]:
+    """The table rows of a markdown report (its numbers; the prose may change between versions)."""
+    return [line.rstrip() for line in text.splitlines() if line.startswith("|")]
 
 
 def check_replication(folder: Path) -> FolderResult:
-    """A ``rpbench replicate`` folder: the checks that apply to the authors' engine, the rest skipped by
+    """A ``rpbench replicate`` folder: its files against meta.json's manifest, report.md against runs.csv,
+    the authors' runs from their records, rpbench's own from their results folders; the rest skipped by
     name with the reason."""
     out = FolderResult(str(folder))
     try:
-        for name, violations, checked, skipped in audit_folder(folder):
-            out.runs.append(RunCheck(name, violations=violations, checked=checked, skipped=skipped))
+        with np.errstate(all="ignore"):
+            out.folder_check, out.runs = audit_folder(Path(folder))
     except RpbenchError as exc:
         out.error = one_line(exc)
     return out

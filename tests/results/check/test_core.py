@@ -24,11 +24,14 @@ from rpbench.results.check.core import as_number, same, show
 
 # ------------------------------------------------------------------ verdicts
 def test_a_run_fails_by_the_checks_it_breaks_and_skips_say_why():
-    """A run is ok until a check fails; skip reasons for one check are joined, not replaced."""
+    """A run is ok until a check fails, skipped while no check ran; skip reasons for one check are joined."""
     rc = RunCheck("mb")
     rc.skip("hourly", "no hourly.csv")
     rc.skip("hourly", "no report.md")
-    assert rc.ok and rc.status == "ok" and rc.skipped == {"hourly": "no hourly.csv; no report.md"}
+    assert rc.ok and rc.status == "skipped" and rc.skipped == {"hourly": "no hourly.csv; no report.md"}
+    assert format_report([rc]).splitlines()[0] == "mb: SKIPPED (no check could be made)"
+    rc.checked["orders"] = 3
+    assert rc.status == "ok" and format_report([rc]).startswith("mb: OK (orders 3)")
     rc.fail("kpi", "KPI pairs: reported 3.0, recomputed 2")
     rc.fail("kpi", "KPI served: reported 9.0, recomputed 8")
     assert not rc.ok and rc.status == "failed" and len(rc.violations["kpi"]) == 2

@@ -1,0 +1,42 @@
+"""What a ``rpbench replicate`` folder keeps so that ``rpbench check`` can verify it: rpbench's own engine's runs
+as full results folders (``engines/<date>_<strategy>_<engine>/``), and the SHA-256 of every file written
+(meta.json's ``manifest``)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from rpbench.backends.presets import Preset
+from rpbench.results.check.folder import file_sha256
+from rpbench.results.check.replication import ENGINES_DIR, engine_folder
+from rpbench.results.folder import StrategyRun, write_folder
+from rpbench.results.report import write_report
+from rpbench.scenarios.base import Scenario
+
+__all__ = ["ENGINES_DIR", "engine_folder", "file_manifest", "write_engine_folder"]
+
+
+def write_engine_folder(dest: Path, scenario: Scenario, run: StrategyRun, preset: Preset, command: str | None) -> None:
+    """One run of rpbench's own engine as a results folder (inputs, event log, trajectories, KPIs, report.md
+    without figures): ``rpbench check`` verifies it as it verifies ``rpbench run``'s."""
+    dest.mkdir(parents=True)
+    write_folder(
+        dest,
+        scenario,
+        [run],
+        {},
+        order=[run.name],
+        preset=preset,
+        scenario_args={"name": scenario.name},
+        command=command,
+    )
+    write_report(dest, name=dest.name, figures=False)
+
+
+def file_manifest(folder: Path) -> dict[str, str]:
+    """SHA-256 of every file under ``folder`` but meta.json, by path relative to it (``/``-separated)."""
+    return {
+        path.relative_to(folder).as_posix(): file_sha256(path)
+        for path in sorted(folder.rglob("*"))
+        if path.is_file() and path.relative_to(folder).as_posix() != "meta.json"
+    }

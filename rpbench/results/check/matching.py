@@ -1,0 +1,188 @@
+"""``bound-optimal``: the bound's value is at least the maximum-weight matching of its graph, proven here.
+
+The checker enumerates the bound's graph itself (every pair of orders inside the widest time window, each
+orientation valued by :mod:`.certificate`'s own rule), so a pair left out of the candidate set counts as
+much as a pair left out of the matching.  The maximum is then bounded by a dual certificate of the
+matching polytope: degree constraints plus the odd-set (blossom) constraints that a cutting-plane loop
+finds (the odd components of the fractional edges), solved with HiGHS through ``scipy.optimize.linprog``.
+The solver only searches: the dual it returns is made feasible and summed by numpy here, and any feasible
+dual bounds every matching (weak duality), so the verdict rests on that arithmetic, not on the solver's
+claim.  Weights are integral (the model's unit), so a dual below ``U + 1`` proves ``max <= U``.  When the
+loop does not close the gap (never seen on the Haikou peak hours), HiGHS's MIP over the same constraints
+decides, on its own optimality claim, and the check says so.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.optimize import Bounds, LinearConstraint, linprog, milp
+from scipy.sparse.csgraph import connected_components
+
+from rpbench.results.check.certificate import _orientation_weight
+from rpbench.results.check.core import TOL_M, TOL_S
+from rpbench.results.check.folder import Folder
+
+#: Pairs (one orientation each) valued per numpy block: bounds memory to a few hundred MB.
+BLOCK_PAIRS = 1 << 20
+#: A weight this close above a multiple of the unit is float noise: rounded down, never up (the checker's
+#: rounded weights then never exceed the run's, whose optimum is the bound).
+ROUND_SLACK = 1e-6
+#: Cutting-plane rounds before the exact fallback.
+MAX_ROUNDS = 100
+FRACTIONAL = 1e-6
+
+
+def bound_graph(f: Folder) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(a, b, weight) of every edge of the upper bound's graph (docs/bound.md), enumerated from the folder's
+    orders alone.  An unordered pair lies inside the widest window of its earlier order i,
+    ``t_j - t_i <= K_i + (R̄ + l_i)/v`` (the later order joining; i joining waits at most ``K_i``); an
+    orientation is valued only when A's detour at ``h = o_A`` is within D̄, which turning later never
+    shortens (the triangle inequality along A's shortest path, docs/bound.md step 3)."""
+    p = f.params
+    t, k, ids = f.col("request_s"), f.col("patience_s"), f.col("order_id")
+    rank = np.lexsort((ids, t))
+    ts = t[rank]
+    reach = k[rank] + (p.max_pickup_m + TOL_M + f.solo[rank]) / p.speed_mps + TOL_S
+    hi = np.searchsorted(ts, ts + reach + 1e-9 * (1.0 + np.abs(ts)), side="right")
+    count = np.maximum(hi - np.arange(len(ts)) - 1, 0)
+    parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+    cum = np.cumsum(count)
+    i0 = 0
+    while i0 < len(ts):
+        i1 = max(i0 + 1, int(np.searchsorted(cum, (cum[i0 - 1] if i0 else 0) + BLOCK_PAIRS, side="right")))
+        ii = np.repeat(np.arange(i0, min(i1, len(ts))), count[i0:i1])
+        if len(ii):
+            starts = np.cumsum(count[i0:i1]) - count[i0:i1]
+            jj = ii + 1 + np.arange(len(ii)) - np.repeat(starts, count[i0:i1])
+            a, b = rank[ii], rank[jj]
+            w = np.full(len(a), -np.inf)
+            for x, y in ((a, b), (b, a)):
+                m = np.flatnonzero(_may_turn_at_origin(f, x, y))
+                w[m] = np.fmax(w[m], _orientation_weight(f, x[m], y[m]))
+            edge = np.isfinite(w)
+            parts.append((a[edge], b[edge], w[edge]))
+        i0 = i1
+    if not parts:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0)
+    return tuple(np.concatenate(c) for c in zip(*parts, strict=True))  # type: ignore[return-value]
+
+
+def _may_turn_at_origin(f: Folder, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """A necessary condition of "x first, y joins": x's ride to its destination via o_y within D̄."""
+    dist, o, d = f.distances.dist, f.col("origin"), f.col("destination")
+    detour = dist[o[x], o[y]] + dist[o[y], d[x]] - f.solo[x]
+    return detour <= f.params.max_detour_m + 1e-6 * (1.0 + np.abs(detour))
+
+
+def unit_values(weight: np.ndarray, unit_m: float) -> np.ndarray:
+    """Weights in model units, rounded up as the bound's model does (docs/bound.md), float noise excepted."""
+    return np.ceil(weight / unit_m - ROUND_SLACK)
+
+
+@dataclass
+class MatchingProof:
+    """What the checker proved about the maximum-weight matching of a graph (weights in integral units)."""
+
+    best: int  # the weight of a matching the checker found (a lower bound on the maximum)
+    upper: float  # a verified upper bound on the maximum (a feasible dual's value, or the exact maximum)
+    method: str
+    odd_sets: int = 0
+
+
+def prove_maximum(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, target: float) -> MatchingProof:
+    """A matching and an upper bound on the maximum weight of any matching of ``(n, a, b, w)`` (``w`` positive
+    integers); stops as soon as the upper bound is below ``target + 1`` or a matching above ``target`` is
+    found, else solves the MIP."""
+    m = len(w)
+    if m == 0:
+        return MatchingProof(0, 0.0, "no edges")
+    w = np.asarray(w, dtype=np.float64)
+    degree = _degree(n, a, b)
+    sets: list[np.ndarray] = []
+    best = 0
+    for _ in range(MAX_ROUNDS):
+        rows = [degree] + [sp.csr_matrix(_inside(n, s, a, b).astype(np.float64)) for s in sets]
+        res = linprog(
+            -w,
+            A_ub=sp.vstack(rows).tocsr(),
+            b_ub=np.r_[np.ones(n), [(len(s) - 1) // 2 for s in sets]],
+            bounds=(0, None),
+            method="highs",
+        )
+        if res.status != 0:
+            break
+        best = max(best, _rounded_matching(n, a, b, w, res.x))
+        upper = _dual_value(n, a, b, w, sets, -res.ineqlin.marginals)
+        if best > target or upper < np.floor(target + 1e-9) + 1 - 1e-6:
+            return MatchingProof(best, upper, "dual certificate", len(sets))
+        frac = (res.x > FRACTIONAL) & (res.x < 1 - FRACTIONAL)
+        new = _odd_components(n, a[frac], b[frac])
+        if not new:
+            break
+        sets += new
+    return _exact(n, a, b, w, sets)
+
+
+def _degree(n: int, a: np.ndarray, b: np.ndarray) -> sp.csr_matrix:
+    edges = np.arange(len(a))
+    return sp.csr_matrix((np.ones(2 * len(a)), (np.r_[a, b], np.r_[edges, edges])), shape=(n, len(a)))
+
+
+def _inside(n: int, s: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    member = np.zeros(n, dtype=bool)
+    member[s] = True
+    return member[a] & member[b]
+
+
+def _dual_value(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, sets: list[np.ndarray], dual: np.ndarray) -> float:
+    """The value of the solver's dual made feasible here: y, z clipped at 0, each edge's shortfall (float
+    tolerance of the solver) added to its first end.  Feasible, so an upper bound on every matching."""
+    y, z = np.maximum(dual[:n], 0.0), np.maximum(dual[n:], 0.0)
+    cover = y[a] + y[b]
+    for s, zs in zip(sets, z, strict=True):
+        cover += zs * _inside(n, s, a, b)
+    short = np.maximum(w - cover, 0.0)
+    np.maximum.at(y, a, y[a] + short)
+    return float(y.sum() + sum(zs * ((len(s) - 1) // 2) for s, zs in zip(sets, z, strict=True)))
+
+
+def _rounded_matching(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, x: np.ndarray) -> int:
+    """The weight of the edges with x > 1/2 (a matching: two such edges at one node would exceed degree 1)."""
+    take = x > 0.5
+    if (np.bincount(np.r_[a[take], b[take]], minlength=n) > 1).any():
+        return 0
+    return int(w[take].sum())
+
+
+def _odd_components(n: int, a: np.ndarray, b: np.ndarray) -> list[np.ndarray]:
+    """Vertex sets of the odd components (>= 3 nodes) of the fractional edges: violated blossom constraints."""
+    if not len(a):
+        return []
+    _, label = connected_components(sp.coo_matrix((np.ones(len(a)), (a, b)), shape=(n, n)), directed=False)
+    out = []
+    for c in np.unique(label[np.r_[a, b]]):
+        s = np.flatnonzero(label == c)
+        if len(s) % 2 == 1 and len(s) >= 3:
+            out.append(s)
+    return out
+
+
+def _exact(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, sets: list[np.ndarray]) -> MatchingProof:
+    """The HiGHS MIP over the degree and odd-set constraints, no gap allowed (its optimality is the solver's
+    claim: the last resort when the certificate did not close)."""
+    rows = [_degree(n, a, b)] + [sp.csr_matrix(_inside(n, s, a, b).astype(np.float64)) for s in sets]
+    upper = np.r_[np.ones(n), [(len(s) - 1) // 2 for s in sets]]
+    res = milp(
+        -w,
+        constraints=LinearConstraint(sp.vstack(rows).tocsr(), -np.inf, upper),
+        integrality=np.ones(len(w)),
+        bounds=Bounds(0, 1),
+        options={"mip_rel_gap": 0.0},
+    )
+    if res.status != 0 or res.x is None:
+        return MatchingProof(0, float("inf"), "HiGHS MIP (no solution)", len(sets))
+    value = _rounded_matching(n, a, b, w, res.x)
+    return MatchingProof(value, float(value), "HiGHS MIP (the solver's optimality claim)", len(sets))
