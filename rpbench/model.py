@@ -32,16 +32,18 @@ from __future__ import annotations
 
 import copy
 import enum
-from dataclasses import dataclass, field
+import math
+from dataclasses import dataclass, field, fields
 from typing import ClassVar, Self
 
 import numpy as np
 import scipy.sparse as sp
 
-from rpbench.exceptions import ModelError
+from rpbench.exceptions import ModelError, SolverError
 
 #: Sums of |values| must stay exactly representable in float64 (2**53).
 MAX_EXACT_TOTAL = float(2**53)
+_INT32 = np.iinfo(np.int32)
 
 
 class Structure(str, enum.Enum):  # noqa: UP042 (str() of a str-mixin enum stays the member name)
@@ -64,18 +66,26 @@ def quantize(values_m, unit_m: float = 1e-3) -> np.ndarray:
 
 
 def _distinct_rows(table: np.ndarray) -> bool:
-    """Whether the rows of an int64 table (entries >= -1) are pairwise distinct.
+    """Whether the rows of an int64 table (entries >= -1) are pairwise distinct."""
+    return _distinct_keys(*table.T)
 
-    Each row becomes one mixed-radix integer, so a 1-D sort decides (``np.unique(axis=0)`` sorts a
-    structured view and dominated a simulation round's model check); tables whose radix product
+
+def _distinct_keys(*keys: np.ndarray) -> bool:
+    """Whether the tuples ``(keys[0][i], keys[1][i], ...)`` (integer entries >= -1) are pairwise distinct.
+
+    Each tuple becomes one mixed-radix integer, so a 1-D sort decides (``np.unique(axis=0)`` sorts a
+    structured view and dominated a simulation round's model check); keys whose radix product
     could overflow int64 are compared row-wise.
     """
-    radix = table.max(axis=0, initial=-1) + 2
-    if np.prod(radix.astype(np.float64)) >= 2.0**62:
+    radix = [int(k.max()) + 2 if len(k) else 1 for k in keys]
+    if math.prod(float(r) for r in radix) >= 2.0**62:
+        table = np.stack([np.asarray(k, dtype=np.int64) for k in keys], axis=1)
         return len(np.unique(table, axis=0)) == len(table)
-    key = np.zeros(len(table), dtype=np.int64)
-    for col, base in zip(table.T, radix, strict=True):
-        key = key * base + (col + 1)
+    key = keys[0].astype(np.int64) + 1
+    for col, base in zip(keys[1:], radix[1:], strict=True):
+        key *= base
+        key += col
+        key += 1
     key.sort()
     return not (key[1:] == key[:-1]).any()
 
@@ -126,6 +136,26 @@ class _Model:
         data = np.ones(len(rows), dtype=np.float64)
         return sp.csc_matrix((data, rows, start), shape=(self.n_rows, self.n_cols))
 
+    def frozen(self) -> Self:
+        """A copy whose arrays are read-only copies, validated again: what a backend is handed.
+
+        Validation on construction does not cover arrays their builder changes afterwards (a plug-in
+        strategy setting a value to NaN); the copy can no longer change, and is checked as it is.
+        """
+        twin = copy.copy(self)
+        twin.__dict__.pop("_column_rows_cache", None)  # derived from the arrays as they were then
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if isinstance(value, np.ndarray):
+                mine = value.copy()
+                mine.setflags(write=False)
+                object.__setattr__(twin, f.name, mine)
+        twin._validate()
+        return twin
+
+    def _validate(self) -> None:
+        raise NotImplementedError
+
     def renamed(self, name: str) -> Self:
         """The same model under another name (arrays shared, no re-validation)."""
         twin = copy.copy(self)
@@ -137,11 +167,43 @@ class _Model:
         return {"rows": int(self.n_rows), "cols": int(self.n_cols), "nonzeros": int(self.column_rows()[0][-1])}
 
     # -- validation helpers --------------------------------------------------
+    def _count(self, n, what: str) -> int:
+        whole = isinstance(n, (int, np.integer)) and not isinstance(n, bool)
+        if not (whole or (isinstance(n, (float, np.floating)) and math.isfinite(n) and n == int(n))):
+            raise ModelError(f"model {self.name!r}: {what} {n!r} is not a whole number")
+        return int(n)
+
+    def _floats(self, raw) -> np.ndarray:
+        try:
+            return np.asarray(raw, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise ModelError(f"model {self.name!r}: values must be numbers") from None
+
+    def _indices(self, raw, what: str) -> np.ndarray:
+        """``raw`` as int32 column indices, refusing what a cast would silently change (1.5, NaN, 2**40)."""
+        arr = np.asarray(raw)
+        if arr.ndim != 1 or (len(arr) and arr.dtype.kind not in "iuf"):
+            raise ModelError(
+                f"model {self.name!r}: {what} must be a one-dimensional array of integers "
+                f"(got shape {arr.shape}, dtype {arr.dtype})"
+            )
+        if arr.dtype.kind == "i" and arr.dtype.itemsize <= 4:
+            return arr.astype(np.int32, copy=False)
+        if len(arr):
+            if arr.dtype.kind == "f" and not np.all(arr == np.round(arr)):  # NaN != NaN: refused too
+                bad = int(np.flatnonzero(arr != np.round(arr))[0])
+                raise ModelError(f"model {self.name!r}: {what} of column {bad} is {float(arr[bad])!r}, not an integer")
+            if arr.min() < _INT32.min or arr.max() > _INT32.max:
+                bad = int(np.flatnonzero((arr < _INT32.min) | (arr > _INT32.max))[0])
+                raise ModelError(f"model {self.name!r}: {what} of column {bad} is {arr[bad].item()!r}, out of range")
+        return arr.astype(np.int32)
+
     def _check_values(self) -> None:
         v = self.values
         if v.ndim != 1:
             raise ModelError(f"model {self.name!r}: values must be one-dimensional")
-        if not np.all(np.isfinite(v)):
+        total = float(np.abs(v).sum())  # NaN or infinite exactly when some value is: one pass for both checks
+        if not math.isfinite(total):
             bad = int(np.flatnonzero(~np.isfinite(v))[0])
             raise ModelError(f"model {self.name!r}: value of column {bad} is {float(v[bad])!r}; values must be finite")
         if not np.all(v == np.round(v)):
@@ -150,7 +212,7 @@ class _Model:
                 f"model {self.name!r}: value of column {bad} is {float(v[bad])!r}; values must be whole "
                 f"multiples of unit_m={self.unit_m} (use rpbench.model.quantize)"
             )
-        if np.abs(v).sum() > MAX_EXACT_TOTAL:
+        if total > MAX_EXACT_TOTAL:
             raise ModelError(f"model {self.name!r}: values too large for exact float64 sums; use a coarser unit_m")
         if not (self.unit_m > 0 and np.isfinite(self.unit_m)):
             raise ModelError(f"model {self.name!r}: unit_m={self.unit_m!r} must be a positive number")
@@ -159,17 +221,16 @@ class _Model:
         if len(arr) != self.n_cols:
             raise ModelError(f"model {self.name!r}: {what} has {len(arr)} entries for {self.n_cols} columns")
         lo = -1 if allow_minus_one else 0
-        bad = (arr < lo) | (arr >= upper)
-        if bad.any():
-            c = int(np.flatnonzero(bad)[0])
+        if len(arr) and (arr.min() < lo or arr.max() >= upper):
+            c = int(np.flatnonzero((arr < lo) | (arr >= upper))[0])
             raise ModelError(f"model {self.name!r}: column {c} has {what} {int(arr[c])}, outside [{lo}, {upper - 1}]")
 
     def _check_unique(self, *keys: np.ndarray) -> None:
         if self.n_cols < 2:
             return
-        table = np.stack([np.asarray(k, dtype=np.int64) for k in keys], axis=1)
-        if _distinct_rows(table):
+        if _distinct_keys(*keys):
             return
+        table = np.stack([np.asarray(k, dtype=np.int64) for k in keys], axis=1)
         srt = np.lexsort(table.T[::-1])
         dup = np.flatnonzero((np.diff(table[srt], axis=0) == 0).all(axis=1))[0]
         raise ModelError(f"model {self.name!r}: columns {int(srt[dup])} and {int(srt[dup + 1])} are duplicates")
@@ -228,13 +289,13 @@ class AssignmentModel(_Model):
         unit_m: float = 1e-3,
         name: str = "assignment",
     ):
-        object.__setattr__(self, "n_passengers", int(n_passengers))
-        object.__setattr__(self, "n_vehicles", int(n_vehicles))
-        object.__setattr__(self, "col_passenger", np.asarray(col_passenger, dtype=np.int32))
-        object.__setattr__(self, "col_vehicle", np.asarray(col_vehicle, dtype=np.int32))
-        object.__setattr__(self, "values", np.asarray(values, dtype=np.float64))
-        object.__setattr__(self, "unit_m", float(unit_m))
         object.__setattr__(self, "name", name)
+        object.__setattr__(self, "n_passengers", self._count(n_passengers, "number of passengers"))
+        object.__setattr__(self, "n_vehicles", self._count(n_vehicles, "number of vehicles"))
+        object.__setattr__(self, "col_passenger", self._indices(col_passenger, "passenger"))
+        object.__setattr__(self, "col_vehicle", self._indices(col_vehicle, "vehicle"))
+        object.__setattr__(self, "values", self._floats(values))
+        object.__setattr__(self, "unit_m", float(unit_m))
         self._validate()
 
     def _validate(self) -> None:
@@ -302,14 +363,14 @@ class TripPackingModel(_Model):
         unit_m: float = 1e-3,
         name: str = "trip_packing",
     ):
-        object.__setattr__(self, "n_requests", int(n_requests))
-        object.__setattr__(self, "n_vehicles", int(n_vehicles))
-        object.__setattr__(self, "col_vehicle", np.asarray(col_vehicle, dtype=np.int32))
-        object.__setattr__(self, "col_request1", np.asarray(col_request1, dtype=np.int32))
-        object.__setattr__(self, "col_request2", np.asarray(col_request2, dtype=np.int32))
-        object.__setattr__(self, "values", np.asarray(values, dtype=np.float64))
-        object.__setattr__(self, "unit_m", float(unit_m))
         object.__setattr__(self, "name", name)
+        object.__setattr__(self, "n_requests", self._count(n_requests, "number of requests"))
+        object.__setattr__(self, "n_vehicles", self._count(n_vehicles, "number of vehicles"))
+        object.__setattr__(self, "col_vehicle", self._indices(col_vehicle, "vehicle"))
+        object.__setattr__(self, "col_request1", self._indices(col_request1, "first request"))
+        object.__setattr__(self, "col_request2", self._indices(col_request2, "second request"))
+        object.__setattr__(self, "values", self._floats(values))
+        object.__setattr__(self, "unit_m", float(unit_m))
         self._validate()
 
     def _validate(self) -> None:
@@ -375,13 +436,13 @@ class PairingModel(_Model):
         unit_m: float = 1e-3,
         name: str = "pairing",
     ):
-        object.__setattr__(self, "n_orders", int(n_orders))
-        object.__setattr__(self, "col_a", np.asarray(col_a, dtype=np.int32))
-        object.__setattr__(self, "col_b", np.asarray(col_b, dtype=np.int32))
-        object.__setattr__(self, "values", np.asarray(values, dtype=np.float64))
+        object.__setattr__(self, "name", name)
+        object.__setattr__(self, "n_orders", self._count(n_orders, "number of orders"))
+        object.__setattr__(self, "col_a", self._indices(col_a, "first order"))
+        object.__setattr__(self, "col_b", self._indices(col_b, "second order"))
+        object.__setattr__(self, "values", self._floats(values))
         object.__setattr__(self, "objective", objective)
         object.__setattr__(self, "unit_m", float(unit_m))
-        object.__setattr__(self, "name", name)
         self._validate()
 
     def _validate(self) -> None:
@@ -460,10 +521,27 @@ def make_solution(model: _Model, chosen, status: Status, backend: str, **kw) -> 
     """A :class:`Solution` with ``chosen`` sorted and the objective recomputed from the model.
 
     Backends use this so the reported objective is always Σ values[chosen]
-    exactly, never a solver's floating-point echo of it.
+    exactly, never a solver's floating-point echo of it.  ``chosen`` must be
+    distinct integral column indices: a boolean mask, a fractional index or
+    a repeated one is a :class:`SolverError`, not something cast or
+    deduplicated into a different answer.
     """
-    chosen = np.unique(np.asarray(chosen, dtype=np.int64))
-    return Solution(chosen=chosen, objective=model.objective_of(chosen), status=status, backend=backend, **kw)
+    raw = np.asarray(chosen)
+    if raw.ndim != 1 or (len(raw) and raw.dtype.kind not in "iuf"):
+        raise SolverError(
+            f"backend {backend!r} chose columns of {model.name!r} as shape {raw.shape}, dtype {raw.dtype}; "
+            "give a one-dimensional array of column indices (for a 0/1 vector x: np.flatnonzero(x > 0.5))"
+        )
+    if raw.dtype.kind == "f" and not np.all(raw == np.round(raw)):
+        bad = int(np.flatnonzero(raw != np.round(raw))[0])
+        raise SolverError(
+            f"backend {backend!r} chose column index {float(raw[bad])!r} of {model.name!r}, not an integer"
+        )
+    unique = np.unique(raw.astype(np.int64))
+    if len(unique) != len(raw):  # a 0/1 vector passed as indices, say: never silently deduplicated
+        raise SolverError(f"backend {backend!r} chose a column of {model.name!r} twice")
+    unique.setflags(write=False)
+    return Solution(chosen=unique, objective=model.objective_of(unique), status=status, backend=backend, **kw)
 
 
 def empty_solution(model: _Model, backend: str) -> Solution:

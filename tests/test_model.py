@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -165,3 +167,31 @@ def test_distinct_rows_with_huge_entries_falls_back_to_row_comparison():
     big = 2**40
     assert _distinct_rows(np.array([[big, 1, big], [big, 2, big]], dtype=np.int64))
     assert not _distinct_rows(np.array([[big, 1, big], [big, 1, big]], dtype=np.int64))
+
+
+@pytest.mark.parametrize(
+    "col_passenger, message",
+    [
+        ([0, 0.5, 1], "passenger of column 1 is 0.5, not an integer"),
+        ([0, np.nan, 1], "passenger of column 1 is nan, not an integer"),
+        (np.array([0, 0, 2**40]), "passenger of column 2 is 1099511627776, out of range"),  # int32 would wrap it
+        ([True, False, True], "one-dimensional array of integers"),
+        ([[0], [0], [1]], "one-dimensional array of integers"),
+    ],
+)
+def test_indices_a_cast_would_change_are_refused(col_passenger, message):
+    with pytest.raises(ModelError, match=re.escape(message)):
+        AssignmentModel(2, 1, col_passenger, [0, -1, -1], [3, 0, 0])
+    with pytest.raises(ModelError, match="number of passengers 2.5 is not a whole number"):
+        AssignmentModel(2.5, 1, [0, 0, 1], [0, -1, -1], [3, 0, 0])
+
+
+def test_frozen_is_a_read_only_copy_validated_again():
+    model = AssignmentModel(2, 1, [0, 0, 1], [0, -1, -1], [3, 0, 0])
+    model.column_rows()  # cached from the arrays as they are now
+    twin = model.frozen()
+    assert not twin.values.flags.writeable and twin.values is not model.values
+    model.col_vehicle[0] = -1  # a second wait column for passenger 0
+    with pytest.raises(ModelError, match="columns 0 and 1 are duplicates"):
+        model.frozen()
+    assert twin.column_rows()[1].tolist() == [0, 2, 0, 1]  # the copy keeps what was checked

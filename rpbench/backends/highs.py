@@ -103,6 +103,8 @@ def kept_instance(settings: dict, role: str = "solve") -> highspy.Highs:
     h = _kept.highs.get(role)
     if h is None:
         h = _kept.highs[role] = highspy.Highs()
+        for event in (h.cbSimplexInterrupt, h.cbIpmInterrupt, h.cbMipInterrupt):
+            event.subscribe(_let_signals_in)
     else:
         h.clearModel()
     if _kept.settings.get(role) != settings:
@@ -111,6 +113,29 @@ def kept_instance(settings: dict, role: str = "solve") -> highspy.Highs:
         _apply(h, settings)
         _kept.settings[role] = dict(settings)
     return h
+
+
+def _let_signals_in(event) -> None:
+    """HiGHS's periodic interrupt check, made a moment of Python in the solving thread.
+
+    ``Highs.run()`` is one C++ call: a Python signal handler (the CLI turns SIGTERM into an
+    exception, Ctrl-C is KeyboardInterrupt) cannot run until it returns, so a long solve ignored
+    both.  Subscribing this no-op callback makes HiGHS call into Python at its interrupt checks;
+    a pending handler runs there and its exception leaves ``run()`` (:func:`run_interruptibly`).
+    """
+
+
+def run_interruptibly(h: highspy.Highs, solve=None):
+    """``h.run()`` (or ``solve()`` on ``h``) where a signal handler's exception may end it; ``h`` is then
+    dropped from this thread's kept instances (the exception crossed HiGHS: its state is not trusted)."""
+    try:
+        return h.run() if solve is None else solve()
+    except BaseException:
+        for role, kept in list(_kept.highs.items()):
+            if kept is h:
+                del _kept.highs[role]
+                _kept.settings.pop(role, None)
+        raise
 
 
 class HighsBackend(ProgramBackend):
@@ -138,7 +163,7 @@ class HighsBackend(ProgramBackend):
         clock = Clock()
         with clock("solve_s"):
             h = kept_instance(highs_settings(options, options.time_limit_s, relax=True), role="packing_lp")
-            chosen = unique_optimum(model, h)
+            chosen = run_interruptibly(h, lambda: unique_optimum(model, h))
         if chosen is None:
             sol = super().solve(model, options, hint)
             return replace(sol, solve_s=sol.solve_s + clock.times["solve_s"])
@@ -184,7 +209,7 @@ class HighsBackend(ProgramBackend):
             if hint is not None and not relax:
                 h.setSolution(n, np.arange(n, dtype=np.int32), np.asarray(hint, dtype=np.float64))
         with clock("solve_s"):
-            h.run()
+            run_interruptibly(h)
         with clock("extract_s"):
             status = h.getModelStatus().name
             state = raw_state(STATUS, status, "HiGHS")

@@ -32,19 +32,22 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TypeVar
 
 import numpy as np
 import pandas as pd
 
 from rpbench.backends import Preset, solve
-from rpbench.exceptions import SolverError
+from rpbench.exceptions import ModelError, SolverError
 from rpbench.instances import save_instance
 from rpbench.model import Solution, Status
 from rpbench.paths import cache_dir
 from rpbench.scenarios.base import Scenario
 from rpbench.sim.fleet import DROPOFF, PICKUP, FleetState, Stop
 from rpbench.sim.ties import canonicalize
-from rpbench.strategies.base import Kind, RoundModel, RoundState, Strategy
+from rpbench.strategies.base import Kind, RoundModel, RoundState, Strategy, received, received_moves
+
+T = TypeVar("T")
 
 #: ``capture(round, t, round_model, solution)``: a hook that sees every solved round.
 Capture = Callable[[int, float, RoundModel, Solution], None]
@@ -218,13 +221,16 @@ class Simulator:
     def _round(self, k: int, t: float) -> None:
         t_build = time.perf_counter()
         state = self._round_state(t)
-        rm = self.strategy.build(state)
+        built = self._checked(k, t, lambda: self.strategy.build(state))  # a model it failed to construct
         build_s = time.perf_counter() - t_build
+        # Checked here, once built (a strategy may change its arrays after constructing them), and
+        # copied into arrays it can no longer change: the solver and the commit see what was checked.
+        rm = self._checked(k, t, lambda: received(built, state, self.strategy.structure))
         model = rm.model
         if model.n_cols == 0:
             return
         try:
-            solution = solve(model, self.preset)  # verified feasible there
+            solution = solve(model, self.preset)  # verified there: a valid, feasible answer
         except SolverError as exc:
             raise self._round_failure(k, t, model, str(exc)) from None
         if solution.status is Status.INFEASIBLE:
@@ -241,11 +247,13 @@ class Simulator:
             )
         if self.capture is not None:
             self.capture(k, t, rm, solution)
-        moves = 0
+        tie_moves = 0
         if self.canonical_ties:
-            solution, moves = canonicalize(model, solution)
+            solution, tie_moves = canonicalize(model, solution)
         assigned = self._commit(rm, solution.chosen, t)
-        vehicles, targets = self.strategy.reposition(state, rm, solution.chosen)
+        moves = self.strategy.reposition(state, rm, solution.chosen)
+        used = rm.vehicle[solution.chosen]
+        vehicles, targets = self._checked(k, t, lambda: received_moves(moves, state, used, len(self.dist)))
         for v, node in zip(vehicles, targets, strict=True):
             self._reposition(int(v), int(node), t)
         size = model.size
@@ -267,9 +275,19 @@ class Simulator:
                 solution.objective * model.unit_m,
                 solution.gap,
                 assigned,
-                moves,
+                tie_moves,
             )
         )
+
+    def _checked(self, k: int, t: float, check: Callable[[], T]) -> T:
+        """``check()``, its :class:`ModelError` naming the strategy (run name and class) and the round."""
+        try:
+            return check()
+        except ModelError as exc:
+            cls = type(self.strategy)
+            raise ModelError(
+                f"strategy {self.strategy.name!r} ({cls.__module__}.{cls.__qualname__}) round {k} (t={t:g} s): {exc}"
+            ) from None
 
     def _round_failure(self, k: int, t: float, model, what: str) -> SolverError:
         """A solver failure naming the strategy and round, with the round's model saved for `rpbench bench`."""

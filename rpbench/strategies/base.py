@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any, ClassVar, Generic, TypeVar, cast
 
 import numpy as np
 
+from rpbench.exceptions import ModelError, one_line
 from rpbench.model import AssignmentModel, Structure, TripPackingModel
 from rpbench.scenarios.base import Params, Scenario
 from rpbench.strategies.options import RunOptions
@@ -112,7 +113,178 @@ class RoundModel:
         n = self.model.n_cols
         for name in ("kind", "vehicle", "first", "second", "fofo", "utility_m", "pickup_m"):
             if len(getattr(self, name)) != n:
-                raise ValueError(f"RoundModel.{name} has {len(getattr(self, name))} entries for {n} columns")
+                raise ModelError(f"RoundModel.{name} has {len(getattr(self, name))} entries for {n} columns")
+
+
+#: The model class of each round structure (exactly: a subclass could redefine what its columns cover).
+ROUND_MODELS: dict[Structure, type] = {Structure.ASSIGNMENT: AssignmentModel, Structure.TRIP_PACKING: TripPackingModel}
+
+
+def received(rm: object, state: RoundState, structure: Structure) -> RoundModel:
+    """What :meth:`Strategy.build` returned, checked against its round and copied into read-only arrays.
+
+    Validation on construction is not enough: a strategy may change its arrays afterwards.  The
+    copy (the one the solver and the simulator use) is checked as it is: a :class:`RoundModel`
+    around the structure's model class, the model valid (:meth:`~rpbench.model._Model.frozen`),
+    its rows the round's waiting passengers and then its V0 and V1 vehicles in state order, and
+    each column's decoding the decision its model column stands for.  A model the solver finds
+    feasible is then a set of decisions the simulator can commit.  Raises one :class:`ModelError`
+    line saying what is wrong (the caller names the strategy).
+    """
+    if not isinstance(rm, RoundModel):
+        raise ModelError(f"build() returned {_a(rm)}, not a RoundModel")
+    want = ROUND_MODELS.get(structure)
+    if want is None or type(rm.model) is not want:
+        expected = {Structure.ASSIGNMENT: "an AssignmentModel", Structure.TRIP_PACKING: "a TripPackingModel"}.get(
+            structure, "an AssignmentModel or a TripPackingModel"
+        )
+        raise ModelError(
+            f"build() returned a RoundModel around {_a(rm.model)}; a strategy of structure {structure.value} "
+            f"returns {expected}"
+        )
+    try:
+        model = rm.model.frozen()
+        checked = RoundModel(
+            model=model,
+            kind=_frozen(rm.kind, "RoundModel.kind", np.int8, model.n_cols),
+            vehicle=_frozen(rm.vehicle, "RoundModel.vehicle", np.int64, model.n_cols),
+            first=_frozen(rm.first, "RoundModel.first", np.int64, model.n_cols),
+            second=_frozen(rm.second, "RoundModel.second", np.int64, model.n_cols),
+            fofo=_frozen(rm.fofo, "RoundModel.fofo", np.bool_, model.n_cols),
+            utility_m=_frozen(rm.utility_m, "RoundModel.utility_m", np.float64, model.n_cols),
+            pickup_m=_frozen(rm.pickup_m, "RoundModel.pickup_m", np.float64, model.n_cols),
+        )
+        _check_decoding(checked, state)
+    except ModelError as exc:
+        raise ModelError(f"build() returned an invalid model: {exc}") from None
+    except (TypeError, ValueError, AttributeError, IndexError) as exc:  # arrays of the wrong kind
+        raise ModelError(f"build() returned a malformed model ({type(exc).__name__}: {one_line(exc)})") from None
+    return checked
+
+
+def _a(obj: object) -> str:
+    return "None" if obj is None else f"a {type(obj).__name__}"
+
+
+def _frozen(raw: object, name: str, dtype: type, n: int | None = None) -> np.ndarray:
+    """A read-only copy of ``raw`` as ``dtype`` (``n`` entries), refusing a cast that would change its values."""
+    arr = np.array(raw)
+    if arr.ndim != 1 or (n is not None and len(arr) != n):
+        raise ModelError(f"{name} has shape {arr.shape}" + (f" for {n} columns" if n is not None else ""))
+    if len(arr) and arr.dtype.kind not in ("b" if dtype is np.bool_ else "biuf"):
+        raise ModelError(f"{name} holds {arr.dtype} values")
+    out: np.ndarray = arr.astype(dtype, copy=False)  # np.array copied it already
+    if out is not arr and dtype is not np.float64 and not np.array_equal(out, arr):  # NaN, 1.5, 300 as int8
+        c = int(np.flatnonzero(out != arr)[0])
+        raise ModelError(f"{name}[{c}] = {arr[c].item()!r} is not a valid {np.dtype(dtype).name}")
+    out.setflags(write=False)
+    return out
+
+
+def received_moves(
+    moves: object, state: RoundState, assigned: np.ndarray, n_nodes: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """What :meth:`Strategy.reposition` returned, checked: distinct vacant vehicles of the round that
+    were not just assigned (``assigned``: their ids), each sent to a node index of the network."""
+    try:
+        raw_vehicles, raw_targets = cast(tuple[object, object], moves)
+    except (TypeError, ValueError):
+        raise ModelError(f"reposition() returned {_a(moves)}, not a pair (vehicle ids, target nodes)") from None
+    vehicles = _frozen(raw_vehicles, "reposition() vehicles", np.int64)
+    targets = _frozen(raw_targets, "reposition() targets", np.int64, len(vehicles))
+    if not len(vehicles):
+        return vehicles, targets
+    ordered = np.sort(vehicles)
+    for bad, why in (
+        (vehicles[~np.isin(vehicles, state.v0_vehicle)], "is not a vacant vehicle of the round"),
+        (vehicles[np.isin(vehicles, assigned)], "was assigned a passenger in this round"),
+        (ordered[1:][ordered[1:] == ordered[:-1]], "is sent twice"),
+    ):
+        if len(bad):
+            raise ModelError(f"reposition() vehicle {int(bad[0])} {why}")
+    bad = np.flatnonzero((targets < 0) | (targets >= n_nodes))
+    if len(bad):
+        raise ModelError(f"reposition() target node {int(targets[bad[0]])} is not a node index (0..{n_nodes - 1})")
+    return vehicles, targets
+
+
+_KIND_NAMES = {int(k): k.name for k in Kind}
+
+
+def _check_decoding(rm: RoundModel, state: RoundState) -> None:
+    """Each column's (kind, vehicle, first, second) is the decision its model column stands for.
+
+    One pass over all columns with few numpy calls (a simulation round has tens of columns, so each
+    call's overhead is what counts); only a failing model pays for finding out what is wrong.
+    """
+    model = rm.model
+    if isinstance(model, AssignmentModel):
+        passengers, row_vehicle, r1, r2 = model.n_passengers, model.col_vehicle, model.col_passenger, None
+    else:  # received() passes only the two round models
+        passengers, row_vehicle, r1, r2 = model.n_requests, model.col_vehicle, model.col_request1, model.col_request2
+    n_vehicles = state.n_v0 + state.n_v1
+    if passengers > state.n_passengers or model.n_vehicles > n_vehicles:
+        raise ModelError(
+            f"the model has {passengers} passenger and {model.n_vehicles} vehicle rows for a round of "
+            f"{state.n_passengers} waiting passengers and {n_vehicles} vehicles (V0 then V1)"
+        )
+    # the decision of each column; index -1 (keep waiting, no second request) reads the appended -1
+    vehicle = np.concatenate([state.v0_vehicle, state.v1_vehicle, [-1]])[row_vehicle]
+    kind = (row_vehicle >= state.n_v0).astype(np.int8) + np.int8(Kind.VACANT)  # VACANT or JOIN
+    kind[row_vehicle < 0] = Kind.WAIT
+    a = state.p_order[r1]
+    finite = np.isfinite(rm.utility_m + rm.pickup_m) | (row_vehicle < 0)
+    if r2 is None:
+        ok = (rm.kind == kind) & (rm.vehicle == vehicle) & (rm.first == a) & (rm.second == -1) & finite
+    else:
+        pair = r2 >= 0
+        kind[pair] = Kind.TRIP2
+        b = np.append(state.p_order, -1)[r2]
+        orders = ((rm.first == a) & (rm.second == b)) | (pair & (rm.first == b) & (rm.second == a))
+        v0 = ~pair | (row_vehicle < state.n_v0)  # a two-request trip takes a vacant vehicle
+        ok = (rm.kind == kind) & (rm.vehicle == vehicle) & orders & v0 & finite
+    if not ok.all():
+        _explain(rm, state, int(np.flatnonzero(~ok)[0]), kind, vehicle, a, None if r2 is None else b)
+
+
+def _explain(
+    rm: RoundModel, state: RoundState, c: int, kind: np.ndarray, vehicle: np.ndarray, a: np.ndarray, b
+) -> None:
+    """Raise the :class:`ModelError` saying what is wrong with column ``c`` (its expected decision given)."""
+    row = int(rm.model.col_vehicle[c])
+    pair = b is not None and b[c] >= 0
+    want = Kind(int(kind[c]))
+    if int(rm.kind[c]) != want:
+        what = {
+            Kind.WAIT: "keeps its passenger waiting",
+            Kind.TRIP2: "is a two-passenger trip",
+            Kind.VACANT: "is a vacant vehicle's (a V0 row)",
+            Kind.JOIN: "is a partly occupied vehicle's (a V1 row)",
+        }[want]
+        got = _KIND_NAMES.get(int(rm.kind[c]), str(int(rm.kind[c])))
+        raise ModelError(f"column {c} has kind {got}, but its model column {what}: kind {want.name}")
+    if pair and row >= state.n_v0:
+        raise ModelError(
+            f"column {c} is a two-passenger trip of a partly occupied vehicle (vehicle row {row}); "
+            "only a vacant vehicle may take one"
+        )
+    if int(rm.vehicle[c]) != int(vehicle[c]):
+        raise ModelError(
+            f"column {c} has vehicle {int(rm.vehicle[c])}, but its model column stands for vehicle {int(vehicle[c])}"
+            + (" (-1: keep waiting)" if row < 0 else f" (vehicle row {row}: V0 then V1 in state order)")
+        )
+    first, second = int(rm.first[c]), int(rm.second[c])
+    orders = (int(a[c]), int(b[c]) if b is not None else -1)
+    if (first, second) != orders and not (pair and (second, first) == orders):
+        serves = f"orders {orders[0]} and {orders[1]}" if pair else f"order {orders[0]}"
+        raise ModelError(
+            f"column {c} has (first, second) = ({first}, {second}), but its model column "
+            f"serves {serves} (passenger rows are the round's waiting passengers in state order)"
+        )
+    raise ModelError(
+        f"column {c} has utility_m {float(rm.utility_m[c])!r} and pickup_m {float(rm.pickup_m[c])!r}; "
+        "a column that assigns a passenger needs finite ones"
+    )
 
 
 class Strategy(ABC, Generic[OptionsT]):

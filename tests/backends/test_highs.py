@@ -46,3 +46,35 @@ def test_a_rejected_option_is_an_error_and_the_next_solve_starts_clean():
         kept_instance({"output_flag": False, "no_such_option": 1})
     h = kept_instance({"output_flag": False})
     assert h.getNumCol() == 0
+
+
+class _Alarm(Exception):
+    pass
+
+
+def test_a_signal_handler_ends_a_long_solve_and_the_interrupted_instance_is_dropped():
+    """HiGHS calls into Python at its interrupt checks, so a handler's exception ends ``run()`` mid-solve."""
+    import signal
+
+    from rpbench.backends import highs
+
+    backend = get_backend("highs")
+    backend.solve(synthetic.pairing(20, seed=1), SolveOptions())
+    h = highs._kept.highs["solve"]
+
+    def alarm(signum, frame):
+        raise _Alarm
+
+    previous = signal.signal(signal.SIGALRM, alarm)
+    signal.setitimer(signal.ITIMER_REAL, 0.3)
+    try:
+        with pytest.raises(_Alarm):
+            backend.solve(synthetic.pairing(1000, seed=1), SolveOptions())  # seconds of MIP
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
+    assert h.getModelStatus().name != "kOptimal"  # stopped inside run(), not after it
+    assert highs._kept.highs.get("solve") is not h  # its state after the exception is not trusted
+    model = synthetic.pairing(40, seed=2)
+    want = get_backend("matching").solve(model, SolveOptions()).objective
+    assert backend.solve(model, SolveOptions()).objective == want

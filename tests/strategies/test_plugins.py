@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -18,18 +19,23 @@ import textwrap
 from importlib import metadata
 from pathlib import Path
 
+import numpy as np
 import pytest
+from helpers import line_network, round_state
 from plugin_helpers import EXAMPLE, declare_entry_points, forget
 
 from rpbench import plugins
 from rpbench.cli import main
 from rpbench.commands._runs import parse_runs
-from rpbench.exceptions import ParameterError
+from rpbench.exceptions import ModelError, ParameterError
 from rpbench.harness.spec import resolve_runs
+from rpbench.model import Structure
 from rpbench.results.check import check_folder
 from rpbench.results.metrics import TIMING_KPIS
 from rpbench.strategies import plugin_names, strategy_class
+from rpbench.strategies.base import Kind, received
 from rpbench.strategies.myopic import MyopicBatch
+from rpbench.strategies.rtv import RTV
 
 MODULE = '''
 from dataclasses import dataclass
@@ -479,3 +485,58 @@ def test_example_package_runs_by_entry_point_and_preset(tmp_path, monkeypatch):
         assert all(c.ok for c in check_folder(tmp_path / "fresh"))
     finally:
         forget("rpbench_greedy")
+
+
+# ------------------------------------------------------------------ what the simulator receives from build()
+def rtv_round():
+    """An RTV round (trip packing): three passengers, two vacant vehicles, one partly occupied."""
+    net = line_network(6)
+    state = round_state(
+        net, [(0, 4), (1, 5), (2, 5)], [(0, 0.0), (1, 0.0)], occupied=[{"node": 3, "origin": 3, "destination": 5}]
+    )
+    return state, RTV().build(state)
+
+
+def test_a_received_round_model_is_a_read_only_copy():
+    state, rm = rtv_round()
+    got = received(rm, state, Structure.TRIP_PACKING)
+    assert got.model.values is not rm.model.values and np.array_equal(got.model.values, rm.model.values)
+    arrays = [got.model.values, got.model.col_vehicle, got.kind, got.vehicle, got.first, got.second, got.fofo]
+    assert not any(a.flags.writeable for a in arrays)
+    rm.model.values[0] = np.nan  # the strategy's own arrays stay its own
+    assert np.isfinite(got.model.values).all()
+
+
+def test_a_trip_may_list_its_passengers_in_either_pick_up_order():
+    state, rm = rtv_round()
+    trip = int(np.flatnonzero(rm.kind == Kind.TRIP2)[0])
+    rm.first[trip], rm.second[trip] = rm.second[trip], rm.first[trip]
+    received(rm, state, Structure.TRIP_PACKING)
+
+
+@pytest.mark.parametrize(
+    "spoil, message",
+    [
+        (lambda rm, trip: rm.second.__setitem__(trip, 99), "but its model column serves orders"),
+        (lambda rm, trip: rm.kind.__setitem__(trip, Kind.VACANT), "but its model column is a two-passenger trip"),
+        (lambda rm, trip: rm.kind.__setitem__(-1, Kind.VACANT), "is a partly occupied vehicle's (a V1 row)"),
+        (lambda rm, trip: rm.vehicle.__setitem__(trip, 2), "stands for vehicle"),
+        (lambda rm, trip: rm.kind.__setitem__(0, 9), "column 0 has kind 9, but"),
+        (lambda rm, trip: rm.pickup_m.__setitem__(trip, np.inf), "needs finite ones"),
+        (lambda rm, trip: rm.model.col_request1.__setitem__(0, 7), "column 0 has first request 7"),
+    ],
+)
+def test_a_spoilt_trip_packing_round_is_refused(spoil, message):
+    state, rm = rtv_round()
+    trip = int(np.flatnonzero(rm.kind == Kind.TRIP2)[0])
+    spoil(rm, trip)
+    with pytest.raises(ModelError, match=re.escape(message)):
+        received(rm, state, Structure.TRIP_PACKING)
+
+
+def test_a_round_model_of_another_structure_is_refused():
+    state, rm = rtv_round()
+    with pytest.raises(ModelError, match="a strategy of structure assignment returns an AssignmentModel"):
+        received(rm, state, Structure.ASSIGNMENT)
+    with pytest.raises(ModelError, match="build.. returned a tuple, not a RoundModel"):
+        received((rm,), state, Structure.TRIP_PACKING)
