@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import shutil
 from pathlib import Path
 
 from rpbench.exceptions import ResultsError, RpbenchError
@@ -17,7 +16,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="write a checked light copy of a results folder",
         description="Run rpbench check on a results folder (run, multi-day or sweep) and, if every "
         f"check passes, copy it without {', '.join(HEAVY)} and with the checker's "
-        "verdict in check.txt.",
+        "verdict in check.txt.  The folder is first copied whole beside DEST and the checker runs on that "
+        "copy, so what is published is what was checked.  A folder holding a symbolic link (or a special "
+        "file) is refused: publish copies files, never what a link points to.  Only one publish to a "
+        "DEST runs at a time; a second one fails at once.",
     )
     p.add_argument("source", metavar="RESULTS_DIR")
     p.add_argument("dest", metavar="DEST", help="folder to create (never overwritten)")
@@ -29,20 +31,12 @@ def run(args: argparse.Namespace) -> int:
     # before the (slow) checker: DEST must be free (a dangling link counts as taken) and its folder writable
     check_new_folder(dest, what="DEST")
     try:
-        print(publish(args.source, dest))
-    except BaseException as exc:
-        _remove_staging(dest)
-        if isinstance(exc, OSError) and not isinstance(exc, RpbenchError):
-            where = f"{exc.filename}: " if exc.filename else ""
-            raise ResultsError(
-                f"cannot publish to {str(dest)!r} ({where}{exc.strerror or exc}); nothing was written"
-            ) from None
-        raise
+        print(publish(args.source, dest))  # removes its own staging folder, whatever stops it
+    except OSError as exc:
+        if isinstance(exc, RpbenchError):
+            raise
+        where = f"{exc.filename}: " if exc.filename else ""
+        raise ResultsError(
+            f"cannot publish to {str(dest)!r} ({where}{exc.strerror or exc}); nothing was written"
+        ) from None
     return 0
-
-
-def _remove_staging(dest: Path) -> None:
-    """The copy rpbench.harness.publish stages beside DEST before renaming it into place."""
-    staging = dest.with_name(f".{dest.name}.partial")
-    if staging.is_dir() and not staging.is_symlink():
-        shutil.rmtree(staging, ignore_errors=True)

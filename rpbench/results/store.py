@@ -38,7 +38,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from rpbench import __version__
+from rpbench import __version__, files
 from rpbench.data.road import NetworkTables
 from rpbench.exceptions import ResultsError, RpbenchError, one_line
 from rpbench.network import RoadNetwork
@@ -53,7 +53,9 @@ DEFAULT_PARENT = "rpbench-runs"
 #: about a process on another machine sharing the folder (or a reused PID), and a dead process's leftover
 #: costs only disk space meanwhile, so err on the late side.
 STALE_PARTIAL_S = 60 * 60
-_PARTIAL = re.compile(r"^\.(?P<name>.+)\.partial-(?P<pid>\d+)$")
+#: ``.NAME.partial-PID``, or ``.NAME.partial-PID-XXXX`` (a staging folder made with tempfile.mkdtemp, such as
+#: rpbench publish's).
+_PARTIAL = re.compile(r"^\.(?P<name>.+)\.partial-(?P<pid>\d+)(?:-\w+)?$")
 
 
 @contextlib.contextmanager
@@ -180,8 +182,8 @@ def _write_error(exc: BaseException, tmp: Path, final: Path) -> ResultsError | N
 
 
 def remove_stale_partials(parent: Path, *, older_than_s: float = STALE_PARTIAL_S) -> list[Path]:
-    """Remove the ``.NAME.partial-PID`` folders in ``parent`` left by processes that died before cleaning up
-    (SIGKILL, power loss): only when no process has that PID any more and the folder is older than
+    """Remove the ``.NAME.partial-PID[-XXXX]`` folders in ``parent`` left by processes that died before cleaning
+    up (SIGKILL, power loss): only when no process has that PID any more and the folder is older than
     ``older_than_s``.  Returns the folders removed."""
     try:
         entries = list(os.scandir(parent))
@@ -299,7 +301,7 @@ def read_meta(folder: Path) -> dict[str, Any]:
     if not path.is_file():
         raise ResultsError(f"{str(folder)!r} is not an rpbench results folder (no meta.json)")
     try:
-        meta = json.loads(path.read_text())
+        meta = files.parse_json(path.read_text(), repr(str(path)), ResultsError)  # deep nesting: one line too
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise ResultsError(f"{str(path)!r} is not valid JSON: {one_line(exc)}") from None
     if not isinstance(meta, dict):

@@ -143,6 +143,14 @@ def test_an_old_partial_of_a_dead_process_is_removed(results_parent):
     assert not stale.exists() and (results_parent / "new" / "meta.json").is_file()
 
 
+def test_an_old_publish_staging_folder_of_a_dead_process_is_removed(results_parent):
+    """rpbench publish stages in ``.DEST.partial-PID-XXXX`` (tempfile.mkdtemp): swept like a run's partial."""
+    stale = partial(results_parent, "pub", dead_pid(), age_s=3600)
+    staging = stale.rename(stale.with_name(f"{stale.name}-k3x_9a2q"))
+    new_folder_in(results_parent)
+    assert not staging.exists()
+
+
 def test_a_young_partial_of_a_dead_process_is_kept(results_parent):
     young = partial(results_parent, "young-run", dead_pid(), age_s=10)
     new_folder_in(results_parent)

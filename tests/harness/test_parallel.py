@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import dataclasses
 import os
+import signal
 import sys
 import time
 from pathlib import Path
@@ -10,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from rpbench.exceptions import ParameterError
-from rpbench.harness.parallel import run_tasks
+from rpbench.harness.parallel import WorkerDiedError, run_tasks
 
 
 def square(x: int) -> int:
@@ -28,6 +30,42 @@ def sleep_or_fail(task: tuple[str, str]) -> None:
     while not pid_file.exists():
         time.sleep(0.05)
     raise ValueError("task failed on purpose")
+
+
+@dataclasses.dataclass(frozen=True)
+class Job:
+    """A task named like a day or sweep point (by its ``out`` folder): ``sleep`` records its pid and sleeps;
+    ``kill`` and ``exit`` wait for that record, then end their worker by SIGKILL or by exit status 3."""
+
+    kind: str
+    folder: str
+    out: str
+
+
+def sleep_or_die(job: Job) -> None:
+    pid_file = Path(job.folder) / "sleeper.pid"
+    if job.kind == "sleep":
+        pid_file.write_text(str(os.getpid()))
+        time.sleep(120)
+        return
+    while not pid_file.exists():
+        time.sleep(0.05)
+    if job.kind == "kill":
+        os.kill(os.getpid(), signal.SIGKILL)
+    os._exit(3)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kind, how", [("kill", "was killed by SIGKILL"), ("exit", "exited with status 3")])
+def test_a_dead_worker_is_one_error_naming_its_task_and_the_other_workers_stop(tmp_path, kind, how):
+    jobs = [Job("sleep", str(tmp_path), str(tmp_path / "day-1")), Job(kind, str(tmp_path), str(tmp_path / "day-2"))]
+    with pytest.raises(WorkerDiedError) as raised:
+        run_tasks(sleep_or_die, jobs, workers=2, label="days", progress=False)
+    message = str(raised.value)
+    assert message.startswith(f"days: the worker process running day-2 {how} (pid "), message
+    assert message.endswith("; the other workers were stopped") and "\n" not in message
+    with pytest.raises(ProcessLookupError):
+        os.kill(int((tmp_path / "sleeper.pid").read_text()), 0)  # terminated and reaped
 
 
 @pytest.mark.slow
