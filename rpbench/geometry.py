@@ -14,7 +14,9 @@ An order is feasible when both detours are <= D̄; the pair is feasible when
 feasible one with the smaller L (tie -> FOFO; ``order_rule="min_then_check"``
 instead picks the smaller L first and then tests it, as the authors' code
 did).  The saving is ``e = l_A + l_B - L_chosen``.  Thresholds are inclusive
-with a 1e-9 m tolerance (A23).
+with a 1e-9 m tolerance (A23).  A pair with a zero-length order (origin and destination on one node,
+``l = 0``) is never feasible: by the triangle inequality its saving is at most 0, so such an order is
+served solo.
 
 Everything is vectorised: inputs are broadcastable arrays of node indices
 and distances, ``dist`` is the all-pairs matrix of the one distance oracle.
@@ -104,7 +106,8 @@ def choose_order(g: PairGeometry, max_pickup_m: float, order_rule: str = "min_fe
         ok = np.where(fofo, g.fofo_ok, g.folo_ok)
     else:
         raise ParameterError(f"order_rule {order_rule!r} unknown; expected one of {', '.join(ORDER_RULES)}")
-    feasible = ok & (g.pk <= max_pickup_m + TOLERANCE_M)
+    # A zero-length trip (origin = destination node) is served solo, never pooled: it can only lose (e <= 0).
+    feasible = ok & (g.pk <= max_pickup_m + TOLERANCE_M) & (g.l_a > TOLERANCE_M) & (g.l_b > TOLERANCE_M)
     length = np.where(fofo, g.fofo_length, g.folo_length)
     ride_a = np.where(fofo, g.delta + g.p + g.l_oB_dA, length)
     ride_b = np.where(fofo, g.l_oB_dA + g.l_dA_dB, g.l_b)

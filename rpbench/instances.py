@@ -31,7 +31,8 @@ from typing import Any
 import numpy as np
 
 from rpbench.exceptions import ModelError, ResultsError, one_line
-from rpbench.model import AssignmentModel, Model, PairingModel, Structure, TripPackingModel
+from rpbench.files import check_schema, parse_json
+from rpbench.model import AssignmentModel, Model, PairingModel, Status, Structure, TripPackingModel
 
 FORMAT = "rpbench-instance-1"
 #: Largest declared row count (passengers, vehicles, requests, orders): ~1000 times the largest fleet or
@@ -52,6 +53,21 @@ _READ_ERRORS = (
     NotImplementedError,
 )
 _HEADER_READERS = {(1, 0): np.lib.format.read_array_header_1_0, (2, 0): np.lib.format.read_array_header_2_0}
+#: The provenance fields of ``meta_json`` (rpbench snapshot writes them all; a hand-made instance may have
+#: none) and the types their values must have: ``objective`` is what the run's solver reached (null if none).
+META_TYPES: dict[str, type | tuple[type, ...]] = {
+    "scenario": str,
+    "scenario_name": str,
+    "seed": int,
+    "strategy": str,
+    "round": int,
+    "t_s": float,
+    "preset": str,
+    "objective": (float, type(None)),
+    "status": str,
+    "size": dict,
+}
+STATUSES = frozenset(s.value for s in Status)
 _FIELDS = {
     Structure.ASSIGNMENT: ("n_passengers", "n_vehicles", "col_passenger", "col_vehicle"),
     Structure.TRIP_PACKING: ("n_requests", "n_vehicles", "col_vehicle", "col_request1", "col_request2"),
@@ -139,13 +155,31 @@ def load_instance(path: str | Path) -> tuple[Model, dict[str, Any]]:
                 unit_m=unit_m,
                 name=name,
             )
-        meta = json.loads(str(data.get("meta_json", "{}")))
-        if not isinstance(meta, dict):
-            raise ValueError("meta_json is not a JSON object")
+        meta = parse_json(str(data.get("meta_json", "{}")), "meta_json", ResultsError)
+    except ResultsError as exc:  # malformed or too deeply nested
+        raise ResultsError(f"snapshot file {str(path)!r} is corrupt: {exc}") from None
     except (KeyError, ValueError, TypeError, OverflowError, ModelError) as exc:
         what = f"missing array(s) {exc.args[0]}" if isinstance(exc, KeyError) else one_line(exc)
         raise ResultsError(f"snapshot file {str(path)!r} is corrupt: {what}") from None
+    _check_meta(meta, path)
     return model, meta
+
+
+def _check_meta(meta: Any, path: Path) -> None:
+    """The metadata fields rpbench reads (:data:`META_TYPES`) hold values of their types; each is optional."""
+    where = f"snapshot file {str(path)!r}"
+    if not isinstance(meta, dict):
+        raise ResultsError(f"{where} is corrupt: meta_json is not a JSON object (it holds a {type(meta).__name__})")
+    for key, want in META_TYPES.items():
+        if key in meta:
+            check_schema(meta, {key: want}, f"{where}, metadata", ResultsError)
+    objective = meta.get("objective")
+    if objective is not None and not math.isfinite(objective):
+        raise ResultsError(f"{where}, metadata: objective = {objective!r} is not a finite number")
+    if "status" in meta and meta["status"] not in STATUSES:
+        raise ResultsError(
+            f"{where}, metadata: status = {meta['status']!r} is not one of {', '.join(sorted(STATUSES))}"
+        )
 
 
 def _read_arrays(path: Path) -> dict[str, np.ndarray]:

@@ -15,7 +15,10 @@ Every value is checked when the preset is parsed: ``threads`` in [1, 1024],
 ``time_limit_s`` in (0, 1e6] s, ``mip_rel_gap`` in [0, 1] (finite: TOML's
 ``nan`` and ``inf`` are refused), ``method``/``solver``/``description``
 strings, ``[options.extra]`` a table of scalars (string, integer, finite
-number, boolean).  The file must be UTF-8 TOML.  Any violation is one
+number, boolean).  An option the backend does not honour
+(:data:`~rpbench.backends.registry.HONOURS`: ``method`` on ``matching``) is
+refused unless it asks for the default (``mip_rel_gap = 0``, ``threads = 1``).
+The file must be UTF-8 TOML.  Any violation is one
 :class:`~rpbench.exceptions.PresetError` naming the file.
 
 Presets are found in the checkout's ``solvers/`` folder, else in the
@@ -31,14 +34,14 @@ reported at once, naming the preset.
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 
 from rpbench.backends.base import Backend, SolveOptions
-from rpbench.backends.registry import REGISTRY, backend_class, plugin_names
+from rpbench.backends.registry import REGISTRY, backend_class, honoured_options, plugin_names
 from rpbench.exceptions import PresetError, one_line
+from rpbench.files import parse_toml, require_regular
 from rpbench.model import Structure
 from rpbench.paths import source_root
 from rpbench.plugins import is_spec
@@ -158,8 +161,7 @@ def load_preset(name: str) -> Preset:
     """Load a preset by name (or by path to a ``.toml`` file), validating it."""
     if name.endswith(".toml"):
         path = Path(name)
-        if not path.is_file():
-            raise PresetError(f"solver preset file {name!r} does not exist")
+        require_regular(path, "solver preset file", PresetError)  # a folder or FIFO is named as such
         return parse_preset(path.stem, _read_text(path, str(path)), str(path))
     files = _preset_files()
     if name not in files:
@@ -182,10 +184,7 @@ def _read_text(entry: Path | resources.abc.Traversable, where: str) -> str:
 
 
 def parse_preset(name: str, text: str, where: str) -> Preset:
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise PresetError(f"solver preset {where!r} is not valid TOML: {one_line(exc)}") from None
+    data = parse_toml(text, f"solver preset {where!r}", PresetError)  # too deeply nested: one line too
     unknown = set(data) - _TOP_KEYS
     if unknown:
         raise PresetError(
@@ -209,13 +208,24 @@ def parse_preset(name: str, text: str, where: str) -> Preset:
     description = data.get("description", "")
     if not isinstance(description, str):
         raise PresetError(f"solver preset {where!r}: description = {description!r} must be a string")
-    return Preset(
-        name=name,
-        backend=backend,
-        description=description,
-        options=_parse_options(data.get("options", {}), where),
-        path=where,
-    )
+    options = _parse_options(data.get("options", {}), where)
+    _refuse_unhonoured(options, backend, where)
+    return Preset(name=name, backend=backend, description=description, options=options, path=where)
+
+
+def _refuse_unhonoured(options: SolveOptions, backend: str, where: str) -> None:
+    """One line for an option set to anything but its default that ``backend`` would drop silently."""
+    honoured = honoured_options(backend)
+    default = SolveOptions()
+    order = ("threads", "time_limit_s", "mip_rel_gap", "method", "solver", "extra")
+    for key in order:
+        value = getattr(options, key)
+        if key not in honoured and value != getattr(default, key):
+            keep = ", ".join(k for k in order if k in honoured)
+            raise PresetError(
+                f"solver preset {where!r}: backend {backend!r} does not honour option {key} = {value!r} "
+                f"(it honours {keep}); remove it"
+            )
 
 
 def _parse_options(opts, where: str) -> SolveOptions:

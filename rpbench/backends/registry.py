@@ -24,6 +24,23 @@ REGISTRY: dict[str, str] = {
     "blossom": "blossom:BlossomBackend",
 }
 
+#: The preset options (``[options]`` keys) each built-in backend honours; a preset setting another one is
+#: refused (it would be dropped silently yet recorded in meta.json as used).  ``method`` picks among a
+#: backend's algorithms (HiGHS, SciPy: lp or mip for the assignment; OR-Tools: flow or cp), ``solver`` the
+#: solver behind a modelling layer (CVXPY, Pyomo); SciPy's milp runs on one thread; the special-purpose
+#: algorithms of matching and blossom are exact and have no method to choose nor gap to accept.
+#: A plug-in backend declares its own as a class attribute ``honours`` (default: every option).
+PRESET_OPTIONS = frozenset({"threads", "time_limit_s", "mip_rel_gap", "method", "solver", "extra"})
+HONOURS: dict[str, frozenset[str]] = {
+    "highs": PRESET_OPTIONS - {"solver"},
+    "ortools": PRESET_OPTIONS - {"solver"},
+    "scipy": PRESET_OPTIONS - {"solver", "threads"},
+    "cvxpy": PRESET_OPTIONS,
+    "pyomo": PRESET_OPTIONS,
+    "matching": frozenset({"threads", "time_limit_s", "extra"}),
+    "blossom": frozenset({"threads", "time_limit_s", "extra"}),
+}
+
 #: Entry-point group of backends installed by other distributions.
 ENTRY_POINT_GROUP = "rpbench.backends"
 
@@ -55,6 +72,14 @@ def backend_class(name: str) -> type[Backend]:
 def plugin_names() -> list[str]:
     """Names of the installed plug-in backends (entry points not shadowed by a built-in name)."""
     return plugins.plugin_names(ENTRY_POINT_GROUP, REGISTRY)
+
+
+def honoured_options(name: str) -> frozenset[str]:
+    """The preset options backend ``name`` honours (:data:`HONOURS`; a plug-in's ``honours`` attribute)."""
+    if name in HONOURS:
+        return HONOURS[name]
+    declared = getattr(backend_class(name), "honours", None)
+    return frozenset(declared) & PRESET_OPTIONS if declared is not None else PRESET_OPTIONS
 
 
 def get_backend(name: str) -> Backend:

@@ -13,6 +13,7 @@ import argparse
 import dataclasses
 from collections.abc import Sequence
 
+from rpbench.backends.presets import load_preset
 from rpbench.commands._common import add_decision_budget_arg, add_strict_arg, command_line, decision_budget
 from rpbench.exceptions import ParameterError
 from rpbench.harness.spec import RunEntry, RunSpec, resolve_runs, typed_options
@@ -95,6 +96,13 @@ def parse_runs(strategies: str | Sequence[str], opts: Sequence[str] = ()) -> lis
     """``--strategies`` text (or names) and ``--opt`` items -> typed run entries, in order."""
     names = split_list(strategies) if isinstance(strategies, str) else list(strategies)
     return parse_opt_items(opts, resolve_runs(names))
+
+
+def check_presets(args: argparse.Namespace) -> None:
+    """``--solver`` and ``--oracle-solver`` loaded (and so checked) before the scenario is fetched or built."""
+    load_preset(args.solver)
+    if getattr(args, "oracle_solver", None):
+        load_preset(args.oracle_solver)
 
 
 def run_spec(args: argparse.Namespace, request: ScenarioRequest, *, runs: Sequence[RunEntry] | None = None) -> RunSpec:

@@ -13,17 +13,35 @@ killed and reports ``killed``.
 from __future__ import annotations
 
 import argparse
+import shlex
 import sys
 
-from rpbench.backends.presets import load_preset
+from rpbench.backends.presets import load_preset, preset_names
 from rpbench.bench.runner import format_table, run_benchmark
 from rpbench.bench.synthetic import SUITES, suite
-from rpbench.commands._common import check_out_file, command_line, note, print_json, write_out_file
+from rpbench.commands._common import (
+    SEED,
+    TIME_LIMIT,
+    add_number_arg,
+    check_numbers,
+    check_out_file,
+    check_unique,
+    command_line,
+    note,
+    print_json,
+    write_out_file,
+)
 from rpbench.exceptions import ParameterError
 from rpbench.instances import load_instances
 from rpbench.model import OBJECTIVES, Structure
 from rpbench.results.html.bench import write_bench_html
 from rpbench.results.plots import bench_figure
+from rpbench.strategies.options import Range
+
+#: About the default hard timeout (2 x limit + 30 s) of the longest time limit a preset may set.
+HARD_TIMEOUT = Range(0.0, 2 * TIME_LIMIT.high, "s", low_open=True)
+#: The fastest of more than 100 runs of one solve tells nothing the fastest of 100 does not.
+REPEAT = Range(1, 100, integer=True)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -61,7 +79,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="LIST",
         help="only models of these structures, comma-separated: assignment, trip_packing, pairing",
     )
-    p.add_argument("--seed", type=int, default=0, help="seed of the synthetic models (default 0)")
+    add_number_arg(p, "--seed", SEED, default=0, help="seed of the synthetic models (default 0)")
     p.add_argument(
         "--solver",
         action="append",
@@ -69,10 +87,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="NAME",
         help="preset to run (repeatable; default: every installed preset)",
     )
-    p.add_argument(
+    add_number_arg(
+        p,
         "--time-limit",
-        type=float,
-        default=None,
+        TIME_LIMIT,
         metavar="S",
         help="per-solve time limit for every preset (default: each preset's own)",
     )
@@ -83,14 +101,14 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="NAME=S",
         help="per-solve time limit of one preset, e.g. pyomo-highs=30 (repeatable)",
     )
-    p.add_argument(
+    add_number_arg(
+        p,
         "--hard-timeout",
-        type=float,
-        default=None,
+        HARD_TIMEOUT,
         metavar="S",
         help="kill a solve after S seconds (default: 2 x its time limit + 30)",
     )
-    p.add_argument("--repeat", type=int, default=3, help="runs per solve; the fastest is kept (default 3)")
+    add_number_arg(p, "--repeat", REPEAT, default=3, help="runs per solve; the fastest is kept (default 3)")
     p.add_argument("--no-isolate", dest="isolate", action="store_false", help="solve in this process (no hard timeout)")
     p.add_argument("--csv", metavar="FILE", default=None, help="also write the table as CSV")
     p.add_argument("--plot", metavar="PNG", default=None, help="also plot solver time against model size")
@@ -105,20 +123,26 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(handler=run)
 
 
-def _limits(items: list[str]) -> dict[str, float]:
-    out = {}
+def _limits(items: list[str], run: list[str]) -> dict[str, float]:
+    """``--preset-time-limit NAME=S`` items: each a preset that runs (``run``), given once, S in range."""
+    out: dict[str, float] = {}
     for item in items:
         name, sep, value = item.partition("=")
-        try:
-            out[name.strip()] = float(value)
-        except ValueError:
-            sep = ""
-        if not sep or out[name.strip()] <= 0:
-            raise ParameterError(f"--preset-time-limit {item!r}: expected NAME=SECONDS with SECONDS > 0")
+        name = name.strip()
+        if not sep or not name:
+            raise ParameterError(f"--preset-time-limit {item!r}: expected NAME=SECONDS, e.g. pyomo-highs=30")
+        if name not in run:
+            raise ParameterError(
+                f"--preset-time-limit {item!r}: preset {name!r} is not benchmarked (presets: {', '.join(run)})"
+            )
+        if name in out:
+            raise ParameterError(f"--preset-time-limit gives preset {name!r} twice; give it once")
+        out[name] = TIME_LIMIT.check("--preset-time-limit", value.strip(), shlex.quote(item))
     return out
 
 
 def run(args: argparse.Namespace) -> int:
+    check_numbers(args)  # before any model is built or loaded
     if not args.synthetic and not args.paths:
         raise ParameterError(
             "nothing to benchmark: name instance files or folders (e.g. instances/examples) and/or pass --synthetic"
@@ -129,16 +153,15 @@ def run(args: argparse.Namespace) -> int:
         raise ParameterError(
             f"--objectives {args.objectives!r}: expected a comma-separated subset of {', '.join(OBJECTIVES)}"
         )
-    if args.time_limit is not None and args.time_limit <= 0:
-        raise ParameterError(f"--time-limit {args.time_limit!r} must be > 0")
-    if args.repeat < 1:
-        raise ParameterError(f"--repeat {args.repeat} must be >= 1")
-    limits = _limits(args.preset_time_limit)
+    if args.hard_timeout is not None and not args.isolate:
+        raise ParameterError("--hard-timeout kills an isolated solve; --no-isolate solves in this process, without one")
     # output files checked before benchmarking: a bad path must not cost the run
     csv_out = check_out_file(args.csv, "--csv") if args.csv else None
     plot_out = check_out_file(args.plot, "--plot") if args.plot else None
     html_out = check_out_file(args.html, "--html") if args.html else None
+    check_unique("--solver", args.solver or [])
     presets = None if args.solver is None else [load_preset(name) for name in args.solver]  # fail before building
+    limits = _limits(args.preset_time_limit, preset_names() if presets is None else [p.name for p in presets])
     wanted = None
     if args.structures is not None:  # checked before the (slow) synthetic suite is built
         wanted = {x.strip() for x in args.structures.split(",") if x.strip()}

@@ -9,13 +9,15 @@ from rpbench.commands._common import (
     add_decision_budget_arg,
     add_offline_arg,
     add_parallel_args,
+    check_numbers,
+    check_out_name,
+    check_parallel,
     command_line,
     decision_budget,
     note,
     note_over_budget,
 )
 from rpbench.data.first_run import ensure_data_dir
-from rpbench.exceptions import ParameterError
 from rpbench.harness.evaluate import run_evaluation
 from rpbench.protocols import builtin_names, load_protocol
 from rpbench.results.layout import REPORT, REPORT_HTML
@@ -41,10 +43,11 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    check_numbers(args)  # before anything runs or downloads
+    check_parallel(args)
     budget = decision_budget(args)
+    check_out_name(args.out)
     protocol = load_protocol(args.protocol)
-    if args.workers is not None and args.workers < 1:
-        raise ParameterError(f"--workers {args.workers} must be >= 1")
     data = None
     if protocol.scenario != "toy":
         data = str(ensure_data_dir(args.data, what=f"protocol {protocol.name!r}", offline=args.offline))

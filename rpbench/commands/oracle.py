@@ -9,8 +9,11 @@ from pathlib import Path
 
 from rpbench.backends import load_preset
 from rpbench.commands._common import (
+    TIME_LIMIT,
+    add_number_arg,
     add_scenario_args,
     add_strict_arg,
+    check_numbers,
     check_out_file,
     note,
     print_json,
@@ -20,8 +23,19 @@ from rpbench.commands._common import (
 from rpbench.exceptions import ParameterError
 from rpbench.harness.strict import require_proven
 from rpbench.oracle.pairs import bound_rules
-from rpbench.oracle.solve import UNIT_M, PairRules, check_variant, find_candidates, solve_oracle
+from rpbench.oracle.solve import (
+    MAX_UNIT_M,
+    MIN_UNIT_M,
+    UNIT_M,
+    PairRules,
+    check_variant,
+    find_candidates,
+    solve_oracle,
+)
 from rpbench.results.report import UNPROVEN_MARK
+from rpbench.strategies.options import Range
+
+UNIT_M_RANGE = Range(MIN_UNIT_M, MAX_UNIT_M, "m")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -61,20 +75,22 @@ def register(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="also pair an order requested while the first one rides (oracle_allow_enroute)",
     )
-    p.add_argument(
+    add_number_arg(
+        p,
         "--time-limit",
-        type=float,
-        default=None,
+        TIME_LIMIT,
         metavar="S",
         help="override the preset's time limit in seconds (a stopped solve reports its gap)",
     )
-    p.add_argument(
+    add_number_arg(
+        p,
         "--unit-m",
-        type=float,
+        UNIT_M_RANGE,
         default=UNIT_M,
         metavar="M",
-        help=f"resolution of the savings in the model, in metres (default {UNIT_M:g}; coarser if an "
-        "integer algorithm reports an overflow)",
+        help=f"resolution of the savings in the model, in metres (default {UNIT_M:g}). The solver proves the "
+        "optimum of the savings rounded to M, which can miss the unrounded optimum by up to M per pair: the "
+        "output states the proven bound ('rounding slack')",
     )
     p.add_argument("--pairs", metavar="CSV", default=None, help="write the chosen pairs to this CSV file")
     p.add_argument("--json", action="store_true", help="print one JSON object")
@@ -83,16 +99,14 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    check_numbers(args)  # before the scenario is built (or its data fetched)
     pairs_csv = check_out_file(args.pairs, "--pairs") if args.pairs else None  # before solving anything
-    if args.time_limit is not None and not args.time_limit > 0:
-        raise ParameterError(f"--time-limit {args.time_limit!r} must be > 0 seconds")
-    if not (args.unit_m > 0 and math.isfinite(args.unit_m)):
-        raise ParameterError(f"--unit-m {args.unit_m!r} must be a finite number of metres > 0")
+    if args.variant == "bound" and (args.both_pickup_orders or args.pickup_check or args.allow_enroute):
+        raise ParameterError("--variant bound takes no pair-rule flags: the bound's rules are fixed by its proof")
+    preset = load_preset(args.solver)
     scenario = scenario_request(args).build()
     variants: tuple[int, ...]
     if args.variant == "bound":
-        if args.both_pickup_orders or args.pickup_check or args.allow_enroute:
-            raise ParameterError("--variant bound takes no pair-rule flags: the bound's rules are fixed by its proof")
         variants, rules = (1,), bound_rules(scenario.params)
     else:
         variants = (1, 2) if args.variant == "both" else (check_variant(args.variant),)
@@ -103,7 +117,6 @@ def run(args: argparse.Namespace) -> int:
             allow_enroute=args.allow_enroute,
         )
     candidates = find_candidates(scenario.network.distances(), scenario.orders, rules)
-    preset = load_preset(args.solver)
     options = preset.options
     if args.time_limit is not None:
         options = dataclasses.replace(options, time_limit_s=args.time_limit)
@@ -135,7 +148,14 @@ def run(args: argparse.Namespace) -> int:
                     **candidates.stats,
                     "seconds": candidates.seconds,
                 },
-                **{"bound" if r.is_upper_bound else f"oracle{v}": r.kpis() for v, r in results.items()},
+                **{
+                    "bound" if r.is_upper_bound else f"oracle{v}": {
+                        **r.kpis(),
+                        "unit_m": r.model.unit_m,
+                        "rounding_slack_m": r.rounding_slack_m,
+                    }
+                    for v, r in results.items()
+                },
             }
         )
         return 0
@@ -157,6 +177,12 @@ def run(args: argparse.Namespace) -> int:
         f"({candidates.seconds:.3f} s)"
     )
     print(_table(results))
+    for r in results.values():
+        if not math.isnan(r.rounding_slack_m):
+            print(
+                f"  {_name(r)}: savings enter the model rounded to {r.model.unit_m:g} m; the unrounded optimum is "
+                f"at most {r.rounding_slack_m:,.2f} m above its saving (proven rounding slack)"
+            )
     return 0
 
 

@@ -16,8 +16,11 @@ import time
 from pathlib import Path
 
 from rpbench.commands._common import (
+    SEED,
     add_data_arg,
+    add_number_arg,
     add_offline_arg,
+    check_numbers,
     check_out_file,
     note,
     parse_param_overrides,
@@ -33,6 +36,14 @@ from rpbench.predict.fcfs import simulate, validate
 from rpbench.predict.rates import DEFAULT_DATE, RATE_KINDS, load_rates
 from rpbench.scenarios.base import Params
 from rpbench.scenarios.common import haikou_network
+from rpbench.strategies.options import Range
+
+#: τ_0 is a sojourn (a mean pick-up time): a day bounds it, as it bounds FL's tau0_s.
+TAU0 = Range(0.0, 86400.0, "s")
+#: The FCFS simulation holds every simulated order in memory: 1000 h (ten times the default) of the month
+#: table's demand is a few GB, already more than a validation needs.
+HOURS = Range(0.0, 1000.0, "h", low_open=True)
+MIN_SAMPLES = Range(1, 10**6, integer=True)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -59,10 +70,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         default=None,
         help="per-OD CSV (default: prediction-<rates>[-<date>].csv in the current folder)",
     )
-    p.add_argument(
+    add_number_arg(
+        p,
         "--tau0",
-        type=float,
-        default=None,
+        TAU0,
         metavar="S",
         help="sojourn of the origin taker state, e.g. a calibrated mean pick-up time (default 120)",
     )
@@ -92,11 +103,11 @@ def register(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="also simulate an FCFS dispatcher on Poisson demand and report MAPE/RMSE",
     )
-    p.add_argument("--hours", type=float, default=100.0, help="simulated hours for --validate-fcfs (default 100)")
-    p.add_argument(
-        "--min-samples", type=int, default=20, help="compare ODs with at least this many simulated orders (default 20)"
+    add_number_arg(p, "--hours", HOURS, help="simulated hours for --validate-fcfs (default 100)")
+    add_number_arg(
+        p, "--min-samples", MIN_SAMPLES, help="compare ODs with at least this many simulated orders (default 20)"
     )
-    p.add_argument("--seed", type=int, default=0, help="random seed of the FCFS simulation (default 0)")
+    add_number_arg(p, "--seed", SEED, help="random seed of the FCFS simulation (default 0)")
     p.add_argument(
         "--compare-authors", action="store_true", help="compare with the authors' published 2017-05-01 predictions"
     )
@@ -112,12 +123,19 @@ def default_csv(kind: str, date: str | None) -> Path:
 
 def run(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
-    if args.hours <= 0 or args.min_samples < 1 or args.seed < 0:
-        raise ParameterError("--hours must be > 0, --min-samples >= 1 and --seed >= 0")
+    check_numbers(args)  # before the data folder is fetched or anything is built
+    given = {"--hours": args.hours, "--min-samples": args.min_samples, "--seed": args.seed}
+    if not args.validate_fcfs:
+        for flag, value in given.items():
+            if value is not None:
+                raise ParameterError(f"{flag} applies to --validate-fcfs only; add --validate-fcfs or drop it")
+    hours = 100.0 if args.hours is None else args.hours
+    min_samples = 20 if args.min_samples is None else args.min_samples
+    seed = 0 if args.seed is None else args.seed
+    params = Params().replace(**parse_param_overrides(args.param))
     # checked before the (minutes-long) solve: a bad --out must not cost it
     csv_path = check_out_file(args.out or str(default_csv(args.rates, args.date)), "--out")
     data_dir = ensure_data_dir(args.data, what="rpbench predict", offline=args.offline)
-    params = Params().replace(**parse_param_overrides(args.param))
     changes = {
         k: v for k, v in (("tau0_s", args.tau0), ("priority", args.priority), ("accel", args.accel)) if v is not None
     }
@@ -130,9 +148,14 @@ def run(args: argparse.Namespace) -> int:
     if args.validate_fcfs:
         model = build_model(network, rates, params, config)
         prediction = solve_model(model)
-        simulated = simulate(model, hours=args.hours, seed=args.seed)
+        simulated = simulate(model, hours=hours, seed=seed)
         del model
-        out["fcfs"], _ = validate(prediction, simulated, min_samples=args.min_samples)
+        out["fcfs"], _ = validate(prediction, simulated, min_samples=min_samples)
+        if not out["fcfs"]["ods_compared"]:  # nothing to report: refused before the CSV is written
+            raise ParameterError(
+                f"--validate-fcfs: no OD has {min_samples} simulated orders in {hours:g} h; raise --hours or "
+                "lower --min-samples"
+            )
     else:
         prediction = predict(network, rates, params, config, use_cache=not args.no_cache)
     table = prediction.per_od_table()
@@ -179,8 +202,8 @@ def _print_human(r: dict) -> None:
         for name in ("pairing_prob", "ride_m", "shared_m"):
             m = f[name]
             print(
-                f"  {name:<13} MAPE {m['mape_pct']:.2f} %  RMSE {m['rmse']:.4g}  "
-                f"(mean predicted {m['mean_pred']:.4g}, simulated {m['mean_sim']:.4g})"
+                f"  {name:<13} MAPE {_num(m['mape_pct'], '.2f')} %  RMSE {_num(m['rmse'], '.4g')}  "
+                f"(mean predicted {_num(m['mean_pred'], '.4g')}, simulated {_num(m['mean_sim'], '.4g')})"
             )
     if "authors" in r:
         a = r["authors"]
@@ -190,3 +213,8 @@ def _print_human(r: dict) -> None:
                 f"  {c['column']:<28} ours {c['mean_ours']:10.4g}  authors {c['mean_authors']:10.4g}  "
                 f"pearson {c['pearson'] if c['pearson'] is None else round(c['pearson'], 3)}"
             )
+
+
+def _num(value: float | None, spec: str) -> str:
+    """A metric, or "n/a" where it is undefined (no simulated OD with a positive value)."""
+    return "n/a" if value is None else format(value, spec)

@@ -9,9 +9,18 @@ import sys
 import pandas as pd
 
 from rpbench.backends.presets import load_preset
-from rpbench.commands._common import add_data_arg, add_offline_arg, command_line, print_json
+from rpbench.commands._common import (
+    add_data_arg,
+    add_offline_arg,
+    check_date_list,
+    check_out_name,
+    check_unique,
+    command_line,
+    print_json,
+)
 from rpbench.data import available_peak_dates
 from rpbench.data.first_run import ensure_data_dir
+from rpbench.exceptions import ParameterError
 from rpbench.replication.folder import engine_folder, file_manifest, write_engine_folder
 from rpbench.replication.reference import has_committed
 from rpbench.replication.report import criterion, markdown
@@ -67,17 +76,21 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     strategies = parse_strategies(args.strategies)
-    data_dir = ensure_data_dir(args.data, what="rpbench replicate", offline=args.offline)
-    have = available_peak_dates(data_dir)
+    check_unique(
+        f"--strategies {args.strategies!r}", [s.strip().lower() for s in args.strategies.split(",") if s.strip()]
+    )
     if args.date and args.dates:
-        from rpbench.exceptions import ParameterError
-
         raise ParameterError("give --date or --dates, not both")
-    dates = parse_dates(args.dates or args.date or "2017-05-01", have)
-    preset = load_preset(args.solver)
-    check_new_folder(args.out)
+    check_date_list("--dates", args.dates)
     mode = "none" if args.no_ablation else args.ablation
     steps_for(mode)  # a bad --ablation is one line before anything runs
+    preset = load_preset(args.solver)
+    check_out_name(args.out, inner=["records", "2017-05-01_fl-nd_rpbench", "runs", "fl-nd", "trajectories.npz"])
+    check_new_folder(args.out)  # before the data folder is fetched
+    data_dir = ensure_data_dir(args.data, what="rpbench replicate", offline=args.offline)
+    have = available_peak_dates(data_dir)
+    dates = parse_dates(args.dates or args.date or "2017-05-01", have)
+    check_unique(f"--dates {args.dates!r}", dates)
     own: list = []  # rpbench's own engine's runs, kept as results folders that rpbench check verifies
     result = replicate(
         data_dir,

@@ -7,7 +7,14 @@ import argparse
 import pandas as pd
 
 from rpbench.commands._common import (
+    WORKERS,
+    add_number_arg,
     add_scenario_args,
+    check_date_list,
+    check_numbers,
+    check_out_name,
+    check_parallel,
+    check_unique,
     decision_budget,
     note,
     note_over_budget,
@@ -15,7 +22,7 @@ from rpbench.commands._common import (
     print_json,
     scenario_request,
 )
-from rpbench.commands._runs import add_run_args, run_spec
+from rpbench.commands._runs import add_run_args, check_presets, parse_runs, run_spec
 from rpbench.data.first_run import FETCH_COMMAND
 from rpbench.exceptions import ParameterError
 from rpbench.harness.comparison import run_comparison
@@ -46,10 +53,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="A..B|A,B,...",
         help="run several days of a dated scenario (haikou-peak, haikou-day), e.g. 2017-05-01..2017-05-14",
     )
-    p.add_argument(
+    add_number_arg(
+        p,
         "--workers",
-        type=int,
-        default=None,
+        WORKERS,
         help="parallel worker processes for --dates (default: one per core; 1 = in this process)",
     )
     p.add_argument(
@@ -63,11 +70,21 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    check_numbers(args)  # before anything runs or downloads
     if args.dates and args.date:
         raise ParameterError("--dates and --date exclude each other; drop --date")
-    decision_budget(args)  # a bad --decision-budget fails before anything runs or downloads
+    if not args.dates and (args.workers is not None or args.scheduler is not None):
+        flag = "--workers" if args.workers is not None else "--scheduler"
+        raise ParameterError(f"{flag} spreads the days of --dates; a run of one day runs in this process")
+    check_parallel(args)
+    check_date_list("--dates", args.dates)
+    decision_budget(args)
+    runs = parse_runs(args.strategies, args.opt)  # names and options checked before any download
+    check_presets(args)
+    days = ["2017-05-01"] if args.dates else []  # a day folder's name: a date
+    check_out_name(args.out, inner=[*days, "runs", max((e.name for e in runs), key=len)])
     check_new_folder(args.out)  # before a first run's data download: a bad --out must cost nothing
-    spec = run_spec(args, scenario_request(args).resolved())
+    spec = run_spec(args, scenario_request(args).resolved(), runs=runs)
     code = run_many_days(args, spec) if args.dates else run_one(args, spec)
     if args.scenario is None and spec.request.name == "toy" and not args.json:  # the fall-back city
         note(f"rpbench: SYNTHETIC DATA: the table above is the toy city, not Haikou; get the data: {FETCH_COMMAND}")
@@ -99,6 +116,7 @@ def run_one(args: argparse.Namespace, spec: RunSpec) -> int:
 
 def run_many_days(args: argparse.Namespace, spec: RunSpec) -> int:
     dates = spec.request.dates(args.dates)
+    check_unique(f"--dates {args.dates!r}", dates)
     name = spec.request.name
     note(f"running {len(dates)} days of {name} ({dates[0]} .. {dates[-1]}) x {', '.join(spec.names)}")
     folder = run_days(spec, dates, args.out, workers=args.workers, scheduler=args.scheduler)

@@ -5,10 +5,24 @@ from __future__ import annotations
 import argparse
 
 from rpbench.bench.snapshot import take_snapshots
-from rpbench.commands._common import add_scenario_args, note, print_json, scenario_request
-from rpbench.commands._runs import parse_runs, run_spec
+from rpbench.commands._common import (
+    add_number_arg,
+    add_scenario_args,
+    check_numbers,
+    check_out_name,
+    check_unique,
+    note,
+    print_json,
+    scenario_request,
+)
+from rpbench.commands._runs import check_presets, parse_runs, run_spec
 from rpbench.exceptions import ParameterError
 from rpbench.results.store import check_new_folder
+from rpbench.strategies.options import Range
+
+#: A round index: a day of 0.1 s rounds (Δt's lower bound) has 864,000.
+ROUND = Range(0, 864_000, integer=True)
+LARGEST = Range(1, 10_000, integer=True)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -22,7 +36,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--strategies", default="mb,rtv,fl", help="strategies to snapshot (default mb,rtv,fl)")
     p.add_argument("--solver", default="highs", help="solver preset used during the runs")
     p.add_argument("--rounds", default=None, help="round indices to freeze, e.g. 10,100,200 (default: largest)")
-    p.add_argument("--largest", type=int, default=3, help="without --rounds: freeze the N largest rounds")
+    add_number_arg(p, "--largest", LARGEST, help="without --rounds: freeze the N largest rounds (default 3)")
     p.add_argument("--opt", action="append", default=[], metavar="STRATEGY.KEY=VALUE", help="strategy option")
     p.add_argument("--out", required=True, help="folder to create for the instance files")
     p.add_argument("--json", action="store_true", help="print the manifest as JSON")
@@ -30,24 +44,30 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    check_numbers(args)  # before anything runs or downloads
     runs = [e for e in parse_runs(args.strategies, args.opt) if not e.offline]
+    check_presets(args)
     if not runs:
         raise ParameterError(
             f"--strategies {args.strategies!r}: offline runs have no rounds to freeze; name a strategy"
         )
     rounds = None
-    if args.rounds:
-        try:
-            rounds = sorted({int(r) for r in args.rounds.split(",") if r.strip()})
-        except ValueError:
-            raise ParameterError(f"--rounds {args.rounds!r}: expected round indices like 10,100,200") from None
-    if args.largest < 1:
-        raise ParameterError(f"--largest {args.largest} must be >= 1")
+    if args.rounds is not None:
+        items = [r.strip() for r in args.rounds.split(",") if r.strip()]
+        if not items or not all(r.lstrip("-").isdigit() for r in items):
+            raise ParameterError(f"--rounds {args.rounds!r}: expected round indices like 10,100,200")
+        rounds = [ROUND.check(f"--rounds {args.rounds!r}: round", r, r) for r in items]
+        check_unique(f"--rounds {args.rounds!r}", [str(r) for r in rounds])
+        if args.largest is not None:
+            raise ParameterError("--largest picks rounds without --rounds; give one of them")
+    longest = max((e.name for e in runs), key=len)
+    check_out_name(args.out, inner=[f"{args.scenario or 'haikou-peak'}_{longest}_round00000.npz"])
+    check_new_folder(args.out)  # before the data is fetched, the scenario built and simulated
     spec = run_spec(args, scenario_request(args), runs=runs)
-    check_new_folder(args.out)  # before the scenario is built and simulated
     scenario = spec.request.build()
     note(scenario.label)
-    folder, entries = take_snapshots(spec, args.out, scenario=scenario, rounds=rounds, largest=args.largest)
+    largest = 3 if args.largest is None else args.largest
+    folder, entries = take_snapshots(spec, args.out, scenario=scenario, rounds=rounds, largest=largest)
     if args.json:
         print_json({"folder": str(folder), "instances": entries})
         return 0

@@ -9,18 +9,23 @@ import pandas as pd
 from rpbench.commands._common import (
     add_parallel_args,
     add_scenario_args,
+    check_numbers,
+    check_out_name,
+    check_parallel,
     decision_budget,
     note,
     note_over_budget,
     note_unproven,
+    parse_param_overrides,
     print_json,
     scenario_request,
 )
-from rpbench.commands._runs import add_run_args, parse_runs, run_spec, split_list
+from rpbench.commands._runs import add_run_args, check_presets, parse_runs, run_spec, split_list
 from rpbench.exceptions import ParameterError
-from rpbench.harness.sweep import SWEEPS, SweepSpec, expand, parse_over, run_sweep
+from rpbench.harness.sweep import SWEEPS, SweepSpec, expand, option_target, parse_over, run_sweep
 from rpbench.results import layout
 from rpbench.results.layout import REPORT_HTML
+from rpbench.results.store import check_new_folder
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -52,6 +57,10 @@ def build_spec(args: argparse.Namespace) -> SweepSpec:
     if (args.sweep is None) == (args.over is None):
         raise ParameterError(f"give either a predefined sweep ({', '.join(SWEEPS)}) or --over NAME=V1,V2,...")
     if args.over:
+        if args.values:
+            raise ParameterError(
+                "--values changes a predefined sweep's values; with --over give them as NAME=V1,V2,..."
+            )
         parameter, over = parse_over(args.over)
         strategies = tuple(split_list(args.strategies or "mb,rtv,fl"))
         return SweepSpec(
@@ -67,12 +76,37 @@ def build_spec(args: argparse.Namespace) -> SweepSpec:
     return SweepSpec(spec.name, spec.parameter, values, strategies, spec.kpis, spec.paper_table)
 
 
+def check_opt_conflict(parameter: str, runs: list[str], opts: list[str]) -> None:
+    """``--opt RUN.OPTION=V`` beside a sweep over that same option is an error: every point sets it."""
+    target = option_target(parameter, runs)
+    if target is None:
+        return
+    for item in opts:
+        key = item.partition("=")[0].strip()
+        if key == f"{target[0]}.{target[1]}":
+            raise ParameterError(
+                f"--opt {item!r} conflicts with the sweep over {parameter}, which sets it at every point"
+            )
+
+
 def run(args: argparse.Namespace) -> int:
-    decision_budget(args)  # a bad --decision-budget fails before anything runs or downloads
+    check_numbers(args)  # before anything runs or downloads
+    check_parallel(args)
+    decision_budget(args)
     sweep = build_spec(args)
-    spec = run_spec(args, scenario_request(args), runs=parse_runs(list(sweep.strategies), args.opt))
-    points = expand(sweep.parameter, sweep.values, spec.names)
-    for point in points:  # a run option's values are checked before anything runs
+    runs = parse_runs(list(sweep.strategies), args.opt)
+    check_presets(args)
+    check_opt_conflict(sweep.parameter, [e.name for e in runs], args.opt)
+    points = expand(sweep.parameter, sweep.values, [e.name for e in runs])
+    given = parse_param_overrides(args.param)
+    for point in points:
+        point.refuse_overrides(given)
+    check_out_name(
+        args.out, inner=[max((p.label for p in points), key=len), "runs", max((e.name for e in runs), key=len)]
+    )
+    check_new_folder(args.out)  # before a first run's data download
+    spec = run_spec(args, scenario_request(args), runs=runs)
+    for point in points:  # a run option's values and a --param set by the sweep too are refused before any run
         point.spec_of(spec, spec.request)
     note(f"sweep {sweep.name}: {len(points)} points x {', '.join(spec.names)} on {spec.request.name}")
     folder = run_sweep(sweep, points, spec, args.out, workers=args.workers, scheduler=args.scheduler)

@@ -7,7 +7,8 @@ bad values) the first offending row.  A damaged gzip stream is a
 ``DataError`` too, and so is an integer that does not fit an int64 exactly
 (a 20-digit id, or ``1e30``): numpy would wrap it around silently.
 
-A ``.gz`` file is inflated through :func:`open_csv`, which refuses it (a
+A path that is not a regular file is named for what it is (a folder, a FIFO, a
+symbolic link loop), not as missing.  A ``.gz`` file is inflated through :func:`open_csv`, which refuses it (a
 gzip bomb) as soon as it inflates past :data:`INFLATE_RATIO` times its own
 size, or :data:`INFLATE_FLOOR` bytes for a small one: never inflated whole.
 """
@@ -25,6 +26,7 @@ import numpy as np
 import pandas as pd
 
 from rpbench.exceptions import DataError, DataNotFoundError, one_line
+from rpbench.files import file_problem, is_missing
 
 #: Column kinds understood by :func:`read_table`.
 INT, FLOAT, TEXT, DATETIME = "int", "float", "text", "datetime"
@@ -40,12 +42,13 @@ INFLATE_FLOOR = 64 << 20
 
 
 def require_file(path: Path, what: str) -> Path:
-    """Return ``path`` if it is a file, else raise a :class:`DataNotFoundError`."""
-    if not path.is_file():
-        raise DataNotFoundError(
-            f"{what} file {str(path)!r} does not exist; check the data folder (--data) and its SOURCE.md layout"
-        )
-    return path
+    """Return ``path`` if it is a regular file; else a :class:`DataNotFoundError` when nothing is there, a
+    :class:`DataError` naming what is there instead (a folder, a FIFO, a symbolic link loop)."""
+    problem = file_problem(path)
+    if problem is None:
+        return path
+    cls = DataNotFoundError if is_missing(problem) else DataError
+    raise cls(f"{what} file {str(path)!r} {problem}; check the data folder (--data) and its SOURCE.md layout")
 
 
 class _BoundedReader(io.RawIOBase):
@@ -72,7 +75,9 @@ class _BoundedReader(io.RawIOBase):
 
 @contextlib.contextmanager
 def open_csv(path: Path, what: str) -> Iterator[io.BufferedIOBase | Path]:
-    """What to hand ``pd.read_csv``: ``path`` itself, or for a ``.gz`` a stream bounded as the module says."""
+    """What to hand ``pd.read_csv``: ``path`` itself, or for a ``.gz`` a stream bounded as the module says.
+    Anything but a regular file at ``path`` is refused first (:func:`require_file`): a FIFO would block."""
+    require_file(path, what)
     if path.suffix != ".gz":
         yield path
         return
@@ -97,7 +102,6 @@ def read_table(
     those columns, converted, renamed by ``rename``.  Columns listed in
     ``optional`` may be absent.
     """
-    require_file(path, what)
     try:
         with open_csv(path, what) as source:
             frame = pd.read_csv(source, usecols=lambda c: c in columns, low_memory=False, compression=None)

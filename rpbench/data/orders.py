@@ -30,6 +30,7 @@ import pandas as pd
 
 from rpbench.data._table import DATETIME, FLOAT, INT, read_table
 from rpbench.exceptions import DataError, DataNotFoundError, ParameterError
+from rpbench.files import file_problem, is_missing
 
 PEAK_DIR = Path("demand_0800_0900") / "orders"
 RAW_PEAK_FILE = Path("demand_0800_0900") / "raw_orders_2017-05-01_0800-0900_by_departure_time.csv.gz"
@@ -60,7 +61,10 @@ def peak_order_path(data_dir: Path, date: str) -> Path:
     """Path of the peak-hour order file of ``date``, with a clear error when missing."""
     day = parse_date(date).isoformat()
     path = data_dir / PEAK_DIR / f"{day}.csv.gz"
-    if not path.is_file():
+    problem = file_problem(path)
+    if problem is not None and not is_missing(problem):
+        raise DataError(f"the peak-hour order file of {day}, {str(path)!r}, {problem}")
+    if problem is not None:
         have = available_peak_dates(data_dir)
         listed = f"available: {', '.join(have)}" if have else f"no order files in {data_dir / PEAK_DIR}"
         raise DataNotFoundError(f"no peak-hour order file for {day} ({str(path)!r} does not exist); {listed}")

@@ -27,6 +27,7 @@ release them, but they stay in the response-rate denominator.
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -56,7 +57,7 @@ COLUMNS = ("order_id", "departure_time", "origin_id", "destination_id") + PREDIC
 def paper_order_source(data_dir: Path, date: str) -> Path:
     """The file the authors' committed output of ``date`` was simulated from."""
     day = parse_date(date).isoformat()
-    if day == ARRIVE_TIME_DATE and (data_dir / ARRIVE_TIME_FILE).is_file():
+    if day == ARRIVE_TIME_DATE and os.path.lexists(data_dir / ARRIVE_TIME_FILE):  # a folder there is named
         return data_dir / ARRIVE_TIME_FILE
     return peak_order_path(data_dir, day)
 
@@ -136,7 +137,7 @@ def group_by_first_appearance(frame: pd.DataFrame, key: list[str]) -> pd.DataFra
 def _od_predictions(data_dir: Path) -> pd.DataFrame:
     """Per-OD predictions of 2017-05-01 indexed by (origin_id, destination_id); NaN columns when absent."""
     od_path, pred_path = data_dir / OD_FILE, data_dir / PREDICTION_FILE
-    if not (od_path.is_file() and pred_path.is_file()):
+    if not (os.path.lexists(od_path) and os.path.lexists(pred_path)):  # optional; open_csv names a wrong kind
         return pd.DataFrame(
             columns=list(PREDICTION_COLUMNS),
             index=pd.MultiIndex.from_arrays([[], []], names=["origin_id", "destination_id"]),

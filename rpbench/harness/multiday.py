@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from rpbench import results
+from rpbench import files, results
 from rpbench.harness.comparison import ComparisonTask, run_task
 from rpbench.harness.parallel import run_tasks
 from rpbench.harness.spec import RunSpec
@@ -23,7 +23,7 @@ from rpbench.results.metrics import KPI_LABELS
 from rpbench.results.parents import MULTIDAY_PLOT_KPIS, by_day_table, day_folders
 from rpbench.results.plots import per_day_figures
 from rpbench.results.report import RATIO_ROWS, findings, fmt, load_kpis, markdown_table, offline_notes, table_rows
-from rpbench.results.runs import run_label, run_styles
+from rpbench.results.runs import markdown_cell, run_label, run_styles
 from rpbench.results.store import check_new_folder
 from rpbench.results.tables import csv_table, latex_table
 from rpbench.scenarios import SCENARIOS
@@ -100,7 +100,9 @@ def write_multiday_report(parent: Path, name: str | None = None) -> Path:
         f"rpbench, scenario {scenario} (sample {sample}): mean over {len(days)} {what}, "
         f"{meta['dates'][0]} .. {meta['dates'][-1]}"
     )
-    (parent / layout.TABLE_TEX).write_text(latex_table(mean, table_rows(mean), fmt, caption=caption, styles=styles))
+    files.write_text(
+        parent / layout.TABLE_TEX, latex_table(mean, table_rows(mean), fmt, caption=caption, styles=styles)
+    )
     csv_table(mean, table_rows(mean), styles).to_csv(parent / layout.TABLE_CSV)
     lines += [f"The mean table is also `{layout.TABLE_TEX}` (LaTeX, booktabs) and `{layout.TABLE_CSV}` (raw values).",
               ""]  # fmt: skip
@@ -110,7 +112,7 @@ def write_multiday_report(parent: Path, name: str | None = None) -> Path:
         lines += [
             f"### {KPI_LABELS.get(kpi, kpi)} per day",
             "",
-            "| date | " + " | ".join(run_label(r, styles) for r in runs) + " |",
+            "| date | " + " | ".join(markdown_cell(run_label(r, styles)) for r in runs) + " |",
             "|---|" + "---:|" * len(runs),
         ]
         lines += [f"| {d} | " + " | ".join(fmt(kpi, wide.loc[d, r]) for r in runs) + " |" for d in wide.index]
@@ -134,5 +136,5 @@ def write_multiday_report(parent: Path, name: str | None = None) -> Path:
         "",
     ]
     path = parent / "report.md"
-    path.write_text("\n".join(lines))
+    files.write_text(path, "\n".join(lines))
     return path

@@ -7,7 +7,7 @@ import shutil
 import tempfile
 from pathlib import Path
 
-from rpbench import results
+from rpbench import files, results
 from rpbench.exceptions import ResultsError
 from rpbench.harness.multiday import write_multiday_report
 from rpbench.harness.sweep import write_sweep_report
@@ -44,14 +44,15 @@ def render(
         if not folder.is_dir():
             raise ResultsError(f"results folder {str(folder)!r} does not exist")
     if len(folders) > 1:
-        return _render_combined(folders, metrics, dest, page=page)
+        text, paths = _render_combined(folders, metrics, dest, page=page)
+        return files.printable(text), paths  # a folder name's non-UTF-8 bytes escaped, as in the files
     folder = folders[0]
     written = _render_one(folder, dest, page=page)
     if metrics is not None:
-        return _selected(folder, metrics), [written]
+        return files.printable(_selected(folder, metrics)), [written]
     if written.suffix == ".html":
         return f"page written to {written}", [written]
-    return written.read_text(), [written]
+    return files.printable(written.read_text(errors="surrogateescape")), [written]
 
 
 def _render_one(folder: Path, dest: Path | None, *, page: bool) -> Path:

@@ -40,6 +40,10 @@ from rpbench.strategies.options import RunOptions
 
 #: A run name is a folder name and an ``--opt`` prefix: letters, digits and ``._-``, not starting with a dot.
 _RUN_NAME = re.compile(r"^[A-Za-z0-9_-][A-Za-z0-9._-]*$")
+#: A run name names its folder ``runs/<name>/``: at most NAME_MAX bytes (255 on every common file system).
+MAX_RUN_NAME_BYTES = 255
+#: A round's decision budget beyond a day flags nothing.
+MAX_DECISION_BUDGET_S = 86400.0
 #: Separates a variant's settings from its strategy (``fl@tau0_s=200``).
 VARIANT_SEP = "@"
 #: A variant setting ``KEY=VALUE``: an option name, and a value that stays a plain folder-name part.
@@ -87,15 +91,22 @@ class RunSpec:
     def __post_init__(self) -> None:
         budget = self.decision_budget_s
         if budget is not None and not (
-            isinstance(budget, (int, float)) and not isinstance(budget, bool) and math.isfinite(budget) and budget > 0
+            isinstance(budget, (int, float))
+            and not isinstance(budget, bool)
+            and math.isfinite(budget)
+            and 0 < budget <= MAX_DECISION_BUDGET_S
         ):
-            raise ParameterError(f"decision budget {budget!r} must be a finite number of seconds > 0")
+            raise ParameterError(
+                f"decision budget {budget!r} must be a finite number of seconds > 0 and <= {MAX_DECISION_BUDGET_S:g}"
+            )
         if not self.runs:
             raise ParameterError("a comparison needs at least one strategy or offline run")
         names = [r.name for r in self.runs]
         twice = sorted({n for n in names if names.count(n) > 1})
         if twice:
             raise ParameterError(f"run name {twice[0]!r} appears twice; every run of a comparison needs its own name")
+        for name in names:
+            check_run_name_length(name)
 
     @classmethod
     def of(
@@ -223,6 +234,7 @@ def resolve_runs(items: Sequence[str]) -> list[RunEntry]:
         entries.append(entry)
     seen: dict[str, str] = {}
     for e in entries:
+        check_run_name_length(e.name)
         if e.name in seen:
             first = seen[e.name]
             what = f"names {e.name!r} twice" if first == e.source else f"runs {first!r} and {e.source!r} as {e.name!r}"
@@ -262,6 +274,16 @@ def _variant(entry: RunEntry, text: str, settings: Sequence[str]) -> RunEntry:
     name = VARIANT_SEP.join([entry.name, *(f"{k}={v}" for k, v in parsed)])
     variant = RunEntry(name, entry.source, entry.options, tuple(parsed))
     return dataclasses.replace(variant, options=typed_options(variant, dict(parsed)))
+
+
+def check_run_name_length(name: str) -> None:
+    """One error line for a run name too long to name its folder (found before any run, not when the
+    results are written)."""
+    size = len(name.encode("utf-8", "surrogateescape"))
+    if size > MAX_RUN_NAME_BYTES:
+        raise ParameterError(
+            f"run name {name[:40]!r}... is {size} bytes; it names the run's folder, at most {MAX_RUN_NAME_BYTES}"
+        )
 
 
 def _plugin_run_name(source: str, cls: type[Strategy]) -> str:

@@ -16,11 +16,11 @@ on the same scenario.  The paper's sweeps are predefined:
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from rpbench import paper, results
+from rpbench import files, paper, results
 from rpbench.exceptions import ParameterError
 from rpbench.harness.comparison import ComparisonTask, run_task
 from rpbench.harness.parallel import run_tasks
@@ -32,7 +32,7 @@ from rpbench.results.metrics import KPI_LABELS
 from rpbench.results.parents import sweep_table
 from rpbench.results.plots import sweep_figure
 from rpbench.results.report import fmt
-from rpbench.results.runs import run_label, run_styles
+from rpbench.results.runs import markdown_cell, run_label, run_styles
 from rpbench.results.store import check_new_folder
 from rpbench.results.tables import booktabs, latex_escape
 from rpbench.scenarios import ScenarioRequest
@@ -116,8 +116,21 @@ class SweepPoint:
     overrides: dict[str, float] = field(default_factory=dict)  # scenario parameters
     options: dict[str, dict[str, float]] = field(default_factory=dict)  # run name -> its options at this point
 
+    def refuse_overrides(self, overrides: Mapping[str, float]) -> None:
+        """One error line when ``overrides`` (``--param dt_s=5``) set a parameter this point sets (``--over
+        dt=...``): the point's value would silently win."""
+        both = sorted(set(overrides) & set(self.overrides))
+        if both:
+            swept = self.label.rpartition("=")[0]
+            raise ParameterError(
+                f"--param {both[0]} conflicts with the sweep over {swept}, which sets it at every point; drop one"
+            )
+
     def spec_of(self, spec: RunSpec, request: ScenarioRequest) -> RunSpec:
-        """The point's comparison: ``spec`` on ``request`` with the point's parameters and run options."""
+        """The point's comparison: ``spec`` on ``request`` with the point's parameters and run options.
+
+        A parameter the request overrides already is an error (:meth:`refuse_overrides`)."""
+        self.refuse_overrides(request.overrides)
         point = spec.for_request(request.with_overrides(self.overrides))
         for run, values in self.options.items():
             point = point.with_options(run, values)
@@ -248,7 +261,7 @@ def write_sweep_report(parent: Path, name: str | None = None) -> Path:
     head = [meta["parameter"]] + [
         f"{KPI_LABELS.get(k, k).split(' (')[0]} {run_label(r, styles)}" for k in kpis for r in runs
     ]
-    lines += ["| " + " | ".join(head) + " |", "|---|" + "---:|" * (len(head) - 1)]
+    lines += ["| " + " | ".join(map(markdown_cell, head)) + " |", "|---|" + "---:|" * (len(head) - 1)]
     body = []
     for p in meta["points"]:
         sel = table[table["label"] == p["label"]].set_index(["kpi", "run"])["value"]
@@ -282,7 +295,7 @@ def write_sweep_report(parent: Path, name: str | None = None) -> Path:
         "",
     ]
     path = parent / "report.md"
-    path.write_text("\n".join(lines))
+    files.write_text(path, "\n".join(lines))
     return path
 
 

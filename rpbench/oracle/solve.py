@@ -42,7 +42,16 @@ VARIANTS = {1: "weight", 2: "cardinality_then_weight"}
 #: reduction needs about twice the largest saving (plus Oracle-2's bonus) --
 #: so 1 mm overflows on Haikou trips of 30+ km while 1 cm does not.  Every
 #: backend sees the same rounded values; reported savings are the unrounded sums.
+#: The solver proves the optimum of the *rounded* savings, which may miss the
+#: unrounded optimum by up to one unit per pair (:attr:`OracleResult.rounding_slack_m`
+#: bounds it): 0.5 m per pair at :data:`MAX_UNIT_M`, a few parts in ten thousand of a
+#: pair's typical saving of a kilometre or more.
 UNIT_M = 0.01
+#: The sane range of ``unit_m``: coarser units let rounding change the optimum by more than the savings'
+#: own precision (``--unit-m 5000`` rounds nearly every saving to 0 or 1 unit); finer than 1 µm the
+#: rounded savings of 100 km trips leave float64's exact integers (2**53).
+MIN_UNIT_M = 1e-6
+MAX_UNIT_M = 1.0
 
 #: KPI keys shared with the strategies' reports (NaN where undefined).
 KPI_KEYS = ("orders", "pairs", "pooled_passengers", "pairing_ratio", "avg_detour_m", "avg_shared_m", "total_saving_km")
@@ -91,6 +100,24 @@ class OracleResult:
         if sol.status is Status.OPTIMAL:
             return sol.objective * unit
         return sol.bound * unit if sol.bound is not None else float("nan")
+
+    @property
+    def rounding_slack_m(self) -> float:
+        """A proven bound on how far the unrounded optimum may lie above :attr:`total_saving_m` because the
+        model rounds each saving to ``unit_m`` (NaN for the upper bound, whose rounding is upwards, and for an
+        unproven solve).
+
+        Each saving is within ``unit/2`` of its rounded value, and the rounded optimum is ``V``; so any
+        matching of ``P`` pairs is worth at most ``unit (V + P/2)`` unrounded, while the chosen one is worth
+        :attr:`total_saving_m`.  ``P`` is the number of pairs Oracle-2 proves maximal, or at most half the
+        orders for Oracle-1.
+        """
+        if self.is_upper_bound or self.status is not Status.OPTIMAL:
+            return float("nan")
+        unit = self.model.unit_m
+        rounded = float(np.sum(self.model.values[self.solution.chosen]))
+        most_pairs = len(self.pairs) if self.variant == 2 else self.n_orders // 2
+        return max(0.0, unit * (rounded + most_pairs / 2) - self.total_saving_m)
 
     @property
     def seed_objective_m(self) -> float:
@@ -266,6 +293,8 @@ def solve_oracle(
 
 __all__ = [
     "KPI_KEYS",
+    "MAX_UNIT_M",
+    "MIN_UNIT_M",
     "UNIT_M",
     "VARIANTS",
     "CandidatePairs",

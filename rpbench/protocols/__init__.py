@@ -11,13 +11,13 @@ from __future__ import annotations
 
 import hashlib
 import json
-import tomllib
 from dataclasses import asdict, dataclass, field
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
 from rpbench.exceptions import ParameterError
+from rpbench.files import parse_toml, read_text
 from rpbench.results.leaderboard import Bootstrap
 from rpbench.results.metrics import DECISION_KPIS, KPI_ORDER
 
@@ -57,19 +57,13 @@ def load_protocol(name_or_path: str) -> Protocol:
     """A built-in protocol by name, or a TOML file by path; a bad one is one ParameterError line."""
     if name_or_path.endswith(".toml") or "/" in name_or_path:
         path = Path(name_or_path)
-        if not path.is_file():
-            raise ParameterError(f"protocol file {name_or_path!r} does not exist")
-        text, where = path.read_text(encoding="utf-8", errors="replace"), name_or_path
+        text, where = read_text(path, "protocol file", ParameterError), name_or_path
     elif name_or_path in builtin_names():
         text = resources.files(__package__).joinpath(f"{name_or_path}.toml").read_text(encoding="utf-8")
         where = name_or_path
     else:
         raise ParameterError(f"unknown protocol {name_or_path!r} (built in: {', '.join(builtin_names())})")
-    try:
-        raw = tomllib.loads(text)
-    except (tomllib.TOMLDecodeError, RecursionError) as exc:
-        raise ParameterError(f"protocol {where!r} is not valid TOML ({exc})") from None
-    return _parse(raw, where)
+    return _parse(parse_toml(text, f"protocol {where!r}", ParameterError), where)
 
 
 def _parse(raw: dict[str, Any], where: str) -> Protocol:

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from rpbench import results
+from rpbench import files, results
 from rpbench.exceptions import ResultsError
 from rpbench.oracle.runs import ORACLE_RUNS
 from rpbench.results import layout
@@ -476,7 +476,7 @@ def write_combined(c: Combined, dest: Path, metrics: list[str] | None = None) ->
     rows = selected_rows(c.table, metrics)
     caption = f"{c.label}: the runs of {', '.join(s.name for s in c.sources)} combined"
     tex = latex_table(c.table, rows, fmt, caption=caption, unproven=c.unproven, mark=UNPROVEN_MARK, styles=c.styles)
-    (dest / layout.TABLE_TEX).write_text(tex)
+    files.write_text(dest / layout.TABLE_TEX, tex)
     csv_table(c.table, rows, c.styles).to_csv(dest / layout.TABLE_CSV)
     png = kpi_figure(c.table, dest / layout.KPIS_PNG, c.label, fmt, c.styles)
     return [dest / layout.TABLE_TEX, dest / layout.TABLE_CSV, png]

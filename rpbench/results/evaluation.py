@@ -12,14 +12,14 @@ from pathlib import Path
 
 import pandas as pd
 
-from rpbench import results
+from rpbench import files, results
 from rpbench.exceptions import ResultsError
 from rpbench.results import layout
 from rpbench.results.leaderboard import RATIO_OF_MEANS, Bootstrap, leaderboard, paired
 from rpbench.results.metrics import KPI_LABELS
 from rpbench.results.plots import leaderboard_figure, seeds_by_day_figure
 from rpbench.results.report import fmt, load_kpis
-from rpbench.results.runs import run_label, run_styles
+from rpbench.results.runs import markdown_cell, run_label, run_styles
 from rpbench.results.tables import booktabs, latex_escape
 
 #: The leaderboard's figure (and its SVG and PDF beside it).
@@ -113,8 +113,8 @@ def write_evaluation_report(folder: Path, name: str | None = None) -> Path:
         "",
     ]
     head, body = leaderboard_rows(board, protocol, styles)
-    lines += ["| " + " | ".join(head) + " |", "|---|" + "---:|" * (len(head) - 1)]
-    lines += ["| " + " | ".join(row) + " |" for row in body]
+    lines += ["| " + " | ".join(map(markdown_cell, head)) + " |", "|---|" + "---:|" * (len(head) - 1)]
+    lines += ["| " + " | ".join(map(markdown_cell, row)) + " |" for row in body]
     lines += ["", *_figure_lines(folder, board, protocol, styles, level)]
     sel = pairs[pairs["kpi"] == rank]
     if len(sel):
@@ -129,7 +129,8 @@ def write_evaluation_report(folder: Path, name: str | None = None) -> Path:
         ]
         for _, r in sel.iterrows():
             lines.append(
-                f"| {run_label(r['a'], styles)} | {run_label(r['b'], styles)} | {fmt(rank, r['mean_diff'])} | "
+                f"| {markdown_cell(run_label(r['a'], styles))} | {markdown_cell(run_label(r['b'], styles))} | "
+                f"{fmt(rank, r['mean_diff'])} | "
                 f"[{fmt(rank, r['ci_low'])}, {fmt(rank, r['ci_high'])}] | {r['wilcoxon_p']:.3g} | "
                 f"{int(r['days_a_above'])} / {int(r['days_a_below'])} / {int(r['days_tied'])} |"
             )
@@ -141,9 +142,9 @@ def write_evaluation_report(folder: Path, name: str | None = None) -> Path:
     ]
     caption = f"rpbench evaluation {protocol['name']} version {protocol['version']}: mean [{level} interval]"
     latex = [[latex_escape(cell) for cell in row] for row in [head, *body]]
-    (folder / layout.TABLE_TEX).write_text(booktabs(latex[0], latex[1:], caption=caption, what="the leaderboard"))
+    files.write_text(folder / layout.TABLE_TEX, booktabs(latex[0], latex[1:], caption=caption, what="the leaderboard"))
     path = folder / layout.REPORT
-    path.write_text("\n".join(lines))
+    files.write_text(path, "\n".join(lines))
     return path
 
 

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from rpbench import paper, results
+from rpbench import files, paper, results
 from rpbench.exceptions import ResultsError
 from rpbench.results import layout
 from rpbench.results.metrics import (
@@ -31,7 +31,7 @@ from rpbench.results.metrics import (
     state_spells,
 )
 from rpbench.results.plots import hourly_figure, kpi_figure, timeline_figure
-from rpbench.results.runs import Styles, run_label, run_styles
+from rpbench.results.runs import Styles, markdown_cell, run_label, run_styles
 from rpbench.results.tables import csv_table, latex_table
 
 #: Competitive-ratio rows: KPI name -> the oracle run whose total saving is the denominator.
@@ -160,7 +160,9 @@ def markdown_table(
     unproven = unproven or {}
     out = [
         "| Metric | "
-        + " | ".join(run_label(c, styles) + ("\\" + UNPROVEN_MARK if c in unproven else "") for c in cols)
+        + " | ".join(
+            markdown_cell(run_label(c, styles)) + ("\\" + UNPROVEN_MARK if c in unproven else "") for c in cols
+        )
         + " |",
         "|---|" + "---:|" * len(cols),
     ]
@@ -288,10 +290,31 @@ def unproven_notes(unproven: dict[str, str], styles: Styles | None = None) -> li
     ]
 
 
+#: What a comparison folder's meta.json must hold to be reported (checked once, where a report reads it).
+REPORT_META: files.Schema = {
+    "scenario": {
+        "name": str,
+        "label": str,
+        "seed": int,
+        "summary": {"orders": int, "vehicles": int, "nodes": int},
+    },
+    "preset": {"name": str, "backend": str},
+    "versions": {"rpbench": str},
+    "runs": dict,
+}
+
+
+def report_meta(folder: Path) -> dict[str, Any]:
+    """A comparison folder's meta.json, refused in one line when it lacks what a report shows."""
+    meta = results.read_meta(folder)
+    files.check_schema(meta, REPORT_META, repr(str(folder / "meta.json")), ResultsError)
+    return meta
+
+
 def report_markdown(folder: Path, name: str | None = None, figures: list[str] | None = None) -> str:
     """``report.md`` of a comparison folder (``name``: the folder's name in the text; ``figures``: the
     figure section's lines, :func:`figure_lines`, placed after the comparison tables)."""
-    meta = results.read_meta(folder)
+    meta = report_meta(folder)
     table = load_kpis(folder)
     unproven = unproven_runs(folder)
     sc = meta["scenario"]
@@ -326,7 +349,9 @@ def report_markdown(folder: Path, name: str | None = None, figures: list[str] | 
         lines += [
             "## Solver statistics per run",
             "",
-            summary.to_markdown() if _has_tabulate() else "```\n" + summary.to_string() + "\n```",
+            summary.rename(index=markdown_cell).to_markdown()
+            if _has_tabulate()
+            else "```\n" + summary.to_string() + "\n```",
             "",
         ]
         lines += budget_lines(meta)
@@ -443,13 +468,13 @@ def write_report(folder: Path, name: str | None = None, dest: Path | None = None
         text = report_markdown(folder, name, UNIT_FIGURES)
     write_paper_tables(folder, dest)
     path = dest / "report.md"
-    path.write_text(text)
+    files.write_text(path, text)  # a command line or folder name with non-UTF-8 bytes is quoted escaped
     return path
 
 
 def write_paper_tables(folder: Path, dest: Path) -> None:
     """``table.tex`` and ``table.csv``: the comparison table for a paper (:mod:`rpbench.results.tables`)."""
-    meta = results.read_meta(folder)
+    meta = report_meta(folder)
     table = load_kpis(folder)
     styles = run_styles(meta)
     rows = table_rows(table)
@@ -458,13 +483,13 @@ def write_paper_tables(folder: Path, dest: Path) -> None:
     )
     tex = latex_table(table, rows, fmt, caption=caption, unproven=unproven_runs(folder), mark=UNPROVEN_MARK,
                       styles=styles)  # fmt: skip
-    (dest / layout.TABLE_TEX).write_text(tex)
+    files.write_text(dest / layout.TABLE_TEX, tex)
     csv_table(table, rows, styles).to_csv(dest / layout.TABLE_CSV)
 
 
 def figure_lines(folder: Path, dest: Path) -> list[str]:
     """Draw the figures of ``folder`` into ``dest``; return the report's figure section embedding them."""
-    meta = results.read_meta(folder)
+    meta = report_meta(folder)
     sc = meta["scenario"]
     table = load_kpis(folder)
     styles = run_styles(meta)
@@ -545,7 +570,7 @@ class Timeline:
 def timeline_of(folder: Path) -> Timeline | str:
     """The timeline of every simulation run of ``folder`` (:func:`rpbench.results.metrics.state_spells`,
     binned by :data:`TIMELINE_BINS_S`), or the sentence saying why there is none."""
-    meta = results.read_meta(folder)
+    meta = report_meta(folder)
     sc = meta["scenario"]
     if not results.run_names(folder):
         return (
@@ -598,7 +623,7 @@ def hourly_plot(folder: Path, dest: Path | None = None) -> Path | None:
     hourly = pd.read_csv(path)
     if hourly.empty or hourly["hour"].nunique() <= 2:
         return None
-    meta = results.read_meta(folder)
+    meta = report_meta(folder)
     path = (folder if dest is None else dest) / HOURLY_PNG
     return hourly_figure(hourly, path, meta["scenario"]["label"], run_styles(meta))
 
@@ -634,7 +659,8 @@ def check_metrics(metrics: list[str] | None) -> list[str] | None:
 
 def selected_markdown(table: pd.DataFrame, styles: Styles | None = None) -> str:
     cols = list(table.columns)
-    out = ["| Metric | " + " | ".join(run_label(c, styles) for c in cols) + " |", "|---|" + "---:|" * len(cols)]
+    out = ["| Metric | " + " | ".join(markdown_cell(run_label(c, styles)) for c in cols) + " |"]
+    out.append("|---|" + "---:|" * len(cols))
     for k in table.index:
         out.append(f"| {KPI_LABELS.get(k, k)} | " + " | ".join(fmt(k, table.loc[k, c]) for c in cols) + " |")
     return "\n".join(out)

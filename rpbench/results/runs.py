@@ -35,6 +35,12 @@ def run_label(name: str, styles: Styles | None = None) -> str:
     return _style(name, styles)[0]
 
 
+def markdown_cell(text: str) -> str:
+    """``text`` (a run label, a run name, a scenario label: anything a user or plug-in chose) as one cell of
+    a markdown table: ``|`` escaped (it would end the cell), line breaks and runs of spaces made one space."""
+    return " ".join(str(text).split()).replace("|", "\\|")
+
+
 def run_color(name: str, styles: Styles | None = None) -> str | None:
     """Matplotlib colour of a run's line (None: the next colour of the cycle)."""
     return _style(name, styles)[1]

@@ -19,6 +19,10 @@ import numpy as np
 from rpbench.exceptions import ParameterError
 from rpbench.network import RoadNetwork
 
+#: The scenario summary's count of zero-length orders (origin = destination node after snapping): served solo,
+#: never pooled (docs/simulator.md); the checker applies that rule to folders that record it.
+ZERO_LENGTH_KEY = "zero_length_orders"
+
 
 @dataclass(frozen=True)
 class Params:
@@ -263,6 +267,7 @@ class Scenario:
             "nodes": int(self.network.n_nodes),
             "arcs": int(self.network.n_arcs),
             "distinct_od_pairs": len(od),
+            ZERO_LENGTH_KEY: int((solo <= 0).sum()),
             "mean_solo_trip_m": float(solo.mean()) if len(o) else 0.0,
             "first_request_s": float(o.request_s[0]) if len(o) else 0.0,
             "last_request_s": float(o.request_s[-1]) if len(o) else 0.0,

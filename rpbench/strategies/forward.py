@@ -58,7 +58,7 @@ from rpbench.strategies.candidates import (
     vacant_options,
 )
 from rpbench.strategies.myopic import PoolingOptions
-from rpbench.strategies.options import option
+from rpbench.strategies.options import Range, option
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -76,11 +76,16 @@ class ForwardOptions(PoolingOptions):
         "where λ_w comes from: the scenario's implied demand, the 21-day table, or the scenario's own orders",
         choices=RATE_SOURCES,
     )
+    # a day bounds a sojourn and R̄'s own bound (1000 km) a mean pick-up distance
     tau0_s: float | tuple[float, ...] | None = option(
-        None, "τ_0 in seconds, one value or one per hour (default: MB calibration run's mean pick-up time, A4)"
+        None,
+        "τ_0 in seconds, one value or one per hour (default: MB calibration run's mean pick-up time, A4)",
+        range=Range(0.0, 86400.0, "s"),
     )
     mean_pickup_m: float | tuple[float, ...] | None = option(
-        None, "l̄ of the waiting utility in metres, one value or one per hour (default: MB calibration run's)"
+        None,
+        "l̄ of the waiting utility in metres, one value or one per hour (default: MB calibration run's)",
+        range=Range(0.0, 1e6, "m"),
     )
     priority: str | None = option(None, "taker priority of the prediction (§2.4, A7)", choices=PRIORITIES)
     include_origin_state: bool | None = option(None, "taker state k = 0 at the origin (A4)")

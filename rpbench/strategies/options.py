@@ -6,7 +6,9 @@ in: it rejects names the class does not declare and values of the wrong
 type with one :class:`~rpbench.exceptions.ParameterError` line naming the
 option and the known ones, and accepts both Python values (from the
 harness) and command-line text (``--opt rtv.rebalance=true``), which it
-converts by the declared type rather than by guessing.
+converts by the declared type rather than by guessing.  A numeric option
+declares its sane :class:`Range` (``option(..., range=Range(0, 86400, "s"))``):
+a value outside it is refused the same way, before anything runs.
 """
 
 from __future__ import annotations
@@ -21,9 +23,67 @@ from typing import Any, Self, Union
 from rpbench.exceptions import ParameterError
 
 
-def option(default: Any, help: str, *, choices: tuple[str, ...] | None = None) -> Any:
-    """A declared option: its default, one help line and, for text options, the allowed values."""
-    return dataclasses.field(default=default, metadata={"help": help, "choices": choices})
+@dataclass(frozen=True)
+class Range:
+    """The sane range of a number: ``low <= value <= high`` (``low < value`` when ``low_open``), in ``unit``.
+
+    Beyond it a value is a typo or overflows what is derived from it (a time limit of 1e300 s, an array
+    sized by it); :meth:`check` gives the one error line.  ``integer`` also requires a whole number.
+    """
+
+    low: float
+    high: float
+    unit: str = ""
+    low_open: bool = False
+    integer: bool = False
+
+    def describe(self) -> str:
+        """``0 < value <= 86400 s``."""
+        unit = f" {self.unit}" if self.unit else ""
+        low, high = (f"{int(self.low)}", f"{int(self.high)}") if self.integer else (f"{self.low:g}", f"{self.high:g}")
+        kind = "an integer " if self.integer else ""
+        return f"{kind}{low} {'<' if self.low_open else '<='} value <= {high}{unit}"
+
+    def contains(self, value: float) -> bool:
+        if not math.isfinite(value) or value > self.high:
+            return False
+        if self.integer and value != int(value):
+            return False
+        return value > self.low if self.low_open else value >= self.low
+
+    def check(self, what: str, value: Any, text: str | None = None) -> Any:
+        """``value`` (a number, or text to convert) when it lies in the range, else one ParameterError line
+        ``WHAT TEXT is out of range (RANGE)``; ``text`` is the value as the user typed it."""
+        shown = text if text is not None else (value if isinstance(value, str) else repr(value))
+        number = _number(value)
+        if number is None:
+            raise ParameterError(f"{what} {shown} is not a number ({self.describe()})")
+        if not self.contains(number):
+            raise ParameterError(f"{what} {shown} is out of range ({self.describe()})")
+        return int(number) if self.integer else number
+
+
+def _number(value: Any) -> float | None:
+    """``value`` as a float (text "1e3", an int, a float), or None when it is no number at all."""
+    if isinstance(value, bool):
+        return None
+    if isinstance(value, (int, float)):
+        try:
+            return float(value)
+        except OverflowError:  # an int beyond float: out of any range
+            return math.inf
+    if isinstance(value, str):
+        try:
+            return float(value.strip())
+        except ValueError:
+            return None
+    return None
+
+
+def option(default: Any, help: str, *, choices: tuple[str, ...] | None = None, range: Range | None = None) -> Any:
+    """A declared option: its default, one help line, for text options the allowed values and for numeric
+    options (every one must declare it) the sane :class:`Range`."""
+    return dataclasses.field(default=default, metadata={"help": help, "choices": choices, "range": range})
 
 
 @dataclass(frozen=True)
@@ -44,6 +104,8 @@ class RunOptions:
             name: _convert(owner, name, hints[name], declared[name].metadata.get("choices"), value)
             for name, value in raw.items()
         }
+        for name, value in values.items():
+            _check_range(owner, name, declared[name].metadata.get("range"), value)
         return cls(**values)
 
     @classmethod
@@ -52,7 +114,9 @@ class RunOptions:
         out = {}
         for f in dataclasses.fields(cls):
             text = f.metadata.get("help", "")
-            out[f.name] = text if "default" in text else f"{text} (default {f.default!r})"
+            text = text if "default" in text else f"{text} (default {f.default!r})"
+            bounds = f.metadata.get("range")
+            out[f.name] = f"{text}; {bounds.describe()}" if bounds is not None else text
         return out
 
     def as_dict(self) -> dict[str, Any]:
@@ -61,6 +125,15 @@ class RunOptions:
 
     def replace(self, **changes: Any) -> Self:
         return dataclasses.replace(self, **changes)
+
+
+def _check_range(owner: str, name: str, bounds: Range | None, value: Any) -> None:
+    """Every number of ``value`` (one, or each of a per-hour list) inside the option's declared range."""
+    if bounds is None or value is None or isinstance(value, (bool, str)):
+        return
+    for number in value if isinstance(value, tuple) else (value,):
+        if isinstance(number, (int, float)) and not isinstance(number, bool):
+            bounds.check(f"{owner}: option {name} =", number, f"{number!r}")
 
 
 def _plain(value: Any) -> Any:

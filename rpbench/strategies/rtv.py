@@ -43,7 +43,7 @@ from rpbench.model import Structure, TripPackingModel, quantize
 from rpbench.strategies.base import Kind, RoundModel, RoundState, Strategy
 from rpbench.strategies.candidates import VALUE_UNIT_M, join_options, vacant_options
 from rpbench.strategies.myopic import PoolingOptions
-from rpbench.strategies.options import option
+from rpbench.strategies.options import Range, option
 
 LARGE_C_KO_M = 1e6
 PICKUP_TIE_BREAK = 1e-3
@@ -54,11 +54,16 @@ class RTVOptions(PoolingOptions):
     """RTV's options (docs/algorithms.md §3.3, A15-A17)."""
 
     c_ko: float | str | None = option(
-        None, "value of serving a request, metres or 'large' (default R̄, A15)", choices=("large",)
+        None,
+        "value of serving a request, metres or 'large' (default R̄, A15)",
+        choices=("large",),
+        range=Range(0.0, LARGE_C_KO_M, "m"),  # 'large' is the top of the range
     )
     objective: str = option("net", "net: e - pick-up; gross: e - 1e-3 pick-up", choices=("net", "gross"))
     rr_pickup_check: bool = option(True, "size-2 trips need l(o_first, o_second) <= R̄")
-    rv_top_k: int | None = option(None, "keep each request's k best vehicle edges (None: all)")
+    rv_top_k: int | None = option(
+        None, "keep each request's k best vehicle edges (None: all)", range=Range(1, 10**6, integer=True)
+    )
     rebalance: bool = option(False, "send idle vacant vehicles towards unassigned requests (PNAS step d, A17)")
     reassign: bool = option(False, "reassign assigned requests (not supported: assignments are final)")
 

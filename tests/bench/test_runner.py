@@ -126,7 +126,7 @@ def test_bench_command_json(capsys, tmp_path):
         (["bench", "--synthetic", "--structures", "assignment,knapsack"], "--structures"),
         (["bench", "--synthetic", "--objectives", "max"], "--objectives"),
         (["bench", "--synthetic", "--preset-time-limit", "highs"], "NAME=SECONDS"),
-        (["bench", "--synthetic", "--time-limit", "0"], "must be > 0"),
+        (["bench", "--synthetic", "--time-limit", "0"], "--time-limit 0 is out of range"),
         (["bench", "--synthetic", "--sizes", "tiny", "--solver", "nope"], "unknown solver preset"),
     ],
 )

@@ -83,3 +83,30 @@ def test_values_the_tests_and_the_paper_use_stay_valid(name, values):
 def test_non_numbers_are_refused_in_code_too(name, value):
     with pytest.raises(ParameterError, match=f"{name} = .* is not a finite number"):
         Params().replace(**{name: value})
+
+
+SWEEP = ("sweep", "--scenario", "toy", "--sample", "0.1", "--strategies", "np", "--workers", "1")
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (("--over", "dt_s=20,30", "--param", "dt_s=5"), "--param dt_s conflicts with the sweep over dt_s"),
+        (("--over", "dt=20,30", "--param", "dt_s=5"), "--param dt_s conflicts with the sweep over dt"),
+        (("interval", "--param", "dt_s=5"), "--param dt_s conflicts with the sweep over dt"),
+        (("--over", "K=60,90", "--param", "patience_mean_s=80"), "--param patience_mean_s conflicts"),
+        (("--over", "dt=20,30", "--param", "dt_s=1e300"), "parameter dt_s = 1e+300 is outside its sane range"),
+    ],
+)
+def test_a_param_the_sweep_sets_is_one_line_before_any_run(capsys, tmp_path, argv, message):
+    out = tmp_path / "sweep"
+    line = cli_error(capsys, *SWEEP, *argv, "--out", out)
+    assert message in line, line
+    assert not out.exists()
+
+
+def test_a_param_the_sweep_does_not_set_still_applies():
+    from rpbench.harness.sweep import expand
+
+    for point in expand("dt", (20.0, 30.0)):
+        point.refuse_overrides({"max_detour_m": 500.0})  # another parameter: no conflict

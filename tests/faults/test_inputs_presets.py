@@ -77,7 +77,7 @@ def test_preset_that_is_a_folder(capsys, tmp_path):
     folder = tmp_path / "dir.toml"
     folder.mkdir()
     line = cli_error(capsys, "bench", "--synthetic", "--solver", folder)
-    assert "does not exist" in line and str(folder) in line
+    assert "is a folder" in line and str(folder) in line  # named for what it is, not "missing"
 
 
 def test_valid_preset_values_still_parse():
@@ -93,3 +93,46 @@ def test_valid_preset_values_still_parse():
         "log_to_console": False,
     }
     assert (preset.options.threads, preset.options.time_limit_s, preset.options.mip_rel_gap) == (1, 60.0, 0.0)
+
+
+UNHONOURED = {
+    # backend, [options] line, what the line names
+    "matching method": ("matching", 'method = "simplex"', "option method = 'simplex'"),
+    "matching solver": ("matching", 'solver = "HIGHS"', "option solver = 'HIGHS'"),
+    "matching gap": ("matching", "mip_rel_gap = 0.01", "option mip_rel_gap = 0.01"),
+    "blossom method": ("blossom", 'method = "lp"', "option method = 'lp'"),
+    "highs solver": ("highs", 'solver = "gurobi"', "option solver = 'gurobi'"),
+    "ortools solver": ("ortools", 'solver = "scip"', "option solver = 'scip'"),
+    "scipy threads": ("scipy", "threads = 4", "option threads = 4"),
+}
+
+
+@pytest.mark.parametrize("case", UNHONOURED)
+def test_an_option_the_backend_cannot_honour_is_refused(capsys, tmp_path, case):
+    backend, line, message = UNHONOURED[case]
+    text = f'backend = "{backend}"\n[options]\n{line}\n'
+    error = bench_with(capsys, tmp_path, text)
+    assert f"backend {backend!r} does not honour {message}" in error, error
+
+
+def test_a_run_with_an_unhonoured_preset_option_writes_nothing(capsys, tmp_path):
+    preset = tmp_path / "m.toml"
+    preset.write_text('backend = "matching"\n[options]\nmethod = "simplex"\n')
+    out = tmp_path / "out"
+    argv = ("run", "--scenario", "toy", "--sample", "0.1", "--strategies", "mb", "--solver", preset, "--out", out)
+    line = cli_error(capsys, *argv)
+    assert "backend 'matching' does not honour option method" in line
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("backend", ["matching", "blossom", "scipy"])
+def test_default_values_of_unhonoured_options_still_parse(backend):
+    """``mip_rel_gap = 0`` asks an exact backend for nothing it does not do; ``threads = 1`` neither."""
+    preset = parse_preset("p", f'backend = "{backend}"\n[options]\nthreads = 1\nmip_rel_gap = 0.0\n', "p.toml")
+    assert preset.options.mip_rel_gap == 0.0
+
+
+def test_every_shipped_preset_still_parses():
+    from rpbench.backends.presets import load_preset, preset_names
+
+    assert {load_preset(name).name for name in preset_names()} == set(preset_names())

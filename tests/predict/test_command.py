@@ -75,7 +75,7 @@ def test_predict_validate_fcfs(fake_data, tmp_path, capsys):
         (["--rates", "day", "--date", "2017-05-02"], "no peak-hour order file for 2017-05-02"),
         (["--rates", "month", "--date", "2017-05-01"], "--date only applies"),
         (["--rates", "month", "--param", "max_detour_m=-3"], "max_detour_m"),
-        (["--rates", "month", "--tau0", "-1"], "tau0_s"),
+        (["--rates", "month", "--tau0", "-1"], "--tau0 -1 is out of range"),
     ],
 )
 def test_bad_input_is_one_line_exit_2(fake_data, tmp_path, capsys, argv, message):

@@ -49,7 +49,7 @@ def test_text_is_converted_by_the_declared_type():
         ({"rebalance": "maybe"}, "option rebalance = 'maybe' must be true/false"),
         ({"rebalance": 1}, "option rebalance = 1 must be true/false"),
         ({"rv_top_k": "2.5"}, "option rv_top_k = '2.5' must be an integer or none"),
-        ({"rv_top_k": 0}, "rv_top_k 0 must be a positive integer"),
+        ({"rv_top_k": 0}, "option rv_top_k = 0 is out of range"),
         ({"c_ko": "huge"}, "option c_ko = 'huge' must be a finite number or none or one of large"),
         ({"c_ko": "nan"}, "option c_ko = 'nan' must be"),
         ({"objective": "profit"}, "option objective = 'profit' must be one of net, gross"),

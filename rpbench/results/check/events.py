@@ -3,6 +3,8 @@
 
 :func:`check_events` also returns the per-order table (event times, vehicle, partner, odometers read at the
 matched trajectory entries) that :mod:`.kpis` and :mod:`.certificate` read the run's figures off.
+A zero-length trip (origin = destination) is never pooled (``service``), in folders whose scenario summary
+counts such orders (``zero_length_orders``: written since the rule).
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ from rpbench.network import RoadNetwork
 from rpbench.results.check.core import EVENT_KINDS, TOL_M, TOL_S, RunCheck, show
 from rpbench.results.check.folder import Folder
 from rpbench.results.layout import ORDERS
-from rpbench.scenarios.base import Params
+from rpbench.scenarios.base import ZERO_LENGTH_KEY, Params
 
 Trajectories = dict[str, np.ndarray]
 
@@ -276,6 +278,11 @@ def check_events(rc: RunCheck, events: pd.DataFrame, f: Folder, traj: Trajectori
     pair_bad = (partner >= 0) & (v_assign != v_assign[p])
     for o in np.flatnonzero(pair_bad)[:5]:
         rc.fail("capacity", f"order {o} is paired with order {partner[o]} of another vehicle")
+    if ZERO_LENGTH_KEY in (f.meta.get("scenario", {}).get("summary") or {}):  # written under the rule
+        zero = (partner >= 0) & (np.minimum(f.solo, f.solo[p]) <= TOL_M)
+        for o in np.flatnonzero(zero & (partner > np.arange(n)))[:5]:
+            rc.fail("service", f"orders {o} and {partner[o]} are pooled, but one is a zero-length trip (origin = "
+                    "destination), which is served solo only")  # fmt: skip
     # pick-up distance (A14 rule: from the partner's pick-up when the partner came first)
     partner_first = (partner >= 0) & (t_pick[p] <= t_pick + TOL_S) & ok & ok[p]
     start_t = np.where(partner_first, np.maximum(t_assign, t_pick[p]), t_assign)

@@ -9,6 +9,8 @@ of the passengers' odometer intervals per vehicle, the shared distance the overl
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pandas as pd
 
@@ -364,6 +366,10 @@ def check_report(fc: RunCheck, f: Folder) -> None:
     fc.checked["report_tables"] = len(expected)
 
 
+#: Where one markdown cell ends: a ``|`` not escaped (a label's own ``|`` is written ``\\|``).
+_CELL_BORDER = re.compile(r"(?<!\\)\|")
+
+
 def _metric_tables(text: str) -> list[MetricTable]:
     """The markdown tables whose header starts with "| Metric |": per row its label and its cells (the header,
     where a run may be marked unproven, is not compared)."""
@@ -374,7 +380,7 @@ def _metric_tables(text: str) -> list[MetricTable]:
             current = []
             tables.append(current)
         elif current is not None and line.startswith("|"):
-            cells = [c.strip() for c in line.strip().strip("|").split("|")]
+            cells = [c.strip() for c in _CELL_BORDER.split(line.strip().removeprefix("|").removesuffix("|"))]
             if not set("".join(cells)) <= set("-: "):  # not the |---|---:| line
                 current.append((cells[0], cells[1:]))
         else:

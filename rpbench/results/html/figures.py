@@ -6,6 +6,7 @@ group, so a click on a legend entry hides or shows that run in every panel.
 
 from __future__ import annotations
 
+import html
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -24,6 +25,11 @@ from rpbench.results.plots import (
 from rpbench.results.runs import Styles, run_label
 
 FONT = {"family": "system-ui, -apple-system, Segoe UI, Roboto, Helvetica Neue, Arial, sans-serif", "size": 12}
+
+
+def plotly_text(text: str) -> str:
+    """A label as Plotly text, which reads a few HTML tags and entities: shown as written, never as markup."""
+    return html.escape(text, quote=False)
 
 
 def css_colors(runs: Sequence[str], styles: Styles | None = None) -> dict[str, str]:
@@ -69,7 +75,7 @@ def kpi_bars(table: pd.DataFrame, text: Callable[[str, float], str], styles: Sty
             value = table.loc[kpi, run]
             if pd.isna(value):
                 continue
-            label = run_label(run, styles)
+            label = plotly_text(run_label(run, styles))
             fig.add_trace(
                 go.Bar(
                     x=[label],
@@ -108,7 +114,7 @@ def timeline(
         sel = table[table["state"] == state]
         for run, g in sel.groupby("run", sort=False):
             run = str(run)
-            label = run_label(run, styles)
+            label = plotly_text(run_label(run, styles))
             fig.add_trace(
                 go.Scatter(
                     x=(g["t_s"] / scale).round(4).to_numpy(),
@@ -153,7 +159,7 @@ def hourly(table: pd.DataFrame, styles: Styles | None = None) -> Any:
             run = str(run)
             if not g[col].notna().any():
                 continue
-            label = run_label(run, styles)
+            label = plotly_text(run_label(run, styles))
             fig.add_trace(
                 go.Scatter(
                     x=g["hour"].to_numpy(),
@@ -195,7 +201,7 @@ def round_times(rounds: pd.DataFrame, styles: Styles | None = None) -> Any:
     fig = go.Figure()
     for run, g in rounds.groupby("run", sort=False):
         run = str(run)
-        label = run_label(run, styles)
+        label = plotly_text(run_label(run, styles))
         ms = np.maximum(g["solve_s"].to_numpy(dtype=float), 1e-7) * 1e3
         if binned:
             bins = pd.Series(ms).groupby((g["t_s"].to_numpy() // ROUND_BIN_S) * ROUND_BIN_S)
@@ -246,7 +252,7 @@ def by_parameter(
         sel = table[(table["kpi"] == k) & table["value"].notna()]
         for run, g in sel.groupby("run", sort=False):
             run = str(run)
-            label = run_label(run, styles)
+            label = plotly_text(run_label(run, styles))
             fig.add_trace(
                 go.Scatter(
                     x=g[x].astype(str).to_numpy() if dates else g[x].to_numpy(dtype=float),
@@ -296,7 +302,7 @@ def sweep_panels(table: pd.DataFrame, parameter: str, kpis: Sequence[str], style
         sel = table[(table["kpi"] == k) & table["value"].notna()]
         for run, g in sel.groupby("run", sort=False):
             run = str(run)
-            label = run_label(run, styles)
+            label = plotly_text(run_label(run, styles))
             fig.add_trace(
                 go.Scatter(
                     x=g["point"].to_numpy(dtype=float),
@@ -384,7 +390,7 @@ def leaderboard_bars(board: pd.DataFrame, metrics: Sequence[str], styles: Styles
         sel = board[board["kpi"] == k]
         fig.add_trace(
             go.Bar(
-                x=[run_label(str(r), styles) for r in sel["run"]],
+                x=[plotly_text(run_label(str(r), styles)) for r in sel["run"]],
                 y=sel["mean"].to_numpy(dtype=float),
                 error_y={
                     "type": "data",

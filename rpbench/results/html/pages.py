@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from rpbench import paper, results
+from rpbench import files, paper, results
 from rpbench.results import layout
 from rpbench.results.html import figures
 from rpbench.results.html.mapdata import map_payload
@@ -58,7 +58,7 @@ def write_html(folder: Path, name: str | None = None, dest: Path | None = None, 
         page = comparison_page(folder, name, published=published)
     path = dest / REPORT_HTML
     tmp = path.with_name(f".{REPORT_HTML}.partial")
-    tmp.write_text(page.render(), encoding="utf-8")
+    files.write_text(tmp, page.render())  # non-UTF-8 bytes of a quoted path or command line escaped
     tmp.replace(path)
     return path
 
