@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from rpbench.exceptions import DataError, DataNotFoundError, one_line
+from rpbench.exceptions import DataError, DataNotFoundError, RpbenchError, one_line
 from rpbench.files import file_problem, is_missing
 
 #: Column kinds understood by :func:`read_table`.
@@ -105,6 +105,8 @@ def read_table(
     try:
         with open_csv(path, what) as source:
             frame = pd.read_csv(source, usecols=lambda c: c in columns, low_memory=False, compression=None)
+    except RpbenchError:  # open_csv's own one line (a missing file is a FileNotFoundError too)
+        raise
     except _GZIP_ERRORS as exc:
         raise DataError(
             f"{what} file {str(path)!r} is not a valid gzip stream (truncated or corrupt: "

@@ -101,13 +101,13 @@ def budget_folders(tmp_path_factory):
     """The same comparison without a budget, with a budget no round meets and with one every round meets."""
     root = tmp_path_factory.mktemp("budget")
     spec = RunSpec.of(ScenarioRequest("toy", sample=0.1, seed=4), ["mb", "fl", "oracle1"])
-    specs = {budget: dataclasses.replace(spec, decision_budget_s=budget) for budget in (None, 1e-9, 1e9)}
+    specs = {budget: dataclasses.replace(spec, decision_budget_s=budget) for budget in (None, 1e-9, 86400.0)}
     return {budget: run_comparison(s, root / str(budget), progress=False)[0] for budget, s in specs.items()}
 
 
 def test_a_tiny_budget_flags_every_solved_round_and_a_huge_one_none(budget_folders):
     """Every round in rounds.csv.gz was solved; the KPI counts its run's flags; the folder checks clean."""
-    for budget, flagged in ((1e-9, True), (1e9, False)):
+    for budget, flagged in ((1e-9, True), (86400.0, False)):
         folder = budget_folders[budget]
         rounds = pd.read_csv(folder / "rounds.csv.gz")
         assert rounds["over_budget"].dtype == bool and (rounds["over_budget"] == flagged).all()
@@ -128,7 +128,7 @@ def test_without_a_budget_nothing_is_added_and_a_budget_changes_no_simulation(bu
     assert "rounds_over_budget" not in set(pd.read_csv(plain / "kpis.csv")["kpi"])
     assert "budget" not in (plain / "report.md").read_text()
     assert over_budget_runs(plain) == {}
-    for budget in (1e-9, 1e9):
+    for budget in (1e-9, 86400.0):
         for run in ("mb", "fl"):
             log = f"runs/{run}/events.csv.gz"
             assert pd.read_csv(budget_folders[budget] / log).equals(pd.read_csv(plain / log))
@@ -144,4 +144,4 @@ def test_the_note_names_each_run_with_rounds_over_the_budget(budget_folders):
     assert list(notes) == ["mb", "fl"]
     n = int((rounds["run"] == "mb").sum())
     assert notes["mb"].startswith(f"{n} of {n} rounds decided slower than the 1e-09 s budget (slowest ")
-    assert over_budget_runs(budget_folders[1e9]) == {}
+    assert over_budget_runs(budget_folders[86400.0]) == {}
