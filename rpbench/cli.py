@@ -87,6 +87,7 @@ def sigterm_raises() -> Iterator[None]:
 
 
 def main(argv: list[str] | None = None) -> int:
+    _escape_unencodable_output()
     parser = build_parser()
     args = parser.parse_args(argv)
     if not getattr(args, "handler", None):
@@ -109,6 +110,16 @@ def main(argv: list[str] | None = None) -> int:
     except OSError as exc:  # a file-system error no command turned into an RpbenchError: still one line
         print(f"rpbench: error: {os_error_line(exc)}", file=sys.stderr)
         return 2
+
+
+def _escape_unencodable_output() -> None:
+    """Print what the terminal's encoding cannot carry (a non-UTF-8 path's bytes, under a strict locale) as
+    escapes, never as a UnicodeEncodeError after the work is done."""
+    for stream in (sys.stdout, sys.stderr):
+        reconfigure = getattr(stream, "reconfigure", None)  # a test's capture stream may not have it
+        if reconfigure is not None:
+            with contextlib.suppress(ValueError, OSError):  # a detached or closed stream: leave it
+                reconfigure(errors="backslashreplace")
 
 
 def os_error_line(exc: OSError) -> str:

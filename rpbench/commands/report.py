@@ -10,6 +10,7 @@ from functools import partial
 from pathlib import Path
 
 from rpbench.commands._common import check_out_file, write_out_file
+from rpbench.files import printable, write_text
 from rpbench.harness.render import render
 
 
@@ -49,7 +50,7 @@ def run(args: argparse.Namespace) -> int:
     metrics = [m.strip() for m in args.metrics.split(",")] if args.metrics else None
     if args.out is None:
         text, _ = render([Path(f) for f in args.folders], metrics, page=args.html)
-        print(text)
+        print(printable(text))
         return 0
     out = check_out_file(args.out, "--out")  # before rendering anything
     plots: list[Path] = []
@@ -61,11 +62,11 @@ def run(args: argparse.Namespace) -> int:
                 write_out_file(target, "--out", partial(shutil.copyfile, png))
                 plots.append(target)
                 text = text.replace(f"]({png.name})", f"]({target.name})")  # the report's links follow the plots
-        write_out_file(out, "--out", lambda tmp: tmp.write_text(text))
+        write_out_file(out, "--out", lambda tmp: write_text(tmp, text))
     except BaseException:  # a report written in part is not written: its plots go too
         for target in plots:
             target.unlink(missing_ok=True)
         raise
     beside = f" (plots beside it: {', '.join(p.name for p in plots)})" if plots else ""
-    print(f"report written to {args.out}{beside}")
+    print(printable(f"report written to {args.out}{beside}"))
     return 0

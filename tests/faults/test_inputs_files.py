@@ -153,6 +153,26 @@ def test_non_utf8_out_folder_is_written_with_the_path_escaped(capsys, tmp_path, 
     assert "run\\xff" in text
 
 
+def test_a_report_to_a_non_utf8_file_name_is_written(capsys, tmp_path, toy_folder, monkeypatch):
+    target = Path(os.fsdecode(bytes(tmp_path) + b"/report\xff.md"))
+    printed, _ = cli_ok(capsys, *as_typed(monkeypatch, "report", toy_folder, "--out", target))
+    assert "report\\xff.md" in printed and target.read_text(encoding="utf-8").startswith("# rpbench")
+
+
+def test_a_strict_terminal_encoding_prints_a_non_utf8_path_escaped(tmp_path):
+    """Under an ASCII stdout (a strict locale), the path's byte is printed as an escape, not a crash."""
+    import subprocess
+
+    out = bytes(tmp_path) + b"/run\xff"
+    env = {**os.environ, "PYTHONIOENCODING": "ascii", "RPBENCH_CACHE": str(tmp_path / "cache")}
+    cli = "import sys; from rpbench.cli import main; sys.exit(main(sys.argv[1:]))"
+    argv = ["run", "--scenario", "toy", "--sample", "0.1", "--strategies", "np", "--no-progress", "--out", out]
+    done = subprocess.run([sys.executable, "-c", cli, *argv], env=env, capture_output=True, check=False)
+    assert done.returncode == 0, done.stderr.decode(errors="replace")
+    assert b"Traceback" not in done.stderr and b"results written to " in done.stdout
+    assert b"run\\udcff" in done.stdout and os.path.isdir(out)
+
+
 def test_non_utf8_data_folder_path_is_quoted_escaped(capsys, tmp_path, fake_data, monkeypatch):
     data = Path(os.fsdecode(bytes(tmp_path) + b"/data\xff"))
     fake_data.rename(data)
