@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
 
@@ -65,14 +67,22 @@ def test_a_signal_handler_ends_a_long_solve_and_the_interrupted_instance_is_drop
     def alarm(signum, frame):
         raise _Alarm
 
+    sent: list[bool] = []
+
+    def signal_mid_solve(event):  # the signal arrives while run() is solving, at its first check
+        if not sent:
+            sent.append(True)
+            os.kill(os.getpid(), signal.SIGALRM)
+
+    for event in (h.cbSimplexInterrupt, h.cbIpmInterrupt, h.cbMipInterrupt):
+        event.subscribe(signal_mid_solve)
     previous = signal.signal(signal.SIGALRM, alarm)
-    signal.setitimer(signal.ITIMER_REAL, 0.3)
     try:
         with pytest.raises(_Alarm):
-            backend.solve(synthetic.pairing(1000, seed=1), SolveOptions())  # seconds of MIP
+            backend.solve(synthetic.pairing(1000, seed=1), SolveOptions())  # a MIP of about a second
     finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
         signal.signal(signal.SIGALRM, previous)
+    assert sent
     assert h.getModelStatus().name != "kOptimal"  # stopped inside run(), not after it
     assert highs._kept.highs.get("solve") is not h  # its state after the exception is not trusted
     model = synthetic.pairing(40, seed=2)
