@@ -197,7 +197,7 @@ def received_moves(
     ordered = np.sort(vehicles)
     for bad, why in (
         (vehicles[~np.isin(vehicles, state.v0_vehicle)], "is not a vacant vehicle of the round"),
-        (vehicles[np.isin(vehicles, assigned)], "was assigned a passenger in this round"),
+        (vehicles[np.isin(vehicles, assigned)], "was assigned a passenger in the same round"),
         (ordered[1:][ordered[1:] == ordered[:-1]], "is sent twice"),
     ):
         if len(bad):

@@ -82,8 +82,9 @@ The modules, in import order: :mod:`.core` (verdicts, tolerances, schemas),
 :mod:`.folder` (reading, the digest, the folder checks), :mod:`.events`
 (movement, event log, service rules), :mod:`.kpis` (kpi, decision-budget, hourly, report),
 :mod:`.certificate` (the checker's pair geometry, bound-certificate),
-:mod:`.matching` (bound-optimal), :mod:`.oracle`, :mod:`.parents`, :mod:`.replication` (a ``rpbench replicate``
-folder) and :mod:`.verify` (the entry points).
+:mod:`.matching` (bound-optimal), :mod:`.oracle`, :mod:`.parents`, :mod:`.verify` (a comparison folder's
+checks), :mod:`.replication` (a ``rpbench replicate`` folder, its engines' folders checked by :mod:`.verify`)
+and :mod:`.tree` (the entry point: any folder).
 """
 
 from rpbench.results.check.certificate import bound_weights
@@ -98,7 +99,8 @@ from rpbench.results.check.core import (
     format_report,
 )
 from rpbench.results.check.folder import inputs_digest
-from rpbench.results.check.verify import check_folder, check_results, check_tree
+from rpbench.results.check.tree import check_tree
+from rpbench.results.check.verify import check_folder, check_results
 
 __all__ = [
     "EXIT_FAILED",

@@ -35,6 +35,7 @@ from rpbench.exceptions import ResultsError, RpbenchError, one_line
 from rpbench.results import store as results
 from rpbench.results.check.core import FOLDER, KPI_COLUMNS, FolderResult, RunCheck, as_number, same
 from rpbench.results.check.folder import file_sha256, read_table
+from rpbench.results.check.verify import check_results
 from rpbench.results.layout import FLEET, KPIS, META
 
 RECORDS_DIR = "records"
@@ -211,8 +212,6 @@ def audit_row(folder: Path, root: Path, row: dict, manifest: dict | None, dates:
 
 def audit_engine(rc: RunCheck, folder: Path, root: Path, row: dict, manifest: dict | None) -> None:
     """rpbench's own engine: its results folder passes the full checker, and the row shows its KPIs."""
-    from rpbench.results.check.verify import check_results  # the entry point imports this module
-
     path = engine_folder(folder, str(row["date"]), str(row["strategy"]), str(row["engine"]))
     name = path.relative_to(folder).as_posix()
     if not inside(root, path):

@@ -1,7 +1,6 @@
-"""The entry points: which checks a folder gets, and in which order.
+"""Which checks a comparison folder gets, and in which order (:mod:`.tree` dispatches any folder).
 
-A replication folder goes to :mod:`.replication`, a multi-day or sweep parent to :mod:`.parents` (then
-each child), a comparison folder to its folder checks (:mod:`.folder`), each run's (:mod:`.events`,
+A comparison folder goes to its folder checks (:mod:`.folder`), each run's (:mod:`.events`,
 :mod:`.kpis` and :mod:`.certificate` for a simulation, :mod:`.oracle` for an offline run), then the tables
 built over all runs (``hourly``, ``report``).
 """
@@ -16,7 +15,7 @@ import pandas as pd
 from rpbench import results
 from rpbench.exceptions import ResultsError, RpbenchError, one_line
 from rpbench.results.check.certificate import check_certificate
-from rpbench.results.check.core import EVENT_COLUMNS, FOLDER, PARENT_KINDS, FolderResult, RunCheck
+from rpbench.results.check.core import EVENT_COLUMNS, FOLDER, FolderResult, RunCheck
 from rpbench.results.check.events import check_event_log, check_events, check_movement
 from rpbench.results.check.folder import (
     Folder,
@@ -38,29 +37,7 @@ from rpbench.results.check.kpis import (
 )
 from rpbench.results.check.oracle import check_oracle
 from rpbench.results.check.page import check_page
-from rpbench.results.check.parents import check_parent
-from rpbench.results.check.replication import check_replication
-from rpbench.results.layout import EVENTS, META, RUNS, TRAJECTORIES
-
-
-def check_tree(path: str | Path) -> list[FolderResult]:
-    """Check a results folder, or a multi-day / sweep parent (its own files, then every child folder);
-    an unreadable folder is a :class:`FolderResult` with ``error`` set, never an exception."""
-    path = Path(path)
-    if not path.is_dir():
-        return [FolderResult(str(path), error=f"results folder {str(path)!r} does not exist")]
-    meta = None
-    if (path / META).exists():
-        try:
-            meta = results.read_meta(path)
-        except RpbenchError as exc:
-            return [FolderResult(str(path), error=one_line(exc))]
-    if meta is not None and meta.get("kind") == "replication":
-        return [check_replication(path)]
-    if meta is not None and meta.get("kind") in PARENT_KINDS:
-        parent, children = check_parent(path, meta)
-        return [parent] + [check_results(child) for child in children]
-    return [check_results(folder) for folder in results.run_folders(path)]
+from rpbench.results.layout import EVENTS, RUNS, TRAJECTORIES
 
 
 def check_results(folder: str | Path) -> FolderResult:
