@@ -39,6 +39,7 @@ COMMANDS = (
     "list",
     "data",
     "replicate",
+    "train",
 )
 
 

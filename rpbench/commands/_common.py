@@ -211,8 +211,9 @@ def add_offline_arg(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def add_scenario_args(parser: argparse.ArgumentParser, *, positional: bool = False) -> None:
-    """--scenario/--date/--sample/--seed plus parameter overrides."""
+def add_scenario_args(parser: argparse.ArgumentParser, *, positional: bool = False, one_draw: bool = True) -> None:
+    """--scenario/--date/--sample/--seed plus parameter overrides (``one_draw=False``: without --date and
+    --seed, for a command that gives its own lists of them)."""
     if positional:
         parser.add_argument("scenario", metavar="NAME", help="scenario name (see `rpbench list`)")
     else:
@@ -222,9 +223,11 @@ def add_scenario_args(parser: argparse.ArgumentParser, *, positional: bool = Fal
             help="scenario name (default: haikou-peak, fetching its data on first use; the toy city, "
             "said loudly, when that fails)",
         )
-    parser.add_argument("--date", default=None, help="date YYYY-MM-DD (default 2017-05-01)")
+    if one_draw:
+        parser.add_argument("--date", default=None, help="date YYYY-MM-DD (default 2017-05-01)")
     add_number_arg(parser, "--sample", SAMPLE, help="fraction of orders kept (haikou-peak default 0.3)")
-    add_number_arg(parser, "--seed", SEED, default=0, help="random seed (default 0)")
+    if one_draw:
+        add_number_arg(parser, "--seed", SEED, default=0, help="random seed (default 0)")
     parser.add_argument(
         "--fleet-at",
         dest="fleet_placement",
@@ -279,9 +282,9 @@ def scenario_request(args: argparse.Namespace) -> ScenarioRequest:
             ensure_data_dir(args.data, what=f"scenario {name!r}", offline=offline, progress=progress)
     return ScenarioRequest(
         name=name,
-        date=args.date,
+        date=getattr(args, "date", None),
         sample=args.sample,
-        seed=args.seed,
+        seed=getattr(args, "seed", 0),
         params=params,
         fleet_placement=args.fleet_placement,
         data_dir=args.data,

@@ -13,6 +13,7 @@ records it as ``decision_budget_s`` (absent otherwise): the checker and the repo
 from __future__ import annotations
 
 import dataclasses
+import shutil
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -88,6 +89,13 @@ def competitive_ratio_rows(runs: Sequence[StrategyRun], offline: dict[str, Oracl
     ]
 
 
+def copy_artefacts(artefacts: dict[str, tuple[str, Path]], run_dir: Path) -> dict[str, str]:
+    """Copy each artefact folder into ``run_dir/NAME/`` and return ``{name: digest}`` for meta.json."""
+    for name, (_, source) in artefacts.items():
+        shutil.copytree(source, run_dir / name)
+    return {name: digest for name, (digest, _) in artefacts.items()}
+
+
 def write_folder(
     folder: Path,
     scenario: Scenario,
@@ -134,6 +142,7 @@ def write_folder(
             "options": r.options.as_dict(),
             "wall_s": r.sim.wall_s,
             "prepare_s": r.sim.prepare_s,
+            **({"artefacts": copy_artefacts(r.sim.artefacts, d)} if r.sim.artefacts else {}),
             "end_s": r.sim.end_s,
             "rounds_solved": len(r.sim.rounds),
             "source": r.source,

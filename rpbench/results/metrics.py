@@ -270,11 +270,7 @@ def hourly(tab: pd.DataFrame, start_hour: int = 0) -> pd.DataFrame:
     hour = (tab["request_s"] // 3600).astype(int) + start_hour
     served = tab["served"]
     pooled = tab["pooled"]
-    partner = tab["partner"].to_numpy()
-    idx = np.arange(len(tab))
-    lead = pooled.to_numpy() & ((partner > idx) | (partner < 0))
-    p = np.where(partner >= 0, partner, 0)
-    pair_saving = np.where(lead, tab["solo_m"].to_numpy() + tab["solo_m"].to_numpy()[p] - _pair_length(tab, p), 0.0)
+    pair_saving = _lead_savings(tab)
     frame = pd.DataFrame(
         {
             "hour": hour,
@@ -301,6 +297,35 @@ def hourly(tab: pd.DataFrame, start_hour: int = 0) -> pd.DataFrame:
         }
     )
     return out.reset_index()
+
+
+def _pair_leads(tab: pd.DataFrame) -> np.ndarray:
+    """Per order: whether it is its served pair's lower order index (each pair counted once)."""
+    partner = tab["partner"].to_numpy()
+    return tab["pooled"].to_numpy() & (partner > np.arange(len(tab)))
+
+
+def _lead_savings(tab: pd.DataFrame) -> np.ndarray:
+    """Per order: its pair's l_A + l_B - L on the pair's lower order index (0 on every other row)."""
+    p = np.maximum(tab["partner"].to_numpy(), 0)
+    return np.where(
+        _pair_leads(tab), tab["solo_m"].to_numpy() + tab["solo_m"].to_numpy()[p] - _pair_length(tab, p), 0.0
+    )
+
+
+def pair_savings(tab: pd.DataFrame) -> pd.DataFrame:
+    """One row per served pair: its vehicle, the time its last passenger was dropped off and its
+    realised saving l_A + l_B - L (Eq. 5, read off the odometers), in order of the lower order index."""
+    lead = np.flatnonzero(_pair_leads(tab))
+    partner = tab["partner"].to_numpy()[lead]
+    drop = tab["dropoff_s"].to_numpy()
+    return pd.DataFrame(
+        {
+            "vehicle": tab["vehicle"].to_numpy()[lead],
+            "done_s": np.maximum(drop[lead], drop[partner]),
+            "saving_m": _lead_savings(tab)[lead],
+        }
+    )
 
 
 def _pair_length(tab: pd.DataFrame, partner: np.ndarray) -> np.ndarray:

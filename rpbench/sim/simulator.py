@@ -30,7 +30,7 @@ import stat
 import tempfile
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TypeVar
 
@@ -102,6 +102,9 @@ class SimResult:
     #: predictions and their caches), timed apart so that a first run's cache builds are not charged to
     #: the strategy's own time.
     prepare_s: float = 0.0
+    #: What the run's decisions depend on besides the scenario (:meth:`Strategy.artefacts`): name ->
+    #: (digest, folder), copied into the results folder.
+    artefacts: dict[str, tuple[str, Path]] = field(default_factory=dict)
 
 
 #: Where a failed round's model is dumped: a private folder of the cache, not the shared /tmp.
@@ -215,6 +218,7 @@ class Simulator:
             wall_s=time.perf_counter() - t0,
             end_s=end,
             prepare_s=prepare_s,
+            artefacts=self.strategy.artefacts(),
         )
 
     # ------------------------------------------------------------ per round

@@ -29,6 +29,7 @@ REGISTRY: dict[str, str] = {
     "rtv": "rtv:RTV",
     "fl-nd": "forward:ForwardLookingNoDelay",
     "fl": "forward:ForwardLooking",
+    "vf": "value:ValueFunction",
 }
 
 #: Entry-point group of strategies installed by other distributions.

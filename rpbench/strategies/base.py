@@ -13,6 +13,7 @@ from __future__ import annotations
 import enum
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar, Generic, TypeVar, cast
 
 import numpy as np
@@ -335,6 +336,14 @@ class Strategy(ABC, Generic[OptionsT]):
     @abstractmethod
     def build(self, state: RoundState) -> RoundModel:
         """Build the model of the batch round the state describes."""
+
+    def artefacts(self) -> dict[str, tuple[str, Path]]:
+        """Files the run's decisions depend on, by name: ``(digest, folder)`` (default: none).
+
+        Called after the run; each folder is copied into the run's results folder under its name and
+        its digest recorded in meta.json, so that ``rpbench check`` can verify it (a learned model, say).
+        """
+        return {}
 
     def reposition(self, state: RoundState, rm: RoundModel, chosen: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Vehicles to send towards nodes after the round's decisions (default: none).

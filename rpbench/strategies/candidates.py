@@ -42,11 +42,24 @@ class JoinOptions:
     pickup_m: np.ndarray
     saving_m: np.ndarray  # e(v_p', p), Eq. (5)
     fofo: np.ndarray
+    #: The pooled route still to drive from the vehicle's position to the last drop-off (pre + L - δ).
+    remaining_m: np.ndarray
 
     @classmethod
     def empty(cls) -> JoinOptions:
         none = np.zeros(0, np.int64)
-        return cls(none, none, np.zeros(0), np.zeros(0), np.zeros(0, bool))
+        return cls(none, none, np.zeros(0), np.zeros(0), np.zeros(0, bool), np.zeros(0))
+
+    def take(self, keep: np.ndarray) -> JoinOptions:
+        """The options ``keep`` selects (a boolean mask or indices)."""
+        return JoinOptions(
+            self.p[keep],
+            self.v[keep],
+            self.pickup_m[keep],
+            self.saving_m[keep],
+            self.fofo[keep],
+            self.remaining_m[keep],
+        )
 
 
 def vacant_options(state: RoundState) -> VacantOptions:
@@ -86,7 +99,8 @@ def join_options(state: RoundState, order_rule: str = "min_feasible") -> JoinOpt
     )
     r = choose_order(g, state.params.max_pickup_m, order_rule)
     ok = r.feasible
-    return JoinOptions(p[ok], v[ok], r.pk[ok], r.saving[ok], r.fofo[ok])
+    remaining = state.v1_pre_m[v] + r.length - state.v1_delta_m[v]
+    return JoinOptions(p[ok], v[ok], r.pk[ok], r.saving[ok], r.fofo[ok], remaining[ok])
 
 
 def _within_road_distance(state: RoundState, nodes: np.ndarray, pre_m: np.ndarray, limit_m: float):

@@ -162,7 +162,7 @@ class _ForwardBase(Strategy[ForwardOptions]):
         vac = vacant_options(state)
         join = join_options(state, self.options.order_rule)
         good = join.saving_m > 0  # A11
-        join = JoinOptions(join.p[good], join.v[good], join.pickup_m[good], join.saving_m[good], join.fofo[good])
+        join = join.take(good)
         prediction, hour = self.prediction_at(state.t_s)
         e_vac = prediction.lookup(state.p_origin, state.p_destination).e_vacant
         return vac, join, prediction, hour, e_vac

@@ -146,11 +146,13 @@ BASE = {
     "bench": ("bench", "--synthetic", "--sizes", "tiny", "--csv", "OUT"),
     "predict": ("predict", "--validate-fcfs", "--offline", "--out", "OUT"),
     "evaluate": ("evaluate", "toy-quick", "--out", "OUT"),
+    "train": ("train", "vf", *TOY, "--out", "OUT"),
 }
 _ANY = ["-1", "1e300", "nan", "inf", "-inf", "abc"]
 #: (command, option) -> values out of its range (0 too where 0 is out).  The old behaviour of each is in
 #: the change's report; every one now ends the same way.
 OUT_OF_RANGE: dict[tuple[str, str], list[str]] = {
+    ("train", "--sample"): ["0", "1.5", *_ANY],
     ("run", "--sample"): ["0", "1.5", *_ANY],
     ("run", "--seed"): ["4294967296", "2.5", *_ANY],
     ("run", "--decision-budget"): ["0", "86401", *_ANY],

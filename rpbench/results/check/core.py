@@ -31,7 +31,7 @@ PARENT_KINDS = ("multi-day", "sweep", "evaluate")
 #: Input files whose bytes meta.json's ``inputs_digest`` pins.
 DIGEST_FILES = (ORDERS, FLEET, NETWORK)
 #: The fields of a run's meta.json record that decide what the checker checks (digested per run).
-RUN_SPEC_FIELDS = ("kind", "options", "variant", "rules", "status", "unit_m")
+RUN_SPEC_FIELDS = ("kind", "options", "variant", "rules", "status", "unit_m", "artefacts")
 EVENT_KINDS = ("request", "assign", "pickup", "dropoff", "cancel", "reposition")
 #: Reported figures the files cannot reproduce (timings: a run's wall time, a strategy's one-off
 #: ``prepare()``, the oracle's stages; sizes of the oracle's enumeration and model; the solver's gap): listed

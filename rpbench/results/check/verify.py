@@ -14,6 +14,7 @@ import pandas as pd
 
 from rpbench import results
 from rpbench.exceptions import ResultsError, RpbenchError, one_line
+from rpbench.results.check.artefacts import check_artefacts
 from rpbench.results.check.certificate import check_certificate
 from rpbench.results.check.core import EVENT_COLUMNS, FOLDER, FolderResult, RunCheck
 from rpbench.results.check.events import check_event_log, check_events, check_movement
@@ -125,6 +126,7 @@ def _check_simulation(f: Folder, name: str, run_dir: Path, bound: float | None) 
     budget, claims = budget_expected(rc, f, name, reported)
     compare_kpis(rc, "simulation", kpis | budget, reported, claims)
     check_certificate(rc, tab, f, kpis["total_saving_km"], bound)
+    check_artefacts(rc, f, name, run_dir)
     rc.checked["orders"] = f.n
     rc.checked["served"] = int(tab["served"].sum())
     return rc, hourly_expected(tab, f.solo)
