@@ -34,6 +34,7 @@ DEFAULT_DATES = ValueOptions().train_dates
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "train",
+        allow_abbrev=False,  # --date and --seed are not --dates and --seeds: no single draw to train on
         help="learn a value model for the vf strategy from simulated training days",
         description="Learn the tabular value V(cell, time bin) of a vacant vehicle by policy evaluation of MB "
         "(Xu et al., KDD 2018) on training days, and write it as a model folder for --opt vf.model=FOLDER.",
@@ -54,6 +55,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="a training option of vf (cell_m, bin_s, discount, method, learning_rate, epochs, iterations, "
         "order_rule; see `rpbench list`), repeatable",
     )
+    # the single-draw options of other commands, refused in one line naming the list to give instead
+    p.add_argument("--date", dest="single_date", default=None, help=argparse.SUPPRESS)
+    p.add_argument("--seed", dest="single_seed", default=None, help=argparse.SUPPRESS)
     p.add_argument("--out", default=None, metavar="FOLDER", help="the new model folder")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--no-progress", action="store_true", help="no progress lines on stderr")
@@ -61,6 +65,10 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.single_date is not None:
+        raise ParameterError("--date: a model is trained on several days, give --dates A..B or A,B,...")
+    if args.single_seed is not None:
+        raise ParameterError("--seed: a model is trained on a list of sample seeds, give --seeds S1,S2,...")
     check_numbers(args)
     check_date_list("--dates", args.dates)
     options = _options(args.opt, args.seeds)

@@ -11,6 +11,7 @@ Loading checks every array against its recorded digest and shape: an edited file
 from __future__ import annotations
 
 import hashlib
+import io
 import json
 import os
 import shutil
@@ -22,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from rpbench import __version__
-from rpbench.exceptions import ParameterError
+from rpbench.exceptions import ParameterError, one_line
 from rpbench.files import load_json_object
 from rpbench.network import RoadNetwork
 
@@ -141,7 +142,13 @@ def load_model(folder: str | os.PathLike) -> tuple[ValueModel, str]:
             raise ParameterError(f"{where}: cannot read {name}.npy ({exc.strerror or exc})") from None
         if _sha256(data) != digests.get(name):
             raise ParameterError(f"{where}: {name}.npy does not match its digest in {MODEL_JSON} (edited or damaged)")
-        arrays[name] = np.load(path, allow_pickle=False)
+        try:  # the bytes just verified, not the file read again
+            arrays[name] = np.load(io.BytesIO(data), allow_pickle=False)
+        except (ValueError, OSError, EOFError) as exc:
+            raise ParameterError(f"{where}: {name}.npy is not a .npy array ({one_line(exc)})") from None
+        if arrays[name].dtype.kind not in ("iuf" if name == "values" else "iu"):
+            kind = "numbers" if name == "values" else "integers"
+            raise ParameterError(f"{where}: {name}.npy holds {arrays[name].dtype} values, not {kind}")
     try:
         shape = (int(meta["n_cells"]), int(meta["n_bins"]))
         model = ValueModel(

@@ -150,9 +150,14 @@ def training_record(scenarios: list[Scenario], settings: Settings) -> dict[str, 
             }
             for s in scenarios
         ],
-        "policy": "mb" if settings.iterations == 1 else f"mb, then vf ({settings.iterations - 1} policy iterations)",
+        "policy": _policy_text(settings.iterations),
         "settings": asdict(settings),
     }
+
+
+def _policy_text(iterations: int) -> str:
+    more = iterations - 1
+    return "mb" if more == 0 else f"mb, then vf ({more} policy iteration{'s' if more > 1 else ''})"
 
 
 def _policy(settings: Settings, model: ValueModel | None) -> Strategy:
@@ -223,6 +228,8 @@ def cached_model(
         except ParameterError as exc:  # a damaged cache entry is retrained, saying so
             _note(True, f"rebuilding the cached value model: {exc}")
             shutil.rmtree(folder, ignore_errors=True)
+    if folder.exists():  # a leftover without model.json (a full disk, say): not a model
+        shutil.rmtree(folder, ignore_errors=True)
     model = train(scenarios, settings, progress=progress)
     digest = save_model_atomically(model, folder)
     return model, digest, folder

@@ -62,6 +62,8 @@ def _value_model_problem(folder: Path, digest: str, f: Folder) -> str | None:
             if hashlib.sha256(path.read_bytes()).hexdigest() != sums[array]:
                 return f"{array}.npy does not match its SHA-256 in model.json (edited or damaged)"
             arrays[array] = np.load(path, allow_pickle=False)
+            if arrays[array].dtype.kind not in "iuf":
+                return f"{array}.npy holds {arrays[array].dtype} values, not numbers"
         training = meta.get("training") or {}
     except (OSError, ValueError, KeyError, TypeError) as exc:
         return f"unreadable ({type(exc).__name__}: {exc})"
