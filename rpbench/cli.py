@@ -40,6 +40,7 @@ COMMANDS = (
     "data",
     "replicate",
     "train",
+    "instances",
 )
 
 

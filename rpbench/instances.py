@@ -93,8 +93,25 @@ def save_instance(path: str | Path, model, meta: dict[str, Any] | None = None) -
     if model.structure == Structure.PAIRING:
         arrays["objective"] = np.array(model.objective)
     path.parent.mkdir(parents=True, exist_ok=True)
-    np.savez_compressed(path, **arrays)
+    write_npz(path, arrays)
     return path
+
+
+#: The timestamp of every member of an instance file: np.savez stamps the time of writing, which would make
+#: two builds of the same instance differ in their bytes (and their SHA-256).
+_ZIP_TIME = (1980, 1, 1, 0, 0, 0)
+
+
+def write_npz(path: Path, arrays: dict[str, Any]) -> None:
+    """``np.savez_compressed``'s format (one deflated ``NAME.npy`` member per array, read by ``np.load``),
+    written with fixed member times and order: the same arrays give the same bytes."""
+    with zipfile.ZipFile(path, "w", compression=zipfile.ZIP_DEFLATED) as zf:
+        for name, value in arrays.items():
+            info = zipfile.ZipInfo(f"{name}.npy", date_time=_ZIP_TIME)
+            info.compress_type = zipfile.ZIP_DEFLATED
+            info.external_attr = 0o644 << 16
+            with zf.open(info, "w", force_zip64=True) as member:
+                np.lib.format.write_array(member, np.asanyarray(value), allow_pickle=False)
 
 
 def load_instance(path: str | Path) -> tuple[Model, dict[str, Any]]:

@@ -1,12 +1,17 @@
-"""Freeze chosen rounds of simulation runs into instance files (:mod:`rpbench.instances`).
+"""Freeze chosen rounds of simulation runs, and offline pairing models, into instance files
+(:mod:`rpbench.instances`).
 
 Each strategy is simulated on the scenario with the preset; the models of
 the chosen rounds (round indices, or the largest rounds by columns) are
-written with their provenance, plus a ``manifest.json`` listing them.
+written with their provenance.  Each offline run (``bound``, ``oracle1``,
+``oracle2``) is one pairing model over all the scenario's orders, built as
+the run builds it (:func:`rpbench.oracle.solve.oracle_model`) but not solved
+(its ``objective`` is null).  A ``manifest.json`` lists them all.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 from rpbench import results
@@ -15,9 +20,13 @@ from rpbench.harness.comparison import calibrated, simulate_strategy
 from rpbench.harness.spec import RunSpec
 from rpbench.instances import save_instance
 from rpbench.model import Model, Solution
+from rpbench.oracle.pairs import find_candidates
+from rpbench.oracle.runs import ORACLE_RUNS
+from rpbench.oracle.solve import oracle_model
 from rpbench.results.store import check_new_folder
 from rpbench.scenarios.base import Scenario
 from rpbench.strategies.base import RoundModel
+from rpbench.strategies.options import RunOptions
 
 #: A captured round: its number, time, model, the solver's objective and status.
 _Captured = tuple[int, float, Model, float, str]
@@ -33,8 +42,8 @@ def take_snapshots(
 ) -> tuple[Path, list[dict]]:
     """Simulate each strategy of ``spec`` and save the chosen rounds' models under ``out`` (a new folder).
 
-    ``scenario``: the one ``spec.request`` builds, when built already.  Offline runs have no rounds and are
-    not part of a snapshot.
+    ``scenario``: the one ``spec.request`` builds, when built already.  Each offline run adds its pairing
+    model (not solved: the full day's bound has millions of columns).
     """
     check_new_folder(out)
     preset = load_preset(spec.preset)
@@ -69,7 +78,28 @@ def take_snapshots(
                 }
                 save_instance(tmp / f"{stem}.npz", model, meta)
                 entries.append({"file": f"{stem}.npz", **meta})
+        for entry in spec.offline:
+            stem = f"{scenario.name}_{entry.name}"
+            model, meta = offline_model(scenario, entry.name, entry.options)
+            save_instance(tmp / f"{stem}.npz", model, meta)
+            entries.append({"file": f"{stem}.npz", **meta})
         results.write_json(
             tmp / "manifest.json", {"format": "rpbench-instance-1", "instances": entries, **results.environment()}
         )
     return final, entries
+
+
+def offline_model(scenario: Scenario, run: str, options: RunOptions) -> tuple[Model, dict]:
+    """The pairing model offline run ``run`` solves on ``scenario``, and its provenance (objective null)."""
+    spec = ORACLE_RUNS[run]
+    candidates = find_candidates(scenario.network.distances(), scenario.orders, spec.rules(scenario.params, options))
+    model = oracle_model(candidates, spec.variant)[0].renamed(run)
+    return model, {
+        "scenario": scenario.label,
+        "scenario_name": scenario.name,
+        "seed": scenario.seed,
+        "strategy": run,
+        "objective": None,
+        "size": model.size,
+        "rules": dataclasses.asdict(candidates.rules),
+    }

@@ -1,23 +1,35 @@
-"""``rpbench bench``: time every solver preset on the same models.
+"""``rpbench bench``: time every solver preset on the same models, and summarise as the field reports.
 
 The models are snapshot instance files (``rpbench bench instances/examples``,
 files or folders searched recursively) and/or seeded synthetic models
 (``--synthetic``).  One row per (model, preset): status, objective, build /
-solve / extract times, and whether the objective equals the proven optimum
-of the other presets and of the run the instance was frozen from (exit
-status 1 on any disagreement).  A preset that hits its
-time limit reports ``time_limit``; one that overruns the hard timeout is
-killed and reports ``killed``.
+solve / extract times (the fastest of ``--repeat`` runs, and their spread),
+and a verdict (:func:`rpbench.bench.runner.verdict`): ``optimal``, ``wrong``
+(against the known values of ``--solu FILE``, a folder's ``rpbench.solu``,
+or another preset's proven optimum; exit status 1), ``time_limit``,
+``memory_limit`` (``--memory-limit``), ``error`` or ``killed`` (the hard
+timeout).  Then one line per (tier, preset) (:mod:`rpbench.bench.summary`):
+instances solved, the shifted geometric mean of the time with unsolved
+instances at the time limit, its ratio to the best preset.  ``--out FOLDER``
+writes all of it with the performance profile, the machine and the library
+versions, and a report.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import shlex
 import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
 
 from rpbench.backends.presets import load_preset, preset_names
-from rpbench.bench.runner import format_table, run_benchmark
+from rpbench.bench.runner import NO_TIER, format_table, run_benchmark
+from rpbench.bench.summary import SHIFTS, environment, format_summary, summarise, write_outputs
 from rpbench.bench.synthetic import SUITES, suite
 from rpbench.commands._common import (
     SEED,
@@ -32,16 +44,26 @@ from rpbench.commands._common import (
     write_out_file,
 )
 from rpbench.exceptions import ParameterError
-from rpbench.instances import load_instances
+from rpbench.instances import find_instances, load_instances
+from rpbench.library.solu import Known, check_names, read_solu
 from rpbench.model import OBJECTIVES, Structure
+from rpbench.results.benchmarks import SHIFT_S
 from rpbench.results.html.bench import write_bench_html
 from rpbench.results.plots import bench_figure
+from rpbench.results.store import check_new_folder, new_results_folder, write_json
 from rpbench.strategies.options import Range
 
 #: About the default hard timeout (2 x limit + 30 s) of the longest time limit a preset may set.
 HARD_TIMEOUT = Range(0.0, 2 * TIME_LIMIT.high, "s", low_open=True)
 #: The fastest of more than 100 runs of one solve tells nothing the fastest of 100 does not.
 REPEAT = Range(1, 100, integer=True)
+#: A worker's address space, in GB of 2**30 bytes.
+MEMORY_LIMIT = Range(0.0, 65536.0, "GB", low_open=True)
+#: The shift of the shifted geometric mean (0: the plain geometric mean).
+SHIFT = Range(0.0, 3600.0, "s")
+#: The known-values file a folder of instances may hold at its top, used unless --solu names one.
+SOLU_NAME = "rpbench.solu"
+_SHIFTS_TEXT = ", ".join(f"{k} {v:g} s" for k, v in SHIFTS.items() if k != NO_TIER) + f", others {SHIFT_S:g} s"
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -49,7 +71,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "bench",
         help="time every solver preset on the same models",
         description="Time every installed solver preset on the same decision models, build and "
-        "solve apart, and cross-check their objectives.",
+        "solve apart; check every answer against the other presets and the known values (--solu), and "
+        "summarise per preset: instances solved, shifted geometric mean of the time, performance profile.",
     )
     p.add_argument(
         "paths",
@@ -108,9 +131,57 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="S",
         help="kill a solve after S seconds (default: 2 x its time limit + 30)",
     )
-    add_number_arg(p, "--repeat", REPEAT, default=3, help="runs per solve; the fastest is kept (default 3)")
-    p.add_argument("--no-isolate", dest="isolate", action="store_false", help="solve in this process (no hard timeout)")
-    p.add_argument("--csv", metavar="FILE", default=None, help="also write the table as CSV")
+    add_number_arg(
+        p,
+        "--memory-limit",
+        MEMORY_LIMIT,
+        metavar="GB",
+        help="cap each isolated worker's address space at GB (2**30 bytes; RLIMIT_AS, which counts reserved "
+        "as well as used memory: leave headroom); a solve over it reports memory_limit (default: none)",
+    )
+    add_number_arg(
+        p,
+        "--repeat",
+        REPEAT,
+        default=3,
+        help="runs per solve; the fastest is kept, with the min / median / max of all (default 3)",
+    )
+    p.add_argument(
+        "--no-isolate",
+        dest="isolate",
+        action="store_false",
+        help="solve in this process (no hard timeout, no memory limit)",
+    )
+    p.add_argument(
+        "--solu",
+        metavar="FILE",
+        default=None,
+        help="known values (.solu: =opt=, =best=, =bound= NAME VALUE, =inf=, =unkn= NAME) to check every answer "
+        f"against (default: the {SOLU_NAME} at the top of a folder named, if any)",
+    )
+    add_number_arg(
+        p,
+        "--shift",
+        SHIFT,
+        metavar="S",
+        help=f"shift of the shifted geometric mean, for every tier (default per tier: {_SHIFTS_TEXT})",
+    )
+    p.add_argument(
+        "--no-progress", action="store_true", help="no progress bar (there is none when stderr is not a terminal)"
+    )
+    p.add_argument(
+        "--out",
+        metavar="FOLDER",
+        default=None,
+        help="also write a new folder: results.csv, summary.csv, profile.csv, profile.png/.svg, environment.json, "
+        "report.md",
+    )
+    p.add_argument(
+        "--csv",
+        metavar="FILE",
+        default=None,
+        help="also write the table as CSV (and the machine and versions beside it, FILE's stem + .environment.json)",
+    )
     p.add_argument("--plot", metavar="PNG", default=None, help="also plot solver time against model size")
     p.add_argument(
         "--html",
@@ -155,25 +226,35 @@ def run(args: argparse.Namespace) -> int:
         )
     if args.hard_timeout is not None and not args.isolate:
         raise ParameterError("--hard-timeout kills an isolated solve; --no-isolate solves in this process, without one")
+    if args.memory_limit is not None and not args.isolate:
+        raise ParameterError("--memory-limit caps an isolated worker; --no-isolate solves in this process, without one")
     # output files checked before benchmarking: a bad path must not cost the run
     csv_out = check_out_file(args.csv, "--csv") if args.csv else None
+    sidecar = check_out_file(str(_sidecar(csv_out)), "--csv") if csv_out is not None else None
     plot_out = check_out_file(args.plot, "--plot") if args.plot else None
     html_out = check_out_file(args.html, "--html") if args.html else None
+    if args.out is not None:
+        check_new_folder(args.out)
     check_unique("--solver", args.solver or [])
     presets = None if args.solver is None else [load_preset(name) for name in args.solver]  # fail before building
     limits = _limits(args.preset_time_limit, preset_names() if presets is None else [p.name for p in presets])
     wanted = None
     if args.structures is not None:  # checked before the (slow) synthetic suite is built
         wanted = {x.strip() for x in args.structures.split(",") if x.strip()}
-        known = {st.value for st in Structure}
-        if not wanted or wanted - known:
+        known_structures = {st.value for st in Structure}
+        if not wanted or wanted - known_structures:
             raise ParameterError(
-                f"--structures {args.structures!r}: expected a comma-separated subset of {', '.join(sorted(known))}"
+                f"--structures {args.structures!r}: expected a comma-separated subset of "
+                f"{', '.join(sorted(known_structures))}"
             )
     models, recorded = load_instances(args.paths) if args.paths else ([], {})
+    tiers = _tiers(args.paths, [m.name for m in models]) if args.paths else {}
+    solu_files = [Path(args.solu)] if args.solu is not None else _folder_solus(args.paths)
+    solus = _read_solus(solu_files, explicit=args.solu is not None)  # a bad line fails before any build
     if args.synthetic:
         note(f"building the {args.sizes!r} synthetic models (seed {args.seed}) ...")
         models += suite(args.sizes, seed=args.seed, objectives=objectives)
+    known = _known(solus, [m.name for m in models])
     if wanted is not None:
         models = [m for m in models if m.structure.value in wanted]
         if not models:
@@ -186,22 +267,118 @@ def run(args: argparse.Namespace) -> int:
         repeat=args.repeat,
         isolate=args.isolate,
         hard_timeout_s=args.hard_timeout,
-        progress=None if args.json else note,
+        memory_limit_gb=args.memory_limit,
+        progress=False if args.no_progress else None,
         recorded=recorded,
+        known=known,
+        tiers=tiers,
     )
-    if csv_out is not None:
+    what = f"{len(models)} models x {table['preset'].nunique()} presets"
+    settings = _settings(args, table, solu_files)
+    env = environment() if csv_out is not None or html_out is not None or args.out is not None else None
+    if csv_out is not None and sidecar is not None:
         write_out_file(csv_out, "--csv", lambda tmp: table.to_csv(tmp, index=False))
+        write_out_file(sidecar, "--csv", lambda tmp: write_json(tmp, {**(env or {}), "bench": settings}))
     if plot_out is not None:
-        title = f"rpbench bench: {len(models)} models x {table['preset'].nunique()} presets (time of proven optima)"
+        title = f"rpbench bench: {what} (time of proven optima)"
         write_out_file(plot_out, "--plot", lambda tmp: bench_figure(table, tmp, title))
     if html_out is not None:
-        what = f"{len(models)} models x {table['preset'].nunique()} presets"
-        write_out_file(html_out, "--html", lambda tmp: write_bench_html(table, tmp, what, command_line()))
+        write_out_file(
+            html_out,
+            "--html",
+            lambda tmp: write_bench_html(table, tmp, what, command_line(), shift=args.shift, env=env),
+        )
+    if args.out is not None:
+        with new_results_folder(args.out, "bench") as (tmp, final):
+            write_outputs(tmp, table, title=what, settings=settings, shift=args.shift, env=env)
+        note(
+            f"rpbench: wrote {final} (results.csv, summary.csv, profile.csv, profile.png, environment.json, report.md)"
+        )
     if args.json:
         print_json(table.astype(object).where(table.notna(), None).to_dict(orient="records"))
     else:
         print(format_table(table))
-    if (table["agrees"] == False).any():  # noqa: E712  (pandas boolean with missing values)
-        print("rpbench: presets disagree on a proven optimum (see the rows marked NO)", file=sys.stderr)
+        print()
+        print(format_summary(summarise(table, args.shift)))
+    wrong = int((table["verdict"] == "wrong").sum())
+    if wrong:
+        print(
+            f"rpbench: {wrong} {'answer is' if wrong == 1 else 'answers are'} wrong (verdict wrong: against the "
+            "known values or another preset's proven optimum)",
+            file=sys.stderr,
+        )
         return 1
     return 0
+
+
+def _sidecar(csv: Path) -> Path:
+    """The machine-and-versions file beside a ``--csv`` table: ``bench.csv`` -> ``bench.environment.json``."""
+    return csv.with_name(f"{csv.stem}.environment.json")
+
+
+def _tiers(paths: list[str], names: list[str]) -> dict[str, str]:
+    """Each instance's tier (its metadata's ``tier``; :data:`~rpbench.bench.runner.NO_TIER` if none), by the
+    names :func:`load_instances` gave (its models come in the order of the files it found)."""
+    files = list(dict.fromkeys(find_instances([*paths])))
+    if len(files) != len(names):  # load_instances reads each file once, in this order
+        raise AssertionError("instance files and models do not line up")
+    out = {}
+    for f, name in zip(files, names, strict=True):
+        with np.load(f, allow_pickle=False) as data:  # only the metadata member is read
+            meta = json.loads(str(data["meta_json"])) if "meta_json" in data.files else {}
+        tier = meta.get("tier") if isinstance(meta, dict) else None
+        out[name] = tier if isinstance(tier, str) and tier.strip() else NO_TIER
+    return out
+
+
+def _folder_solus(paths: list[str]) -> list[Path]:
+    """The known-values files at the top of the folders named (said on stderr)."""
+    found = []
+    for p in map(Path, dict.fromkeys(paths)):
+        solu = p / SOLU_NAME
+        if p.is_dir() and solu.is_file():
+            note(f"rpbench: known values from {solu} (--solu FILE to use another)")
+            found.append(solu)
+    return found
+
+
+def _read_solus(files: list[Path], *, explicit: bool) -> list[tuple[Path, dict[str, Known]]]:
+    out = []
+    for f in files:
+        if explicit and not f.is_file():
+            state = "is a folder" if f.is_dir() else "does not exist"
+            raise ParameterError(f"--solu {str(f)!r} {state}; give a known-values (.solu) file")
+        out.append((f, read_solu(f)))
+    return out
+
+
+def _known(solus: list[tuple[Path, dict[str, Known]]], names: list[str]) -> dict[str, Known]:
+    """The known values of every file by instance name; each name must name an instance of ``names``, and
+    one given in two files is an error."""
+    known: dict[str, Known] = {}
+    source: dict[str, Path] = {}
+    for f, entries in solus:
+        check_names(entries, names, f"known values {str(f)!r}")
+        for name, k in entries.items():
+            if name in known:
+                raise ParameterError(
+                    f"instance {name!r} has known values in {str(source[name])!r} and {str(f)!r}; keep one"
+                )
+            known[name], source[name] = k, f
+    return known
+
+
+def _settings(args: argparse.Namespace, table: pd.DataFrame, solu_files: list[Path]) -> dict[str, Any]:
+    """What the benchmark ran with, for environment.json and report.md."""
+    limits = table.groupby("preset", sort=True)["time_limit_s"].first()
+    return {
+        "command": command_line(),
+        "presets": sorted(set(table["preset"])),
+        "time_limit_s": {str(k): (None if v != v else float(v)) for k, v in limits.items()},
+        "hard_timeout_s": (args.hard_timeout or "2 x the time limit + 30") if args.isolate else None,
+        "memory_limit_gb": args.memory_limit,
+        "repeat": args.repeat,
+        "isolate": args.isolate,
+        "known_values": [str(f) for f in solu_files],
+        "shift_s": args.shift if args.shift is not None else f"per tier: {_SHIFTS_TEXT}",
+    }

@@ -33,7 +33,12 @@ def register(sub: argparse._SubParsersAction) -> None:
         "(format: instances/README.md) for `rpbench bench`.",
     )
     add_scenario_args(p)
-    p.add_argument("--strategies", default="mb,rtv,fl", help="strategies to snapshot (default mb,rtv,fl)")
+    p.add_argument(
+        "--strategies",
+        default="mb,rtv,fl",
+        help="strategies to snapshot (default mb,rtv,fl); offline runs (bound, oracle1, oracle2) freeze their "
+        "pairing model over all orders",
+    )
     p.add_argument("--solver", default="highs", help="solver preset used during the runs")
     p.add_argument("--rounds", default=None, help="round indices to freeze, e.g. 10,100,200 (default: largest)")
     add_number_arg(p, "--largest", LARGEST, help="without --rounds: freeze the N largest rounds (default 3)")
@@ -45,12 +50,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     check_numbers(args)  # before anything runs or downloads
-    runs = [e for e in parse_runs(args.strategies, args.opt) if not e.offline]
+    runs = parse_runs(args.strategies, args.opt)
     check_presets(args)
-    if not runs:
-        raise ParameterError(
-            f"--strategies {args.strategies!r}: offline runs have no rounds to freeze; name a strategy"
-        )
     rounds = None
     if args.rounds is not None:
         items = [r.strip() for r in args.rounds.split(",") if r.strip()]
@@ -60,6 +61,10 @@ def run(args: argparse.Namespace) -> int:
         check_unique(f"--rounds {args.rounds!r}", [str(r) for r in rounds])
         if args.largest is not None:
             raise ParameterError("--largest picks rounds without --rounds; give one of them")
+        if all(e.offline for e in runs):
+            raise ParameterError(
+                f"--rounds: --strategies {args.strategies!r} names only offline runs, which have no rounds"
+            )
     longest = max((e.name for e in runs), key=len)
     check_out_name(args.out, inner=[f"{args.scenario or 'haikou-peak'}_{longest}_round00000.npz"])
     check_new_folder(args.out)  # before the data is fetched, the scenario built and simulated
@@ -73,9 +78,8 @@ def run(args: argparse.Namespace) -> int:
         return 0
     for e in entries:
         size = e["size"]
-        print(
-            f"{e['file']:<40} {e['strategy']:<6} round {e['round']:>5}  {size['rows']:>5} rows "
-            f"{size['cols']:>6} cols  objective {e['objective']:.0f}"
-        )
+        where = f"round {e['round']:>5}" if "round" in e else "offline    "
+        objective = "not solved" if e["objective"] is None else f"objective {e['objective']:.0f}"
+        print(f"{e['file']:<40} {e['strategy']:<7} {where}  {size['rows']:>5} rows {size['cols']:>7} cols  {objective}")
     print(f"\n{len(entries)} instance(s) written to {folder}; solve them with: rpbench bench {folder}")
     return 0

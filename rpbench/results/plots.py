@@ -412,12 +412,13 @@ def bench_figure(table: pd.DataFrame, path: Path, title: str) -> Path:
     """Solver time (build + solve + extract) against model size, one panel per structure, one line per preset.
 
     ``table`` is a :func:`rpbench.bench.runner.run_benchmark` table; rows without a
-    proven optimum are left out (their time is a time limit, not a solve).
+    proven optimum (verdict ``optimal`` when the table has verdicts) are left out: their time is a time
+    limit or a wrong answer's, not a solve.
     """
     plt = _pyplot()
     from matplotlib.ticker import NullFormatter
 
-    done = table[table["status"] == "optimal"]
+    done = table[table["verdict"] == "optimal"] if "verdict" in table else table[table["status"] == "optimal"]
     structures = list(dict.fromkeys(table["structure"]))
     fig, axes = plt.subplots(1, len(structures), figsize=(4.2 * len(structures), 3.8), squeeze=False)
     presets = sorted(set(table["preset"]))
@@ -434,4 +435,31 @@ def bench_figure(table: pd.DataFrame, path: Path, title: str) -> Path:
         ax.set_title(structure, fontsize=10)
         ax.grid(alpha=0.3, which="both")
     _legends(fig, list(axes[0]), below=False)
+    return _save(plt, fig, path, title)
+
+
+def profile_figure(profile: pd.DataFrame, path: Path, title: str) -> Path:
+    """The Dolan-Moré performance profile: one step line per preset, tau on a log axis.
+
+    ``profile`` is a :func:`rpbench.bench.summary.performance_profile` table (``preset``, ``tau``,
+    ``fraction``); each line is drawn to the largest tau, where it stays at the share its preset solved.
+    """
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    presets = sorted(set(profile["preset"]))
+    top = float(profile["tau"].max()) if len(profile) else 1.0
+    right = max(2.0, top * 1.25)
+    for i, (preset, g) in enumerate(profile.groupby("preset", sort=True)):
+        g = g.sort_values("tau")
+        x = np.concatenate([g["tau"].to_numpy(), [right]])
+        y = np.concatenate([g["fraction"].to_numpy(), g["fraction"].to_numpy()[-1:]])
+        ax.step(x, y, where="post", label=str(preset), color=_TAB10[i % len(_TAB10)], lw=1.6)
+    ax.set_xscale("log", base=2)
+    ax.set_xlim(1.0, right)
+    ax.set_ylim(0.0, 1.05)
+    ax.set_xlabel("τ: time over the fastest preset's time (log scale)", fontsize=9)
+    ax.set_ylabel("share of instances solved within τ", fontsize=9)
+    ax.grid(alpha=0.3, which="both")
+    if presets:
+        ax.legend(fontsize=8, loc="lower right")
     return _save(plt, fig, path, title)

@@ -153,6 +153,8 @@ _ANY = ["-1", "1e300", "nan", "inf", "-inf", "abc"]
 #: the change's report; every one now ends the same way.
 OUT_OF_RANGE: dict[tuple[str, str], list[str]] = {
     ("train", "--sample"): ["0", "1.5", *_ANY],
+    ("bench", "--memory-limit"): ["0", "1e5", *_ANY],
+    ("bench", "--shift"): ["3601", *_ANY],
     ("run", "--sample"): ["0", "1.5", *_ANY],
     ("run", "--seed"): ["4294967296", "2.5", *_ANY],
     ("run", "--decision-budget"): ["0", "86401", *_ANY],
