@@ -22,7 +22,7 @@ from rpbench.exceptions import ParameterError
 from rpbench.results import store
 from rpbench.scenarios.registry import scenario_spec
 from rpbench.scenarios.request import ScenarioRequest
-from rpbench.strategies.value import ValueOptions
+from rpbench.strategies.value import ValueFunction, ValueOptions
 from rpbench.valuefn.model import save_model
 from rpbench.valuefn.train import train, training_record
 
@@ -82,7 +82,12 @@ def run(args: argparse.Namespace) -> int:
         for seed in options.train_seeds:
             scenarios.append(request.replace(date=day, seed=seed).build())
     started = time.perf_counter()
-    model = train(scenarios, options.settings(), progress=False if args.no_progress else None)
+    model = train(
+        scenarios,
+        options.settings(),
+        next_policy=ValueFunction(options).next_policy,
+        progress=False if args.no_progress else None,
+    )
     seconds = time.perf_counter() - started
     with store.new_results_folder(args.out, f"vf-model_{store.timestamp()}") as (tmp, final):
         tmp.rmdir()  # save_model creates the folder it writes

@@ -100,12 +100,18 @@ class ValueFunction(Strategy[ValueOptions]):
             if self.options.model == "auto":
                 scenarios = training_scenarios(scenario, self.options.train_dates, self.options.train_seeds)
                 check_held_out(scenario, training_record(scenarios, self.options.settings()))
-                self.model, self.model_digest, self.model_folder = cached_model(scenarios, self.options.settings())
+                self.model, self.model_digest, self.model_folder = cached_model(
+                    scenarios, self.options.settings(), next_policy=self.next_policy
+                )
             else:
                 self.model_folder = Path(self.options.model)
                 self.model, self.model_digest = load_model(self.model_folder)
             self.model.check_network(scenario.network, "vf")
             check_held_out(scenario, self.model.training)
+
+    def next_policy(self, model: ValueModel) -> ValueFunction:
+        """The policy of the next policy iteration: VF with ``model`` and this run's order rule."""
+        return ValueFunction.with_model(model, order_rule=self.options.order_rule)
 
     def artefacts(self) -> dict[str, tuple[str, Path]]:
         if self.model_folder is None:

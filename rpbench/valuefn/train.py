@@ -14,6 +14,7 @@ import hashlib
 import json
 import shutil
 import sys
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -29,6 +30,7 @@ from rpbench.scenarios.registry import build_scenario, scenario_spec
 from rpbench.scenarios.request import parse_dates
 from rpbench.sim.simulator import Simulator
 from rpbench.strategies.base import RoundModel, RoundState, Strategy
+from rpbench.strategies.myopic import MyopicBatch
 from rpbench.valuefn.cells import Grid
 from rpbench.valuefn.learn import evaluate_policy
 from rpbench.valuefn.model import MODEL_JSON, ValueModel, load_model, save_model_atomically
@@ -98,8 +100,22 @@ def check_held_out(scenario: Scenario, training: dict[str, Any]) -> None:
         )
 
 
-def train(scenarios: list[Scenario], settings: Settings, *, progress: bool | None = None) -> ValueModel:
-    """Learn V from simulations of the training ``scenarios`` (all on one network)."""
+#: Makes the policy a learned value dispatches with (policy iteration): the strategy layer gives it, so that
+#: this package does not import the strategies that import it.
+NextPolicy = Callable[[ValueModel], Strategy]
+
+
+def train(
+    scenarios: list[Scenario],
+    settings: Settings,
+    *,
+    next_policy: NextPolicy | None = None,
+    progress: bool | None = None,
+) -> ValueModel:
+    """Learn V from simulations of the training ``scenarios`` (all on one network); ``next_policy`` (needed when
+    ``settings.iterations`` > 1) turns a learned value into the policy of the next iteration."""
+    if settings.iterations > 1 and next_policy is None:
+        raise ParameterError("vf: policy iteration needs the policy a value dispatches with (next_policy)")
     if not scenarios:
         raise ParameterError("vf: no training scenarios")
     network = scenarios[0].network
@@ -115,7 +131,10 @@ def train(scenarios: list[Scenario], settings: Settings, *, progress: bool | Non
             _note(
                 progress, f"vf training: iteration {iteration + 1}/{settings.iterations}, run {k + 1}/{len(scenarios)}"
             )
-            parts.append(simulate_transitions(scenario, _policy(settings, model), preset, grid, settings.discount))
+            policy: Strategy = MyopicBatch(order_rule=settings.order_rule)
+            if model is not None and next_policy is not None:  # checked above: iterations > 1 has one
+                policy = next_policy(model)
+            parts.append(simulate_transitions(scenario, policy, preset, grid, settings.discount))
         values, visits = evaluate_policy(
             Transitions.concat(parts),
             grid,
@@ -158,15 +177,6 @@ def training_record(scenarios: list[Scenario], settings: Settings) -> dict[str, 
 def _policy_text(iterations: int) -> str:
     more = iterations - 1
     return "mb" if more == 0 else f"mb, then vf ({more} policy iteration{'s' if more > 1 else ''})"
-
-
-def _policy(settings: Settings, model: ValueModel | None) -> Strategy:
-    from rpbench.strategies.myopic import MyopicBatch
-    from rpbench.strategies.value import ValueFunction  # the strategy imports this package
-
-    if model is None:
-        return MyopicBatch(order_rule=settings.order_rule)
-    return ValueFunction.with_model(model, order_rule=settings.order_rule)
 
 
 def simulate_transitions(
@@ -216,7 +226,11 @@ def cache_key(scenarios: list[Scenario], settings: Settings) -> str:
 
 
 def cached_model(
-    scenarios: list[Scenario], settings: Settings, *, progress: bool | None = None
+    scenarios: list[Scenario],
+    settings: Settings,
+    *,
+    next_policy: NextPolicy | None = None,
+    progress: bool | None = None,
 ) -> tuple[ValueModel, str, Path]:
     """The model trained on ``scenarios`` with ``settings``: from the cache (its digests verified on load),
     or trained and stored there.  Returns the model, its digest and its folder."""
@@ -230,7 +244,7 @@ def cached_model(
             shutil.rmtree(folder, ignore_errors=True)
     if folder.exists():  # a leftover without model.json (a full disk, say): not a model
         shutil.rmtree(folder, ignore_errors=True)
-    model = train(scenarios, settings, progress=progress)
+    model = train(scenarios, settings, next_policy=next_policy, progress=progress)
     digest = save_model_atomically(model, folder)
     return model, digest, folder
 

@@ -15,6 +15,7 @@ from rpbench.exceptions import ParameterError
 from rpbench.scenarios.registry import build_scenario
 from rpbench.sim.simulator import Simulator
 from rpbench.strategies.myopic import MyopicBatch
+from rpbench.strategies.value import ValueFunction
 from rpbench.valuefn import train as training
 from rpbench.valuefn.model import MODEL_JSON, load_model, save_model
 from rpbench.valuefn.train import (
@@ -81,7 +82,7 @@ def test_policy_iteration_and_td_learn_other_values(toy):
     """iterations = 2 evaluates vf's own policy (another value); method td another estimate of MB's."""
     runs = training_scenarios(toy, "", (1,))
     mb = train(runs, Settings())
-    again = train(runs, Settings(iterations=2))
+    again = train(runs, Settings(iterations=2), next_policy=ValueFunction().next_policy)
     td = train(runs, Settings(method="td", learning_rate=0.1, epochs=5))
     assert again.training["policy"] == "mb, then vf (1 policy iteration)"
     assert not np.array_equal(again.values, mb.values)
