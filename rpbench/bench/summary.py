@@ -256,10 +256,14 @@ def write_outputs(
     settings: Mapping[str, Any],
     shift: float | None = None,
     env: Mapping[str, Any] | None = None,
+    known_values: str | None = None,
 ) -> dict[str, Path]:
     """Write ``results.csv`` (the rows), ``summary.csv``, ``profile.csv``, ``profile.png`` (with SVG and PDF
-    beside it), ``environment.json`` (the machine, the versions and ``settings``) and ``report.md`` into
-    ``folder``; return them by name."""
+    beside it), ``environment.json`` (the machine, the versions and ``settings``), ``report.md`` and
+    ``meta.json`` (kind ``bench``, every file of the folder, ``known_values``: the name of the known-values
+    file the caller already wrote there, or None) into ``folder``; return them by name.  ``rpbench check``
+    recomputes the verdicts, the summary and the profile from these files
+    (:mod:`rpbench.results.check.bench`)."""
     from rpbench.results.plots import profile_figure
 
     env = dict(env if env is not None else environment())
@@ -274,6 +278,10 @@ def write_outputs(
     paths["profile.svg"] = folder / "profile.svg"
     paths["report.md"] = folder / "report.md"
     paths["report.md"].write_text(report_markdown(table, summary, env, settings, title), encoding="utf-8")
+    paths["meta.json"] = folder / "meta.json"
+    listed = sorted(p.name for p in folder.iterdir() if p.is_file())
+    meta = {"kind": "bench", "rpbench_version": env.get("versions", {}).get("rpbench"), "files": listed}
+    store.write_json(paths["meta.json"], {**meta, "known_values": known_values})
     return paths
 
 

@@ -45,12 +45,14 @@ from rpbench.commands._common import (
 )
 from rpbench.exceptions import ParameterError
 from rpbench.instances import find_instances, load_instances
-from rpbench.library.solu import Known, check_names, read_solu
+from rpbench.library.manifest import library_names
 from rpbench.model import OBJECTIVES, Structure
 from rpbench.results.benchmarks import SHIFT_S
+from rpbench.results.check.bench import KNOWN_FILE
 from rpbench.results.html.bench import write_bench_html
 from rpbench.results.plots import bench_figure
 from rpbench.results.store import check_new_folder, new_results_folder, write_json
+from rpbench.solu import Known, check_names, read_solu, write_solu
 from rpbench.strategies.options import Range
 
 #: About the default hard timeout (2 x limit + 30 s) of the longest time limit a preset may set.
@@ -290,7 +292,11 @@ def run(args: argparse.Namespace) -> int:
         )
     if args.out is not None:
         with new_results_folder(args.out, "bench") as (tmp, final):
-            write_outputs(tmp, table, title=what, settings=settings, shift=args.shift, env=env)
+            used = {name: known[name] for name in sorted(known)}
+            if used:  # the folder carries the values it was judged against: rpbench check re-judges with them
+                write_solu(tmp / KNOWN_FILE, used, header=["the known values this benchmark was judged against"])
+            known_file = KNOWN_FILE if used else None
+            write_outputs(tmp, table, title=what, settings=settings, shift=args.shift, env=env, known_values=known_file)
         note(
             f"rpbench: wrote {final} (results.csv, summary.csv, profile.csv, profile.png, environment.json, report.md)"
         )
@@ -353,13 +359,20 @@ def _read_solus(files: list[Path], *, explicit: bool) -> list[tuple[Path, dict[s
 
 
 def _known(solus: list[tuple[Path, dict[str, Known]]], names: list[str]) -> dict[str, Known]:
-    """The known values of every file by instance name; each name must name an instance of ``names``, and
+    """The known values of every file by instance name; each name must name an instance of ``names`` or of
+    the library (a library-wide file judges any subset: the other lines are skipped, said on stderr), and
     one given in two files is an error."""
     known: dict[str, Known] = {}
     source: dict[str, Path] = {}
+    library = library_names()
     for f, entries in solus:
-        check_names(entries, names, f"known values {str(f)!r}")
+        elsewhere = set(check_names(entries, names, f"known values {str(f)!r}", library))
+        if elsewhere:
+            skipped = f"{len(elsewhere)} of the {len(entries)} known values of {str(f)!r}"
+            note(f"rpbench: {skipped} name library instances not benchmarked here")
         for name, k in entries.items():
+            if name in elsewhere:
+                continue
             if name in known:
                 raise ParameterError(
                     f"instance {name!r} has known values in {str(source[name])!r} and {str(f)!r}; keep one"

@@ -41,8 +41,8 @@ from rpbench.library.manifest import (
 )
 from rpbench.library.prove import prove
 from rpbench.library.sets import SETS, instance_set
-from rpbench.library.solu import write_solu
 from rpbench.results import store
+from rpbench.solu import write_solu
 
 #: Where a set's files are looked for without --dir: the committed tier in a checkout, else the default
 #: place `build` writes to.

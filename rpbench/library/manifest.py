@@ -48,6 +48,15 @@ def packaged_manifest(name: str) -> dict[str, Any] | None:
     return json.loads(ref.read_text(encoding="utf-8"))
 
 
+def library_names() -> set[str]:
+    """The name of every instance of every set whose reference manifest ships with rpbench."""
+    names: set[str] = set()
+    for ref in resources.files(__package__).joinpath("manifests").iterdir():
+        if ref.name.endswith(".json"):
+            names |= {str(i["name"]) for i in json.loads(ref.read_text(encoding="utf-8"))["instances"]}
+    return names
+
+
 def read_manifest(folder: Path) -> dict[str, Any]:
     return load_json_object(folder / MANIFEST, "instance set manifest", ParameterError)
 

@@ -15,7 +15,7 @@ from rpbench.bench.runner import cross_check, run_benchmark, verdict
 from rpbench.bench.summary import summarise
 from rpbench.cli import main
 from rpbench.instances import save_instance
-from rpbench.library.solu import Known, write_solu
+from rpbench.solu import Known, write_solu
 
 OPT, TL, FEAS, INF = "optimal", "time_limit", "feasible", "infeasible"
 

@@ -17,7 +17,7 @@ from rpbench.library.export import read_mps_optimum, write_model
 from rpbench.library.manifest import MANIFEST, content_sha256, packaged_manifest, verify_folder
 from rpbench.library.prove import prove
 from rpbench.library.sets import SETS, InstanceSet, instance_set
-from rpbench.library.solu import read_solu
+from rpbench.solu import read_solu
 
 ROOT = Path(__file__).resolve().parents[2]
 COMMITTED_S = ROOT / "instances" / "library" / "S"

@@ -71,6 +71,10 @@ rpbench's own runs as full results folders (``engine-rows``); every check
 built on trajectories is skipped by name, with the reason.  A run none of
 whose checks could be made is reported skipped, never OK.
 
+A ``rpbench bench --out`` folder (:mod:`.bench`): ``manifest``, ``environment``, ``known-values``,
+``verdict`` per preset (recomputed against the folder's ``known.solu`` and the other presets' optima),
+``summary``, ``profile`` and ``report`` (recomputed from ``results.csv``).
+
 A folder that cannot be read — a file missing, truncated or unparseable, a
 column missing or not numeric, meta.json without its parameters — is
 *unreadable*: :class:`ResultsError` (``rpbench check`` exit status 2).  A

@@ -1,6 +1,7 @@
 """``rpbench check`` of any folder: a comparison, a parent (multi-day, sweep, evaluation: its own tables,
-then each child) or a replication; the dispatch sits above the checkers it calls, so that a replication's
-check can check its engines' folders as comparisons (:func:`.verify.check_results`)."""
+then each child), a replication or a ``rpbench bench`` folder; the dispatch sits above the checkers it
+calls, so that a replication's check can check its engines' folders as comparisons
+(:func:`.verify.check_results`)."""
 
 from __future__ import annotations
 
@@ -8,6 +9,8 @@ from pathlib import Path
 
 from rpbench import results
 from rpbench.exceptions import RpbenchError, one_line
+from rpbench.results.check.bench import KIND as BENCH_KIND
+from rpbench.results.check.bench import check_bench
 from rpbench.results.check.core import PARENT_KINDS, FolderResult
 from rpbench.results.check.parents import check_parent
 from rpbench.results.check.replication import check_replication
@@ -29,6 +32,8 @@ def check_tree(path: str | Path) -> list[FolderResult]:
             return [FolderResult(str(path), error=one_line(exc))]
     if meta is not None and meta.get("kind") == "replication":
         return [check_replication(path)]
+    if meta is not None and meta.get("kind") == BENCH_KIND:
+        return [check_bench(path)]
     if meta is not None and meta.get("kind") in PARENT_KINDS:
         parent, children = check_parent(path, meta)
         return [parent] + [check_results(child) for child in children]

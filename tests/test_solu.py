@@ -3,10 +3,12 @@ written sorted and byte for byte the same, names checked against the instances."
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from rpbench.exceptions import ParameterError
-from rpbench.library.solu import Known, check_names, read_solu, write_solu
+from rpbench.solu import Known, check_names, read_solu, write_solu
 
 GOOD = """\
 # known values of a test set
@@ -128,3 +130,35 @@ def test_check_names():
     assert str(err.value).startswith("set.solu: 'b' names no instance benchmarked here (2 instances)")
     with pytest.raises(ParameterError, match="'a', 'b' name no instance"):
         check_names(known, [], "set.solu")
+
+
+def test_check_names_skips_library_instances_not_benchmarked():
+    known = {"a": Known("opt", 1.0), "lib": Known("opt", 2.0), "typo": Known("inf")}
+    assert check_names(known, ["a"], "set.solu", library=["lib", "typo"]) == ["lib", "typo"]
+    with pytest.raises(ParameterError, match="'typo' names no instance benchmarked here .* or of the library"):
+        check_names(known, ["a"], "set.solu", library=["lib"])
+
+
+def test_a_library_wide_solu_judges_a_subset(tmp_path, capsys):
+    """The committed S tier benched against the whole library's file: its lines judge, the others are skipped."""
+    from rpbench.cli import main
+
+    repo = Path(__file__).resolve().parents[1]
+    one = sorted((repo / "instances" / "library" / "S").glob("toy_*_mb_*.npz"))[0]
+    rc = main(
+        [
+            "bench",
+            str(one),
+            "--solu",
+            str(repo / "instances" / "rpbench.solu"),
+            "--solver",
+            "matching",
+            "--no-isolate",
+            "--no-progress",
+            "--repeat",
+            "1",
+        ]
+    )
+    out, err = capsys.readouterr()
+    assert rc == 0 and "name library instances not benchmarked here" in err
+    assert "optimal" in out.splitlines()[2]

@@ -119,17 +119,20 @@ def write_solu(path: str | os.PathLike, entries: Mapping[str, Known], header: It
     return path
 
 
-def check_names(known: Mapping[str, Known], names: Iterable[str], where: str) -> None:
-    """One :class:`ParameterError` line when a name of ``known`` (read from ``where``) names none of the
-    instances ``names``: a typo there would silently check nothing."""
-    have = set(names)
-    missing = sorted(set(known) - have)
-    if missing:
-        shown = ", ".join(repr(n) for n in missing[:5]) + (f" and {len(missing) - 5} more" if len(missing) > 5 else "")
-        which = "names no instance" if len(missing) == 1 else "name no instance"
+def check_names(known: Mapping[str, Known], names: Iterable[str], where: str, library: Iterable[str] = ()) -> list[str]:
+    """The names of ``known`` (read from ``where``) that name a ``library`` instance not benchmarked here
+    (a collection-wide file, as MIPLIB's, judges any subset of its collection); one
+    :class:`ParameterError` line when a name names neither: a typo there would silently check nothing."""
+    have, collection = set(names), set(library)
+    unknown = sorted(set(known) - have - collection)
+    if unknown:
+        shown = ", ".join(repr(n) for n in unknown[:5]) + (f" and {len(unknown) - 5} more" if len(unknown) > 5 else "")
+        which = "names no instance" if len(unknown) == 1 else "name no instance"
         raise ParameterError(
-            f"{where}: {shown} {which} benchmarked here ({len(have)} instances); remove the line or name the instance"
+            f"{where}: {shown} {which} benchmarked here ({len(have)} instances) or of the library; remove the "
+            "line or name the instance"
         )
+    return sorted((set(known) - have) & collection)
 
 
 def _number(value: float) -> str:
