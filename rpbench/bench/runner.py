@@ -156,7 +156,7 @@ def run_benchmark(
             )
             preset = replace(preset, options=replace(preset.options, time_limit_s=limit))
             hard = hard_timeout_s if hard_timeout_s is not None else (2 * limit + 30 if limit else None)
-            runner = _Worker(preset, hard, memory_limit_gb) if isolate else _Inline(preset)
+            runner = IsolatedWorker(preset, hard, memory_limit_gb) if isolate else _Inline(preset)
             try:
                 for model in models:
                     if bar is not None:
@@ -394,7 +394,7 @@ def _worker_main(conn, preset: Preset, memory_limit_gb: float | None = None) -> 
         conn.send(inline.run(model, repeat))
 
 
-class _Worker:
+class IsolatedWorker:
     """Runs solves in a spawned process; a solve past the hard timeout kills it (status ``killed``), a worker
     that dies under a memory limit reports ``memory_limit``."""
 

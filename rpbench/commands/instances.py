@@ -16,6 +16,7 @@ from pathlib import Path
 
 from rpbench import __version__
 from rpbench.backends import load_preset
+from rpbench.bench.runner import IsolatedWorker
 from rpbench.commands._common import (
     TIME_LIMIT,
     add_data_arg,
@@ -39,7 +40,7 @@ from rpbench.library.manifest import (
     verify_folder,
     write_manifest,
 )
-from rpbench.library.prove import prove
+from rpbench.library.prove import prove, with_time_limit
 from rpbench.library.sets import SETS, instance_set
 from rpbench.results import store
 from rpbench.solu import write_solu
@@ -141,13 +142,20 @@ def run_solu(args: argparse.Namespace) -> int:
     models, _ = load_instances(args.paths)
     entries, lines = {}, []
     counts: dict[str, int] = {}
-    for k, model in enumerate(models):
-        if not args.no_progress:
-            note(f"{k + 1}/{len(models)} {model.name} ({model.n_cols:,} columns)")
-        proof = prove(model, installed, args.time_limit)
-        entries[model.name] = proof.known
-        counts[proof.known.kind] = counts.get(proof.known.kind, 0) + 1
-        lines.append(f"{model.name}: {', '.join(proof.algorithms) or 'no proof'} ({'; '.join(proof.answers)})")
+    # each preset solves in its own process, killed at twice its time limit plus 30 s (as rpbench bench)
+    hard = 2 * args.time_limit + 30
+    workers = {p.name: IsolatedWorker(with_time_limit(p, args.time_limit), hard) for p in installed}
+    try:
+        for k, model in enumerate(models):
+            if not args.no_progress:
+                note(f"{k + 1}/{len(models)} {model.name} ({model.n_cols:,} columns)")
+            proof = prove(model, installed, args.time_limit, workers=workers)
+            entries[model.name] = proof.known
+            counts[proof.known.kind] = counts.get(proof.known.kind, 0) + 1
+            lines.append(f"{model.name}: {', '.join(proof.algorithms) or 'no proof'} ({'; '.join(proof.answers)})")
+    finally:
+        for worker in workers.values():
+            worker.close()
     header = [
         f"rpbench {__version__} known values of {len(models)} instances (objective in model units, maximised)",
         "=opt=: proven by at least two different algorithms (presets tried in order: "

@@ -11,22 +11,24 @@ known, else ``=unkn=``.  Proven optima that differ are a :class:`ResultsError` (
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 from rpbench.backends import Preset, solve
 from rpbench.backends.base import SolveOptions
+from rpbench.bench.runner import IsolatedWorker
 from rpbench.exceptions import ResultsError, RpbenchError
-from rpbench.model import Model, Solution, Status, Structure
+from rpbench.model import Model, Status, Structure
 from rpbench.solu import Known
 
 #: Backends that are front ends of HiGHS (scipy.optimize.milp and linprog are HiGHS too).
 _HIGHS_FRONT_ENDS = {"highs", "scipy", "cvxpy", "pyomo"}
 
 
-def algorithm(preset: Preset, model: Model, sol: Solution) -> str:
-    """The algorithm that proved ``sol``: what counts as independent evidence."""
+def algorithm(preset: Preset, model: Model, message: str) -> str:
+    """The algorithm that proved an answer (``message``: the solver's message): what counts as independent
+    evidence."""
     backend = preset.backend
-    message = sol.message or ""
     if backend in _HIGHS_FRONT_ENDS or "HiGHS" in message:
         return "HiGHS"
     if "Blossom V" in message or backend in ("blossom", "blossom-v"):
@@ -46,9 +48,25 @@ class Proof:
     answers: tuple[str, ...]
 
 
-def prove(model: Model, presets: list[Preset], time_limit_s: float, *, stop_when_agreed: bool = True) -> Proof:
+def with_time_limit(preset: Preset, time_limit_s: float) -> Preset:
+    """``preset`` with its solver time limit set to ``time_limit_s``."""
+    options: SolveOptions = dataclasses.replace(preset.options, time_limit_s=time_limit_s)
+    return dataclasses.replace(preset, options=options)
+
+
+def prove(
+    model: Model,
+    presets: list[Preset],
+    time_limit_s: float,
+    *,
+    stop_when_agreed: bool = True,
+    workers: Mapping[str, IsolatedWorker] | None = None,
+) -> Proof:
     """Solve ``model`` with the presets that support its structure, in order, and combine their answers;
-    ``stop_when_agreed``: stop at the first two different algorithms proving the same optimum."""
+    ``stop_when_agreed``: stop at the first two different algorithms proving the same optimum.  With
+    ``workers`` (by preset name, each made from the preset :func:`with_time_limit`), every solve runs in
+    that preset's own process, killed past its hard timeout: HiGHS checks its limit too rarely on the
+    largest pairing models to stop near it."""
     proven: dict[float, set[str]] = {}
     best: float | None = None
     bound: float | None = None
@@ -57,21 +75,30 @@ def prove(model: Model, presets: list[Preset], time_limit_s: float, *, stop_when
         adapter = preset.adapter()
         if not adapter.supports(model.structure) or not adapter.is_installed():
             continue
-        options: SolveOptions = dataclasses.replace(preset.options, time_limit_s=time_limit_s)
-        try:
-            sol = solve(model, dataclasses.replace(preset, options=options))
-        except RpbenchError as exc:
-            answers.append(f"{preset.name}: error ({exc})")
+        if workers is not None:
+            row = workers[preset.name].run(model, 1)
+            status, objective, message = str(row["status"]), row["objective"], str(row["message"] or "")
+            found_bound = None if row["bound"] is None or row["bound"] != row["bound"] else float(row["bound"])
+        else:
+            try:
+                sol = solve(model, with_time_limit(preset, time_limit_s))
+            except RpbenchError as exc:
+                answers.append(f"{preset.name}: error ({exc})")
+                continue
+            status, objective, message, found_bound = sol.status.value, sol.objective, sol.message or "", sol.bound
+        if status in ("error", "killed", "memory_limit"):
+            answers.append(f"{preset.name}: {status} ({message})")
             continue
-        answers.append(f"{preset.name}: {sol.status.value} {sol.objective:.0f}")
-        if sol.status is Status.OPTIMAL:
-            agreed = proven.setdefault(float(sol.objective), set())
-            agreed.add(algorithm(preset, model, sol))
+        answers.append(f"{preset.name}: {status} {objective:.0f}")
+        if status == Status.OPTIMAL.value:
+            agreed = proven.setdefault(float(objective), set())
+            agreed.add(algorithm(preset, model, message))
             if len(agreed) >= 2 and len(proven) == 1 and stop_when_agreed:
                 break  # two independent proofs: the others would only spend time
-        best = sol.objective if best is None else max(best, sol.objective)
-        if sol.bound is not None:
-            bound = sol.bound if bound is None else min(bound, sol.bound)
+        if objective is not None and objective == objective:  # NaN: stopped without a solution
+            best = objective if best is None else max(best, objective)
+        if found_bound is not None:
+            bound = found_bound if bound is None else min(bound, found_bound)
     if len(proven) > 1:
         raise ResultsError(f"model {model.name!r}: presets prove different optima ({'; '.join(answers)})")
     if proven:

@@ -198,3 +198,23 @@ def test_snapshot_rounds_of_offline_runs_only_is_one_line(tmp_path, capsys):
         capsys, "snapshot", "--scenario", "toy", "--strategies", "bound", "--rounds", "3", "--out", tmp_path / "x"
     )
     assert_one_error(code, err, "names only offline runs")
+
+
+def test_prove_in_isolated_workers_records_a_dead_solver_and_goes_on():
+    """``rpbench instances solu`` solves in workers: a solver that dies is an answer, not the end of the file."""
+    from bench.crash_backend import Crash
+
+    from rpbench.backends import Preset
+    from rpbench.bench import synthetic
+    from rpbench.bench.runner import IsolatedWorker
+    from rpbench.library.prove import with_time_limit
+
+    presets = [Preset.of(Crash()), load_preset("highs"), load_preset("matching")]
+    workers = {p.name: IsolatedWorker(with_time_limit(p, 30.0), 90.0) for p in presets}
+    try:
+        proof = prove(synthetic.pairing(40, seed=3).renamed("crash"), presets, 30.0, workers=workers)
+    finally:
+        for w in workers.values():
+            w.close()
+    assert proof.known.kind == "opt" and proof.algorithms == ("HiGHS", "sparse blossom (PyMatching)")
+    assert proof.answers[0].startswith("crash: killed (") and "SIGKILL" in proof.answers[0]
