@@ -112,6 +112,11 @@ def kept_instance(settings: dict, role: str = "solve") -> highspy.Highs:
         _kept.settings[role] = None  # unknown until every option is accepted
         _apply(h, settings)
         _kept.settings[role] = dict(settings)
+    if "time_limit" in settings:
+        # HiGHS (before 2.0) compares time_limit with the instance's run time summed over every run, and
+        # clearModel does not reset that clock (ERGO-Code/HiGHS#1331, #1477): a kept instance would stop
+        # at once on every solve after its first ``time_limit`` seconds of solving.  The limit is moved on.
+        h.setOptionValue("time_limit", h.getRunTime() + float(settings["time_limit"]))
     return h
 
 

@@ -88,3 +88,20 @@ def test_a_signal_handler_ends_a_long_solve_and_the_interrupted_instance_is_drop
     model = synthetic.pairing(40, seed=2)
     want = get_backend("matching").solve(model, SolveOptions()).objective
     assert backend.solve(model, SolveOptions()).objective == want
+
+
+def test_a_kept_instance_gives_every_solve_its_whole_time_limit():
+    """HiGHS measures time_limit against its instance's run time summed over all runs; the kept instance of
+    the highs backend moves the limit on, so solves after the first ``time_limit`` seconds still run."""
+    import dataclasses
+
+    from rpbench.backends import highs, load_preset, solve
+
+    preset = load_preset("highs")
+    preset = dataclasses.replace(preset, options=dataclasses.replace(preset.options, time_limit_s=0.5))
+    model = synthetic.assignment(400, 1500, seed=1)  # about 0.1 s a solve
+    first = solve(model, preset)
+    assert first.status.value == "optimal"
+    h = highs._kept.highs["solve"]
+    while h.getRunTime() < 1.5:  # three limits' worth of solving on the one instance
+        assert solve(model, preset).objective == first.objective
