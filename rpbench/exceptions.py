@@ -63,6 +63,12 @@ class NoOrdersError(RpbenchError, ValueError):
     only write an empty results folder."""
 
 
+class LookaheadError(RpbenchError, AttributeError):
+    """An online strategy reached for what a dispatcher cannot know before the day: the scenario's realised
+    orders (:class:`rpbench.scenarios.base.OnlineView`).  An ``AttributeError`` too, so ``hasattr`` and
+    ``getattr(view, "orders", None)`` answer that the view has none."""
+
+
 def one_line(exc: BaseException) -> str:
     """``exc`` as one line of text, for embedding a library's message in an rpbench error.
 

@@ -1,8 +1,9 @@
 """One prediction per scenario hour: the demand rates a scenario implies, τ_0, caching and warm starts.
 
 :func:`scenario_predictions` is what the FL strategies call.  It takes the
-rates λ_w from the scenario's :class:`~rpbench.scenarios.base.Demand` (or the
-scenario's own orders), rounds τ_0 to :data:`TAU0_RESOLUTION_S` so runs with
+rates λ_w from the scenario's :class:`~rpbench.scenarios.base.Demand` (the
+21-day table, or past days of a generator; the scenario's own orders only when
+asked for, which reads the future: :func:`reads_realised_orders`), rounds τ_0 to :data:`TAU0_RESOLUTION_S` so runs with
 nearly equal calibrations share one cached prediction, reuses a solved
 prediction from the disk cache, and otherwise solves the fixed point on the
 cached structure (:mod:`.list_cache`): the matching sets depend only on the OD
@@ -17,21 +18,22 @@ from pathlib import Path
 
 import numpy as np
 
-from rpbench.exceptions import ParameterError
+from rpbench.exceptions import LookaheadError, ParameterError
 from rpbench.predict.config import PredictConfig
 from rpbench.predict.prediction import Prediction, cached_prediction, predict
-from rpbench.predict.rates import OdRates, month_rates, order_rates
-from rpbench.scenarios.base import Scenario
+from rpbench.predict.rates import HOUR_S, OdRates, month_rates, order_rates
+from rpbench.scenarios.base import LOOKAHEAD_HINT, Demand, OnlineView, Scenario
 
-#: Where λ_w comes from: the scenario's implied demand, the 21-day table, or the scenario's own orders.
-RATE_SOURCES = ("auto", "month", "scenario")
+#: Where λ_w comes from: the demand known before the day (the 21-day table or the demand history), the 21-day
+#: table, the demand history, or the scenario's own orders (the realisation: reading them is clairvoyant).
+RATE_SOURCES = ("auto", "month", "history", "scenario")
 #: τ_0 is rounded to this resolution, so runs whose calibrations differ by a few
 #: seconds (peak hours of different days, sweep points) share one prediction.
 TAU0_RESOLUTION_S = 10.0
 
 
 def scenario_predictions(
-    scenario: Scenario, source: str, tau0_s: np.ndarray, config: PredictConfig
+    scenario: Scenario | OnlineView, source: str, tau0_s: np.ndarray, config: PredictConfig
 ) -> list[Prediction]:
     """One prediction per hour of ``scenario`` (``len(tau0_s)`` hours; hours with equal inputs share one).
 
@@ -70,13 +72,25 @@ def _same_ods(a: OdRates, b: OdRates) -> bool:
     return len(a) == len(b) and np.array_equal(a.origin, b.origin) and np.array_equal(a.destination, b.destination)
 
 
-def hourly_rates(scenario: Scenario, source: str, hours: int) -> list[OdRates]:
-    """λ_w for each of the first ``hours`` hours of ``scenario`` (objects shared where equal)."""
+def rate_source(source: str, demand: Demand) -> str:
+    """What rates ``source`` reads for a scenario of ``demand``: ``auto`` is its table (``month`` or
+    ``history``) and, when it has none, its own orders (``scenario``)."""
     if source not in RATE_SOURCES:
         raise ParameterError(f"rates {source!r} unknown; expected one of {', '.join(RATE_SOURCES)}")
+    if source != "auto":
+        return source
+    return demand.table if demand.table in ("month", "history") else "scenario"
+
+
+def reads_realised_orders(source: str, demand: Demand) -> bool:
+    """Whether rates ``source`` count the scenario's realised orders: a run predicting from them is clairvoyant."""
+    return rate_source(source, demand) == "scenario"
+
+
+def hourly_rates(scenario: Scenario | OnlineView, source: str, hours: int) -> list[OdRates]:
+    """λ_w for each of the first ``hours`` hours of ``scenario`` (objects shared where equal)."""
     net, demand = scenario.network, scenario.demand
-    if source == "auto":
-        source = "month" if demand.table == "month" else "scenario"
+    source = rate_source(source, demand)
     if source == "month":
         if demand.data_dir is None or net.name != "haikou":
             raise ParameterError(
@@ -88,15 +102,34 @@ def hourly_rates(scenario: Scenario, source: str, hours: int) -> list[OdRates]:
             return [base] * hours
         # hour h carries n_h orders of the table's OD mix: λ_w(h) = n_h · λ_w / Σλ / 3600
         return [base.scaled(float(n / (base.total_per_s * 3600.0))) for n in demand.orders_per_hour[:hours]]
+    if source == "history":
+        history = demand.history
+        if history is None:
+            raise ParameterError(
+                f"FL rates 'history': scenario {scenario.name!r} has no demand history "
+                "(use --opt fl.rates=month or fl.rates=scenario)"
+            )
+        # the mean over its days: λ_w(h) = (orders of OD w in hour h of the past days) / (days · 3600 s)
+        period_s = history.days * HOUR_S
+        return _per_hour(net, history.request_s, history.origin, history.destination, hours, period_s, history.source)
+    if isinstance(scenario, OnlineView):  # a strategy that did not say it reads the future
+        raise LookaheadError(
+            f"{scenario.reader}: FL rates 'scenario' count the scenario's own orders; {LOOKAHEAD_HINT}"
+        )
     o = scenario.orders
-    hour_of = np.minimum((o.request_s // 3600.0).astype(int), hours - 1)
+    return _per_hour(net, o.request_s, o.origin, o.destination, hours, HOUR_S, f"{scenario.name} orders")
+
+
+def _per_hour(net, request_s, origin, destination, hours: int, period_s: float, what: str) -> list[OdRates]:
+    """Rates of each hour's orders (count / ``period_s``; an order after the last hour counts in it)."""
+    hour_of = np.minimum((np.asarray(request_s) // HOUR_S).astype(int), hours - 1)
     return [
         order_rates(
             net,
-            o.origin[hour_of == h],
-            o.destination[hour_of == h],
-            3600.0,
-            source=f"{scenario.name} orders of hour {h} (count/3600 s)",
+            origin[hour_of == h],
+            destination[hour_of == h],
+            period_s,
+            source=f"{what} of hour {h} (count/{period_s:g} s)",
         )
         for h in range(hours)
     ]

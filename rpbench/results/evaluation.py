@@ -8,6 +8,7 @@ recomputes all three from the children.
 
 from __future__ import annotations
 
+from collections.abc import Collection
 from pathlib import Path
 
 import pandas as pd
@@ -19,7 +20,7 @@ from rpbench.results.leaderboard import RATIO_OF_MEANS, Bootstrap, leaderboard, 
 from rpbench.results.metrics import KPI_LABELS
 from rpbench.results.plots import leaderboard_figure, seeds_by_day_figure
 from rpbench.results.report import fmt, load_kpis
-from rpbench.results.runs import markdown_cell, run_label, run_styles
+from rpbench.results.runs import clairvoyant_runs, markdown_cell, run_label, run_styles
 from rpbench.results.tables import booktabs, latex_escape
 
 #: The leaderboard's figure (and its SVG and PDF beside it).
@@ -82,7 +83,8 @@ def write_evaluation_report(folder: Path, name: str | None = None) -> Path:
     protocol = meta["protocol"]
     board = results.read_csv(folder / layout.LEADERBOARD)
     pairs = results.read_csv(folder / layout.PAIRED)
-    styles = run_styles(results.read_meta(folder / meta["children"][0]))
+    child = results.read_meta(folder / meta["children"][0])
+    styles = run_styles(child)
     metrics = list(protocol["metrics"])
     rank = metrics[0]
     level = f"{protocol['bootstrap']['level']:.0%}"
@@ -112,7 +114,10 @@ def write_evaluation_report(folder: Path, name: str | None = None) -> Path:
         "saving (a ratio of means).",
         "",
     ]
-    head, body = leaderboard_rows(board, protocol, styles)
+    apart = clairvoyant_runs(child)
+    if apart & set(protocol["strategies"]):
+        lines[-2] += " Clairvoyant runs read the day's orders before they were revealed: they are ranked apart, last."
+    head, body = leaderboard_rows(board, protocol, styles, clairvoyant=apart)
     lines += ["| " + " | ".join(map(markdown_cell, head)) + " |", "|---|" + "---:|" * (len(head) - 1)]
     lines += ["| " + " | ".join(map(markdown_cell, row)) + " |" for row in body]
     lines += ["", *_figure_lines(folder, board, protocol, styles, level)]
@@ -148,13 +153,17 @@ def write_evaluation_report(folder: Path, name: str | None = None) -> Path:
     return path
 
 
-def leaderboard_rows(board: pd.DataFrame, protocol: dict, styles) -> tuple[list[str], list[list[str]]]:
+def leaderboard_rows(
+    board: pd.DataFrame, protocol: dict, styles, *, clairvoyant: Collection[str] = ()
+) -> tuple[list[str], list[list[str]]]:
     """The leaderboard as printed: a header (strategy, each metric, the ratio of means) and a row per run,
-    ranked by the protocol's first metric, each cell "mean [low, high]" as the report formats the KPI."""
+    ranked by the protocol's first metric, each cell "mean [low, high]" as the report formats the KPI.  The
+    ``clairvoyant`` runs (they read the future) are ranked apart, after the others."""
     metrics = list(protocol["metrics"])
     cols = [*metrics, RATIO_OF_MEANS]
     head = ["Strategy"] + [KPI_LABELS.get(k, "Saving: ratio of means") for k in cols]
     order = board[board["kpi"] == metrics[0]].sort_values("mean", ascending=False)["run"].tolist()
+    order = [r for r in order if r not in clairvoyant] + [r for r in order if r in clairvoyant]
     order += [r for r in protocol["strategies"] if r not in order]
     cell = board.set_index(["run", "kpi"])
     body = []

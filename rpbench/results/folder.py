@@ -145,6 +145,7 @@ def write_folder(
             **({"artefacts": copy_artefacts(r.sim.artefacts, d)} if r.sim.artefacts else {}),
             "end_s": r.sim.end_s,
             "rounds_solved": len(r.sim.rounds),
+            "clairvoyant": r.sim.clairvoyant,
             "source": r.source,
             "label": r.label,
             "color": r.color,

@@ -5,7 +5,9 @@ A results folder records each run's label and colour in ``meta.json``
 plug-in strategies included: :func:`run_styles` reads them.  Without a record
 (folders written before labels were recorded, tables built in code) the
 label and colour are read off the strategy classes and offline runs; a run
-name that resolves to no class is shown under its own name.
+name that resolves to no class is shown under its own name.  A run that read
+the future (``"clairvoyant": true`` in its record, or a class declaring
+``clairvoyant = True``) is labelled so: ``FL (clairvoyant)``.
 """
 
 from __future__ import annotations
@@ -18,15 +20,25 @@ from rpbench.strategies import strategy_class
 
 #: Run name -> (label, colour): what :func:`run_styles` returns and the ``styles`` arguments take.
 Styles = Mapping[str, tuple[str, str | None]]
+#: Appended to the label of a run that read the future.
+CLAIRVOYANT_MARK = " (clairvoyant)"
+
+
+def clairvoyant_runs(meta: Mapping[str, Any]) -> set[str]:
+    """The runs of a folder's ``meta.json`` that read the future (their strategy was clairvoyant)."""
+    runs = meta.get("runs") or {}
+    return {name for name, record in runs.items() if isinstance(record, Mapping) and record.get("clairvoyant") is True}
 
 
 def run_styles(meta: Mapping[str, Any]) -> dict[str, tuple[str, str | None]]:
     """The label and colour of every run a folder's ``meta.json`` records (others fall back to the classes)."""
     out = {}
+    clairvoyant = clairvoyant_runs(meta)
     for name, record in (meta.get("runs") or {}).items():
         if isinstance(record, Mapping) and isinstance(record.get("label"), str):
             color = record.get("color")
-            out[name] = (record["label"], color if isinstance(color, str) else None)
+            label = record["label"] + (CLAIRVOYANT_MARK if name in clairvoyant else "")
+            out[name] = (label, color if isinstance(color, str) else None)
     return out
 
 
@@ -56,4 +68,5 @@ def _style(name: str, styles: Styles | None) -> tuple[str, str | None]:
         cls = strategy_class(name)
     except Exception:  # a label is cosmetic: a broken or missing plug-in must not stop a report
         return name, None
-    return cls.label, cls.color
+    # a class attribute True, not a property that depends on the options
+    return cls.label + (CLAIRVOYANT_MARK if getattr(cls, "clairvoyant", False) is True else ""), cls.color

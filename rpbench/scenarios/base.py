@@ -1,4 +1,4 @@
-"""Scenario = orders + fleet + parameters on a road network (frozen, validated).
+"""Scenario = orders + fleet + parameters on a road network (frozen, validated), and its online view.
 
 Generators that build scenarios from the Haikou data or in code live in
 :mod:`rpbench.scenarios`; this module only defines the objects.  Units are in
@@ -12,11 +12,11 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
-from rpbench.exceptions import ParameterError
+from rpbench.exceptions import LookaheadError, ParameterError
 from rpbench.network import RoadNetwork
 
 #: The scenario summary's count of zero-length orders (origin = destination node after snapping): served solo,
@@ -210,19 +210,50 @@ class Fleet:
         return int(self.online_count[max(k, 0)])
 
 
+@dataclass(frozen=True, eq=False)
+class History:
+    """Orders of ``days`` past days of the scenario's demand, as a dispatcher has seen them before the day.
+
+    Per order its request time within its day (seconds from the day's start) and its OD (node indices);
+    the rates it implies are count / (``days`` x 3600 s) per OD and hour.  ``source`` says where it comes
+    from (one line, no machine path).
+    """
+
+    request_s: np.ndarray  # float64
+    origin: np.ndarray  # int32 node index
+    destination: np.ndarray  # int32 node index
+    days: int
+    source: str
+
+    def __post_init__(self) -> None:
+        n = len(self.request_s)
+        if len(self.origin) != n or len(self.destination) != n:
+            raise ParameterError(f"demand history: {n} request times for {len(self.origin)} origins")
+        if self.days < 1:
+            raise ParameterError(f"demand history: {self.days} days; at least one")
+
+
 @dataclass(frozen=True)
 class Demand:
-    """The demand rates λ_w a scenario implies (what FL's prediction, paper §3.1, is fed by default).
+    """The demand rates λ_w known before the day (what FL's prediction, paper §3.1, is fed by default).
 
     ``table = "month"``: the 21-day 08:00-09:00 OD rate table of ``data_dir``
     (the paper's λ_w); with ``orders_per_hour`` it is scaled so that hour h
     carries that many orders (how the synthetic full day draws its demand).
-    ``table = None``: the scenario's own orders, counted per hour.
+    ``table = "history"``: past days of the same demand, ``history`` (a generated
+    city: its generator's draws at other seeds).  ``table = None``: no history;
+    only the scenario's own orders, the realisation, which an online strategy
+    cannot read (:class:`~rpbench.scenarios.base.OnlineView`).
     """
 
     table: str | None = None
     data_dir: str | None = None
     orders_per_hour: tuple[float, ...] | None = None
+    history: History | None = None
+
+    def __post_init__(self) -> None:
+        if (self.table == "history") != (self.history is not None):
+            raise ParameterError("demand: table 'history' and a history go together")
 
 
 @dataclass(frozen=True, eq=False)
@@ -253,6 +284,11 @@ class Scenario:
         if self.horizon_s <= 0:
             raise ParameterError(f"horizon_s = {self.horizon_s} must be > 0")
 
+    def online_view(self, reader: str | None = None) -> OnlineView:
+        """What an online dispatcher knows before the day: everything but the orders (``reader``: who holds it,
+        named by the :class:`~rpbench.exceptions.LookaheadError` a read of the orders raises)."""
+        return OnlineView.of(self, reader)
+
     def summary(self) -> dict[str, Any]:
         """The facts ``rpbench scenario`` prints (keys ``orders``, ``vehicles``, ``nodes`` are stable)."""
         o = self.orders
@@ -278,3 +314,71 @@ class Scenario:
             "data_source": self.provenance.get("source", ""),
             "params": self.params.as_dict(),
         }
+
+
+# ------------------------------------------------------------------ what an online dispatcher sees
+#: Attributes of a :class:`Scenario` that hold or are computed from its realised orders.
+REALISED = ("orders", "summary")
+
+LOOKAHEAD_HINT = (
+    "online strategies see orders only as they are revealed in RoundState; declare `clairvoyant = True` to read "
+    "the future"
+)
+
+
+@dataclass(frozen=True, eq=False)
+class OnlineView:
+    """A :class:`Scenario` without its realised orders (frozen; ``provenance`` is a copy).
+
+    What the simulator hands an online strategy's ``prepare`` (a strategy declaring ``clairvoyant`` gets
+    the whole :class:`Scenario`): the road network, the fleet, the parameters, the seed, the horizon, the
+    labels and provenance, and the demand *history* (:class:`Demand`: the 21-day OD table, or past days of
+    a generator), but not the orders, which reach a strategy only as the simulator reveals them in each
+    round's ``RoundState``.  Reaching for them raises one :class:`~rpbench.exceptions.LookaheadError` line
+    naming the strategy.  The view has no ``orders`` attribute at all, so mypy also flags code that reads
+    them from a ``Scenario | OnlineView`` without first asking which it holds.
+
+    ``reader`` names who holds the view (``strategy 'mine' (mymod.Mine)``), for the error line.
+    """
+
+    name: str
+    label: str
+    network: RoadNetwork
+    fleet: Fleet
+    params: Params
+    seed: int
+    horizon_s: float
+    start_time: str
+    synthetic: bool
+    provenance: dict[str, Any]
+    demand: Demand
+    reader: str = "an online strategy"
+
+    @classmethod
+    def of(cls, scenario: Scenario, reader: str | None = None) -> OnlineView:
+        """The view of ``scenario`` (``reader``: who will hold it)."""
+        return cls(
+            name=scenario.name,
+            label=scenario.label,
+            network=scenario.network,
+            fleet=scenario.fleet,
+            params=scenario.params,
+            seed=scenario.seed,
+            horizon_s=scenario.horizon_s,
+            start_time=scenario.start_time,
+            synthetic=scenario.synthetic,
+            provenance=dict(scenario.provenance),  # a copy: the scenario's stays as it is
+            demand=scenario.demand,
+            reader=reader or cls.reader,
+        )
+
+    def refusal(self, name: str = "orders") -> LookaheadError:
+        """The error a read of ``name`` raises (for code that checks ``isinstance`` first: ``raise view.refusal()``)."""
+        return LookaheadError(f"{self.reader} read the scenario's {name} before they were revealed: {LOOKAHEAD_HINT}")
+
+    if not TYPE_CHECKING:  # at run time only: mypy keeps flagging a read of a view's orders
+
+        def __getattr__(self, name: str) -> Any:
+            if name in REALISED:
+                raise self.refusal(name)
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")

@@ -1,6 +1,10 @@
 """The batch-round simulator (paper §2.1 and §4.1).
 
-Every Δt seconds, at rounds t = 0, Δt, 2Δt, ...:
+Before the first round the strategy's ``prepare`` gets what is known before
+the day: the scenario's :class:`~rpbench.scenarios.base.OnlineView`, without
+its orders (the whole scenario only for a strategy that declares itself
+clairvoyant, whose run is then marked so).  Every Δt seconds, at rounds
+t = 0, Δt, 2Δt, ...:
 
 1. process the pick-ups and drop-offs vehicles reached by t (a vehicle whose
    last passenger leaves becomes vacant and cruises at random);
@@ -105,6 +109,8 @@ class SimResult:
     #: What the run's decisions depend on besides the scenario (:meth:`Strategy.artefacts`): name ->
     #: (digest, folder), copied into the results folder.
     artefacts: dict[str, tuple[str, Path]] = field(default_factory=dict)
+    #: The strategy read the future: its ``prepare`` got the whole scenario (:meth:`Strategy.clairvoyant_on`).
+    clairvoyant: bool = False
 
 
 #: Where a failed round's model is dumped: a private folder of the cache, not the shared /tmp.
@@ -180,7 +186,10 @@ class Simulator:
     # ------------------------------------------------------------------ run
     def run(self) -> SimResult:
         t_prepare = time.perf_counter()
-        self.strategy.prepare(self.scenario)
+        # An online strategy knows the day's orders only as rounds reveal them; only one that says it reads
+        # the future gets them all up front (and its run is marked so).
+        clairvoyant = bool(self.strategy.clairvoyant_on(self.scenario))
+        self.strategy.prepare(self.scenario if clairvoyant else self.scenario.online_view(self._strategy_text()))
         t0 = time.perf_counter()
         prepare_s = t0 - t_prepare
         dt = self.params.dt_s
@@ -219,6 +228,7 @@ class Simulator:
             end_s=end,
             prepare_s=prepare_s,
             artefacts=self.strategy.artefacts(),
+            clairvoyant=clairvoyant,
         )
 
     # ------------------------------------------------------------ per round
@@ -283,15 +293,17 @@ class Simulator:
             )
         )
 
+    def _strategy_text(self) -> str:
+        """The strategy as error lines name it: its run name and class."""
+        cls = type(self.strategy)
+        return f"strategy {self.strategy.name!r} ({cls.__module__}.{cls.__qualname__})"
+
     def _checked(self, k: int, t: float, check: Callable[[], T]) -> T:
         """``check()``, its :class:`ModelError` naming the strategy (run name and class) and the round."""
         try:
             return check()
         except ModelError as exc:
-            cls = type(self.strategy)
-            raise ModelError(
-                f"strategy {self.strategy.name!r} ({cls.__module__}.{cls.__qualname__}) round {k} (t={t:g} s): {exc}"
-            ) from None
+            raise ModelError(f"{self._strategy_text()} round {k} (t={t:g} s): {exc}") from None
 
     def _round_failure(self, k: int, t: float, model, what: str) -> SolverError:
         """A solver failure naming the strategy and round, with the round's model saved for `rpbench bench`."""

@@ -1,11 +1,15 @@
 """What a dispatching strategy sees and what it returns.
 
-The simulator knows a strategy only through :class:`Strategy`: once per
-batch round it hands over a read-only :class:`RoundState` and gets back a
-:class:`RoundModel` — a solver-agnostic model plus, per column, the decision
-it stands for.  A strategy never calls a solver; the simulator solves the
-model with the chosen preset and commits the chosen columns.  Adding a
-formulation is therefore one new module with one class.
+The simulator knows a strategy only through :class:`Strategy`: once before
+the first round it hands :meth:`Strategy.prepare` what is known before the day
+(an :class:`~rpbench.scenarios.base.OnlineView`, the scenario without its
+orders; the whole scenario only to a strategy that declares itself
+:attr:`~Strategy.clairvoyant`), then once per batch round a read-only
+:class:`RoundState`, and it gets back a :class:`RoundModel` — a
+solver-agnostic model plus, per column, the decision it stands for.  A
+strategy never calls a solver; the simulator solves the model with the chosen
+preset and commits the chosen columns.  Adding a formulation is therefore one
+new module with one class.
 """
 
 from __future__ import annotations
@@ -20,7 +24,7 @@ import numpy as np
 
 from rpbench.exceptions import ModelError, one_line
 from rpbench.model import AssignmentModel, Structure, TripPackingModel
-from rpbench.scenarios.base import Params, Scenario
+from rpbench.scenarios.base import OnlineView, Params, Scenario
 from rpbench.strategies.options import RunOptions
 
 if TYPE_CHECKING:
@@ -330,8 +334,24 @@ class Strategy(ABC, Generic[OptionsT]):
         """``options`` completed from the calibration run's KPIs (whole run) and ``hourly`` table."""
         return options
 
-    def prepare(self, scenario: Scenario) -> None:
-        """Called once before the first round (e.g. to load predictions)."""
+    @property
+    def clairvoyant(self) -> bool:
+        """Whether the strategy reads the future: its :meth:`prepare` gets the whole scenario, orders included,
+        and its run is marked clairvoyant in meta.json and wherever it is shown or ranked.  A strategy that does
+        declares ``clairvoyant = True`` in its class body; one that does under some options only, a property."""
+        return False
+
+    def clairvoyant_on(self, scenario: Scenario) -> bool:
+        """Whether this run on ``scenario`` reads the future (default: :attr:`clairvoyant`); for a strategy whose
+        options read the future on some scenarios only (FL's ``rates=auto`` on one without demand history)."""
+        return self.clairvoyant
+
+    def prepare(self, scenario: Scenario | OnlineView) -> None:
+        """Called once before the first round (e.g. to load predictions), with what is known before the day.
+
+        An online strategy gets an :class:`~rpbench.scenarios.base.OnlineView` (no orders: reading them raises
+        :class:`~rpbench.exceptions.LookaheadError`); a :attr:`clairvoyant` one the whole :class:`Scenario`.
+        """
 
     @abstractmethod
     def build(self, state: RoundState) -> RoundModel:
@@ -355,4 +375,9 @@ class Strategy(ABC, Generic[OptionsT]):
 
     def describe(self) -> dict[str, Any]:
         """Options as recorded in a results folder's meta.json."""
-        return {"name": self.name, "structure": self.structure.value, "options": self.options.as_dict()}
+        return {
+            "name": self.name,
+            "structure": self.structure.value,
+            "options": self.options.as_dict(),
+            "clairvoyant": self.clairvoyant,
+        }

@@ -16,12 +16,15 @@ and in ē(0,p).  An OD missing from the rate table predicts 0 (§2.1).
 
 Options (``--opt fl.NAME=VALUE``):
 
-* ``rates``: where λ_w comes from — ``auto`` (default: the demand the
-  scenario implies, :class:`~rpbench.scenarios.base.Demand`: the 21-day
+* ``rates``: where λ_w comes from — ``auto`` (default: the demand known
+  before the day, :class:`~rpbench.scenarios.base.Demand`: the 21-day
   May 1-21 table for Haikou peak hours, as the paper; for the synthetic full
   day the same table scaled to each hour's volume, which is exactly how that
-  day's demand is generated; for other scenarios their own orders per hour),
-  ``month``, ``scenario``.
+  day's demand is generated; for the toy city its generator's past days), ``month``,
+  ``history`` (the past days), ``scenario``: the scenario's own orders per hour.
+  Counting the day's own orders reads the future, so a run that does (``scenario``,
+  or ``auto`` on a scenario without history: the 2017-07-01 trace) is clairvoyant
+  (:attr:`~rpbench.strategies.base.Strategy.clairvoyant`) and marked so.
 * ``tau0_s``: sojourn τ_0 of the origin taker state (A4) and
   ``mean_pickup_m``: l̄ of the waiting utility.  Both default to the mean
   pick-up time / distance of an MB calibration run on the same scenario
@@ -47,7 +50,8 @@ from rpbench.exceptions import ParameterError
 from rpbench.model import Structure
 from rpbench.predict import RATE_SOURCES, PredictConfig, Prediction, scenario_predictions
 from rpbench.predict.config import ACCELERATIONS, PRIORITIES, RHO_MODES
-from rpbench.scenarios.base import Scenario
+from rpbench.predict.hourly import reads_realised_orders
+from rpbench.scenarios.base import OnlineView, Scenario
 from rpbench.strategies.base import RoundModel, RoundState, Strategy
 from rpbench.strategies.candidates import (
     NO_WAIT_UTILITY_M,
@@ -73,7 +77,8 @@ class ForwardOptions(PoolingOptions):
 
     rates: str = option(
         "auto",
-        "where λ_w comes from: the scenario's implied demand, the 21-day table, or the scenario's own orders",
+        "where λ_w comes from: the demand known before the day, the 21-day table, the demand history, or the "
+        "scenario's own orders (clairvoyant)",
         choices=RATE_SOURCES,
     )
     # a day bounds a sojourn and R̄'s own bound (1000 km) a mean pick-up distance
@@ -147,8 +152,18 @@ class _ForwardBase(Strategy[ForwardOptions]):
             mean_pickup_m=pickup if options.mean_pickup_m is None else options.mean_pickup_m,
         )
 
+    # ----------------------------------------------------------- lookahead
+    @property
+    def clairvoyant(self) -> bool:
+        """Rates counted from the scenario's own orders read the future."""
+        return self.options.rates == "scenario"
+
+    def clairvoyant_on(self, scenario: Scenario) -> bool:
+        """``rates=auto`` counts the scenario's own orders too when it carries no demand history."""
+        return self.clairvoyant or reads_realised_orders(self.options.rates, scenario.demand)
+
     # ----------------------------------------------------------- predictions
-    def prepare(self, scenario: Scenario) -> None:
+    def prepare(self, scenario: Scenario | OnlineView) -> None:
         hours = max(1, int(np.ceil(scenario.horizon_s / 3600.0)))
         tau0 = _per_hour(self.options.tau0_s, hours, FALLBACK_TAU0_S, "tau0_s")
         self.mean_pickup_m = _per_hour(self.options.mean_pickup_m, hours, FALLBACK_MEAN_PICKUP_M, "mean_pickup_m")

@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from rpbench.model import Structure
-from rpbench.scenarios.base import Scenario
+from rpbench.scenarios.base import OnlineView, Scenario
 from rpbench.strategies.base import RoundModel, RoundState, Strategy
 from rpbench.strategies.candidates import NO_WAIT_UTILITY_M, assignment_round, join_options, vacant_options
 from rpbench.strategies.myopic import PoolingOptions
@@ -95,7 +95,9 @@ class ValueFunction(Strategy[ValueOptions]):
         out.model = model
         return out
 
-    def prepare(self, scenario: Scenario) -> None:
+    def prepare(self, scenario: Scenario | OnlineView) -> None:
+        """The value model, loaded or trained on other days or seeds of the scenario's generator (read off the
+        view: its name, sample, parameters and data folder), and checked to be held out from it."""
         if self.model is None:
             if self.options.model == "auto":
                 scenarios = training_scenarios(scenario, self.options.train_dates, self.options.train_seeds)

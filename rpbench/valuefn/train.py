@@ -25,7 +25,7 @@ from rpbench.backends import Preset, load_preset
 from rpbench.exceptions import ParameterError
 from rpbench.paths import cache_dir
 from rpbench.results import metrics
-from rpbench.scenarios.base import Scenario
+from rpbench.scenarios.base import OnlineView, Scenario
 from rpbench.scenarios.registry import build_scenario, scenario_spec
 from rpbench.scenarios.request import parse_dates
 from rpbench.sim.simulator import Simulator
@@ -56,7 +56,7 @@ class Settings:
     solver: str = "highs"
 
 
-def training_scenarios(like: Scenario, dates: str, seeds: tuple[int, ...]) -> list[Scenario]:
+def training_scenarios(like: Scenario | OnlineView, dates: str, seeds: tuple[int, ...]) -> list[Scenario]:
     """The scenarios of ``like``'s generator, sample and parameters on ``dates`` (``A..B`` or ``A,B``; a
     generator without dates ignores them) at each of ``seeds``."""
     spec = scenario_spec(like.name)
@@ -75,7 +75,7 @@ def training_scenarios(like: Scenario, dates: str, seeds: tuple[int, ...]) -> li
     ]
 
 
-def held_out_problem(scenario: Scenario, training: dict[str, Any]) -> str | None:
+def held_out_problem(scenario: Scenario | OnlineView, training: dict[str, Any]) -> str | None:
     """Why ``scenario`` is one a model with this ``training`` record was trained on (None: it is not)."""
     if training.get("scenario") != scenario.name:
         return None
@@ -90,7 +90,7 @@ def held_out_problem(scenario: Scenario, training: dict[str, Any]) -> str | None
     return None
 
 
-def check_held_out(scenario: Scenario, training: dict[str, Any]) -> None:
+def check_held_out(scenario: Scenario | OnlineView, training: dict[str, Any]) -> None:
     """One :class:`ParameterError` line when ``scenario`` is one a model with this ``training`` record saw."""
     problem = held_out_problem(scenario, training)
     if problem is not None:

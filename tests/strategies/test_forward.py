@@ -106,7 +106,7 @@ def test_unknown_options_rejected():
 
     with pytest.raises(ParameterError, match="unknown option"):
         make_strategy("fl", colour="red")
-    with pytest.raises(ParameterError, match="option rates = 'weekly' must be one of auto, month, scenario"):
+    with pytest.raises(ParameterError, match="option rates = 'weekly' must be one of auto, month, history, scenario"):
         make_strategy("fl", rates="weekly")
 
 

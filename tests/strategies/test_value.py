@@ -1,5 +1,6 @@
 """VF (value-function dispatch): MB's weights plus the discounted value change, checked by hand on
-line-network rounds; V ≡ 0 is MB exactly; a model is used only on scenarios held out from its training."""
+line-network rounds; V ≡ 0 is MB exactly; a model is used only on scenarios held out from its training, which
+it tells from the online view (what the simulator hands it)."""
 
 from __future__ import annotations
 
@@ -134,7 +135,7 @@ def test_a_zero_value_reproduces_mbs_event_log_and_a_learned_one_changes_it(toy,
 def test_a_model_folder_loads_and_is_named_as_the_runs_artefact(toy, models):
     model, digest, folder = models[1]
     vf = ValueFunction(model=str(folder))
-    vf.prepare(toy)
+    vf.prepare(toy.online_view())
     assert vf.model_digest == digest and np.array_equal(vf.model.values, model.values)
     assert vf.artefacts() == {VALUE_MODEL: (digest, folder)}
 
@@ -142,15 +143,15 @@ def test_a_model_folder_loads_and_is_named_as_the_runs_artefact(toy, models):
 def test_a_model_trained_on_the_test_seed_is_refused(toy, models):
     _, _, folder = models[0]
     with pytest.raises(ParameterError, match=r"trained on this scenario \(seed 0 is one of its training seeds\)"):
-        ValueFunction(model=str(folder)).prepare(toy)
+        ValueFunction(model=str(folder)).prepare(toy.online_view())
     # another sample of seed 0 is another draw: held out
-    ValueFunction(model=str(folder)).prepare(build_scenario("toy", sample=0.2, seed=0))
+    ValueFunction(model=str(folder)).prepare(build_scenario("toy", sample=0.2, seed=0).online_view())
 
 
 def test_auto_refuses_the_test_seed_before_training(toy, tmp_path, monkeypatch):
     monkeypatch.setenv("RPBENCH_CACHE", str(tmp_path / "cache"))
     with pytest.raises(ParameterError, match=r"seed 0 is one of its training seeds") as info:
-        ValueFunction(train_seeds=(3, 0)).prepare(toy)
+        ValueFunction(train_seeds=(3, 0)).prepare(toy.online_view())
     assert "\n" not in str(info.value)
     assert not (tmp_path / "cache" / CACHE_FOLDER).exists()  # refused before any training
 
@@ -159,12 +160,12 @@ def test_auto_trains_once_into_the_cache(toy, tmp_path, monkeypatch, models):
     """model=auto trains on train_seeds (the same model as train() gives) and a second run loads it."""
     monkeypatch.setenv("RPBENCH_CACHE", str(tmp_path / "cache"))
     first = ValueFunction(train_seeds=(1,))
-    first.prepare(toy)
+    first.prepare(toy.online_view())
     (name,) = [p.name for p in (tmp_path / "cache" / CACHE_FOLDER).iterdir()]
     assert first.model_folder == tmp_path / "cache" / CACHE_FOLDER / name
     assert first.model_digest == models[1][1]  # the same training as the seed-1 folder, the same bytes
     second = ValueFunction(train_seeds=(1,))
-    second.prepare(toy)
+    second.prepare(toy.online_view())
     assert second.artefacts() == first.artefacts() == {VALUE_MODEL: (models[1][1], first.model_folder)}
 
 
@@ -173,17 +174,17 @@ def test_a_dated_scenarios_day_must_be_held_out(two_day_data, tmp_path, monkeypa
     monkeypatch.setenv("RPBENCH_CACHE", str(tmp_path / "cache"))
     day1 = build_scenario("haikou-peak", data_dir=two_day_data, date="2017-05-01", sample=1.0)
     with pytest.raises(ParameterError, match="2017-05-01 is one of its training days"):
-        ValueFunction().prepare(day1)
+        ValueFunction().prepare(day1.online_view())
     day2 = build_scenario("haikou-peak", data_dir=two_day_data, date="2017-05-02", sample=1.0)
     vf = ValueFunction(train_dates="2017-05-01")
-    vf.prepare(day2)
+    vf.prepare(day2.online_view())
     assert [r["date"] for r in vf.model.training["runs"]] == ["2017-05-01"]
 
 
 def test_a_model_of_another_network_is_refused(models):
     line = scenario_of(NET, [(0.0, 0, 3)], [1])
     with pytest.raises(ParameterError, match="vf: the value model was learned on another road network"):
-        ValueFunction(model=str(models[1][2])).prepare(line)
+        ValueFunction(model=str(models[1][2])).prepare(line.online_view())
 
 
 def test_vf_is_registered_and_its_options_are_the_training_settings():
