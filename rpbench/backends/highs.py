@@ -87,7 +87,7 @@ class _Kept(threading.local):
 _kept = _Kept()
 
 
-def kept_instance(settings: dict, role: str = "solve") -> highspy.Highs:
+def kept_instance(settings: dict, role: str = "solve", *, lp: bool = False) -> highspy.Highs:
     """This thread's ``highspy.Highs`` for ``role``, its previous model cleared and its options set to ``settings``.
 
     Constructing a Highs object costs about 0.15 ms, more than solving a typical
@@ -112,10 +112,11 @@ def kept_instance(settings: dict, role: str = "solve") -> highspy.Highs:
         _kept.settings[role] = None  # unknown until every option is accepted
         _apply(h, settings)
         _kept.settings[role] = dict(settings)
-    if "time_limit" in settings:
-        # HiGHS (before 2.0) compares time_limit with the instance's run time summed over every run, and
-        # clearModel does not reset that clock (ERGO-Code/HiGHS#1331, #1477): a kept instance would stop
-        # at once on every solve after its first ``time_limit`` seconds of solving.  The limit is moved on.
+    if lp and "time_limit" in settings:
+        # HiGHS (before 2.0) compares an LP's time_limit with the instance's run time summed over every run,
+        # and clearModel does not reset that clock (ERGO-Code/HiGHS#1331, #1477): a kept instance would stop
+        # at once on every LP after its first ``time_limit`` seconds of solving, so the limit is moved on.
+        # Its MIP solver measures each run from its start (tested): a MIP's limit stays as it is.
         h.setOptionValue("time_limit", h.getRunTime() + float(settings["time_limit"]))
     return h
 
@@ -167,7 +168,7 @@ class HighsBackend(ProgramBackend):
         self.ensure_installed()
         clock = Clock()
         with clock("solve_s"):
-            h = kept_instance(highs_settings(options, options.time_limit_s, relax=True), role="packing_lp")
+            h = kept_instance(highs_settings(options, options.time_limit_s, relax=True), role="packing_lp", lp=True)
             chosen = run_interruptibly(h, lambda: unique_optimum(model, h))
         if chosen is None:
             sol = super().solve(model, options, hint)
@@ -188,7 +189,7 @@ class HighsBackend(ProgramBackend):
         import highspy
 
         with clock("build_s"):
-            h = kept_instance(highs_settings(options, time_limit, relax=relax))
+            h = kept_instance(highs_settings(options, time_limit, relax=relax), lp=relax)
             n, m = prog.n, prog.n_rows
             inf = highspy.kHighsInf
             integrality = np.full(n, 0 if relax else int(highspy.HighsVarType.kInteger), dtype=np.int32)

@@ -29,11 +29,12 @@ from rpbench.commands._common import (
     write_out_file,
 )
 from rpbench.exceptions import ParameterError
-from rpbench.instances import load_instances
+from rpbench.instances import find_instances, load_instances
 from rpbench.library.build import build_set
 from rpbench.library.export import FORMATS, export_formats, write_model
 from rpbench.library.manifest import (
     MANIFEST,
+    content_sha256,
     packaged_manifest,
     read_manifest,
     same_files,
@@ -42,6 +43,7 @@ from rpbench.library.manifest import (
 )
 from rpbench.library.prove import prove, with_time_limit
 from rpbench.library.sets import SETS, instance_set
+from rpbench.model import Model
 from rpbench.results import store
 from rpbench.solu import write_solu
 
@@ -139,7 +141,7 @@ def run_solu(args: argparse.Namespace) -> int:
     check_unique(f"--presets {args.presets!r}", names)
     presets = [load_preset(n) for n in names]
     installed = [p for p in presets if p.is_installed()]
-    models, _ = load_instances(args.paths)
+    models = _distinct_by_name(list(args.paths))
     entries, lines = {}, []
     counts: dict[str, int] = {}
     # each preset solves in its own process, killed at twice its time limit plus 30 s (as rpbench bench)
@@ -167,6 +169,31 @@ def run_solu(args: argparse.Namespace) -> int:
     summary = ", ".join(f"{counts[k]} ={k}=" for k in sorted(counts))
     print(f"{len(models)} instances: {summary}; written to {out}")
     return 0
+
+
+#: The member of an instance file that records where it comes from, not what the model is.
+MODEL_META = ("meta_json",)
+
+
+def _distinct_by_name(paths: list[str | Path]) -> list[Model]:
+    """The models of the instance files under ``paths``, named by their file stems as a ``.solu`` file names
+    them: files of one name in two folders (a tier's instances shared with another) must hold the same
+    model (their metadata name their own tier), and are proved once."""
+    files = list(dict.fromkeys(find_instances(paths)))
+    models, _ = load_instances(paths)  # in the order of ``files``
+    seen: dict[str, Path] = {}
+    out = []
+    for f, model in zip(files, models, strict=True):
+        if f.stem in seen:
+            if content_sha256(f, skip=MODEL_META) != content_sha256(seen[f.stem], skip=MODEL_META):
+                raise ParameterError(
+                    f"two different instances are named {f.stem!r}: {str(seen[f.stem])!r} and {str(f)!r}; "
+                    "a .solu file needs one value per name"
+                )
+            continue
+        seen[f.stem] = f
+        out.append(model.renamed(f.stem))
+    return out
 
 
 def _reference(name: str) -> dict:

@@ -29,11 +29,12 @@ def file_sha256(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
-def content_sha256(path: Path) -> str:
-    """SHA-256 of an instance file's arrays (name, dtype, shape, bytes; by name), not of its zip bytes."""
+def content_sha256(path: Path, *, skip: tuple[str, ...] = ()) -> str:
+    """SHA-256 of an instance file's arrays (name, dtype, shape, bytes; by name), not of its zip bytes;
+    ``skip``: members left out (``meta_json``: the model alone, whatever tier or run it is recorded from)."""
     h = hashlib.sha256()
     with np.load(path, allow_pickle=False) as z:
-        for name in sorted(z.files):
+        for name in sorted(set(z.files) - set(skip)):
             arr = np.ascontiguousarray(z[name])
             h.update(json.dumps([name, arr.dtype.str, list(arr.shape)]).encode())
             h.update(arr.tobytes())

@@ -105,3 +105,7 @@ def test_a_kept_instance_gives_every_solve_its_whole_time_limit():
     h = highs._kept.highs["solve"]
     while h.getRunTime() < 1.5:  # three limits' worth of solving on the one instance
         assert solve(model, preset).objective == first.objective
+    # a MIP on the same instance still stops at its own limit (HiGHS's MIP solver times each run itself)
+    hard = synthetic.pairing(300, seed=1, objective="cardinality_then_weight")  # about 0.5 s with no limit
+    short = dataclasses.replace(preset, options=dataclasses.replace(preset.options, time_limit_s=0.02))
+    assert solve(hard, short).status.value == "time_limit"

@@ -41,7 +41,7 @@ def test_out_writes_every_file_and_the_summary(tiered, tmp_path, capsys):
     rows = pd.read_csv(out / "results.csv")
     assert len(rows) == 6 and set(rows["verdict"]) == {"optimal"}
     assert dict(zip(rows["model"], rows["tier"], strict=False)) == {
-        "toy_fl_round00221": "S",
+        "toy_fl_round00056": "S",
         "toy_mb_round00025": "S",
         "toy_rtv_round00056": "M",
     }

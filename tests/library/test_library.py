@@ -218,3 +218,23 @@ def test_prove_in_isolated_workers_records_a_dead_solver_and_goes_on():
             w.close()
     assert proof.known.kind == "opt" and proof.algorithms == ("HiGHS", "sparse blossom (PyMatching)")
     assert proof.answers[0].startswith("crash: killed (") and "SIGKILL" in proof.answers[0]
+
+
+def test_solu_names_each_instance_by_its_file_and_proves_a_shared_one_once(tmp_path, capsys):
+    """Tiers share instances (M holds S's peak-hour models): one line per name, never a folder-prefixed one;
+    two different files of one name are one error."""
+    source = COMMITTED_S / "toy_s030_seed1_mb_round00025.npz"
+    for folder in ("a", "b"):
+        (tmp_path / folder).mkdir()
+        shutil.copy(source, tmp_path / folder / source.name)
+    args = ["instances", "solu", tmp_path / "a", tmp_path / "b", "--presets", "matching,highs", "--no-progress"]
+    rc, _, err = run_cli(capsys, *args, "--out", tmp_path / "ab.solu")
+    assert rc == 0, err
+    assert read_solu(tmp_path / "ab.solu") == {source.stem: read_solu(SOLU)[source.stem]}
+    other, meta = load_instance(COMMITTED_S / "toy_s030_seed1_rtv_round00056.npz")
+    save_instance(tmp_path / "b" / source.name, other, meta)  # same name, other arrays
+    assert_one_error(
+        *run_cli(capsys, *args, "--out", tmp_path / "x.solu")[::2],
+        "two different instances are named 'toy_s030_seed1_mb_round00025'",
+    )
+    assert not (tmp_path / "x.solu").exists()
