@@ -30,6 +30,7 @@ REGISTRY: dict[str, str] = {
     "fl-nd": "forward:ForwardLookingNoDelay",
     "fl": "forward:ForwardLooking",
     "vf": "value:ValueFunction",
+    "hindsight": "hindsight:Hindsight",
 }
 
 #: Entry-point group of strategies installed by other distributions.

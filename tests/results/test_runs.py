@@ -3,14 +3,17 @@
 from __future__ import annotations
 
 from rpbench.oracle.runs import ORACLE_RUNS
-from rpbench.results.runs import run_color, run_label
+from rpbench.results.runs import CLAIRVOYANT_MARK, run_color, run_label
 from rpbench.strategies import REGISTRY, strategy_class
 
 
 def test_labels_come_from_the_classes():
     assert run_label("fl-nd") == "FL-no_delay" and run_label("bound") == "Upper bound"
     for name in REGISTRY:
-        assert run_label(name) == strategy_class(name).label and run_color(name) == strategy_class(name).color
+        cls = strategy_class(name)
+        mark = CLAIRVOYANT_MARK if getattr(cls, "clairvoyant", False) is True else ""
+        assert run_label(name) == cls.label + mark and run_color(name) == cls.color
+    assert run_label("hindsight") == "Hindsight (clairvoyant)"  # a strategy that reads the future says so
     for name, run in ORACLE_RUNS.items():
         assert run_label(name) == run.label and run_color(name) == run.color
 

@@ -1,0 +1,533 @@
+"""Hindsight: a clairvoyant dispatcher, the best offline schedule rpbench finds (a lower bound on OPT).
+
+It knows every order of the day (time, origin, destination, patience) before the first round and
+plans pairs with that knowledge, but every decision is an ordinary round column (or repositioning
+move) that the simulator commits under its own rules: R̄, D̄, patience, a JOIN only into a vehicle
+with one unpaired passenger, assignments final.  Its run is checked by ``rpbench check`` like every
+run, so its saving is the saving of a feasible schedule: ``OPT >= saving``, and ``U >= OPT``
+(docs/bound.md, "Hindsight").
+
+**The plan, re-made every round.**  The open orders are those waiting, those not yet requested (up to
+``horizon_s`` ahead) and the passengers A of the partly occupied vehicles V1.  Their candidate pairs
+are the edges of the upper bound's graph ``G`` (``find_candidates(..., bound_rules(params))``): every
+pair the simulator can form is one, so nothing realisable is left out.  Each edge is valued, for both
+pick-up orders (A first, B joins; a V1 passenger is always A), by the saving ``l_A + l_B - L`` (Eq. 5)
+the simulator would realise given when A's vehicle drives A's shortest path P_A:
+
+* a V1 passenger's pick-up time is known (on board: from the vehicle's position; on the way: from the
+  pick-up distance of the round that assigned it);
+* a waiting A takes one of this round's vacant vehicles (pick-up after ``pk/v``; each is tried) or is
+  assigned in a later round; an A not yet requested in some round of its patience.  A later
+  assignment may pick a vehicle at any pick-up time in ``[0, R̄/v]`` (``plan_pickup = "range"``),
+  so A's pick-up lies between the earliest round plus 0 and the last round plus ``R̄/v``;
+* B joins in a round of ``[max(t_B, A's assignment + Δt), t_B + K_B]``.  While A is not on board the
+  vehicle turns at ``h = o_A`` with pick-up ``l(o_A, o_B)`` (A14); afterwards at the first node ``h``
+  of P_A that the vehicle can have next, inside the window, with ``pre + l(h, o_B) <= R̄`` (turning
+  earlier never lengthens the route, docs/bound.md step 3).  The saving is POOL's at ``h`` with
+  ``δ = l(o_A, h)``, in its best feasible service order (§1.1).
+
+A maximum-weight matching of these values (``plan_solver``, an exact preset) gives every open order a
+planned partner and a role: the first takes a vacant vehicle, the second joins it.
+
+**The round** is the assignment model of MB and FL (:mod:`.candidates`, Eqs. 1-4) with utilities that
+carry the plan out (``C = plan_bonus_m`` puts the plan before everything else):
+
+* JOIN into the vehicle of the planned partner: ``C + e`` (the exact POOL saving of the round);
+* VACANT pick-up of a planned first: ``C + ê(pk) - λ pk``, ``ê(pk)`` the forecast saving of its pair
+  when this vehicle picks it up after ``pk/v`` (a farther vehicle can let the partner join at ``o_A``;
+  ``λ = pickup_weight``); keeping it waiting ``C + ê_later - wait_margin_m`` (the forecast of a later
+  assignment), so it waits only for a clear gain and never in its last round;
+* a planned second waits (utility 0, no vacant option) until it can join; in its last round before
+  its patience runs out it is served as an unplanned passenger;
+* unplanned passengers: MB's ``e - pk`` for a join into a vehicle whose passenger is unplanned too
+  (``e > 0``, A11), ``-pk`` for a vacant vehicle, offered ``now`` (as MB), in the ``last`` round of
+  their patience (until then they may still be planned) or ``never`` (``unplanned``); keeping them
+  waiting otherwise ``-10⁶ m`` (A13).
+
+After the round, idle vacant vehicles are sent towards the origins of the orders that will need one
+soonest (planned firsts and unplanned orders waiting or requested within ``reposition_s``), by a
+minimum-total-distance assignment (:meth:`Hindsight.reposition`).
+
+A forecast that proves wrong costs saving, never feasibility: the simulator commits only feasible
+columns, and the next round re-plans from the state it reached.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+from rpbench.backends import Preset, solve
+from rpbench.exceptions import LookaheadError
+from rpbench.geometry import TOLERANCE_M, choose_order, pair_geometry
+from rpbench.model import PairingModel, Structure
+from rpbench.oracle.pairs import bound_rules, find_candidates
+from rpbench.scenarios.base import OnlineView, Scenario
+from rpbench.strategies.base import Kind, RoundModel, RoundState, Strategy
+from rpbench.strategies.candidates import (
+    NO_WAIT_UTILITY_M,
+    VacantOptions,
+    assignment_round,
+    join_options,
+    vacant_options,
+)
+from rpbench.strategies.options import Range, RunOptions, option
+
+#: Resolution of the plan's matching weights (1 cm, as the oracles').
+PLAN_UNIT_M = 0.01
+#: When passengers without a planned partner are served by a vacant vehicle.
+UNPLANNED = ("now", "last", "never")
+#: Arc-length offset separating the orders' paths in one sorted array (longer than any path).
+_PATH_GAP_M = 1e8
+
+
+@dataclass(frozen=True)
+class HindsightOptions(RunOptions):
+    """Hindsight's options (the plan's horizon, the assumed pick-up time, the round utilities)."""
+
+    horizon_s: float = option(
+        1800.0, "the plan looks this far ahead at orders not yet requested", range=Range(0.0, 86400.0, "s")
+    )
+    pickup_time_s: float = option(
+        150.0,
+        "pick-up time assumed for orders not yet assigned, until the run's own mean is known",
+        range=Range(0.0, 3600.0, "s"),
+    )
+    pickup_weight: float = option(
+        0.0, "λ: weight of the pick-up distance in a planned first's vacant utility", range=Range(0.0, 10.0)
+    )
+    plan_bonus_m: float = option(
+        1e5, "C: utility bonus of the columns that carry out the plan", range=Range(0.0, 1e6, "m")
+    )
+    reposition_s: float = option(
+        300.0,
+        "send idle vacant vehicles towards the orders requested within this many seconds (0: never)",
+        range=Range(0.0, 3600.0, "s"),
+    )
+    reposition_m: float = option(
+        500.0, "only vehicles farther than this from their order's origin are sent", range=Range(0.0, 1e6, "m")
+    )
+    plan_pickup: str = option(
+        "range",
+        "pick-up times a later assignment may choose: any in [0, R̄/v] (a vehicle at the right distance), "
+        "or the run's mean pick-up time",
+        choices=("range", "mean"),
+    )
+    wait_margin_m: float = option(
+        200.0,
+        "a planned first waits for a later assignment only when its forecast gains more than this",
+        range=Range(0.0, 1e6, "m"),
+    )
+    unplanned: str = option(
+        "last",
+        "when a passenger without a planned partner gets a vacant vehicle: now (as MB), in its last round "
+        "(until then it may still find a partner), or never",
+        choices=UNPLANNED,
+    )
+    plan_solver: str = option("matching", "solver preset of the plan's maximum-weight matching (exact)")
+
+
+class Hindsight(Strategy[HindsightOptions]):
+    name = "hindsight"
+    label = "Hindsight"
+    color = "tab:brown"
+    structure = Structure.ASSIGNMENT
+    Options = HindsightOptions
+    description = (
+        "clairvoyant: a rolling maximum-weight matching of all known orders on the upper bound's pair graph, "
+        "valued by forecast realised savings, carried out by the assignment model (a lower bound on OPT)"
+    )
+    clairvoyant = True
+
+    def __init__(self, options: HindsightOptions | None = None, **raw: Any):
+        super().__init__(options, **raw)
+        self._preset: Preset | None = None
+        #: Pairs the rounds' plans formed (sorted order indices), for inspection and tests.
+        self.planned_pairs: set[tuple[int, int]] = set()
+        #: Planned first assigned a vacant vehicle -> (its planned partner, the forecast saving of the pair).
+        self.commitments: dict[int, tuple[int, float]] = {}
+
+    # ----------------------------------------------------------------- prepare
+    def prepare(self, scenario: Scenario | OnlineView) -> None:
+        from rpbench.oracle.solve import resolve_preset  # the oracle imports the backends, as the simulator
+
+        if not isinstance(scenario, Scenario):
+            raise LookaheadError(
+                f"strategy {self.name!r} plans with every order of the day: its prepare needs the whole scenario, "
+                "not an online view"
+            )
+        self._preset = resolve_preset(self.options.plan_solver)
+        o = scenario.orders
+        p = scenario.params
+        distances = scenario.network.distances()
+        self.params = p
+        self.dist = np.asarray(distances.dist)
+        self.origin = o.origin.astype(np.intp)
+        self.destination = o.destination.astype(np.intp)
+        self.request = np.asarray(o.request_s, np.float64)
+        self.patience = np.asarray(o.patience_s, np.float64)
+        n = len(o)
+        self.n = n
+        self.solo = self.dist[self.origin, self.destination] if n else np.zeros(0)
+        dt = p.dt_s
+        # first and last round in which each order can be decided (revealed at k·Δt >= t_req; cancelled
+        # once t - t_req > K, the simulator's rule)
+        self.first_round = np.ceil(self.request / dt - 1e-9) * dt
+        self.last_round = np.floor((self.request + self.patience + 1e-9) / dt) * dt
+        # every order's shortest path (the one its vehicle drives) and the arc length at each node
+        if n:
+            offsets, nodes = distances.paths_batch(self.origin, self.destination)
+        else:
+            offsets, nodes = np.zeros(1, np.int64), np.zeros(0, np.intp)
+        self.path_offsets = np.asarray(offsets, np.int64)
+        self.path_nodes = np.asarray(nodes, np.intp)
+        lengths = np.diff(self.path_offsets)
+        owner = np.repeat(np.arange(n), lengths)
+        self.path_cum = self.dist[self.origin[owner], self.path_nodes] if n else np.zeros(0)
+        self.path_key = self.path_cum + owner * _PATH_GAP_M  # increasing over all paths
+        # the upper bound's graph: every pair the simulator can form (docs/bound.md)
+        cand = find_candidates(distances, o, bound_rules(p))
+        lo, hi = cand.low, cand.high
+        later = np.maximum(self.request[lo], self.request[hi])
+        by_later = np.argsort(later, kind="stable")
+        self.edge_lo, self.edge_hi, self.edge_later = lo[by_later], hi[by_later], later[by_later]
+        self.max_patience = float(self.patience.max()) if n else 0.0
+        # what the simulator's V1 vehicles do: the pick-up time of every assigned first passenger
+        self.pick_s = np.full(n, np.nan)
+        self._last_vac: tuple[float, np.ndarray, np.ndarray, np.ndarray] | None = None
+        self._pickup_times: list[float] = []
+        self.planned_pairs = set()
+        self.commitments = {}
+        self._forecasts: dict[tuple[int, int], float] = {}
+
+    # ------------------------------------------------------------------ rounds
+    def build(self, state: RoundState) -> RoundModel:
+        t = state.t_s
+        p = self.params
+        self._observe(state)
+        vac = vacant_options(state)
+        join = join_options(state)
+        mate, first, wait_value = self._plan(state, vac)
+        p_order = state.p_order
+        bonus = self.options.plan_bonus_m
+        last_round = self.last_round[p_order] < t + p.dt_s - 1e-9  # cancelled before the next round
+
+        # JOIN: a planned partner's vehicle, or MB's join when neither has a planned partner
+        rider = state.v1_order[join.v]
+        joiner = p_order[join.p]
+        planned_join = mate[joiner] == rider
+        free_join = (mate[joiner] < 0) & (mate[rider] < 0) & (join.saving_m > 0)
+        keep = planned_join | free_join
+        join = join.take(keep)
+        planned_join = planned_join[keep]
+        u_join = np.where(planned_join, bonus + join.saving_m, join.saving_m - join.pickup_m)
+
+        # VACANT: planned firsts with a forecast of their pair; planned seconds only in their last round
+        who = p_order[vac.p]
+        is_first = (mate[who] >= 0) & first[who]
+        is_second = (mate[who] >= 0) & ~first[who]
+        unplanned = (mate[who] < 0) | (is_second & last_round[vac.p])
+        serve = {"now": True, "last": last_round[vac.p], "never": is_second}[self.options.unplanned]
+        offer = is_first | (unplanned & serve)
+        keep_v = np.flatnonzero(offer)
+        vac = VacantOptions(vac.p[keep_v], vac.v[keep_v], vac.pickup_m[keep_v])
+        is_first = is_first[keep_v]
+        u_vac = -vac.pickup_m.copy()
+        f = np.flatnonzero(is_first)
+        if len(f):
+            a = p_order[vac.p[f]]
+            b = mate[a]
+            t_pick = t + vac.pickup_m[f] / p.speed_mps
+            w = self._forecast(a, b, self._join_from(b, t + p.dt_s, t), self.last_round[b], t_pick)
+            u_vac[f] = bonus + np.nan_to_num(w, nan=0.0) - self.options.pickup_weight * vac.pickup_m[f]
+            known = np.isfinite(w)
+            vehicles = state.v0_vehicle[vac.v[f]]
+            keys = zip(a[known].tolist(), vehicles[known].tolist(), strict=True)
+            self._forecasts = dict(zip(keys, w[known].tolist(), strict=True))
+        else:
+            self._forecasts = {}
+
+        # WAIT: planned seconds wait for their partner; everyone else is served when possible (A13)
+        waits = (mate[p_order] >= 0) & ~first[p_order] & ~last_round
+        u_wait = np.where(waits, 0.0, NO_WAIT_UTILITY_M)
+        # a planned first waits when a later assignment serves its pair better (by more than the margin)
+        later = wait_value[p_order]
+        delay = (mate[p_order] >= 0) & first[p_order] & ~last_round & np.isfinite(later)
+        u_wait[delay] = bonus + later[delay] - self.options.wait_margin_m
+        rm = assignment_round(state, vac, u_vac, join, u_join, u_wait, name=self.name)
+        self._last_vac = (t, p_order[vac.p], state.v0_vehicle[vac.v], vac.pickup_m)
+        self._round_plan = (t, mate, first)
+        return rm
+
+    def reposition(self, state: RoundState, rm: RoundModel, chosen: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Idle vacant vehicles towards the origins of the orders that will need one soonest.
+
+        The orders that need a vacant vehicle are the planned firsts and the unplanned ones (a planned
+        second joins its partner's vehicle): those still waiting unassigned and those requested within
+        ``reposition_s``.  Idle vehicles (not assigned this round) are matched to them by a
+        minimum-total-distance assignment (``linear_sum_assignment``); a vehicle farther than
+        ``reposition_m`` from its order's origin is sent there.
+        """
+        t, mate, first = self._round_plan
+        self._record_commitments(rm, chosen, mate)
+        none = np.zeros(0, np.int64)
+        if self.options.reposition_s <= 0 or state.n_v0 == 0:
+            return none, none
+        busy = np.isin(state.v0_vehicle, rm.vehicle[chosen])
+        idle = np.flatnonzero(~busy)
+        served = np.isin(state.p_order, rm.first[chosen])
+        hi = np.searchsorted(self.request, t + self.options.reposition_s, side="right")
+        lo = np.searchsorted(self.request, t, side="right")
+        need = np.concatenate([state.p_order[~served], np.arange(lo, hi)])
+        need = need[(mate[need] < 0) | first[need]]
+        if not len(idle) or not len(need):
+            return none, none
+        need = need[: len(idle)]  # the soonest ones (waiting first, then by request time)
+        cost = state.v0_pre_m[idle][:, None] + self.dist[state.v0_node[idle][:, None], self.origin[need][None, :]]
+        rows, cols = linear_sum_assignment(cost)
+        far = cost[rows, cols] > self.options.reposition_m
+        return state.v0_vehicle[idle[rows[far]]].astype(np.int64), self.origin[need[cols[far]]].astype(np.int64)
+
+    def _record_commitments(self, rm: RoundModel, chosen: np.ndarray, mate: np.ndarray) -> None:
+        """Remember, for every planned first assigned this round, its planned partner and forecast saving."""
+        c = chosen[rm.kind[chosen] == Kind.VACANT]
+        for a, v in zip(rm.first[c].tolist(), rm.vehicle[c].tolist(), strict=True):
+            forecast = self._forecasts.get((a, v))
+            if forecast is not None:
+                self.commitments[a] = (int(mate[a]), forecast)
+
+    # -------------------------------------------------------------- knowledge
+    def _observe(self, state: RoundState) -> None:
+        """Pick-up times of the V1 vehicles' passengers, from the round that assigned them.
+
+        A V1 passenger not known yet was assigned a vacant vehicle in the last round this strategy
+        built (assignments are final and only rounds assign); its pick-up distance is the one of that
+        round's vacant option, and the vehicle drives it at the set speed.
+        """
+        riders = state.v1_order
+        new = riders[np.isnan(self.pick_s[riders])]
+        if not len(new) or self._last_vac is None:
+            return
+        t_prev, orders, vehicles, pk = self._last_vac
+        vehicle_of = dict(zip(riders.tolist(), state.v1_vehicle.tolist(), strict=True))
+        key = {(int(o), int(v)): float(d) for o, v, d in zip(orders, vehicles, pk, strict=True)}
+        for a in new.tolist():
+            d = key.get((a, vehicle_of[a]))
+            if d is None:
+                continue
+            self.pick_s[a] = t_prev + d / self.params.speed_mps
+            self._pickup_times.append(d / self.params.speed_mps)
+
+    def _mean_pickup_s(self) -> float:
+        recent = self._pickup_times[-50:]
+        return float(np.mean(recent)) if recent else self.options.pickup_time_s
+
+    def _join_from(self, b: np.ndarray, after_assign: np.ndarray | float, t: float) -> np.ndarray:
+        """The earliest round B can join: revealed, not before ``after_assign`` (A's assignment + Δt), not past."""
+        return np.maximum(np.maximum(self.first_round[b], after_assign), t)
+
+    # -------------------------------------------------------------------- plan
+    def _plan(self, state: RoundState, vac: VacantOptions) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Planned partner (``-1``: none), role (True: picked up first) and, for a first, the forecast saving
+        of its pair when it is assigned in a later round (NaN: none), of every order, this round."""
+        t = state.t_s
+        p = self.params
+        n = self.n
+        mate = np.full(n, -1, np.int64)
+        first = np.zeros(n, bool)
+        wait = np.full(n, np.nan)
+        waiting = np.zeros(n, bool)
+        waiting[state.p_order] = True
+        v1 = np.zeros(n, bool)
+        v1[state.v1_order] = True
+        # edges whose later order is still undecided and requested within the horizon
+        lo_i = np.searchsorted(self.edge_later, t - self.max_patience - p.dt_s, side="left")
+        hi_i = np.searchsorted(self.edge_later, t + self.options.horizon_s, side="right")
+        x, y = self.edge_lo[lo_i:hi_i], self.edge_hi[lo_i:hi_i]
+        future = self.request > t
+        open_ = waiting | v1 | future
+        sel = open_[x] & open_[y] & ~(v1[x] & v1[y])
+        x, y = x[sel], y[sel]
+        if not len(x):
+            return mate, first, wait
+        # directed candidates (A first, B joins): B is never a V1 passenger
+        a = np.concatenate([x, y])
+        b = np.concatenate([y, x])
+        d = ~v1[b]
+        a, b = a[d], b[d]
+        w, later = self._pair_values(state, vac, a, b, waiting, v1)
+        good = np.isfinite(w) & (w >= PLAN_UNIT_M)
+        a, b, w, later = a[good], b[good], w[good], later[good]
+        if not len(a):
+            return mate, first, wait
+        # the better pick-up order of each pair
+        lo, hi = np.minimum(a, b), np.maximum(a, b)
+        srt = np.lexsort((-w, hi, lo))
+        a, b, w, lo, hi, later = a[srt], b[srt], w[srt], lo[srt], hi[srt], later[srt]
+        head = np.ones(len(a), bool)
+        head[1:] = (lo[1:] != lo[:-1]) | (hi[1:] != hi[:-1])
+        a, b, w, lo, hi, later = a[head], b[head], w[head], lo[head], hi[head], later[head]
+        nodes, inv = np.unique(np.concatenate([lo, hi]), return_inverse=True)
+        model = PairingModel(
+            len(nodes),
+            inv[: len(lo)],
+            inv[len(lo) :],
+            np.floor(w / PLAN_UNIT_M),
+            unit_m=PLAN_UNIT_M,
+            name="hindsight-plan",
+        )
+        assert self._preset is not None
+        chosen = solve(model, self._preset).chosen
+        ca, cb = a[chosen], b[chosen]
+        mate[ca], mate[cb] = cb, ca
+        first[ca] = True
+        wait[ca] = later[chosen]
+        self.planned_pairs.update(zip(lo[chosen].tolist(), hi[chosen].tolist(), strict=True))
+        return mate, first, wait
+
+    def _pair_values(
+        self, state: RoundState, vac: VacantOptions, a: np.ndarray, b: np.ndarray, waiting: np.ndarray, v1: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The forecast saving of each directed pair (A = ``a`` first, B = ``b`` joins; NaN: cannot), and
+        the forecast when A, not yet assigned, is assigned in a later round (NaN for a V1 passenger).
+
+        A V1 passenger's vehicle is known.  A waiting A takes this round's vacant vehicle that serves
+        its pair best (``pickup_weight`` charging ``pk``) unless a later assignment gains more than
+        ``wait_margin_m``; a later assignment, in any round up to A's last, picks up A after a time in
+        :meth:`_pickup_range_s`.
+        """
+        t = state.t_s
+        p = self.params
+        w = np.full(len(a), np.nan)
+        later = np.full(len(a), np.nan)
+        has = np.zeros(self.n, bool)
+        has[state.p_order[vac.p]] = True
+        t_hi = self.last_round[b]
+        i = np.flatnonzero(v1[a])
+        w[i] = self._forecast(a[i], b[i], self._join_from(b[i], t, t), t_hi[i], self._v1_pick(state, a[i]))
+        # assigned in a later round (any up to A's last), picked up after a time in [τ_min, τ_max]
+        r_min = np.where(waiting[a], t + p.dt_s, self.first_round[a])
+        r_max = self.last_round[a]
+        i = np.flatnonzero(~v1[a] & (r_min <= r_max + 1e-9))
+        tau_min, tau_max = self._pickup_range_s()
+        later[i] = self._forecast(
+            a[i], b[i], self._join_from(b[i], r_min[i] + p.dt_s, t), t_hi[i], r_max[i] + tau_max, r_min[i] + tau_min
+        )
+        w[i] = later[i]
+        i = np.flatnonzero(waiting[a] & has[a])
+        if len(i):
+            # every vacant option of A: options grouped by passenger (vacant_options is passenger-major)
+            pos = np.full(self.n, -1, np.int64)
+            pos[state.p_order] = np.arange(state.n_passengers)
+            count = np.bincount(vac.p, minlength=state.n_passengers)
+            start = np.cumsum(count) - count
+            k = count[pos[a[i]]]
+            rep = np.repeat(i, k)
+            opt = np.repeat(start[pos[a[i]]], k) + np.arange(len(rep)) - np.repeat(np.cumsum(k) - k, k)
+            pk = vac.pickup_m[opt]
+            wv = self._forecast(a[rep], b[rep], self._join_from(b[rep], t + p.dt_s, t), t_hi[rep], t + pk / p.speed_mps)
+            score = np.where(np.isfinite(wv), wv - self.options.pickup_weight * pk, -np.inf)
+            best = np.lexsort((-score, rep))
+            head = np.ones(len(best), bool)
+            head[1:] = rep[best[1:]] != rep[best[:-1]]
+            pick = best[head & np.isfinite(score[best])]
+            now = np.full(len(a), np.nan)
+            now[rep[pick]] = wv[pick]
+            w[i] = np.fmax(now[i], later[i] - self.options.wait_margin_m)
+        return w, later
+
+    def _pickup_range_s(self) -> tuple[float, float]:
+        """The pick-up times a later assignment is assumed to choose among (``plan_pickup``)."""
+        tau = self._mean_pickup_s()
+        if self.options.plan_pickup == "mean":
+            return tau, tau
+        return 0.0, self.params.max_pickup_m / self.params.speed_mps
+
+    def _v1_pick(self, state: RoundState, a: np.ndarray) -> np.ndarray:
+        """When each V1 passenger in ``a`` is (or was, in effect) picked up: A's vehicle is at arc length
+        ``v (t - pick)`` along P_A from then on."""
+        t = state.t_s
+        pos = np.full(self.n, -1, np.int64)
+        pos[state.v1_order] = np.arange(state.n_v1)
+        k = pos[a]
+        onboard = state.v1_onboard[k]
+        driven = state.v1_delta_m[k] - state.v1_pre_m[k]
+        known = self.pick_s[a]
+        fallback = t + self._mean_pickup_s()
+        return np.where(onboard, t - driven / self.params.speed_mps, np.where(np.isnan(known), fallback, known))
+
+    # --------------------------------------------------------------- forecast
+    def _forecast(
+        self,
+        a: np.ndarray,
+        b: np.ndarray,
+        t_lo: np.ndarray,
+        t_hi: np.ndarray,
+        t_pick: np.ndarray,
+        t_pick_early: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """The saving of B joining A's vehicle in a round of ``[t_lo, t_hi]`` (NaN: cannot), A picked up at
+        ``t_pick`` and then driving P_A at the set speed.
+
+        The vehicle turns at the first node ``h`` of P_A it can have next with ``pre + l(h, o_B) <= R̄``
+        in the window (before the pick-up ``h = o_A``, ``pre = 0``, A14); its saving is POOL's at ``h``
+        with ``δ = l(o_A, h)`` (§1.1).  Vectorised: one numpy step per path node walked.
+        """
+        p = self.params
+        out = np.full(len(a), np.nan)
+        a = np.asarray(a, np.int64)
+        b = np.asarray(b, np.int64)
+        r_bar = p.max_pickup_m + TOLERANCE_M
+        o, dd, solo, dist = self.origin, self.destination, self.solo, self.dist
+        # the window exists, and A's detour can be met at all (it only grows along P_A)
+        rows = np.flatnonzero(
+            (t_lo <= t_hi + 1e-9)
+            & (dist[o[a], o[b]] + dist[o[b], dd[a]] - solo[a] <= p.max_detour_m + 1e-6)
+            & (solo[a] > TOLERANCE_M)
+            & (solo[b] > TOLERANCE_M)
+        )
+        if not len(rows):
+            return out
+        aa, bb = a[rows], b[rows]
+        v = p.speed_mps
+        early = t_pick if t_pick_early is None else t_pick_early
+        s_lo = v * np.maximum(0.0, t_lo[rows] - t_pick[rows])
+        s_hi = v * np.maximum(0.0, t_hi[rows] - early[rows])
+        start = np.searchsorted(self.path_key, s_lo - 1e-6 + aa * _PATH_GAP_M, side="left")
+        end = self.path_offsets[aa + 1]
+        hit = np.full(len(rows), -1, np.int64)
+        k = start.copy()
+        active = np.flatnonzero(k < end)
+        cum, nodes = self.path_cum, self.path_nodes
+        while len(active):
+            kk = k[active]
+            gap = r_bar - dist[nodes[kk], o[bb[active]]]  # how far before h the vehicle may still be
+            earliest = np.maximum(s_lo[active], cum[kk] - gap)
+            found = (gap >= 0) & (earliest <= np.minimum(s_hi[active], cum[kk]) + 1e-6)
+            hit[active[found]] = kk[found]
+            go = ~found & (cum[kk] - r_bar <= s_hi[active]) & (kk + 1 < end[active])
+            k[active[go]] += 1
+            active = active[go]
+        ok = hit >= 0
+        if not ok.any():
+            return out
+        rows, aa, bb, h = rows[ok], aa[ok], bb[ok], hit[ok]
+        g = pair_geometry(
+            dist,
+            o[aa],
+            dd[aa],
+            solo[aa],
+            o[bb],
+            dd[bb],
+            solo[bb],
+            nodes[h],
+            cum[h],
+            np.zeros(len(h)),
+            p.max_detour_m,
+        )
+        r = choose_order(g, np.inf)
+        out[rows[r.feasible]] = r.saving[r.feasible]
+        return out

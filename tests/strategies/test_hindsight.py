@@ -1,0 +1,116 @@
+"""Hindsight, the clairvoyant schedule: declared clairvoyant, checked like every run, at least MB's saving,
+its plan on the upper bound's graph and its forecasts the savings the simulator realises."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from rpbench.backends import load_preset
+from rpbench.cli import main
+from rpbench.exceptions import LookaheadError
+from rpbench.harness.comparison import run_comparison
+from rpbench.harness.spec import RunSpec
+from rpbench.oracle.pairs import bound_rules, find_candidates
+from rpbench.results.check import check_folder
+from rpbench.results.metrics import kpis, occupied_distance_m, odometer_at, passenger_table
+from rpbench.scenarios import ScenarioRequest, build_scenario
+from rpbench.sim.simulator import Simulator
+from rpbench.strategies import make_strategy, strategy_class
+from rpbench.strategies.hindsight import Hindsight
+
+
+def simulate(scenario, name: str, **options):
+    """The strategy after its run, the run's passenger table and its KPIs."""
+    strategy = make_strategy(name, **options)
+    res = Simulator(scenario, strategy, load_preset("highs")).run()
+    o = scenario.orders
+    solo = scenario.network.distances().dist[o.origin, o.destination]
+    tab = passenger_table(res.events, solo, o.request_s, res.trajectories)
+    return strategy, res, tab, kpis(tab, occupied_distance_m(res.events, res.trajectories), scenario.params)
+
+
+def test_hindsight_is_registered_and_declared_clairvoyant():
+    assert strategy_class("hindsight") is Hindsight
+    assert Hindsight.clairvoyant is True
+    assert make_strategy("hindsight").clairvoyant is True
+    assert make_strategy("mb").clairvoyant is False
+
+
+def test_an_online_view_is_refused():
+    scenario = build_scenario("toy", sample=0.1, seed=0)
+    with pytest.raises(LookaheadError, match="hindsight"):
+        make_strategy("hindsight").prepare(scenario.online_view())
+
+
+def test_its_run_on_the_toy_city_passes_the_checker_between_mb_and_the_bound(tmp_path):
+    request = ScenarioRequest("toy", sample=0.3, seed=2)
+    spec = RunSpec.of(request, ["mb", "hindsight", "bound"], oracle_preset="matching")
+    folder, table = run_comparison(spec, tmp_path / "run", progress=False)
+    checks = {rc.run: rc for rc in check_folder(folder)}
+    assert all(rc.ok for rc in checks.values()), {k: v.violations for k, v in checks.items() if not v.ok}
+    assert checks["hindsight"].checked["certified_pairs"] > 0
+    saving = table.loc["total_saving_km"]
+    assert saving["mb"] < saving["hindsight"] <= saving["bound"]
+    meta = json.loads((folder / "meta.json").read_text())
+    assert meta["runs"]["hindsight"]["clairvoyant"] is True and meta["runs"]["mb"]["clairvoyant"] is False
+    assert main(["check", str(folder)]) == 0
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+def test_it_saves_at_least_what_mb_saves_on_small_toy_scenarios(seed):
+    scenario = build_scenario("toy", sample=0.1, seed=seed)
+    *_, hindsight = simulate(scenario, "hindsight")
+    *_, mb = simulate(scenario, "mb")
+    assert hindsight["total_saving_km"] >= mb["total_saving_km"] > 0
+
+
+def test_every_planned_pair_is_an_edge_of_the_bound_graph():
+    scenario = build_scenario("toy", sample=0.2, seed=4)
+    strategy, _, tab, _ = simulate(scenario, "hindsight")
+    cand = find_candidates(scenario.network.distances(), scenario.orders, bound_rules(scenario.params))
+    edges = set(zip(cand.low.tolist(), cand.high.tolist(), strict=True))
+    assert strategy.planned_pairs and strategy.planned_pairs <= edges
+    partner = tab["partner"].to_numpy()
+    realised = {(min(a, int(b)), max(a, int(b))) for a, b in enumerate(partner) if b >= 0}
+    assert realised and realised <= edges
+
+
+@pytest.mark.parametrize("seed", [0, 5])
+def test_a_kept_plan_realises_exactly_its_forecast_saving(seed):
+    """Every planned first records its partner and forecast saving when it takes a vacant vehicle; where that
+    partner joined, the saving read off the odometers (l_A + l_B - L) is the forecast, to the millimetre."""
+    scenario = build_scenario("toy", sample=0.2, seed=seed)
+    strategy, res, tab, _ = simulate(scenario, "hindsight")
+    solo, partner = tab["solo_m"].to_numpy(), tab["partner"].to_numpy()
+    vehicle, pick, drop = tab["vehicle"].to_numpy(), tab["pickup_s"].to_numpy(), tab["dropoff_s"].to_numpy()
+    kept = [(a, b, f) for a, (b, f) in strategy.commitments.items() if partner[a] == b]
+    assert len(kept) >= 0.8 * len(strategy.commitments) > 0
+    a, b, forecast = (np.array(x) for x in zip(*kept, strict=True))
+    end = odometer_at(res.trajectories, vehicle[a], np.maximum(drop[a], drop[b]))
+    realised = solo[a] + solo[b] - (end - odometer_at(res.trajectories, vehicle[a], pick[a]))
+    np.testing.assert_allclose(realised, forecast, atol=1e-3)
+
+
+def test_an_unknown_option_value_is_one_error_line(tmp_path, capsys):
+    code = main(
+        [
+            "run",
+            "--scenario",
+            "toy",
+            "--sample",
+            "0.1",
+            "--strategies",
+            "hindsight",
+            "--opt",
+            "hindsight.unplanned=sometimes",
+            "--no-progress",
+            "--out",
+            str(tmp_path / "never"),
+        ]
+    )
+    assert code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "unplanned" in err[0] and not (tmp_path / "never").exists()
