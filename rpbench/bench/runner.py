@@ -25,7 +25,7 @@
   ``wrong``, ``time_limit``, ``feasible`` (stopped at a gap),
   ``infeasible`` (claimed so, nothing known against it), ``memory_limit``,
   ``error`` or ``killed``.  Known values of a ``.solu`` file
-  (:mod:`rpbench.solu`) decide when they are given;
+  (:mod:`rpbench.bench.solu`) decide when they are given;
 * ``tier``: the instance's size tier (``all`` when it has none).
 
 Each preset is warmed up on a tiny model first so library imports are not
@@ -61,7 +61,7 @@ from rpbench.exceptions import ParameterError, RpbenchError
 from rpbench.model import Model, Status
 
 if TYPE_CHECKING:
-    from rpbench.solu import Known
+    from rpbench.bench.solu import Known
 
 COLUMNS = [
     "model",

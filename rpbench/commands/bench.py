@@ -29,6 +29,7 @@ import pandas as pd
 
 from rpbench.backends.presets import load_preset, preset_names
 from rpbench.bench.runner import NO_TIER, format_table, run_benchmark
+from rpbench.bench.solu import Known, check_names, read_solu, write_solu
 from rpbench.bench.summary import SHIFTS, environment, format_summary, summarise, write_outputs
 from rpbench.bench.synthetic import SUITES, suite
 from rpbench.commands._common import (
@@ -52,7 +53,6 @@ from rpbench.results.check.bench import KNOWN_FILE
 from rpbench.results.html.bench import write_bench_html
 from rpbench.results.plots import bench_figure
 from rpbench.results.store import check_new_folder, new_results_folder, write_json
-from rpbench.solu import Known, check_names, read_solu, write_solu
 from rpbench.strategies.options import Range
 
 #: About the default hard timeout (2 x limit + 30 s) of the longest time limit a preset may set.

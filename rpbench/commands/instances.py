@@ -17,6 +17,7 @@ from pathlib import Path
 from rpbench import __version__
 from rpbench.backends import load_preset
 from rpbench.bench.runner import IsolatedWorker
+from rpbench.bench.solu import write_solu
 from rpbench.commands._common import (
     TIME_LIMIT,
     add_data_arg,
@@ -45,7 +46,6 @@ from rpbench.library.prove import prove, with_time_limit
 from rpbench.library.sets import SETS, instance_set
 from rpbench.model import Model
 from rpbench.results import store
-from rpbench.solu import write_solu
 
 #: Where a set's files are looked for without --dir: the committed tier in a checkout, else the default
 #: place `build` writes to.

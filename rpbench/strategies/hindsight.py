@@ -16,7 +16,7 @@ the simulator would realise given when A's vehicle drives A's shortest path P_A:
 
 * a V1 passenger's pick-up time is known (on board: from the vehicle's position; on the way: from the
   pick-up distance of the round that assigned it);
-* a waiting A takes one of this round's vacant vehicles (pick-up after ``pk/v``; each is tried) or is
+* a waiting A takes one of the current round's vacant vehicles (pick-up after ``pk/v``; each is tried) or is
   assigned in a later round; an A not yet requested in some round of its patience.  A later
   assignment may pick a vehicle at any pick-up time in ``[0, R̄/v]`` (``plan_pickup = "range"``),
   so A's pick-up lies between the earliest round plus 0 and the last round plus ``R̄/v``;
@@ -267,7 +267,7 @@ class Hindsight(Strategy[HindsightOptions]):
 
         The orders that need a vacant vehicle are the planned firsts and the unplanned ones (a planned
         second joins its partner's vehicle): those still waiting unassigned and those requested within
-        ``reposition_s``.  Idle vehicles (not assigned this round) are matched to them by a
+        ``reposition_s``.  Idle vehicles (not assigned in the current round) are matched to them by a
         minimum-total-distance assignment (``linear_sum_assignment``); a vehicle farther than
         ``reposition_m`` from its order's origin is sent there.
         """
@@ -292,7 +292,7 @@ class Hindsight(Strategy[HindsightOptions]):
         return state.v0_vehicle[idle[rows[far]]].astype(np.int64), self.origin[need[cols[far]]].astype(np.int64)
 
     def _record_commitments(self, rm: RoundModel, chosen: np.ndarray, mate: np.ndarray) -> None:
-        """Remember, for every planned first assigned this round, its planned partner and forecast saving."""
+        """Remember, for every planned first assigned in the current round, its planned partner and forecast saving."""
         c = chosen[rm.kind[chosen] == Kind.VACANT]
         for a, v in zip(rm.first[c].tolist(), rm.vehicle[c].tolist(), strict=True):
             forecast = self._forecasts.get((a, v))
@@ -332,7 +332,7 @@ class Hindsight(Strategy[HindsightOptions]):
     # -------------------------------------------------------------------- plan
     def _plan(self, state: RoundState, vac: VacantOptions) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Planned partner (``-1``: none), role (True: picked up first) and, for a first, the forecast saving
-        of its pair when it is assigned in a later round (NaN: none), of every order, this round."""
+        of its pair when it is assigned in a later round (NaN: none), of every order, in the current round."""
         t = state.t_s
         p = self.params
         n = self.n
@@ -394,7 +394,7 @@ class Hindsight(Strategy[HindsightOptions]):
         """The forecast saving of each directed pair (A = ``a`` first, B = ``b`` joins; NaN: cannot), and
         the forecast when A, not yet assigned, is assigned in a later round (NaN for a V1 passenger).
 
-        A V1 passenger's vehicle is known.  A waiting A takes this round's vacant vehicle that serves
+        A V1 passenger's vehicle is known.  A waiting A takes the current round's vacant vehicle that serves
         its pair best (``pickup_weight`` charging ``pk``) unless a later assignment gains more than
         ``wait_margin_m``; a later assignment, in any round up to A's last, picks up A after a time in
         :meth:`_pickup_range_s`.

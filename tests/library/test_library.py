@@ -10,6 +10,7 @@ import pytest
 from faults.test_runs_helpers import assert_one_error, run_cli
 
 from rpbench.backends import load_preset, solve
+from rpbench.bench.solu import read_solu
 from rpbench.exceptions import ResultsError
 from rpbench.instances import load_instance, load_instances, save_instance
 from rpbench.library.build import build_set
@@ -17,7 +18,6 @@ from rpbench.library.export import read_mps_optimum, write_model
 from rpbench.library.manifest import MANIFEST, content_sha256, packaged_manifest, verify_folder
 from rpbench.library.prove import prove
 from rpbench.library.sets import SETS, InstanceSet, instance_set
-from rpbench.solu import read_solu
 
 ROOT = Path(__file__).resolve().parents[2]
 COMMITTED_S = ROOT / "instances" / "library" / "S"

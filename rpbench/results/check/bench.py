@@ -29,9 +29,9 @@ import numpy as np
 import pandas as pd
 
 from rpbench import results
+from rpbench.bench.solu import Known, read_solu
 from rpbench.exceptions import ResultsError, RpbenchError, one_line
 from rpbench.results.check.core import FOLDER, FolderResult, RunCheck
-from rpbench.solu import Known, read_solu
 
 #: The meta.json ``kind`` of a bench folder.
 KIND = "bench"

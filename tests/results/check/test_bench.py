@@ -10,10 +10,10 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
+from rpbench.bench.solu import Known, read_solu, write_solu
 from rpbench.cli import main
 from rpbench.results.check.bench import expected_verdict
 from rpbench.results.check.tree import check_tree
-from rpbench.solu import Known, read_solu, write_solu
 
 EXAMPLES = Path(__file__).resolve().parents[3] / "instances" / "examples"
 FAST = ["--solver", "matching", "--solver", "highs", "--repeat", "2", "--no-isolate", "--no-progress"]

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
+from rpbench.bench.solu import Known, check_names, read_solu, write_solu
 from rpbench.exceptions import ParameterError
-from rpbench.solu import Known, check_names, read_solu, write_solu
 
 GOOD = """\
 # known values of a test set
@@ -143,7 +143,7 @@ def test_a_library_wide_solu_judges_a_subset(tmp_path, capsys):
     """The committed S tier benched against the whole library's file: its lines judge, the others are skipped."""
     from rpbench.cli import main
 
-    repo = Path(__file__).resolve().parents[1]
+    repo = Path(__file__).resolve().parents[2]
     one = sorted((repo / "instances" / "library" / "S").glob("toy_*_mb_*.npz"))[0]
     rc = main(
         [
