@@ -23,10 +23,12 @@ assigned and not yet dropped off, so ``t_B - t_A`` lies in
 ``[-K_B, K_A + (R̄ + l_A)/v]`` with each order's own patience ``K_p``; the
 vehicle then turns towards ``o_B`` at a node ``h`` of A's shortest path
 ``P_A`` with ``l(h, o_B) <= R̄``, no further along than it can have driven
-by ``t_B + K_B``.  The earliest such node ``h*`` is the best place to turn
-(the pooled route only grows along ``P_A``), so the weight is
-``POOL(A, B, h*, δ = l(o_A, h*))`` with no further pick-up test; both pick-up
-orders, the larger saving wins.
+by ``t_B + K_B`` and no earlier than it must have driven by ``t_B`` (A is
+picked up by ``t_A + K_A + R̄/v`` at the latest and then drives on: at least
+``v (t_B - t_A - K_A) - R̄`` along ``P_A``).  The earliest such node ``h*`` is
+the best place to turn (the pooled route only grows along ``P_A``), so the
+weight is ``POOL(A, B, h*, δ = l(o_A, h*))`` with no further pick-up test;
+both pick-up orders, the larger saving wins.
 
 Detours must be ``<= D̄`` (``order_rule`` as in §1.1, default min over the
 feasible service orders).  The pick-up distance ``pk = pre + l(h, o_B)`` is
@@ -297,26 +299,40 @@ def _bound_candidates(
         # how far along its path the first passenger's vehicle can be while the second still waits
         reach_f = rules.speed_mps * (t[jj] + patience[jj] - t[ii]) + 1e-6
         reach_r = rules.speed_mps * (t[ii] + patience[ii] - t[jj]) + 1e-6
-        parts.append(_best_orientation(dist, o, d, solo, ii, jj, reverse_ok, rules, turn=(path, reach_f, reach_r)))
+        # and how far it must be once the second is revealed (the first picked up by t_A + K_A + R̄/v)
+        floor_f = least_driven_m(t[jj] - t[ii], patience[ii], rules)
+        floor_r = least_driven_m(t[ii] - t[jj], patience[jj], rules)
+        turn = (path, reach_f, reach_r, floor_f, floor_r)
+        parts.append(_best_orientation(dist, o, d, solo, ii, jj, reverse_ok, rules, turn=turn))
     return replace(_assemble(parts, rank, n, rules, evaluated, t0), stats={"window": "bound"})
+
+
+def least_driven_m(gap_s: np.ndarray, patience_a_s: np.ndarray, rules: PairRules) -> np.ndarray:
+    """How far along P_A the first passenger A's vehicle has driven, at least, in any round B can join
+    (``gap_s = t_B - t_A``; docs/bound.md, F5): A is assigned by ``t_A + K_A`` a vehicle at most R̄ away,
+    picked up by ``t_A + K_A + R̄/v`` and then driven on at the set speed, and B joins no earlier than
+    ``t_B``.  Negative when B can join before A's pick-up (no limit).  Lowered by the simulator's
+    tolerances and a hair for rounding: a lower limit only ever admits more turning nodes."""
+    v = rules.speed_mps
+    return v * (gap_s - patience_a_s - 2e-6) - (rules.max_pickup_m + 2e-6)
 
 
 def _best_orientation(dist, o, d, solo, ii, jj, reverse_ok, rules: PairRules, turn=None) -> dict:
     """POOL(A=i, B=j, h=o_i) and, where ``reverse_ok``, POOL(A=j, B=i, h=o_j): the larger saving (tie: i first).
 
-    ``turn = (path, reach_f, reach_r)``: the upper bound's geometry instead of
-    h = o_A: the vehicle turns at the first node of A's path within R̄ of o_B
-    (:func:`_turn_at_first_reachable_node`).
+    ``turn = (path, reach_f, reach_r, floor_f, floor_r)``: the upper bound's geometry instead of
+    h = o_A: the vehicle turns at the first node of A's path within R̄ of o_B, between the least and the
+    most A's vehicle can have driven (:func:`_turn_at_first_reachable_node`).
     """
     rev_idx = np.flatnonzero(reverse_ok)
     if turn is None:
         rows_f, fwd = _pool_where_possible(dist, o, d, solo, ii, jj, rules)
         rows_r, rev = _pool_where_possible(dist, o, d, solo, jj[rev_idx], ii[rev_idx], rules)
     else:
-        path, reach_f, reach_r = turn
-        rows_f, fwd = _turn_at_first_reachable_node(dist, o, d, solo, ii, jj, reach_f, path, rules)
+        path, reach_f, reach_r, floor_f, floor_r = turn
+        rows_f, fwd = _turn_at_first_reachable_node(dist, o, d, solo, ii, jj, reach_f, floor_f, path, rules)
         rows_r, rev = _turn_at_first_reachable_node(
-            dist, o, d, solo, jj[rev_idx], ii[rev_idx], reach_r[rev_idx], path, rules
+            dist, o, d, solo, jj[rev_idx], ii[rev_idx], reach_r[rev_idx], floor_r[rev_idx], path, rules
         )
     rows_r = rev_idx[rows_r]
     best_f = np.full(len(ii), -np.inf)
@@ -391,21 +407,24 @@ def _pool_where_possible(dist, o, d, solo, a, b, rules: PairRules, h=None, delta
     return rows[ok], PoolResult(*(getattr(r, f.name)[ok] for f in fields(PoolResult)))
 
 
-def _turn_at_first_reachable_node(dist, o, d, solo, a, b, reach_m, path, rules: PairRules):
-    """POOL(A=a, B=b) with the vehicle turning at h*, the first node of P_A with ``l(h, o_B) <= R̄`` whose
-    predecessor on P_A lies within ``reach_m`` of o_A (docs/bound.md); ``(rows, PoolResult)`` of feasible pairs.
+def _turn_at_first_reachable_node(dist, o, d, solo, a, b, reach_m, floor_m, path, rules: PairRules):
+    """POOL(A=a, B=b) with the vehicle turning at h*, the first node of P_A at arc length ``>= floor_m``
+    with ``l(h, o_B) <= R̄`` whose predecessor on P_A lies within ``reach_m`` of o_A (docs/bound.md);
+    ``(rows, PoolResult)`` of the feasible pairs.
 
     Feasibility at h = o_A is necessary (the pooled route and A's detour only
     grow along P_A), so only the pairs that pass it are walked along their
-    paths, one vectorised step per node.
+    paths, from the first node at or beyond ``floor_m``, one vectorised step per node.
     """
     offsets, nodes, cum = path
     rows, at_origin = _pool_where_possible(dist, o, d, solo, a, b, rules)
-    near = dist[o[a[rows]], o[b[rows]]] <= rules.max_pickup_m + 1e-6
+    start = _first_node_at_or_beyond(offsets, cum, a[rows], floor_m[rows])
+    from_origin = start == offsets[a[rows]]
+    near = from_origin & (dist[o[a[rows]], o[b[rows]]] <= rules.max_pickup_m + 1e-6)
     keep = [(rows[near], PoolResult(*(getattr(at_origin, f.name)[near] for f in fields(PoolResult))))]
     walk = rows[~near]
     if len(walk):
-        pos = offsets[a[walk]] + 1  # o_A itself failed the pick-up test
+        pos = start[~near] + from_origin[~near]  # o_A itself failed the pick-up test
         end = offsets[a[walk] + 1]
         h = np.full(len(walk), -1, dtype=np.intp)
         active = np.flatnonzero(pos < end)
@@ -439,6 +458,20 @@ def _turn_at_first_reachable_node(dist, o, d, solo, a, b, reach_m, path, rules: 
     out_rows = np.concatenate([k[0] for k in keep])
     out = PoolResult(*(np.concatenate([getattr(k[1], f.name) for k in keep]) for f in fields(PoolResult)))
     return out_rows, out
+
+
+def _first_node_at_or_beyond(offsets: np.ndarray, cum: np.ndarray, a: np.ndarray, floor_m: np.ndarray) -> np.ndarray:
+    """Flat index of the first node of each path ``P_a`` at arc length ``>= floor_m`` (the path's end index,
+    one past its last node, where there is none).  Vectorised binary search inside each path."""
+    lo, hi = offsets[a].copy(), offsets[a + 1].copy()
+    while True:
+        active = lo < hi
+        if not active.any():
+            return lo
+        mid = (lo + hi) // 2
+        below = active & (cum[np.minimum(mid, len(cum) - 1)] < floor_m)
+        lo = np.where(below, mid + 1, lo)
+        hi = np.where(active & ~below, mid, hi)
 
 
 def _rows(a, b, enroute: bool, r: PoolResult) -> dict:

@@ -8,6 +8,7 @@ import shutil
 import numpy as np
 import pandas as pd
 import pytest
+from helpers import line_network, scenario_of
 
 from rpbench import results
 from rpbench.exceptions import ParameterError
@@ -18,7 +19,7 @@ from rpbench.oracle.pairs import PairRules, bound_rules
 from rpbench.results.check import bound_weights, check_folder
 from rpbench.scenarios import ScenarioRequest, build_scenario
 
-STRATEGIES = ["np", "mb", "rtv", "fl-nd", "fl"]
+STRATEGIES = ["np", "mb", "rtv", "fl-nd", "fl", "hindsight"]
 
 
 def _frame(scenario) -> pd.DataFrame:
@@ -30,7 +31,7 @@ def _frame(scenario) -> pd.DataFrame:
 
 @pytest.mark.parametrize(
     "seed, overrides",
-    [(0, {}), (5, {}), (1, {"max_pickup_m": 700.0}), (2, {"max_pickup_m": 400.0, "patience_mean_s": 40.0})],
+    [(0, {}), (5, {}), (1, {"max_pickup_m": 700.0}), (2, {"max_pickup_m": 600.0, "patience_mean_s": 40.0})],
 )
 def test_enumeration_equals_a_brute_force_over_all_pairs(seed, overrides):
     """Every pair whose checker-computed bound weight is finite is a candidate, with that weight (a small R̄
@@ -46,6 +47,24 @@ def test_enumeration_equals_a_brute_force_over_all_pairs(seed, overrides):
     found = {(int(lo), int(hi)): w for lo, hi, w in zip(cands.low, cands.high, cands.saving_m, strict=True)}
     assert found.keys() == expected.keys() and len(found) > 20
     assert all(found[k] == pytest.approx(expected[k], abs=1e-9) for k in found)
+
+
+def test_the_first_passenger_has_driven_on_when_a_late_second_is_revealed():
+    """A is picked up by t_A + K_A + R̄/v = 450 s at the latest; B, 500 m behind A's origin, is revealed 120 s
+    later, when A's vehicle has driven at least 1,000 m along A's path: it turns at node 2, not at o_A
+    (saving 3,500 m, not the 4,500 m of turning at A's origin), in the enumeration and in the checker."""
+    net = line_network(11, 500.0)
+    sc = scenario_of(net, [(0.0, 0, 10), (570.0, 1, 10)], [6], patience_s=90.0)
+    cands = find_candidates(sc.network.distances(), sc.orders, bound_rules(sc.params))
+    assert len(cands) == 1 and (cands.first[0], cands.second[0]) == (0, 1)
+    assert cands.saving_m[0] == pytest.approx(3500.0) and cands.length_m[0] == pytest.approx(6000.0)
+    solo = sc.network.distances().dist[sc.orders.origin, sc.orders.destination]
+    weight, edge = bound_weights(sc.network.distances(), _frame(sc), solo, sc.params, np.array([0]), np.array([1]))
+    assert edge[0] and weight[0] == pytest.approx(3500.0)
+    # revealed earlier, while A may still wait for its pick-up, B can join at A's origin
+    early = scenario_of(net, [(0.0, 0, 10), (400.0, 1, 10)], [6], patience_s=90.0)
+    cands = find_candidates(early.network.distances(), early.orders, bound_rules(early.params))
+    assert cands.saving_m[0] == pytest.approx(4500.0)
 
 
 def test_the_bound_contains_the_paper_oracle_pairs():

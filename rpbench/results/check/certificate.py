@@ -122,7 +122,9 @@ def bound_geometry(f: Folder, params: Params, x: np.ndarray, y: np.ndarray) -> t
     """docs/bound.md's orientation "x first, y joins": (allowed, geometry with the vehicle at h*).
 
     Allowed: ``t_y - t_x`` in ``[-K_y, K_x + (R̄ + l_x)/v]``, and h*, the first node of x's shortest path
-    within R̄ of o_y, exists with its predecessor within ``v (t_y + K_y - t_x)`` of o_x.
+    within R̄ of o_y at or beyond the least distance x's vehicle has driven when y is revealed,
+    ``v (t_y - t_x - K_x) - R̄`` (x picked up by ``t_x + K_x + R̄/v``), exists with its predecessor within
+    ``v (t_y + K_y - t_x)`` of o_x.
     """
     t, k = f.col("request_s"), f.col("patience_s")
     v, r_max = params.speed_mps, params.max_pickup_m
@@ -136,7 +138,8 @@ def bound_geometry(f: Folder, params: Params, x: np.ndarray, y: np.ndarray) -> t
         off, nodes, cum = order_paths(f, x[block])
         lengths = np.diff(off)
         near = f.distances.dist[nodes, np.repeat(f.col("origin")[y[block]], lengths)] <= r_max + TOL_M
-        first = first_true(near, off)
+        driven = v * (gap[block] - k[x[block]] - TOL_S) - (r_max + TOL_M)  # at least, once y is revealed
+        first = first_true(near & (cum >= np.repeat(driven, lengths)), off)
         reach = v * (t[y[block]] + k[y[block]] - t[x[block]]) + TOL_M
         turned_late = (first > off[:-1]) & (cum[np.maximum(first - 1, 0)] > reach)
         found = (first >= 0) & ~turned_late
