@@ -24,7 +24,8 @@ the simulator would realise given when A's vehicle drives A's shortest path P_A:
   vehicle turns at ``h = o_A`` with pick-up ``l(o_A, o_B)`` (A14); afterwards at the first node ``h``
   of P_A that the vehicle can have next, inside the window, with ``pre + l(h, o_B) <= R̄`` (turning
   earlier never lengthens the route, docs/bound.md step 3).  The saving is POOL's at ``h`` with
-  ``δ = l(o_A, h)``, in its best feasible service order (§1.1).
+  ``δ = l(o_A, h)``, in its best feasible service order (§1.1): :meth:`.Foresight.forecast`, with the
+  V1 pick-up times of :class:`.PickupTimes` (:mod:`.foresight`, shared with ``fl-perfect``).
 
 A maximum-weight matching of these values (``plan_solver``, an exact preset) gives every open order a
 planned partner and a role: the first takes a vacant vehicle, the second joins it.
@@ -62,7 +63,6 @@ from scipy.optimize import linear_sum_assignment
 
 from rpbench.backends import Preset, solve
 from rpbench.exceptions import LookaheadError
-from rpbench.geometry import TOLERANCE_M, choose_order, pair_geometry
 from rpbench.model import PairingModel, Structure
 from rpbench.oracle.pairs import bound_rules, find_candidates
 from rpbench.scenarios.base import OnlineView, Scenario
@@ -74,14 +74,13 @@ from rpbench.strategies.candidates import (
     join_options,
     vacant_options,
 )
+from rpbench.strategies.foresight import Foresight, PickupTimes
 from rpbench.strategies.options import Range, RunOptions, option
 
 #: Resolution of the plan's matching weights (1 cm, as the oracles').
 PLAN_UNIT_M = 0.01
 #: When passengers without a planned partner are served by a vacant vehicle.
 UNPLANNED = ("now", "last", "never")
-#: Arc-length offset separating the orders' paths in one sorted array (longer than any path).
-_PATH_GAP_M = 1e8
 
 
 @dataclass(frozen=True)
@@ -164,41 +163,21 @@ class Hindsight(Strategy[HindsightOptions]):
         p = scenario.params
         distances = scenario.network.distances()
         self.params = p
-        self.dist = np.asarray(distances.dist)
-        self.origin = o.origin.astype(np.intp)
-        self.destination = o.destination.astype(np.intp)
-        self.request = np.asarray(o.request_s, np.float64)
-        self.patience = np.asarray(o.patience_s, np.float64)
-        n = len(o)
-        self.n = n
-        self.solo = self.dist[self.origin, self.destination] if n else np.zeros(0)
-        dt = p.dt_s
-        # first and last round in which each order can be decided (revealed at k·Δt >= t_req; cancelled
-        # once t - t_req > K, the simulator's rule)
-        self.first_round = np.ceil(self.request / dt - 1e-9) * dt
-        self.last_round = np.floor((self.request + self.patience + 1e-9) / dt) * dt
-        # every order's shortest path (the one its vehicle drives) and the arc length at each node
-        if n:
-            offsets, nodes = distances.paths_batch(self.origin, self.destination)
-        else:
-            offsets, nodes = np.zeros(1, np.int64), np.zeros(0, np.intp)
-        self.path_offsets = np.asarray(offsets, np.int64)
-        self.path_nodes = np.asarray(nodes, np.intp)
-        lengths = np.diff(self.path_offsets)
-        owner = np.repeat(np.arange(n), lengths)
-        self.path_cum = self.dist[self.origin[owner], self.path_nodes] if n else np.zeros(0)
-        self.path_key = self.path_cum + owner * _PATH_GAP_M  # increasing over all paths
+        self.sight = Foresight(scenario)
+        # the realised orders and their round windows, as the foresight holds them
+        sight = self.sight
+        self.dist, self.origin, self.request, self.n = sight.dist, sight.origin, sight.request, sight.n
+        self.first_round, self.last_round = sight.first_round, sight.last_round
+        n = self.n
         # the upper bound's graph: every pair the simulator can form (docs/bound.md)
         cand = find_candidates(distances, o, bound_rules(p))
         lo, hi = cand.low, cand.high
         later = np.maximum(self.request[lo], self.request[hi])
         by_later = np.argsort(later, kind="stable")
         self.edge_lo, self.edge_hi, self.edge_later = lo[by_later], hi[by_later], later[by_later]
-        self.max_patience = float(self.patience.max()) if n else 0.0
+        self.max_patience = float(sight.patience.max()) if n else 0.0
         # what the simulator's V1 vehicles do: the pick-up time of every assigned first passenger
-        self.pick_s = np.full(n, np.nan)
-        self._last_vac: tuple[float, np.ndarray, np.ndarray, np.ndarray] | None = None
-        self._pickup_times: list[float] = []
+        self.pickups = PickupTimes(n, p.speed_mps, self.options.pickup_time_s)
         self.planned_pairs = set()
         self.commitments = {}
         self._forecasts: dict[tuple[int, int], float] = {}
@@ -207,7 +186,7 @@ class Hindsight(Strategy[HindsightOptions]):
     def build(self, state: RoundState) -> RoundModel:
         t = state.t_s
         p = self.params
-        self._observe(state)
+        self.pickups.observe(state)
         vac = vacant_options(state)
         join = join_options(state)
         mate, first, wait_value = self._plan(state, vac)
@@ -241,7 +220,7 @@ class Hindsight(Strategy[HindsightOptions]):
             a = p_order[vac.p[f]]
             b = mate[a]
             t_pick = t + vac.pickup_m[f] / p.speed_mps
-            w = self._forecast(a, b, self._join_from(b, t + p.dt_s, t), self.last_round[b], t_pick)
+            w = self.sight.forecast(a, b, self.sight.join_from(b, t + p.dt_s, t), self.last_round[b], t_pick)
             u_vac[f] = bonus + np.nan_to_num(w, nan=0.0) - self.options.pickup_weight * vac.pickup_m[f]
             known = np.isfinite(w)
             vehicles = state.v0_vehicle[vac.v[f]]
@@ -258,7 +237,7 @@ class Hindsight(Strategy[HindsightOptions]):
         delay = (mate[p_order] >= 0) & first[p_order] & ~last_round & np.isfinite(later)
         u_wait[delay] = bonus + later[delay] - self.options.wait_margin_m
         rm = assignment_round(state, vac, u_vac, join, u_join, u_wait, name=self.name)
-        self._last_vac = (t, p_order[vac.p], state.v0_vehicle[vac.v], vac.pickup_m)
+        self.pickups.offered(t, p_order[vac.p], state.v0_vehicle[vac.v], vac.pickup_m)
         self._round_plan = (t, mate, first)
         return rm
 
@@ -298,36 +277,6 @@ class Hindsight(Strategy[HindsightOptions]):
             forecast = self._forecasts.get((a, v))
             if forecast is not None:
                 self.commitments[a] = (int(mate[a]), forecast)
-
-    # -------------------------------------------------------------- knowledge
-    def _observe(self, state: RoundState) -> None:
-        """Pick-up times of the V1 vehicles' passengers, from the round that assigned them.
-
-        A V1 passenger not known yet was assigned a vacant vehicle in the last round this strategy
-        built (assignments are final and only rounds assign); its pick-up distance is the one of that
-        round's vacant option, and the vehicle drives it at the set speed.
-        """
-        riders = state.v1_order
-        new = riders[np.isnan(self.pick_s[riders])]
-        if not len(new) or self._last_vac is None:
-            return
-        t_prev, orders, vehicles, pk = self._last_vac
-        vehicle_of = dict(zip(riders.tolist(), state.v1_vehicle.tolist(), strict=True))
-        key = {(int(o), int(v)): float(d) for o, v, d in zip(orders, vehicles, pk, strict=True)}
-        for a in new.tolist():
-            d = key.get((a, vehicle_of[a]))
-            if d is None:
-                continue
-            self.pick_s[a] = t_prev + d / self.params.speed_mps
-            self._pickup_times.append(d / self.params.speed_mps)
-
-    def _mean_pickup_s(self) -> float:
-        recent = self._pickup_times[-50:]
-        return float(np.mean(recent)) if recent else self.options.pickup_time_s
-
-    def _join_from(self, b: np.ndarray, after_assign: np.ndarray | float, t: float) -> np.ndarray:
-        """The earliest round B can join: revealed, not before ``after_assign`` (A's assignment + Δt), not past."""
-        return np.maximum(np.maximum(self.first_round[b], after_assign), t)
 
     # -------------------------------------------------------------------- plan
     def _plan(self, state: RoundState, vac: VacantOptions) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -401,20 +350,21 @@ class Hindsight(Strategy[HindsightOptions]):
         """
         t = state.t_s
         p = self.params
+        sight = self.sight
         w = np.full(len(a), np.nan)
         later = np.full(len(a), np.nan)
         has = np.zeros(self.n, bool)
         has[state.p_order[vac.p]] = True
         t_hi = self.last_round[b]
         i = np.flatnonzero(v1[a])
-        w[i] = self._forecast(a[i], b[i], self._join_from(b[i], t, t), t_hi[i], self._v1_pick(state, a[i]))
+        w[i] = sight.forecast(a[i], b[i], sight.join_from(b[i], t, t), t_hi[i], self.pickups.of_v1(state, a[i]))
         # assigned in a later round (any up to A's last), picked up after a time in [τ_min, τ_max]
         r_min = np.where(waiting[a], t + p.dt_s, self.first_round[a])
         r_max = self.last_round[a]
         i = np.flatnonzero(~v1[a] & (r_min <= r_max + 1e-9))
         tau_min, tau_max = self._pickup_range_s()
-        later[i] = self._forecast(
-            a[i], b[i], self._join_from(b[i], r_min[i] + p.dt_s, t), t_hi[i], r_max[i] + tau_max, r_min[i] + tau_min
+        later[i] = sight.forecast(
+            a[i], b[i], sight.join_from(b[i], r_min[i] + p.dt_s, t), t_hi[i], r_max[i] + tau_max, r_min[i] + tau_min
         )
         w[i] = later[i]
         i = np.flatnonzero(waiting[a] & has[a])
@@ -428,7 +378,7 @@ class Hindsight(Strategy[HindsightOptions]):
             rep = np.repeat(i, k)
             opt = np.repeat(start[pos[a[i]]], k) + np.arange(len(rep)) - np.repeat(np.cumsum(k) - k, k)
             pk = vac.pickup_m[opt]
-            wv = self._forecast(a[rep], b[rep], self._join_from(b[rep], t + p.dt_s, t), t_hi[rep], t + pk / p.speed_mps)
+            wv = sight.forecast(a[rep], b[rep], sight.join_from(b[rep], t + p.dt_s, t), t_hi[rep], t + pk / p.speed_mps)
             score = np.where(np.isfinite(wv), wv - self.options.pickup_weight * pk, -np.inf)
             best = np.lexsort((-score, rep))
             head = np.ones(len(best), bool)
@@ -441,93 +391,7 @@ class Hindsight(Strategy[HindsightOptions]):
 
     def _pickup_range_s(self) -> tuple[float, float]:
         """The pick-up times a later assignment is assumed to choose among (``plan_pickup``)."""
-        tau = self._mean_pickup_s()
+        tau = self.pickups.mean_s()
         if self.options.plan_pickup == "mean":
             return tau, tau
         return 0.0, self.params.max_pickup_m / self.params.speed_mps
-
-    def _v1_pick(self, state: RoundState, a: np.ndarray) -> np.ndarray:
-        """When each V1 passenger in ``a`` is (or was, in effect) picked up: A's vehicle is at arc length
-        ``v (t - pick)`` along P_A from then on."""
-        t = state.t_s
-        pos = np.full(self.n, -1, np.int64)
-        pos[state.v1_order] = np.arange(state.n_v1)
-        k = pos[a]
-        onboard = state.v1_onboard[k]
-        driven = state.v1_delta_m[k] - state.v1_pre_m[k]
-        known = self.pick_s[a]
-        fallback = t + self._mean_pickup_s()
-        return np.where(onboard, t - driven / self.params.speed_mps, np.where(np.isnan(known), fallback, known))
-
-    # --------------------------------------------------------------- forecast
-    def _forecast(
-        self,
-        a: np.ndarray,
-        b: np.ndarray,
-        t_lo: np.ndarray,
-        t_hi: np.ndarray,
-        t_pick: np.ndarray,
-        t_pick_early: np.ndarray | None = None,
-    ) -> np.ndarray:
-        """The saving of B joining A's vehicle in a round of ``[t_lo, t_hi]`` (NaN: cannot), A picked up at
-        ``t_pick`` and then driving P_A at the set speed.
-
-        The vehicle turns at the first node ``h`` of P_A it can have next with ``pre + l(h, o_B) <= R̄``
-        in the window (before the pick-up ``h = o_A``, ``pre = 0``, A14); its saving is POOL's at ``h``
-        with ``δ = l(o_A, h)`` (§1.1).  Vectorised: one numpy step per path node walked.
-        """
-        p = self.params
-        out = np.full(len(a), np.nan)
-        a = np.asarray(a, np.int64)
-        b = np.asarray(b, np.int64)
-        r_bar = p.max_pickup_m + TOLERANCE_M
-        o, dd, solo, dist = self.origin, self.destination, self.solo, self.dist
-        # the window exists, and A's detour can be met at all (it only grows along P_A)
-        rows = np.flatnonzero(
-            (t_lo <= t_hi + 1e-9)
-            & (dist[o[a], o[b]] + dist[o[b], dd[a]] - solo[a] <= p.max_detour_m + 1e-6)
-            & (solo[a] > TOLERANCE_M)
-            & (solo[b] > TOLERANCE_M)
-        )
-        if not len(rows):
-            return out
-        aa, bb = a[rows], b[rows]
-        v = p.speed_mps
-        early = t_pick if t_pick_early is None else t_pick_early
-        s_lo = v * np.maximum(0.0, t_lo[rows] - t_pick[rows])
-        s_hi = v * np.maximum(0.0, t_hi[rows] - early[rows])
-        start = np.searchsorted(self.path_key, s_lo - 1e-6 + aa * _PATH_GAP_M, side="left")
-        end = self.path_offsets[aa + 1]
-        hit = np.full(len(rows), -1, np.int64)
-        k = start.copy()
-        active = np.flatnonzero(k < end)
-        cum, nodes = self.path_cum, self.path_nodes
-        while len(active):
-            kk = k[active]
-            gap = r_bar - dist[nodes[kk], o[bb[active]]]  # how far before h the vehicle may still be
-            earliest = np.maximum(s_lo[active], cum[kk] - gap)
-            found = (gap >= 0) & (earliest <= np.minimum(s_hi[active], cum[kk]) + 1e-6)
-            hit[active[found]] = kk[found]
-            go = ~found & (cum[kk] - r_bar <= s_hi[active]) & (kk + 1 < end[active])
-            k[active[go]] += 1
-            active = active[go]
-        ok = hit >= 0
-        if not ok.any():
-            return out
-        rows, aa, bb, h = rows[ok], aa[ok], bb[ok], hit[ok]
-        g = pair_geometry(
-            dist,
-            o[aa],
-            dd[aa],
-            solo[aa],
-            o[bb],
-            dd[bb],
-            solo[bb],
-            nodes[h],
-            cum[h],
-            np.zeros(len(h)),
-            p.max_detour_m,
-        )
-        r = choose_order(g, np.inf)
-        out[rows[r.feasible]] = r.saving[r.feasible]
-        return out
