@@ -20,6 +20,7 @@ from rpbench.data.first_run import ensure_data_dir, obtain_data_dir, warn_synthe
 from rpbench.exceptions import ParameterError
 from rpbench.scenarios.base import Params, Scenario
 from rpbench.scenarios.day import build_day
+from rpbench.scenarios.lattice import build_lattice
 from rpbench.scenarios.paper_input import build_paper_input
 from rpbench.scenarios.peak import build_peak
 from rpbench.scenarios.toy import build_toy
@@ -78,6 +79,13 @@ SCENARIOS: dict[str, ScenarioSpec] = {
             False,
             1.0,
             lambda data_dir, **kw: build_toy(**kw),
+        ),
+        ScenarioSpec(
+            "lattice",
+            "SYNTHETIC small grid city, every block one batch interval long: rpbench proves its offline optimum",
+            False,
+            0.3,
+            lambda data_dir, **kw: build_lattice(**kw),
         ),
     ]
 }

@@ -73,7 +73,7 @@ def grid_network(size: int = 12, seed: int = 0) -> RoadNetwork:
     return RoadNetwork.from_tables(tables)
 
 
-def _hotspot_nodes(rng: np.random.Generator, centres: np.ndarray, share: float, n: int, size: int) -> np.ndarray:
+def hotspot_nodes(rng: np.random.Generator, centres: np.ndarray, share: float, n: int, size: int) -> np.ndarray:
     """Nodes near a random hot spot (with probability ``share``) or uniform."""
     uniform = rng.integers(0, size * size, size=n)
     centre = centres[rng.integers(0, len(centres), size=n)]
@@ -93,8 +93,8 @@ def _demand(rng: Streams, n: int, size: int) -> tuple[np.ndarray, np.ndarray, np
     """One day's ``n`` requests: times (sorted), origins and destinations (node indices)."""
     homes = np.array([1 * size + 1, (size - 2) * size + 2, (size // 2) * size + size - 2])
     work = np.array([(size // 2) * size + size // 2, 2 * size + size - 3])
-    origin = _hotspot_nodes(rng.od, homes, 0.6, n, size)
-    destination = _hotspot_nodes(rng.od, work, 0.6, n, size)
+    origin = hotspot_nodes(rng.od, homes, 0.6, n, size)
+    destination = hotspot_nodes(rng.od, work, 0.6, n, size)
     same = origin == destination
     destination[same] = (destination[same] + size + 1) % (size * size)
     return np.sort(rng.times.uniform(0, 3600.0, size=n)), origin, destination

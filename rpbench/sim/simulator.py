@@ -16,7 +16,9 @@ t = 0, Δt, 2Δt, ...:
    first passenger; full vehicles excluded);
 4. ask the strategy for a model, solve it with the preset's backend, resolve
    ties among optima solver-independently (:mod:`rpbench.sim.ties`) and commit
-   the decisions (assignments are final);
+   the decisions (assignments are final), then move the vacant vehicles the
+   strategy repositions; in a round where nobody waits, only the latter
+   (:meth:`~rpbench.strategies.base.Strategy.idle_moves`);
 5. record events and per-round solver statistics.
 
 Vehicles move along shortest paths at the set speed between rounds
@@ -193,6 +195,8 @@ class Simulator:
         t0 = time.perf_counter()
         prepare_s = t0 - t_prepare
         dt = self.params.dt_s
+        # Rounds where nobody waits build no state, unless the strategy moves idle vehicles in them.
+        idle_moves = type(self.strategy).idle_moves is not Strategy.idle_moves
         next_order = 0
         k = 0
         t = 0.0
@@ -209,6 +213,8 @@ class Simulator:
             self._expire(t)
             if self.waiting:
                 self._round(k, t)
+            elif idle_moves:
+                self._idle_round(k, t)
             if self.progress is not None:
                 self.progress.update(min(t, self.scenario.horizon_s) - self.progress.n)
             if next_order >= self.n_orders and not self.waiting and t >= last_request:
@@ -292,6 +298,15 @@ class Simulator:
                 tie_moves,
             )
         )
+
+    def _idle_round(self, k: int, t: float) -> None:
+        """A round where nobody waits: no model, only the strategy's moves of idle vacant vehicles."""
+        state = self._round_state(t)
+        moves = self._checked(k, t, lambda: self.strategy.idle_moves(state))
+        none = np.zeros(0, np.int64)
+        vehicles, targets = self._checked(k, t, lambda: received_moves(moves, state, none, len(self.dist)))
+        for v, node in zip(vehicles, targets, strict=True):
+            self._reposition(int(v), int(node), t)
 
     def _strategy_text(self) -> str:
         """The strategy as error lines name it: its run name and class."""

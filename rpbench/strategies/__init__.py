@@ -31,6 +31,7 @@ REGISTRY: dict[str, str] = {
     "fl": "forward:ForwardLooking",
     "vf": "value:ValueFunction",
     "hindsight": "hindsight:Hindsight",
+    "exact": "exact:Exact",
 }
 
 #: Entry-point group of strategies installed by other distributions.

@@ -373,6 +373,14 @@ class Strategy(ABC, Generic[OptionsT]):
         """
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
 
+    def idle_moves(self, state: RoundState) -> tuple[np.ndarray, np.ndarray]:
+        """Vehicles to send towards nodes in a round where nobody waits (no model is built then; default:
+        none).  The simulator builds such a round's state only for a strategy that overrides this.
+
+        Returns ``(vehicle ids, target nodes)`` of vacant vehicles, as :meth:`reposition`.
+        """
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+
     def describe(self) -> dict[str, Any]:
         """Options as recorded in a results folder's meta.json."""
         return {
