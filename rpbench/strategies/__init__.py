@@ -32,6 +32,7 @@ REGISTRY: dict[str, str] = {
     "vf": "value:ValueFunction",
     "hindsight": "hindsight:Hindsight",
     "exact": "exact:Exact",
+    "fl-perfect": "perfect:ForwardPerfect",
 }
 
 #: Entry-point group of strategies installed by other distributions.

@@ -174,10 +174,7 @@ class _ForwardBase(Strategy[ForwardOptions]):
         return self.predictions[hour], hour
 
     def _options(self, state: RoundState) -> tuple[VacantOptions, JoinOptions, Prediction, int, np.ndarray]:
-        vac = vacant_options(state)
-        join = join_options(state, self.options.order_rule)
-        good = join.saving_m > 0  # A11
-        join = join.take(good)
+        vac, join = forward_options(state, self.options.order_rule)
         prediction, hour = self.prediction_at(state.t_s)
         e_vac = prediction.lookup(state.p_origin, state.p_destination).e_vacant
         return vac, join, prediction, hour, e_vac
@@ -191,14 +188,35 @@ class ForwardLooking(_ForwardBase):
 
     def build(self, state: RoundState) -> RoundModel:
         vac, join, prediction, hour, e_vac = self._options(state)
-        alpha_k = state.params.alpha ** state.p_rounds_waited.astype(np.float64)
-        ev = e_vac[vac.p]
-        u_vac = fraction(ev * ev, ev + vac.pickup_m) * alpha_k[vac.p]
-        e = join.saving_m
-        u_join = fraction(e * e, e + join.pickup_m) * alpha_k[join.p]
         e_wait = prediction.e_wait(state.p_origin, state.p_destination, state.p_rounds_waited, state.params)
-        u_wait = e_wait - self.mean_pickup_m[min(hour, len(self.mean_pickup_m) - 1)]
-        return assignment_round(state, vac, u_vac, join, u_join, u_wait, name=self.name)
+        mean_pickup_m = float(self.mean_pickup_m[min(hour, len(self.mean_pickup_m) - 1)])
+        return forward_round(state, vac, join, e_vac, e_wait, mean_pickup_m, name=self.name)
+
+
+def forward_options(state: RoundState, order_rule: str) -> tuple[VacantOptions, JoinOptions]:
+    """MB's options of the round, the joins only with a saving ``e > 0`` (A11)."""
+    join = join_options(state, order_rule)
+    return vacant_options(state), join.take(join.saving_m > 0)
+
+
+def forward_round(
+    state: RoundState,
+    vac: VacantOptions,
+    join: JoinOptions,
+    e_vacant: np.ndarray,
+    e_wait: np.ndarray,
+    mean_pickup_m: float,
+    *,
+    name: str,
+) -> RoundModel:
+    """FL's round (Eqs. 13-14) from each waiting passenger's ē(p) and ē(0,p), whatever they come from
+    (``join``: the options with ``e > 0``, A11)."""
+    alpha_k = state.params.alpha ** state.p_rounds_waited.astype(np.float64)
+    ev = e_vacant[vac.p]
+    u_vac = fraction(ev * ev, ev + vac.pickup_m) * alpha_k[vac.p]
+    e = join.saving_m
+    u_join = fraction(e * e, e + join.pickup_m) * alpha_k[join.p]
+    return assignment_round(state, vac, u_vac, join, u_join, e_wait - mean_pickup_m, name=name)
 
 
 class ForwardLookingNoDelay(_ForwardBase):

@@ -193,8 +193,8 @@ def test_two_plugins_under_one_run_name_or_a_builtin_name_are_refused(plugin_dir
         ("mymod:", "strategy 'mymod:' is not MODULE:CLASS"),
         (
             "nosuch",
-            "unknown strategy 'nosuch'; choose from np, mb, rtv, fl-nd, fl, vf, hindsight, bound, oracle1, oracle2, "
-            "or give a strategy class as MODULE:CLASS",
+            "unknown strategy 'nosuch'; choose from np, mb, rtv, fl-nd, fl, vf, hindsight, exact, fl-perfect, bound, "
+            "oracle1, oracle2, or give a strategy class as MODULE:CLASS",
         ),
     ],
 )
