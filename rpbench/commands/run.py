@@ -26,11 +26,13 @@ from rpbench.commands._runs import add_run_args, check_presets, parse_runs, run_
 from rpbench.data.first_run import FETCH_COMMAND
 from rpbench.exceptions import ParameterError
 from rpbench.harness.comparison import run_comparison
-from rpbench.harness.multiday import run_days
+from rpbench.harness.multiday import mean_bracket_lines, run_days
 from rpbench.harness.spec import RunSpec
 from rpbench.results import layout
 from rpbench.results.layout import REPORT_HTML
-from rpbench.results.report import load_kpis, text_table
+from rpbench.results.parents import bracket_by_day
+from rpbench.results.ratios import bracket_line, bracket_record
+from rpbench.results.report import fmt, load_kpis, text_table
 from rpbench.results.runs import run_styles
 from rpbench.results.store import check_new_folder, read_meta
 
@@ -97,18 +99,24 @@ def run_one(args: argparse.Namespace, spec: RunSpec) -> int:
     folder, table = run_comparison(spec, args.out, scenario=scenario, progress=False if args.no_progress else None)
     unproven = note_unproven(folder)
     note_over_budget(folder)
+    simulated = [e.name for e in spec.simulated]
     if args.json:
         print_json(
             {
                 "results_dir": str(folder),
                 "scenario": scenario.label,
                 "kpis": {col: table[col].to_dict() for col in table.columns},
+                **bracket_record(table, simulated),
                 "unproven": unproven,
             }
         )
         return 0
     title = f"{scenario.label} — solver preset {spec.preset}"
-    print(text_table(table, title=title, unproven=unproven, styles=run_styles(read_meta(folder))))
+    styles = run_styles(read_meta(folder))
+    print(text_table(table, title=title, unproven=unproven, styles=styles))
+    bracket = bracket_line(table, simulated, fmt, styles)
+    if bracket:
+        print(bracket)
     print(f"\nresults written to {folder}  (verify: rpbench check {folder})")
     print(f"open {folder / REPORT_HTML} in a browser for the interactive report and the map")
     return 0
@@ -132,11 +140,14 @@ def run_many_days(args: argparse.Namespace, spec: RunSpec) -> int:
                 "unproven": unproven,
                 "mean_kpis": {col: mean[col].to_dict() for col in mean.columns},
                 "per_day": {d: {c: t[c].to_dict() for c in t.columns} for d in dates for t in [load_kpis(folder / d)]},
+                "bracket_per_day": bracket_by_day(folder).set_index("date").to_dict(orient="index"),
             }
         )
         return 0
     title = f"Mean over {len(dates)} days of {name} ({dates[0]} .. {dates[-1]}), solver preset {spec.preset}"
     print(text_table(mean, title=title, unproven=unproven, styles=run_styles(read_meta(folder / dates[0]))))
+    for line in mean_bracket_lines(bracket_by_day(folder))[:1]:
+        print(line)
     print(f"\nresults written to {folder}  (per-day folders inside; report: {folder / 'report.md'})")
     print(f"open {folder / REPORT_HTML} in a browser for the interactive report, linking every day's")
     return 0

@@ -29,7 +29,8 @@ from rpbench.oracle.solve import OracleResult
 from rpbench.results import metrics
 from rpbench.results.folder import StrategyRun, oracle_kpis, write_folder
 from rpbench.results.html import write_html
-from rpbench.results.report import with_competitive_ratios, write_report
+from rpbench.results.ratios import with_ratios
+from rpbench.results.report import write_report
 from rpbench.results.runs import run_label
 from rpbench.results.store import check_new_folder, new_results_folder, timestamp
 from rpbench.scenarios.base import Scenario
@@ -212,11 +213,12 @@ def solve_offline(scenario: Scenario, entries: list[RunEntry], preset: Preset) -
 
 
 def kpi_table(runs: list[StrategyRun], offline: dict[str, OracleResult], order: list[str]) -> pd.DataFrame:
-    """Wide table: KPI rows x run columns (in ``order``), with the competitive-ratio rows."""
+    """Wide table: KPI rows x run columns (in ``order``), with the ratio and bracket rows
+    (:mod:`rpbench.results.ratios`)."""
     cols = {r.name: r.kpis for r in runs}
     for name, result in offline.items():
         cols[name] = oracle_kpis(result)
-    return with_competitive_ratios(pd.DataFrame({name: cols[name] for name in order if name in cols}))
+    return with_ratios(pd.DataFrame({name: cols[name] for name in order if name in cols}), [r.name for r in runs])
 
 
 def progress_bar(scenario: Scenario, label: str, enabled: bool | None):

@@ -20,9 +20,10 @@ from rpbench.results import layout
 from rpbench.results.folder import write_parent_meta
 from rpbench.results.html import write_html
 from rpbench.results.metrics import KPI_LABELS
-from rpbench.results.parents import MULTIDAY_PLOT_KPIS, by_day_table, day_folders
+from rpbench.results.parents import MULTIDAY_PLOT_KPIS, bracket_by_day, by_day_table, day_folders
 from rpbench.results.plots import per_day_figures
-from rpbench.results.report import RATIO_ROWS, findings, fmt, load_kpis, markdown_table, offline_notes, table_rows
+from rpbench.results.ratios import RATIO_KPIS
+from rpbench.results.report import findings, fmt, load_kpis, markdown_table, offline_notes, table_rows
 from rpbench.results.runs import markdown_cell, run_label, run_styles
 from rpbench.results.store import check_new_folder
 from rpbench.results.tables import csv_table, latex_table
@@ -95,7 +96,9 @@ def write_multiday_report(parent: Path, name: str | None = None) -> Path:
     ]
     if meta.get("command"):
         lines += ["Command:", "", f"    {meta['command']}", ""]
-    lines += ["## Mean over days", "", markdown_table(mean, styles=styles), ""] + offline_notes(mean, {})
+    brackets = bracket_by_day(parent)
+    lines += ["## Mean over days", "", markdown_table(mean, styles=styles), ""]
+    lines += mean_bracket_lines(brackets) + offline_notes(mean, {})
     caption = (
         f"rpbench, scenario {scenario} (sample {sample}): mean over {len(days)} {what}, "
         f"{meta['dates'][0]} .. {meta['dates'][-1]}"
@@ -106,8 +109,9 @@ def write_multiday_report(parent: Path, name: str | None = None) -> Path:
     csv_table(mean, table_rows(mean), styles).to_csv(parent / layout.TABLE_CSV)
     lines += [f"The mean table is also `{layout.TABLE_TEX}` (LaTeX, booktabs) and `{layout.TABLE_CSV}` (raw values).",
               ""]  # fmt: skip
+    lines += bracket_table_lines(brackets, styles)
     key = ["total_saving_km", "avg_detour_m", "response_rate", "pairing_ratio"]
-    for kpi in key + [r for r in RATIO_ROWS if r in set(table["kpi"])]:
+    for kpi in key + [r for r in RATIO_KPIS if r in set(table["kpi"])]:
         wide = table[table["kpi"] == kpi].pivot(index="date", columns="run", values="value")[runs]
         lines += [
             f"### {KPI_LABELS.get(kpi, kpi)} per day",
@@ -138,3 +142,43 @@ def write_multiday_report(parent: Path, name: str | None = None) -> Path:
     path = parent / "report.md"
     files.write_text(path, "\n".join(lines))
     return path
+
+
+def mean_bracket_lines(brackets: pd.DataFrame) -> list[str]:
+    """The line under the mean table: the days' mean U, LB and U / LB (the bracket around each day's OPT)."""
+    lb = brackets["best_known_saving_km"]
+    if lb.isna().all():
+        return []
+    u, ratio = brackets["upper_bound_km"], brackets["bound_over_best_known"]
+    if u.isna().all():
+        mean_lb = fmt("total_saving_km", lb.mean())
+        return [f"Each day's OPT is at least its LB, the best known schedule's saving: {mean_lb} km on average.", ""]
+    return [
+        f"Each day's OPT lies in [LB, U]; over the days LB is {fmt('total_saving_km', lb.mean())} km and U "
+        f"{fmt('total_saving_km', u.mean())} km on average, U / LB {fmt('bound_over_best_known', ratio.mean())} "
+        "(the mean of the days' ratios).",
+        "",
+    ]
+
+
+def bracket_table_lines(brackets: pd.DataFrame, styles) -> list[str]:
+    """The bracket per day: U, LB, the run that gave LB and U / LB."""
+    if brackets["best_known_saving_km"].isna().all():
+        return []
+    lines = [
+        "### Bracket of the optimum per day",
+        "",
+        "OPT, the largest saving of any schedule of the simulator, lies in [LB, U]: U the proven upper bound, LB "
+        "the best known schedule (the largest saving among the day's simulated runs, docs/simulator.md).",
+        "",
+        "| date | U (km) | LB (km) | best known schedule | U / LB |",
+        "|---|---:|---:|---|---:|",
+    ]
+    for _, b in brackets.iterrows():
+        who = markdown_cell(run_label(b["best_known_run"], styles)) if b["best_known_run"] else "/"
+        lines.append(
+            f"| {b['date']} | {fmt('total_saving_km', b['upper_bound_km'])} | "
+            f"{fmt('total_saving_km', b['best_known_saving_km'])} | {who} | "
+            f"{fmt('bound_over_best_known', b['bound_over_best_known'])} |"
+        )
+    return [*lines, ""]

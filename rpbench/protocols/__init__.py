@@ -20,6 +20,7 @@ from rpbench.exceptions import ParameterError
 from rpbench.files import parse_toml, read_text
 from rpbench.results.leaderboard import Bootstrap
 from rpbench.results.metrics import DECISION_KPIS, KPI_ORDER
+from rpbench.results.ratios import RATIO_KPIS
 
 
 @dataclass(frozen=True)
@@ -45,8 +46,9 @@ class Protocol:
         return out
 
 
-#: What a protocol's metrics may name: the comparison table's KPIs, the competitive ratio, decision times.
-METRICS = (*KPI_ORDER, "competitive_ratio_bound", *DECISION_KPIS)
+#: What a protocol's metrics may name: the comparison table's KPIs, the ratios (the competitive ratio's two ends,
+#: saving / Oracle-1), decision times.
+METRICS = (*KPI_ORDER, *RATIO_KPIS, *DECISION_KPIS)
 
 
 def builtin_names() -> list[str]:

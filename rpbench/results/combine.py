@@ -28,8 +28,8 @@ from rpbench.results.check.core import DIGEST_FILES
 from rpbench.results.check.folder import file_sha256, json_sha256, run_spec
 from rpbench.results.metrics import KPI_LABELS, TIMING_KPIS
 from rpbench.results.plots import kpi_figure
+from rpbench.results.ratios import DENOMINATORS, DERIVED_KPIS, best_known, bracket_line, savings_of, with_ratios
 from rpbench.results.report import (
-    RATIO_ROWS,
     UNPROVEN_MARK,
     fmt,
     load_kpis,
@@ -40,9 +40,8 @@ from rpbench.results.report import (
     table_rows,
     unproven_notes,
     unproven_runs,
-    with_competitive_ratios,
 )
-from rpbench.results.runs import run_color, run_label, run_styles
+from rpbench.results.runs import run_color, run_label, run_styles, simulated_runs
 from rpbench.results.tables import csv_table, latex_table
 
 #: How a folder of another kind is named in the message refusing it (only comparison folders combine).
@@ -102,6 +101,11 @@ class Combined:
     def runs(self) -> dict[str, dict[str, Any]]:
         """Each column's meta.json run record (the offline notes read the bound's status there)."""
         return {c.key: (self.sources[c.members[0]].meta.get("runs") or {}).get(c.run, {}) for c in self.columns}
+
+    @property
+    def simulated(self) -> list[str]:
+        """The columns that are simulated runs."""
+        return simulated_columns(self.sources, self.columns)
 
 
 def combine(folders: Sequence[Path]) -> Combined:
@@ -308,7 +312,7 @@ def same_run(run: str, a: Source, b: Source) -> bool:
     if run_digest(a.meta, run) != run_digest(b.meta, run):
         return False
     shared = a.table.index.intersection(b.table.index)
-    rows = [k for k in shared if k not in TIMING_KPIS and k not in RATIO_ROWS]
+    rows = [k for k in shared if k not in TIMING_KPIS and k not in DERIVED_KPIS]
     x = a.table.loc[rows, run].to_numpy(dtype=float)
     y = b.table.loc[rows, run].to_numpy(dtype=float)
     return bool(np.allclose(x, y, rtol=SAME_RTOL, atol=SAME_ATOL, equal_nan=True))
@@ -323,16 +327,28 @@ def run_digest(meta: dict[str, Any], run: str) -> str | None:
     return json_sha256(run_spec(record)) if isinstance(record, dict) else None
 
 
+def simulated_columns(sources: list[Source], columns: list[Column]) -> list[str]:
+    """The keys of the columns that show a simulated run (by its folder's record)."""
+    return [c.key for c in columns if simulated_runs(sources[c.members[0]].meta, [c.run])]
+
+
 def combined_table(sources: list[Source], columns: list[Column]) -> pd.DataFrame:
-    """The KPI table of ``columns``; a ratio row whose offline run is one column is recomputed over every
-    column (one instance: its bound is every folder's), else each folder's own ratios stay."""
+    """The KPI table of ``columns``.  One instance: LB is the best saving over every folder's simulated runs,
+    and a ratio row whose offline run is one column divides every column by it; with an offline run differing
+    between folders (two columns), each folder's own ratio stays."""
     parts = []
     for col in columns:
         values = sources[col.members[0]].table[col.run]
         for i in col.members[1:]:  # a KPI only another folder's rpbench wrote
             values = values.combine_first(sources[i].table[col.run])
         parts.append(values.rename(col.key))
-    return with_competitive_ratios(pd.concat(parts, axis=1, sort=False))
+    table = pd.concat(parts, axis=1, sort=False)
+    own = table.loc[[k for k in DENOMINATORS if k in table.index]].copy()  # each folder's, from load_kpis
+    table = with_ratios(table, simulated_columns(sources, columns))
+    for row, oracle in DENOMINATORS.items():
+        if row in own.index and oracle not in table.columns:
+            table.loc[row] = own.loc[row]
+    return table
 
 
 def column_styles(sources: list[Source], columns: list[Column]) -> dict[str, tuple[str, str | None]]:
@@ -383,9 +399,17 @@ def run_notes(sources: list[Source], columns: list[Column]) -> list[str]:
 
 
 def ratio_notes(sources: list[Source], columns: list[Column], table: pd.DataFrame) -> list[str]:
-    """Where a ratio row divides a folder's runs by another folder's offline run, or cannot."""
+    """Where a ratio row divides a folder's runs by another folder's offline run or schedule, or cannot."""
     notes = []
-    for row, oracle in RATIO_ROWS.items():
+    lb = best_known(savings_of(table, simulated_columns(sources, columns)))
+    holder = next((c for c in columns if lb is not None and c.key == lb.run), None)
+    if holder is not None and len(sources) > 1:
+        notes.append(
+            f"{KPI_LABELS['competitive_ratio_best_known']}: every run is divided by the best known schedule over "
+            f"all the folders, {run_label(holder.key, column_styles(sources, [holder]))} of "
+            f"{_names(sources, holder.members)}, as the folders hold one instance."
+        )
+    for row, oracle in DENOMINATORS.items():
         holders = [c for c in columns if c.run == oracle]
         if not holders:
             continue
@@ -433,6 +457,8 @@ def combined_markdown(c: Combined, metrics: list[str] | None = None, *, figures:
     ]
     if metrics is None:
         lines += [markdown_table(c.table, unproven=c.unproven, styles=c.styles), ""]
+        bracket = bracket_line(c.table, c.simulated, fmt, c.styles)
+        lines += [bracket, ""] if bracket else []
         lines += unproven_notes(c.unproven, c.styles) + offline_notes(c.table, {"runs": c.runs})
     else:
         lines += [selected_markdown(c.table.loc[selected_rows(c.table, metrics)], c.styles), ""]
@@ -475,7 +501,10 @@ def write_combined(c: Combined, dest: Path, metrics: list[str] | None = None) ->
     headline-KPI figure ``kpis.png`` (with its SVG and PDF) into ``dest``; returns the files' paths."""
     rows = selected_rows(c.table, metrics)
     caption = f"{c.label}: the runs of {', '.join(s.name for s in c.sources)} combined"
-    tex = latex_table(c.table, rows, fmt, caption=caption, unproven=c.unproven, mark=UNPROVEN_MARK, styles=c.styles)
+    note = bracket_line(c.table, c.simulated, fmt, c.styles)
+    tex = latex_table(
+        c.table, rows, fmt, caption=caption, unproven=c.unproven, mark=UNPROVEN_MARK, styles=c.styles, note=note
+    )
     files.write_text(dest / layout.TABLE_TEX, tex)
     csv_table(c.table, rows, c.styles).to_csv(dest / layout.TABLE_CSV)
     png = kpi_figure(c.table, dest / layout.KPIS_PNG, c.label, fmt, c.styles)

@@ -1,14 +1,15 @@
 """An evaluation folder's tables and report, from its (day, seed) children alone.
 
-``units.csv`` gathers every child's KPI table (the competitive ratio rows included); ``leaderboard.csv``
+``units.csv`` gathers every child's KPI table (the ratio and bracket rows included); ``leaderboard.csv``
 and ``paired.csv`` are :func:`rpbench.results.leaderboard.leaderboard` and
-:func:`~rpbench.results.leaderboard.paired` of it under the protocol recorded in meta.json, so the checker
-recomputes all three from the children.
+:func:`~rpbench.results.leaderboard.paired` of it under the protocol recorded in meta.json, the leaderboard
+with its ranking (:mod:`rpbench.results.ranking`), so the checker recomputes all three from the children.
+A protocol ranking by the competitive ratio against the bound gets its other end, saving / best known
+schedule, beside it (:func:`board_metrics`): the ratio is an interval.
 """
 
 from __future__ import annotations
 
-from collections.abc import Collection
 from pathlib import Path
 
 import pandas as pd
@@ -17,10 +18,13 @@ from rpbench import files, results
 from rpbench.exceptions import ResultsError
 from rpbench.results import layout
 from rpbench.results.leaderboard import RATIO_OF_MEANS, Bootstrap, leaderboard, paired
+from rpbench.results.legacy import current_names
 from rpbench.results.metrics import KPI_LABELS
 from rpbench.results.plots import leaderboard_figure, seeds_by_day_figure
+from rpbench.results.ranking import RANKING_COLUMNS, ranked, run_groups
+from rpbench.results.ratios import RATIO_KPIS
 from rpbench.results.report import fmt, load_kpis
-from rpbench.results.runs import clairvoyant_runs, markdown_cell, run_label, run_styles
+from rpbench.results.runs import markdown_cell, run_label, run_styles
 from rpbench.results.tables import booktabs, latex_escape
 
 #: The leaderboard's figure (and its SVG and PDF beside it).
@@ -54,17 +58,44 @@ def bootstrap_of(meta: dict) -> Bootstrap:
     return Bootstrap(resamples=int(boot["resamples"]), seed=int(boot["seed"]), level=float(boot["level"]))
 
 
+def board_metrics(metrics: list[str]) -> list[str]:
+    """The leaderboard's metrics: the protocol's, ``competitive_ratio_best_known`` added after
+    ``competitive_ratio_bound`` (the two ends of the competitive ratio's interval)."""
+    if "competitive_ratio_bound" in metrics and "competitive_ratio_best_known" not in metrics:
+        at = metrics.index("competitive_ratio_bound") + 1
+        return [*metrics[:at], "competitive_ratio_best_known", *metrics[at:]]
+    return list(metrics)
+
+
+def unit_records(folder: Path) -> list[dict]:
+    """Every unit's run records (meta.json's ``runs``), in the order meta.json lists the units."""
+    meta = results.read_meta(folder)
+    return [results.read_meta(folder / name).get("runs") or {} for name in meta.get("children", [])]
+
+
 def tables(folder: Path) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame]:
-    """(units, leaderboard, paired) recomputed from the children."""
+    """(units, leaderboard with its ranking, paired) recomputed from the children."""
     meta = results.read_meta(folder)
     units = units_table(folder)
     units["day"] = units["day"].fillna("").astype(str)
     runs = list(meta["protocol"]["strategies"])
     metrics = list(meta["protocol"]["metrics"])
     boot = bootstrap_of(meta)
-    board = leaderboard(units, runs, metrics, boot)
-    online = [r for r in runs if results.read_meta(folder / meta["children"][0])["runs"][r]["kind"] == "simulation"]
-    return units, board, paired(units, online, metrics, boot)
+    groups = run_groups(unit_records(folder), runs)
+    board = ranked(leaderboard(units, runs, board_metrics(metrics), boot), groups, metrics[0], runs)
+    simulated = [r for r in runs if groups[r] != "offline"]
+    return units, board, paired(units, simulated, metrics, boot)
+
+
+def read_leaderboard(folder: Path) -> pd.DataFrame:
+    """``leaderboard.csv`` as today's rpbench names it, with its ranking (recomputed from the units' records
+    for a leaderboard written before rpbench recorded one)."""
+    board = current_names(results.read_csv(folder / layout.LEADERBOARD))
+    if set(RANKING_COLUMNS) <= set(board.columns):
+        return board
+    protocol = results.read_meta(folder)["protocol"]
+    runs = list(protocol["strategies"])
+    return ranked(board, run_groups(unit_records(folder), runs), protocol["metrics"][0], runs)
 
 
 def summarize(folder: Path) -> None:
@@ -81,7 +112,7 @@ def write_evaluation_report(folder: Path, name: str | None = None) -> Path:
     comparisons of that metric, and where each unit's folder is."""
     meta = results.read_meta(folder)
     protocol = meta["protocol"]
-    board = results.read_csv(folder / layout.LEADERBOARD)
+    board = read_leaderboard(folder)
     pairs = results.read_csv(folder / layout.PAIRED)
     child = results.read_meta(folder / meta["children"][0])
     styles = run_styles(child)
@@ -109,15 +140,14 @@ def write_evaluation_report(folder: Path, name: str | None = None) -> Path:
         "",
         f"Mean over the (day, seed) runs and its {level} interval: a two-stage bootstrap over days, then seeds "
         f"within a day (undated: over seeds; {protocol['bootstrap']['resamples']} resamples, generator seed "
-        f"{protocol['bootstrap']['seed']}). Ranked by {KPI_LABELS.get(rank, rank)}. The competitive ratio is the "
-        "mean over runs of saving / bound (a mean of ratios); the last column is mean saving / mean bound "
-        "saving (a ratio of means).",
+        f"{protocol['bootstrap']['seed']}). Ranked by {KPI_LABELS.get(rank, rank)}: the online runs first, then "
+        "the clairvoyant runs apart (they read the day's orders before they were revealed), then the offline "
+        "runs (references, not schedules); `leaderboard.csv` records each run's group and rank. The competitive "
+        "ratio is an interval, from the mean over runs of saving / upper bound to the mean of saving / best known "
+        "schedule (means of ratios); the last column is mean saving / mean bound saving (a ratio of means).",
         "",
     ]
-    apart = clairvoyant_runs(child)
-    if apart & set(protocol["strategies"]):
-        lines[-2] += " Clairvoyant runs read the day's orders before they were revealed: they are ranked apart, last."
-    head, body = leaderboard_rows(board, protocol, styles, clairvoyant=apart)
+    head, body = leaderboard_rows(board, protocol, styles)
     lines += ["| " + " | ".join(map(markdown_cell, head)) + " |", "|---|" + "---:|" * (len(head) - 1)]
     lines += ["| " + " | ".join(map(markdown_cell, row)) + " |" for row in body]
     lines += ["", *_figure_lines(folder, board, protocol, styles, level)]
@@ -153,24 +183,22 @@ def write_evaluation_report(folder: Path, name: str | None = None) -> Path:
     return path
 
 
-def leaderboard_rows(
-    board: pd.DataFrame, protocol: dict, styles, *, clairvoyant: Collection[str] = ()
-) -> tuple[list[str], list[list[str]]]:
-    """The leaderboard as printed: a header (strategy, each metric, the ratio of means) and a row per run,
-    ranked by the protocol's first metric, each cell "mean [low, high]" as the report formats the KPI.  The
-    ``clairvoyant`` runs (they read the future) are ranked apart, after the others."""
-    metrics = list(protocol["metrics"])
-    cols = [*metrics, RATIO_OF_MEANS]
-    head = ["Strategy"] + [KPI_LABELS.get(k, "Saving: ratio of means") for k in cols]
-    order = board[board["kpi"] == metrics[0]].sort_values("mean", ascending=False)["run"].tolist()
-    order = [r for r in order if r not in clairvoyant] + [r for r in order if r in clairvoyant]
+def leaderboard_rows(board: pd.DataFrame, protocol: dict, styles) -> tuple[list[str], list[list[str]]]:
+    """The leaderboard as printed: a header (rank, strategy, each metric, the ratio of means) and a row per run
+    in the order of its recorded ranking (:mod:`rpbench.results.ranking`), each cell "mean [low, high]" as the
+    report formats the KPI; a run without rows comes last."""
+    cols = [*board_metrics(list(protocol["metrics"])), RATIO_OF_MEANS]
+    head = ["Rank", "Strategy"] + [KPI_LABELS.get(k, "Saving: ratio of means") for k in cols]
+    first = board.drop_duplicates("run").set_index("run")
+    order = [str(r) for r in first.sort_values("rank", kind="stable").index]
     order += [r for r in protocol["strategies"] if r not in order]
     cell = board.set_index(["run", "kpi"])
     body = []
     for run in order:
-        row = [run_label(run, styles)]
+        row = [_rank_cell(run, first), run_label(run, styles)]
+        offline = run in first.index and first.loc[run, "group"] == "offline"
         for k in cols:
-            if (run, k) in cell.index:
+            if (run, k) in cell.index and not (offline and k in RATIO_KPIS):  # an older leaderboard ranked its 1.000
                 r = cell.loc[(run, k)]
                 key = "competitive_ratio_bound" if k == RATIO_OF_MEANS else k
                 row.append(f"{fmt(key, r['mean'])} [{fmt(key, r['ci_low'])}, {fmt(key, r['ci_high'])}]")
@@ -180,11 +208,23 @@ def leaderboard_rows(
     return head, body
 
 
+def _rank_cell(run: str, first: pd.DataFrame) -> str:
+    """A run's place in the printed leaderboard: "online 1", "clairvoyant 1" (ranked apart), or "reference"
+    for an offline run (``first``: the leaderboard's first row per run, with its group and rank)."""
+    if run not in first.index:
+        return "/"
+    group = str(first.loc[run, "group"])
+    if group == "offline":
+        return "reference"
+    peers = first[first["group"] == group]["rank"]
+    return f"{group} {int((peers < first.loc[run, 'rank']).sum()) + 1}"
+
+
 def _figure_lines(folder: Path, board: pd.DataFrame, protocol: dict, styles, level: str) -> list[str]:
     """Draw the leaderboard and the first metric per day; return the report lines embedding them."""
     title = f"rpbench evaluation {protocol['name']} version {protocol['version']}"
-    leaderboard_figure(board, protocol["metrics"], folder / LEADERBOARD_PNG, f"{title}: mean and {level} interval",
-                       styles)  # fmt: skip
+    metrics = board_metrics(list(protocol["metrics"]))
+    leaderboard_figure(board, metrics, folder / LEADERBOARD_PNG, f"{title}: mean and {level} interval", styles)
     lines = [
         f"![leaderboard: mean and {level} interval]({LEADERBOARD_PNG})",
         "",

@@ -28,6 +28,8 @@ from rpbench.oracle.runs import ORACLE_RUNS
 from rpbench.oracle.solve import OracleResult
 from rpbench.results import layout
 from rpbench.results.check import inputs_digest
+from rpbench.results.metrics import BOUND_MATCHING_KPIS
+from rpbench.results.ratios import BEST_KNOWN_FIELD, best_known, derived_rows
 from rpbench.results.store import environment, save_network, save_trajectories, write_json
 from rpbench.scenarios.base import Scenario
 from rpbench.sim.simulator import SimResult
@@ -57,9 +59,11 @@ class StrategyRun:
 
 
 def oracle_kpis(result: OracleResult) -> dict[str, float]:
-    """The numeric KPIs of an offline run (its solver facts go to meta.json)."""
+    """The numeric KPIs of an offline run (its solver facts go to meta.json); the upper bound's matching
+    statistics under their own names (:data:`~rpbench.results.metrics.BOUND_MATCHING_KPIS`): they bound nothing."""
+    rename = BOUND_MATCHING_KPIS if result.is_upper_bound else {}
     return {
-        k: float(v)
+        rename.get(k, k): float(v)
         for k, v in result.kpis().items()
         if isinstance(v, (int, float, np.number)) and not isinstance(v, bool) and k != "variant"
     }
@@ -73,20 +77,13 @@ def bound_by_hour(pairs: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame({"hour": saving.index, "total_saving_km": saving.to_numpy(), "run": "bound"})
 
 
-def competitive_ratio_rows(runs: Sequence[StrategyRun], offline: dict[str, OracleResult]) -> list[dict[str, Any]]:
-    """``competitive_ratio_bound`` of every simulated run: its saving / the proven upper bound (docs/bound.md)."""
-    bound = offline.get("bound")
-    if bound is None:
-        return []
-    bound_km = oracle_kpis(bound)["total_saving_km"]
-    return [
-        {
-            "run": r.name,
-            "kpi": "competitive_ratio_bound",
-            "value": r.kpis["total_saving_km"] / bound_km if bound_km else float("nan"),
-        }
-        for r in runs
-    ]
+def derived_kpi_rows(runs: Sequence[StrategyRun], offline: dict[str, OracleResult]) -> list[dict[str, Any]]:
+    """kpis.csv's rows derived from the other runs (:mod:`rpbench.results.ratios`): each simulated run's
+    competitive ratios and saving / Oracle-1, and with a bound LB and U / LB as rows of the bound."""
+    savings = {r.name: r.kpis["total_saving_km"] for r in runs}
+    offline_savings = {name: oracle_kpis(res)["total_saving_km"] for name, res in offline.items()}
+    rows = derived_rows(savings, offline_savings)
+    return [{"run": run, "kpi": k, "value": v} for run, row in rows.items() for k, v in row.items()]
 
 
 def copy_artefacts(artefacts: dict[str, tuple[str, Path]], run_dir: Path) -> dict[str, str]:
@@ -150,7 +147,6 @@ def write_folder(
             "label": r.label,
             "color": r.color,
         }
-    tidy += competitive_ratio_rows(runs, offline)
     for name, res in offline.items():
         d = folder / layout.RUNS / name
         d.mkdir(parents=True)
@@ -174,7 +170,9 @@ def write_folder(
             "label": ORACLE_RUNS[name].label,
             "color": ORACLE_RUNS[name].color,
         }
+    tidy += derived_kpi_rows(runs, offline)
     pd.DataFrame(tidy).to_csv(folder / layout.KPIS, index=False)
+    lb = best_known({r.name: r.kpis["total_saving_km"] for r in runs})
     if rounds:
         pd.concat(rounds, ignore_index=True).to_csv(folder / layout.ROUNDS, index=False)
     if hourly and "bound" in offline:
@@ -202,6 +200,8 @@ def write_folder(
         "preset": preset.as_dict(),
         "strategies": list(order),
         "runs": meta_runs,
+        # the run that gave LB, the best known schedule (docs/simulator.md; rpbench check recomputes it)
+        BEST_KNOWN_FIELD: lb.record() if lb is not None else None,
         # What `rpbench check` holds the folder to (docs/guarantees.md): every run folder written, and the
         # SHA-256 of the inputs, parameters and run options, so that a deleted run or an edit is caught.
         "manifest": {"runs": list(meta_runs)},

@@ -6,6 +6,7 @@ the checker recomputes them, so they live here, below both.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import pandas as pd
@@ -13,13 +14,13 @@ import pandas as pd
 from rpbench import results
 from rpbench.exceptions import ResultsError
 from rpbench.results.metrics import KPI_ORDER
+from rpbench.results.plots import RATIO_INTERVAL
+from rpbench.results.ratios import BOUND, best_known, over, savings_of
 from rpbench.results.report import load_kpis
+from rpbench.results.runs import simulated_runs
 
-#: The KPIs of a multi-day report's per-day plots (PNG and report.html).
-MULTIDAY_PLOT_KPIS = [k for k in KPI_ORDER if k != "platform_profit_cny"] + [
-    "competitive_ratio_bound",
-    "competitive_ratio",
-]
+#: The KPIs of a multi-day report's per-day plots (PNG and report.html); the competitive ratio as its interval.
+MULTIDAY_PLOT_KPIS = [k for k in KPI_ORDER if k != "platform_profit_cny"] + [RATIO_INTERVAL, "saving_over_oracle1"]
 
 
 def day_folders(parent: Path) -> list[Path]:
@@ -28,7 +29,7 @@ def day_folders(parent: Path) -> list[Path]:
 
 
 def by_day_table(parent: Path) -> pd.DataFrame:
-    """Tidy (date, run, kpi, value) over the day folders, with the ratio rows of the offline runs present."""
+    """Tidy (date, run, kpi, value) over the day folders, each day's ratio and bracket rows included."""
     frames = []
     for day in day_folders(parent):
         wide = load_kpis(day)
@@ -37,6 +38,27 @@ def by_day_table(parent: Path) -> pd.DataFrame:
     if not frames:
         raise ResultsError(f"{str(parent)!r} holds no per-day results folders")
     return pd.concat(frames, ignore_index=True)[["date", "run", "kpi", "value"]]
+
+
+def bracket_by_day(parent: Path) -> pd.DataFrame:
+    """Per day of a multi-day folder, the bracket around its optimum (:mod:`rpbench.results.ratios`): U (NaN
+    without a bound run), LB, the run that gave LB and U / LB."""
+    rows = []
+    for day in day_folders(parent):
+        wide = load_kpis(day)
+        lb = best_known(savings_of(wide, simulated_runs(results.read_meta(day), map(str, wide.columns))))
+        bound = float(wide.loc["total_saving_km", BOUND]) if BOUND in wide.columns else math.nan
+        rows.append(
+            {
+                "date": day.name,
+                "upper_bound_km": bound,
+                "best_known_saving_km": lb.saving_km if lb else math.nan,
+                "best_known_run": lb.run if lb else "",
+                "bound_over_best_known": over(bound, lb.saving_km) if lb else math.nan,
+            }
+        )
+    return pd.DataFrame(rows, columns=["date", "upper_bound_km", "best_known_saving_km", "best_known_run",
+                                       "bound_over_best_known"])  # fmt: skip
 
 
 def sweep_table(parent: Path) -> pd.DataFrame:

@@ -17,6 +17,12 @@ import pandas as pd
 from rpbench.results.metrics import KPI_LABELS
 from rpbench.results.runs import Styles, run_color, run_label
 
+#: The competitive ratio drawn as its interval [saving / U, saving / LB] (docs/simulator.md): the pseudo-KPI of
+#: the panels and menus that draw it, from its two ends.
+RATIO_INTERVAL = "competitive_ratio_interval"
+RATIO_ENDS = ("competitive_ratio_bound", "competitive_ratio_best_known")
+#: What the interval's marks mean, in a title or caption.
+INTERVAL_MARKS = "low end: saving / upper bound U; ◆ saving / best known schedule LB"
 HOURLY_PANELS = [
     ("avg_shared_m", "(a) Average shared distance (m)"),
     ("avg_detour_m", "(b) Average detour (m)"),
@@ -38,7 +44,11 @@ KPI_AXES = {
     "total_occupied_km": "occupied driving (km)",
     "total_saving_km": "distance saving (km)",
     "competitive_ratio_bound": "saving / proven upper bound",
-    "competitive_ratio": "saving / Oracle-1's saving",
+    "competitive_ratio_best_known": "saving / best known schedule's saving",
+    RATIO_INTERVAL: "saving / OPT, an interval",
+    "saving_over_oracle1": "saving / Oracle-1's saving",
+    "bound_over_best_known": "upper bound / best known saving",
+    "best_known_saving_km": "best known saving (km)",
     "decision_p50_s": "decision time per round (s)",
     "decision_p95_s": "decision time per round (s)",
     "decision_max_s": "decision time per round (s)",
@@ -52,7 +62,7 @@ KPI_PANELS = [
     ("response_rate", "Response rate"),
     ("avg_detour_m", "Average detour"),
     ("avg_pickup_time_s", "Average pick-up time"),
-    ("competitive_ratio_bound", "Competitive ratio"),
+    (RATIO_INTERVAL, "Competitive ratio: bar saving / U, ◆ saving / LB"),
 ]
 #: The panels of :func:`timeline_figure`: state (:data:`rpbench.results.metrics.TIMELINE_STATES`), title.
 TIMELINE_PANELS = [
@@ -200,7 +210,8 @@ def hourly_figure(hourly: pd.DataFrame, path: Path, title: str, styles: Styles |
 
 
 def per_day_figures(by_day: pd.DataFrame, folder: Path, kpis: list[str], styles: Styles | None = None) -> list[Path]:
-    """One figure per KPI: value per day, one series per run (``by_day`` columns date, run, kpi, value).
+    """One figure per KPI: value per day, one series per run (``by_day`` columns date, run, kpi, value);
+    :data:`RATIO_INTERVAL` draws each run's competitive ratio per day as its interval.
 
     Days are discrete: one tick per day on a categorical axis, and markers, not lines, since nothing lies
     between two days; runs are offset a little within a day so that equal values stay visible."""
@@ -212,24 +223,28 @@ def per_day_figures(by_day: pd.DataFrame, folder: Path, kpis: list[str], styles:
     runs = list(dict.fromkeys(str(r) for r in by_day["run"]))
     width = 0.6 / max(len(runs), 1)
     for kpi in kpis:
-        sel = by_day[(by_day["kpi"] == kpi) & by_day["value"].notna()]  # only runs with data are drawn
+        if kpi == RATIO_INTERVAL:
+            sel = interval_rows(by_day)
+        else:
+            sel = by_day[(by_day["kpi"] == kpi) & by_day["value"].notna()]  # only runs with data are drawn
         if sel.empty:
             continue
         fig, ax = plt.subplots(figsize=(9.5, 3.6))
         for run, g in sel.groupby("run", sort=False):
             shift = (runs.index(str(run)) - (len(runs) - 1) / 2) * width
-            ax.plot(
-                [position[str(d)] + shift for d in g["date"]],
-                g["value"],
-                marker="o",
-                ms=4,
-                linestyle="none",
-                label=run_label(str(run), styles),
-                color=colors[str(run)],
-            )
+            x = np.array([position[str(d)] + shift for d in g["date"]])
+            style = {"label": run_label(str(run), styles), "color": colors[str(run)]}
+            if kpi != RATIO_INTERVAL:
+                ax.plot(x, g["value"], marker="o", ms=4, linestyle="none", **style)
+                continue
+            low, high = g["low"].to_numpy(dtype=float), g["high"].to_numpy(dtype=float)
+            ax.vlines(x, np.where(np.isnan(low), 0.0, low), high, color=colors[str(run)], lw=1.6)
+            ax.plot(x, low, marker="o", ms=4, linestyle="none", **style)
+            ax.plot(x, high, marker="D", ms=4, linestyle="none", color=colors[str(run)])
         ax.set_xticks(range(len(days)), days, rotation=45, ha="right", fontsize=8)
         ax.set_xlim(-0.5, len(days) - 0.5)
-        ax.set_title(KPI_LABELS.get(kpi, kpi), fontsize=10)
+        interval = "Competitive ratio per day: ● saving / upper bound up to ◆ saving / best known schedule"
+        ax.set_title(interval if kpi == RATIO_INTERVAL else KPI_LABELS.get(kpi, kpi), fontsize=10)
         ax.set_xlabel("day", fontsize=9)
         ax.set_ylabel(axis_label(kpi), fontsize=9)
         ax.grid(alpha=0.3, axis="y")
@@ -242,18 +257,35 @@ def per_day_figures(by_day: pd.DataFrame, folder: Path, kpis: list[str], styles:
     return paths
 
 
+def interval_rows(tidy: pd.DataFrame, x: str = "date") -> pd.DataFrame:
+    """Per ``x`` and run of a tidy table (``x``, run, kpi, value): the competitive ratio's ends ``low``
+    (saving / U) and ``high`` (saving / LB), where either is defined."""
+    sel = tidy[tidy["kpi"].isin(RATIO_ENDS)]
+    ends = {k: sel[sel["kpi"] == k].set_index([x, "run"])["value"] for k in RATIO_ENDS}
+    wide = pd.DataFrame({"low": ends[RATIO_ENDS[0]], "high": ends[RATIO_ENDS[1]]}).dropna(how="all")
+    order = list(dict.fromkeys(zip(sel[x], sel["run"], strict=True)))
+    return wide.reindex([k for k in order if k in wide.index]).reset_index()
+
+
 def leaderboard_figure(
     board: pd.DataFrame, metrics: Sequence[str], path: Path, title: str, styles: Styles | None = None
 ) -> Path:
     """An evaluation's leaderboard (``leaderboard.csv`` layout): one panel per metric, each run's mean as a bar
-    with its bootstrap interval as an error bar; a panel shows only the runs with a value."""
+    with its bootstrap interval as an error bar; a panel shows only the runs with a value.  The competitive
+    ratio's two ends share one panel (:func:`_leaderboard_interval`)."""
     plt = _pyplot()
-    metrics = [m for m in metrics if (board["kpi"] == m).any()]
+    metrics = interval_metrics([m for m in metrics if (board["kpi"] == m).any()])
     ncols = min(3, max(len(metrics), 1))
     nrows = max(1, -(-len(metrics) // ncols))
     fig, axes = plt.subplots(nrows, ncols, figsize=(4 * ncols, 3.6 * nrows), squeeze=False)
     colors = run_colors(list(dict.fromkeys(str(r) for r in board["run"])), styles)
     for ax, kpi in zip(axes.ravel(), metrics, strict=False):
+        ax.set_ylabel(axis_label(kpi), fontsize=9)
+        ax.axhline(0, color="black", lw=0.6)
+        ax.grid(alpha=0.3, axis="y")
+        if kpi == RATIO_INTERVAL:
+            _leaderboard_interval(ax, board, colors, styles)
+            continue
         sel = board[(board["kpi"] == kpi) & board["mean"].notna()]
         runs = [str(r) for r in sel["run"]]
         mean = sel["mean"].to_numpy(dtype=float)
@@ -264,12 +296,43 @@ def leaderboard_figure(
         ax.errorbar(x, mean, yerr=np.vstack([below, above]), fmt="none", ecolor="black", elinewidth=1, capsize=3)
         ax.set_xticks(x, [run_label(r, styles) for r in runs], rotation=35, ha="right", fontsize=8)
         ax.set_title(KPI_LABELS.get(kpi, kpi).split(" (")[0], fontsize=10)
-        ax.set_ylabel(axis_label(kpi), fontsize=9)
-        ax.axhline(0, color="black", lw=0.6)
-        ax.grid(alpha=0.3, axis="y")
     for ax in axes.ravel()[len(metrics) :]:
         ax.set_visible(False)
     return _save(plt, fig, path, title)
+
+
+def interval_metrics(metrics: Sequence[str]) -> list[str]:
+    """``metrics`` with the competitive ratio's two ends, when both are there, drawn as one
+    :data:`RATIO_INTERVAL` in the place of the first."""
+    metrics = list(metrics)
+    if not set(RATIO_ENDS) <= set(metrics):
+        return metrics
+    first = min(metrics.index(k) for k in RATIO_ENDS)
+    rest = [m for m in metrics if m not in RATIO_ENDS]
+    return [*rest[:first], RATIO_INTERVAL, *rest[first:]]
+
+
+def _leaderboard_interval(ax: Any, board: pd.DataFrame, colors: dict[str, str], styles: Styles | None) -> None:
+    """Each run's mean competitive ratio as an interval: a bar up to the mean of saving / U, a segment up to a
+    diamond at the mean of saving / LB, each end with its bootstrap interval."""
+    ends = [board[(board["kpi"] == k) & board["mean"].notna()].set_index("run") for k in RATIO_ENDS]
+    runs = [str(r) for r in dict.fromkeys([*ends[0].index, *ends[1].index])]
+    x = np.arange(len(runs))
+
+    def column(end: pd.DataFrame, name: str) -> np.ndarray:
+        return np.array([float(end.loc[r, name]) if r in end.index else np.nan for r in runs])
+
+    low, high = column(ends[0], "mean"), column(ends[1], "mean")
+    bars = ~np.isnan(low)
+    ax.bar(x[bars], low[bars], color=[colors[r] for r, b in zip(runs, bars, strict=True) if b], width=0.7)
+    side = x + 0.2  # the upper end beside the bar's own interval, so that the two intervals stay apart
+    ax.vlines(side, np.where(bars, low, 0.0), high, colors="black", lw=1.2, linestyles=":")
+    ax.plot(side, high, marker="D", ms=5, ls="none", color="black")
+    for end, at, mean, color in ((ends[0], x, low, "black"), (ends[1], side, high, "grey")):
+        err = np.vstack([mean - column(end, "ci_low"), column(end, "ci_high") - mean])
+        ax.errorbar(at, mean, yerr=err, fmt="none", ecolor=color, elinewidth=1, capsize=3)
+    ax.set_xticks(x, [run_label(r, styles) for r in runs], rotation=35, ha="right", fontsize=8)
+    ax.set_title(f"Competitive ratio ({INTERVAL_MARKS})", fontsize=8)
 
 
 def seeds_by_day_figure(
@@ -324,6 +387,42 @@ def sweep_figure(
     return _save(plt, fig, path, title, rect=(0, 0.08, 1, 1) if below else None)
 
 
+def interval_ends(table: pd.DataFrame) -> tuple[list[str], np.ndarray, np.ndarray]:
+    """The runs of ``table`` (KPI rows x run columns) with a competitive ratio, and its two ends: saving / U
+    (NaN without a bound) and saving / LB (NaN when LB is not > 0)."""
+    rows = [table.loc[k] if k in table.index else pd.Series(np.nan, index=table.columns) for k in RATIO_ENDS]
+    runs = [str(r) for r in table.columns if pd.notna(rows[0][r]) or pd.notna(rows[1][r])]
+    low = np.array([float(rows[0][r]) for r in runs], dtype=float)
+    high = np.array([float(rows[1][r]) for r in runs], dtype=float)
+    return runs, low, high
+
+
+def _has_panel(table: pd.DataFrame, kpi: str) -> bool:
+    if kpi == RATIO_INTERVAL:
+        return bool(interval_ends(table)[0])
+    return kpi in table.index and bool(table.loc[kpi].notna().any())
+
+
+def _interval_panel(ax: Any, table: pd.DataFrame, colors: dict[str, str], text: Callable[[str, float], str],
+                    styles: Styles | None) -> None:  # fmt: skip
+    """Each run's competitive ratio as its interval: a bar up to saving / U, a segment from there up to a
+    diamond at saving / LB (from 0 without a bound), both ends written above."""
+    runs, low, high = interval_ends(table)
+    x = np.arange(len(runs))
+    bars = ~np.isnan(low)
+    ax.bar(x[bars], low[bars], color=[colors[r] for r, b in zip(runs, bars, strict=True) if b], width=0.7)
+    tops = ~np.isnan(high)
+    base = np.where(bars, low, 0.0)
+    ax.vlines(x[tops], base[tops], high[tops], colors="black", lw=1.4)
+    ax.plot(x[tops], high[tops], marker="D", ms=5, ls="none", color="black")
+    top = float(np.nanmax(np.r_[low, high, 1.0]))
+    for xi, lo, hi in zip(x, low, high, strict=True):
+        ends = [text(k, v) for k, v in zip(RATIO_ENDS[::-1], (hi, lo), strict=True) if not np.isnan(v)]
+        ax.text(xi, np.nanmax([lo, hi, 0.0]) + 0.04 * top, "\n".join(ends), ha="center", va="bottom", fontsize=6)
+    ax.set_ylim(0, top * 1.3)
+    ax.set_xticks(x, [run_label(r, styles) for r in runs], rotation=35, ha="right", fontsize=8)
+
+
 def kpi_figure(
     table: pd.DataFrame, path: Path, title: str, text: Callable[[str, float], str], styles: Styles | None = None
 ) -> Path:
@@ -331,16 +430,23 @@ def kpi_figure(
 
     ``table`` is the wide KPI table (KPI rows x run columns, as :func:`rpbench.results.report.load_kpis`);
     a panel shows only the runs with a value (offline runs have no response rate), the competitive ratio
-    only when the folder has a bound run; ``text(kpi, value)`` writes the value as the report's tables do.
+    as an interval (:func:`_interval_panel`, simulated runs only); ``text(kpi, value)`` writes the value as
+    the report's tables do.
     """
     plt = _pyplot()
-    panels = [(k, name) for k, name in KPI_PANELS if k in table.index and table.loc[k].notna().any()]
+    panels = [(k, name) for k, name in KPI_PANELS if _has_panel(table, k)]
     ncols = 3
     nrows = max(1, -(-len(panels) // ncols))
     fig, axes = plt.subplots(nrows, ncols, figsize=(12, 3.7 * nrows), squeeze=False)
     runs = [str(r) for r in table.columns]
     colors = run_colors(runs, styles)
     for ax, (kpi, name) in zip(axes.ravel(), panels, strict=False):
+        ax.set_title(name, fontsize=10)
+        ax.set_ylabel(axis_label(kpi), fontsize=9)
+        ax.grid(alpha=0.3, axis="y")
+        if kpi == RATIO_INTERVAL:
+            _interval_panel(ax, table, colors, text, styles)
+            continue
         row = table.loc[kpi]
         shown = [r for r in runs if pd.notna(row[r])]
         values = np.array([float(row[r]) for r in shown])
@@ -359,10 +465,7 @@ def kpi_figure(
         low, high = min(0.0, float(values.min())), max(0.0, float(values.max()))
         ax.set_ylim(low - (0.12 * span if low < 0 else 0), high + 0.12 * span)
         ax.set_xticks(x, [run_label(r, styles) for r in shown], rotation=35, ha="right", fontsize=8)
-        ax.set_title(name, fontsize=10)
-        ax.set_ylabel(axis_label(kpi), fontsize=9)
         ax.axhline(0, color="black", lw=0.6)
-        ax.grid(alpha=0.3, axis="y")
     for ax in axes.ravel()[len(panels) :]:
         ax.set_visible(False)
     return _save(plt, fig, path, title)

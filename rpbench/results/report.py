@@ -20,6 +20,7 @@ import pandas as pd
 from rpbench import files, paper, results
 from rpbench.exceptions import ResultsError
 from rpbench.results import layout
+from rpbench.results.legacy import current_names
 from rpbench.results.metrics import (
     DECISION_PARTS,
     EXTRA_KPIS,
@@ -31,18 +32,16 @@ from rpbench.results.metrics import (
     state_spells,
 )
 from rpbench.results.plots import hourly_figure, kpi_figure, timeline_figure
-from rpbench.results.runs import Styles, markdown_cell, run_label, run_styles
+from rpbench.results.ratios import DERIVED_KPIS, RATIO_KPIS, bracket_line, with_ratios
+from rpbench.results.runs import Styles, markdown_cell, run_label, run_styles, simulated_runs
 from rpbench.results.tables import csv_table, latex_table
 
-#: Competitive-ratio rows: KPI name -> the oracle run whose total saving is the denominator.
-#: Ratio rows: KPI name -> the offline run whose total saving is the denominator.  Only the first is a
-#: competitive ratio: the bound is proven (docs/bound.md); Oracle-1 is the paper's reference.
-RATIO_ROWS = {"competitive_ratio_bound": "bound", "competitive_ratio": "oracle1"}
 #: One line under every table with an Oracle-1 column: why its ratio can exceed 1.
 ORACLE1_NOTE = (
     "Oracle-1 (the paper's) pairs only orders requested within K̄ of each other, while the strategies "
-    "also pair en route, so a strategy can save more than Oracle-1: the saving / Oracle-1 row is a "
-    "reference, not a competitive ratio; the competitive ratio divides by the proven upper bound."
+    "also pair en route, so a strategy can save more than Oracle-1: the saving / Oracle-1 row is the paper's "
+    "reference, not a competitive ratio; the competitive ratio divides by the proven upper bound and by the "
+    "best known schedule."
 )
 #: Marks the column of a run whose numbers rest on solver answers not proven optimal (see :func:`unproven_runs`).
 UNPROVEN_MARK = "*"
@@ -68,9 +67,12 @@ PREPARE_SHOWN_S = 0.05
 _DECIMALS = {
     "response_rate": 2,
     "pairing_ratio": 2,
-    "competitive_ratio": 3,
     "competitive_ratio_bound": 3,
+    "competitive_ratio_best_known": 3,
+    "saving_over_oracle1": 3,
+    "bound_over_best_known": 2,
     "pairing_ratio_of_orders": 2,
+    "matching_pairing_ratio": 2,
 }
 
 
@@ -90,31 +92,23 @@ def fmt(kpi: str, value) -> str:
 
 
 def load_kpis(folder: Path) -> pd.DataFrame:
-    """Wide KPI table (rows = KPI keys, columns = runs in meta.json's order)."""
+    """Wide KPI table (rows = KPI keys, columns = runs in meta.json's order; older KPI names read as today's,
+    :mod:`rpbench.results.legacy`), its ratio and bracket rows recomputed (:func:`~.ratios.with_ratios`)."""
     meta = results.read_meta(folder)
     tidy = results.read_csv(folder / "kpis.csv")
     missing = {"run", "kpi", "value"} - set(tidy.columns)
     if missing:
         raise ResultsError(f"{str(folder / 'kpis.csv')!r} lacks column(s) {', '.join(sorted(missing))}")
-    wide = tidy.pivot(index="kpi", columns="run", values="value")
+    wide = current_names(tidy).pivot(index="kpi", columns="run", values="value")
     order = [r for r in meta.get("strategies", []) if r in wide.columns] + [
         r for r in wide.columns if r not in meta.get("strategies", [])
     ]
-    return with_competitive_ratios(wide[order].drop(index=list(RATIO_ROWS), errors="ignore"))
-
-
-def with_competitive_ratios(wide: pd.DataFrame) -> pd.DataFrame:
-    """Add a saving / offline-saving row for each of :data:`RATIO_ROWS`' runs present (the bound's is the
-    competitive ratio; the paper's §4 reports FL = 63.2 % of Oracle-1)."""
-    for row, oracle in RATIO_ROWS.items():
-        if oracle in wide.columns and "total_saving_km" in wide.index:
-            best = wide.loc["total_saving_km", oracle]
-            wide.loc[row] = wide.loc["total_saving_km"] / best if best else np.nan
-    return wide
+    return with_ratios(wide[order], simulated_runs(meta, order))
 
 
 def table_rows(table: pd.DataFrame) -> list[str]:
-    return [k for k in KPI_ORDER if k in table.index] + [k for k in RATIO_ROWS if k in table.index]
+    """The rows of a comparison table: the paper's KPIs, then the ratios (:data:`~.ratios.RATIO_KPIS`)."""
+    return [k for k in KPI_ORDER if k in table.index] + [k for k in RATIO_KPIS if k in table.index]
 
 
 def text_table(
@@ -173,8 +167,8 @@ def markdown_table(
             if paper_values is not None:
                 ref = (
                     paper_values.get(c, {}).get(k, float("nan"))
-                    if k not in RATIO_ROWS
-                    else (paper.FL_COMPETITIVE_RATIO if c == "fl" and k == "competitive_ratio" else float("nan"))
+                    if k not in RATIO_KPIS
+                    else (paper.FL_SAVING_OVER_ORACLE1 if c == "fl" and k == "saving_over_oracle1" else float("nan"))
                 )
                 cell += f" ({fmt(k, ref)})"
             cells.append(cell)
@@ -332,6 +326,7 @@ def report_markdown(folder: Path, name: str | None = None, figures: list[str] | 
         lines += ["Command:", "", f"    {meta['command']}", ""]
     styles = run_styles(meta)
     lines += ["## Comparison (paper Table 2 layout)", "", markdown_table(table, unproven=unproven, styles=styles), ""]
+    lines += bracket_lines(table, meta, styles)
     lines += unproven_notes(unproven, styles) + offline_notes(table, meta)
     if paper.table2_applies(sc["name"], args.get("date"), args.get("sample")):
         lines += [
@@ -368,6 +363,12 @@ def report_markdown(folder: Path, name: str | None = None, figures: list[str] | 
         )
     lines += [f"KPI definitions: see `rpbench/results/metrics.py` (and the README). {verify}", ""]
     return "\n".join(lines)
+
+
+def bracket_lines(table: pd.DataFrame, meta: dict[str, Any], styles: Styles | None = None) -> list[str]:
+    """The line under a folder's comparison table saying where OPT lies (:func:`~.ratios.bracket_line`)."""
+    line = bracket_line(table, simulated_runs(meta, map(str, table.columns)), fmt, styles)
+    return [line, ""] if line else []
 
 
 def budget_lines(meta: dict[str, Any]) -> list[str]:
@@ -481,8 +482,9 @@ def write_paper_tables(folder: Path, dest: Path) -> None:
     caption = (
         f"{meta['scenario']['label']}: rpbench {meta['versions']['rpbench']}, solver preset {meta['preset']['name']}"
     )
+    note = bracket_line(table, simulated_runs(meta, map(str, table.columns)), fmt, styles)
     tex = latex_table(table, rows, fmt, caption=caption, unproven=unproven_runs(folder), mark=UNPROVEN_MARK,
-                      styles=styles)  # fmt: skip
+                      styles=styles, note=note)  # fmt: skip
     files.write_text(dest / layout.TABLE_TEX, tex)
     csv_table(table, rows, styles).to_csv(dest / layout.TABLE_CSV)
 
@@ -494,7 +496,12 @@ def figure_lines(folder: Path, dest: Path) -> list[str]:
     table = load_kpis(folder)
     styles = run_styles(meta)
     kpi_figure(table, dest / KPIS_PNG, sc["label"], fmt, styles)
-    no_ratio = "" if "bound" in table.columns else "; without an upper bound run there is no competitive ratio"
+    no_ratio = (
+        "; the competitive ratio is drawn as its interval, from saving / upper bound (bar) to saving / best known "
+        "schedule (the segment above it)"
+        if "bound" in table.columns
+        else "; without an upper bound run the competitive ratio is drawn only as saving / best known schedule"
+    )
     lines = [
         "## Figures",
         "",
@@ -650,7 +657,7 @@ def check_metrics(metrics: list[str] | None) -> list[str] | None:
     """Validate a user's KPI selection against the known KPI names."""
     if metrics is None:
         return None
-    known = KPI_ORDER + EXTRA_KPIS + list(RATIO_ROWS) + ["wall_s"]
+    known = KPI_ORDER + EXTRA_KPIS + list(DERIVED_KPIS) + ["wall_s"]
     unknown = [m for m in metrics if m not in known]
     if unknown or not metrics:
         raise ResultsError(f"unknown metric {unknown[0] if unknown else '(none)'!r}; known metrics: {', '.join(known)}")

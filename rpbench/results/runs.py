@@ -12,7 +12,7 @@ the future (``"clairvoyant": true`` in its record, or a class declaring
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from typing import Any
 
 from rpbench.oracle.runs import ORACLE_RUNS
@@ -28,6 +28,19 @@ def clairvoyant_runs(meta: Mapping[str, Any]) -> set[str]:
     """The runs of a folder's ``meta.json`` that read the future (their strategy was clairvoyant)."""
     runs = meta.get("runs") or {}
     return {name for name, record in runs.items() if isinstance(record, Mapping) and record.get("clairvoyant") is True}
+
+
+def simulated_runs(meta: Mapping[str, Any], runs: Iterable[str]) -> list[str]:
+    """The runs among ``runs`` that are simulations (meta.json's ``kind``; a run without a record: any name
+    that is not an offline run's), in the order given."""
+    records = meta.get("runs") or {}
+    out = []
+    for name in runs:
+        record = records.get(name)
+        kind = record.get("kind") if isinstance(record, Mapping) else None
+        if kind == "simulation" or (kind is None and name not in ORACLE_RUNS):
+            out.append(name)
+    return out
 
 
 def run_styles(meta: Mapping[str, Any]) -> dict[str, tuple[str, str | None]]:

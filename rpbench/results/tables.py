@@ -46,19 +46,21 @@ def latex_table(
     unproven: dict[str, str] | None = None,
     mark: str = "*",
     styles: Styles | None = None,
+    note: str | None = None,
 ) -> str:
     """A booktabs ``table`` environment of ``rows`` (KPI keys) x ``table``'s runs, cells as ``fmt(kpi, value)``
-    prints them, captioned; the columns of ``unproven`` runs carry ``mark``."""
+    prints them, captioned; the columns of ``unproven`` runs carry ``mark``; ``note``: a line under the table."""
     runs = [str(c) for c in table.columns]
     unproven = unproven or {}
     head = ["Metric"] + [latex_escape(run_label(r, styles)) + (f"$^{{{mark}}}$" if r in unproven else "") for r in runs]
     body = [[latex_escape(KPI_LABELS.get(k, k))] + [latex_escape(fmt(k, table.loc[k, r])) for r in runs] for k in rows]
-    return booktabs(head, body, caption=caption, what="the comparison table")
+    return booktabs(head, body, caption=caption, what="the comparison table", note=note)
 
 
-def booktabs(head: list[str], body: list[list[str]], *, caption: str, what: str) -> str:
+def booktabs(head: list[str], body: list[list[str]], *, caption: str, what: str, note: str | None = None) -> str:
     """A booktabs ``table`` environment: ``head`` and ``body`` cells already LaTeX (escaped), the first column
-    left-aligned, the others right-aligned; ``what`` names the table in its leading comment."""
+    left-aligned, the others right-aligned; ``what`` names the table in its leading comment; ``note`` (text,
+    escaped here) is set in small type under the table."""
     lines = [
         f"% rpbench: {what} (needs \\usepackage{{booktabs}})",
         "\\begin{table}[ht]",
@@ -70,7 +72,10 @@ def booktabs(head: list[str], body: list[list[str]], *, caption: str, what: str)
         "\\midrule",
     ]
     lines += [" & ".join(row) + " \\\\" for row in body]
-    lines += ["\\bottomrule", "\\end{tabular}", "\\end{table}", ""]
+    lines += ["\\bottomrule", "\\end{tabular}"]
+    if note:
+        lines += ["", f"\\smallskip{{\\footnotesize {latex_escape(note)}\\par}}"]
+    lines += ["\\end{table}", ""]
     return "\n".join(lines)
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import pandas as pd
 
 from rpbench.results.evaluation import leaderboard_rows
+from rpbench.results.ranking import ranked, run_groups
 from rpbench.results.runs import CLAIRVOYANT_MARK, clairvoyant_runs, run_label, run_styles
 
 META = {
@@ -45,9 +46,13 @@ def test_the_leaderboard_ranks_clairvoyant_runs_apart():
             for r, m in (("mb", 5.0), ("fl", 9.0), ("old", 7.0))
         ]
     )
-    protocol = {"metrics": ["total_saving_km"], "strategies": ["mb", "fl", "old"]}
+    runs = ["mb", "fl", "old"]
+    protocol = {"metrics": ["total_saving_km"], "strategies": runs}
     styles = run_styles(META)
-    _, body = leaderboard_rows(board, protocol, styles, clairvoyant=clairvoyant_runs(META))
-    assert [row[0] for row in body] == ["Old", "MB", "FL (clairvoyant)"]
-    _, mixed = leaderboard_rows(board, protocol, styles)
-    assert [row[0] for row in mixed] == ["FL (clairvoyant)", "Old", "MB"]  # by the metric alone
+    groups = run_groups([META["runs"]], runs)
+    assert groups == {"mb": "online", "fl": "clairvoyant", "old": "online"}
+    _, body = leaderboard_rows(ranked(board, groups, "total_saving_km", runs), protocol, styles)
+    assert [row[:2] for row in body] == [["online 1", "Old"], ["online 2", "MB"], ["clairvoyant 1", "FL (clairvoyant)"]]
+    online = dict.fromkeys(runs, "online")
+    _, mixed = leaderboard_rows(ranked(board, online, "total_saving_km", runs), protocol, styles)
+    assert [row[1] for row in mixed] == ["FL (clairvoyant)", "Old", "MB"]  # by the metric alone

@@ -23,7 +23,8 @@ from rpbench.harness.spec import RunSpec
 from rpbench.results import layout
 from rpbench.results.combine import combine
 from rpbench.results.metrics import TIMING_KPIS
-from rpbench.results.report import RATIO_ROWS, load_kpis
+from rpbench.results.ratios import DERIVED_KPIS
+from rpbench.results.report import load_kpis
 from rpbench.scenarios import ScenarioRequest
 
 TOY = ScenarioRequest("toy", sample=0.1, seed=5)
@@ -71,7 +72,7 @@ def test_two_folders_of_one_scenario_are_one_table_of_all_their_runs(runs):
     for folder in (runs["one"], runs["two"]):
         own = reported(folder)
         for run in own.columns:
-            kpis = [k for k in own.index if k not in RATIO_ROWS and (run != "mb" or k not in TIMING_KPIS)]
+            kpis = [k for k in own.index if k not in DERIVED_KPIS and (run != "mb" or k not in TIMING_KPIS)]
             assert combined.table.loc[kpis, run].tolist() == pytest.approx(own.loc[kpis, run].tolist(), nan_ok=True)
     # a run shown once carries the first folder's timings (its clock), and the notes say so
     assert combined.table.loc["wall_s", "mb"] == reported(runs["one"]).loc["wall_s", "mb"]
@@ -84,9 +85,27 @@ def test_the_shared_bound_divides_the_other_folders_runs(runs):
     table = combine([runs["two"], runs["one"]]).table
     expected = table.loc["total_saving_km", "fl"] / reported(runs["one"]).loc["total_saving_km", "bound"]
     assert table.loc["competitive_ratio_bound", "fl"] == pytest.approx(expected)
-    assert table.loc["competitive_ratio_bound", "bound"] == pytest.approx(1.0)
+    assert pd.isna(table.loc["competitive_ratio_bound", "bound"])  # the bound has no ratio of its own
     notes = combine([runs["one"], runs["two"]]).notes
     assert any("the runs of `two` are divided by Upper bound of `one`" in note for note in notes)
+
+
+def test_the_best_known_schedule_is_the_best_run_of_every_folder(runs):
+    """One instance: LB is the largest saving among every folder's simulated runs, and divides them all."""
+    combined = combine([runs["one"], runs["two"], runs["three"]])
+    table = combined.table
+    savings = table.loc["total_saving_km", ["mb", "two/fl", "three/fl"]]
+    best = savings.idxmax()
+    assert table.loc["competitive_ratio_best_known", best] == 1.0
+    for run in savings.index:
+        assert table.loc["competitive_ratio_best_known", run] == pytest.approx(savings[run] / savings.max())
+    assert table.loc["best_known_saving_km", "bound"] == pytest.approx(savings.max())
+    assert table.loc["bound_over_best_known", "bound"] == pytest.approx(
+        table.loc["total_saving_km", "bound"] / savings.max()
+    )
+    assert any("divided by the best known schedule over all the folders" in note for note in combined.notes)
+    md, _ = render([runs["one"], runs["two"], runs["three"]])
+    assert "OPT lies in [LB, U] = [" in md and "best known schedule: " in md
 
 
 def test_a_run_name_of_two_distinct_runs_is_one_column_per_folder(runs):
@@ -123,7 +142,7 @@ def test_two_distinct_bounds_leave_each_folder_its_own_ratios(runs, tmp_path):
     assert list(combined.table.columns) == ["mb", "fl", "one/bound", "other/bound"]
     ratio = combined.table.loc["competitive_ratio_bound"]
     assert ratio["mb"] == pytest.approx(load_kpis(runs["one"]).loc["competitive_ratio_bound", "mb"])
-    assert pd.isna(ratio["fl"]) and ratio["other/bound"] == pytest.approx(1.0)
+    assert pd.isna(ratio["fl"]) and pd.isna(ratio["other/bound"])
     assert any("Upper bound differs between the folders" in note for note in combined.notes)
 
 

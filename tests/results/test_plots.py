@@ -16,8 +16,10 @@ from rpbench.harness.spec import RunSpec
 from rpbench.results.check import check_folder
 from rpbench.results.metrics import count_at, state_spells
 from rpbench.results.plots import (
+    RATIO_INTERVAL,
     bench_figure,
     hourly_figure,
+    interval_metrics,
     kpi_figure,
     leaderboard_figure,
     per_day_figures,
@@ -214,6 +216,50 @@ def test_kpi_bars_leave_out_runs_without_the_kpi(tmp_path, figures):
     assert by_title["Total distance saving"].get_ylabel() == "distance saving (km)"
     # each bar carries its value as the report's tables print it
     assert [t.get_text() for t in by_title["Total distance saving"].texts] == ["0.0", "111", "250"]
+
+
+def test_the_competitive_ratio_is_drawn_as_its_interval(tmp_path, figures):
+    """A bar up to saving / U, a segment from there up to a diamond at saving / LB; offline runs have none."""
+    table = pd.DataFrame(
+        {"mb": [60.0, 0.5, 0.6], "hindsight": [100.0, 0.8333, 1.0], "bound": [120.0, np.nan, np.nan]},
+        index=["total_saving_km", "competitive_ratio_bound", "competitive_ratio_best_known"],
+    )
+    kpi_figure(table, tmp_path / "k.png", "title", fmt)
+    (fig,) = figures
+    ratio = next(ax for ax in panels(fig) if ax.get_title().startswith("Competitive ratio"))
+    assert [t.get_text() for t in ratio.get_xticklabels()] == ["MB", "Hindsight (clairvoyant)"]
+    assert [round(p.get_height(), 4) for p in ratio.patches] == [0.5, 0.8333]  # the bars: saving / U
+    (segments,) = ratio.collections
+    assert [tuple(np.round(seg[:, 1], 4)) for seg in segments.get_segments()] == [(0.5, 0.6), (0.8333, 1.0)]
+    assert [t.get_text() for t in ratio.texts] == ["0.600\n0.500", "1.000\n0.833"]  # both ends written
+
+
+def test_the_ratio_per_day_and_in_a_leaderboard_is_an_interval(tmp_path, figures):
+    by_day = pd.DataFrame(
+        [
+            {"date": d, "run": "mb", "kpi": k, "value": v}
+            for d in ("2017-05-01", "2017-05-02")
+            for k, v in (("competitive_ratio_bound", 0.4), ("competitive_ratio_best_known", 0.7))
+        ]
+    )
+    (path,) = per_day_figures(by_day, tmp_path, [RATIO_INTERVAL])
+    assert path.name == "by_day_competitive_ratio_interval.png"
+    (day,) = figures
+    (segments,) = day.axes[0].collections
+    assert [tuple(seg[:, 1]) for seg in segments.get_segments()] == [(0.4, 0.7), (0.4, 0.7)]
+    assert interval_metrics(["total_saving_km", "competitive_ratio_bound", "competitive_ratio_best_known"]) == [
+        "total_saving_km",
+        RATIO_INTERVAL,
+    ]
+    board = pd.DataFrame(
+        [
+            {"run": "mb", "kpi": k, "mean": m, "ci_low": m - 0.1, "ci_high": m + 0.1}
+            for k, m in (("competitive_ratio_bound", 0.4), ("competitive_ratio_best_known", 0.7))
+        ]
+    )
+    leaderboard_figure(board, ["competitive_ratio_bound", "competitive_ratio_best_known"], tmp_path / "l.png", "t")
+    (ratio,) = panels(figures[-1])
+    assert [round(p.get_height(), 6) for p in ratio.patches] == [0.4] and ratio.get_title().startswith("Competitive")
 
 
 # ------------------------------------------------------------------------------------------- a toy run

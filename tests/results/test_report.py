@@ -74,12 +74,17 @@ def fixture_folder(
 def test_table_and_competitive_ratio(tmp_path):
     folder = fixture_folder(tmp_path)
     table = load_kpis(folder)
-    assert table.loc["competitive_ratio", "fl"] == pytest.approx(158 / 250)
+    assert table.loc["saving_over_oracle1", "fl"] == pytest.approx(158 / 250)
+    assert table.loc["competitive_ratio_best_known", "fl"] == 1.0  # FL saved the most: the best known schedule
+    assert table.loc["competitive_ratio_best_known", "mb"] == pytest.approx(111 / 158)
+    assert pd.isna(table.loc["saving_over_oracle1", "oracle1"])  # an offline run has no ratio
     text = text_table(table)
-    assert "Saving / Oracle-1 (paper: same-window pairs; not a bound)" in text and "0.632" in text
-    assert "Competitive ratio" not in text  # no bound in this folder: no competitive ratio
+    assert "Saving / Oracle-1 (paper's reference; not a bound)" in text and "0.632" in text
+    assert "saving / proven upper bound" not in text  # no bound in this folder: no ratio against it
+    assert "Competitive ratio (saving / best known schedule)" in text
     md, written = render([folder])
-    assert "a reference, not a competitive ratio" in md  # why the Oracle-1 row can exceed 1
+    assert "OPT >= LB = 158 km (best known schedule: FL; no upper bound run, so no U)." in md
+    assert "reference, not a competitive ratio" in md  # why the Oracle-1 row can exceed 1
     assert written == [folder / "report.md"]
     assert "| Total distance saving due to ride-pooling (km) | 111 | 158 | 250 |" in md
     # the paper's Table 2 is shown beside rpbench's numbers for 2017-05-01 at 30 %
@@ -90,14 +95,37 @@ def test_the_competitive_ratio_divides_by_the_bound(tmp_path):
     folder = fixture_folder(tmp_path, runs=("mb", "fl", "bound", "oracle1"))
     table = load_kpis(folder)
     assert table.loc["competitive_ratio_bound", "fl"] == pytest.approx(158 / 400)
-    assert table.loc["competitive_ratio", "fl"] == pytest.approx(158 / 250)
+    assert table.loc["saving_over_oracle1", "fl"] == pytest.approx(158 / 250)
+    assert table.loc["best_known_saving_km", "bound"] == 158.0
+    assert table.loc["bound_over_best_known", "bound"] == pytest.approx(400 / 158)
     text = text_table(table)
     rows = [line.split("  ")[0] for line in text.splitlines()]
-    assert rows.index("Competitive ratio (saving / proven upper bound)") < rows.index(
-        "Saving / Oracle-1 (paper: same-window pairs; not a bound)"
+    assert (
+        rows.index("Competitive ratio (saving / proven upper bound)")
+        < rows.index("Competitive ratio (saving / best known schedule)")
+        < rows.index("Saving / Oracle-1 (paper's reference; not a bound)")
     )
     md, _ = render([folder])
     assert "| Upper bound |" in md.replace("Upper bound | Oracle-1", "Upper bound |") and "docs/bound.md" in md
+    # the bound's column shows only what it bounds, the total saving; its ratios are "/", not 1.000
+    assert "| Competitive ratio (saving / proven upper bound) | 0.278 | 0.395 | / | / |" in md
+    assert "| Average detour distance (m) | 912 | 731 | / | 942 |" in md
+    assert "OPT lies in [LB, U] = [158, 400] km (U / LB = 2.53; best known schedule: FL)." in md
+    tex = (folder / "table.tex").read_text()
+    assert "OPT lies in [LB, U] = [158, 400] km" in tex
+
+
+def test_the_bound_matching_statistics_of_an_older_folder_are_not_shown(tmp_path):
+    """A folder written before rpbench named the bound's matching statistics apart (and called saving /
+    Oracle-1 ``competitive_ratio``) reads as today's: the bound's column shows "/" where it bounds nothing."""
+    folder = fixture_folder(tmp_path, runs=("mb", "fl", "bound", "oracle1"))
+    kpis = pd.read_csv(folder / "kpis.csv")
+    legacy = pd.DataFrame([{"run": "fl", "kpi": "competitive_ratio", "value": 0.5}])
+    pd.concat([kpis, legacy]).to_csv(folder / "kpis.csv", index=False)
+    table = load_kpis(folder)
+    assert pd.isna(table.loc["avg_detour_m", "bound"]) and table.loc["matching_avg_detour_m", "bound"] == 500.0
+    assert "competitive_ratio" not in table.index  # read as saving_over_oracle1, then recomputed
+    assert table.loc["saving_over_oracle1", "fl"] == pytest.approx(158 / 250)
 
 
 def test_paper_values_only_where_they_apply(tmp_path):
@@ -117,7 +145,7 @@ def test_every_comparison_has_its_kpi_figure(tmp_path):
     folder = fixture_folder(tmp_path)  # one hour: no per-hour plot, but the KPI bars
     md, _ = render([folder])
     assert (folder / "kpis.png").is_file() and "![headline KPIs per run](kpis.png)" in md
-    assert not (folder / "hourly.png").exists() and "there is no competitive ratio" in md
+    assert not (folder / "hourly.png").exists() and "without an upper bound run the competitive ratio" in md
     # the runs/ folders hold no event log: the timeline says why it is missing
     assert "No timeline: every run of this folder is offline" in md and not (folder / "timeline.png").exists()
 
@@ -256,7 +284,8 @@ def test_formatting():
     assert fmt("response_rate", 0.8123) == "0.81"
     assert fmt("avg_detour_m", 912.4) == "912"
     assert fmt("total_saving_km", -1e-12) == "0.0"
-    assert fmt("competitive_ratio", -1e-9) == "0.000"
+    assert fmt("competitive_ratio_bound", -1e-9) == "0.000"
+    assert fmt("saving_over_oracle1", 1.5) == "1.500" and fmt("bound_over_best_known", 1.0498) == "1.05"
     assert fmt("avg_detour_m", float("nan")) == "/"
 
 

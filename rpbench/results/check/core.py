@@ -1,7 +1,9 @@
 """The checker's verdicts (:class:`RunCheck`, :class:`FolderResult`), tolerances, KPI lists and column schemas.
 
 Every other module of the checker builds on this one and on nothing of the package face, so the package
-imports in one direction: core, then the folder's inputs (:mod:`.folder`), the checks, the entry points.
+imports in one direction: core, then the folder's inputs (:mod:`.folder`), the checks, the entry points.  The
+KPI names come from where rpbench defines them (:mod:`rpbench.results.metrics`, :mod:`rpbench.results.ratios`);
+the values are recomputed here.
 """
 
 from __future__ import annotations
@@ -12,6 +14,8 @@ from typing import Any
 import numpy as np
 
 from rpbench.results.layout import FLEET, NETWORK, ORDERS
+from rpbench.results.metrics import BOUND_MATCHING_KPIS
+from rpbench.results.ratios import BRACKET_KPIS, RATIO_KPIS
 
 TOL_M = 1e-6
 TOL_S = 1e-6
@@ -72,9 +76,18 @@ ORACLE_KPIS = (
     "bound_m",
     "pairs_bound",
 )
-#: Saving ratios: against the folder's bound (in kpis.csv) and against Oracle-1 (rendered from kpis.csv).
-RATIO_KPIS = ("competitive_ratio_bound", "competitive_ratio")
-KNOWN_KPIS = {*SIMULATION_KPIS, *ORACLE_KPIS, *RATIO_KPIS, *UNVERIFIED_KPIS["simulation"], *UNVERIFIED_KPIS["oracle"]}
+#: The bound's matching statistics, under their own names (they bound nothing).
+BOUND_KPIS = tuple(BOUND_MATCHING_KPIS.get(k, k) for k in ORACLE_KPIS)
+#: Rows derived from the other runs (``competitive-ratio``): a simulated run's ratios, the bound's bracket.
+DERIVED_KPIS = (*RATIO_KPIS, *BRACKET_KPIS)
+KNOWN_KPIS = {
+    *SIMULATION_KPIS,
+    *ORACLE_KPIS,
+    *BOUND_KPIS,
+    *DERIVED_KPIS,
+    *UNVERIFIED_KPIS["simulation"],
+    *UNVERIFIED_KPIS["oracle"],
+}
 HOURLY_COLUMNS = (
     "orders",
     "response_rate",

@@ -33,6 +33,7 @@ from rpbench.results.check.core import (
     as_number,
 )
 from rpbench.results.layout import CHECK, FLEET, KPIS, META, NETWORK, ORDERS, RUNS
+from rpbench.results.legacy import current_names
 from rpbench.scenarios.base import Params
 
 
@@ -123,7 +124,7 @@ def read_folder(folder: Path) -> Folder:
     _require(folder / FLEET, fleet, network.n_nodes, nodes=("initial_node",), finite=())
     if not np.array_equal(fleet["vehicle"].to_numpy(), np.arange(len(fleet))):
         raise ResultsError(f"results file {str(folder / FLEET)!r}: vehicles are not numbered 0..{len(fleet) - 1}")
-    kpis = read_table(folder / KPIS, KPI_COLUMNS)
+    kpis = current_names(read_table(folder / KPIS, KPI_COLUMNS))  # an older rpbench's names read as today's
     distances = network.distances()
     solo = distances.dist[orders["origin"].to_numpy(), orders["destination"].to_numpy()]
     return Folder(folder, meta, params, orders, fleet, network, distances, solo, kpis)

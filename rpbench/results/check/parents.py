@@ -1,6 +1,7 @@
 """A multi-day, sweep or evaluation parent folder's own checks: ``manifest`` (every listed day, point or
-unit folder is there) and ``parent-tables`` (by_day.csv and summary.csv, sweep.csv, or an evaluation's
-units.csv, leaderboard.csv and paired.csv, recomputed from its children's KPIs).
+unit folder is there), ``parent-tables`` (by_day.csv and summary.csv, sweep.csv, or an evaluation's
+units.csv, leaderboard.csv and paired.csv, recomputed from its children's KPIs) and an evaluation's
+``ranking`` (:mod:`.ranking`).
 
 The children themselves are comparison folders, checked one by one by the entry points.
 """
@@ -13,10 +14,16 @@ import pandas as pd
 
 from rpbench import results
 from rpbench.exceptions import ResultsError, RpbenchError, one_line
-from rpbench.results.check.core import FOLDER, KNOWN_KPIS, RATIO_KPIS, FolderResult, RunCheck, as_number, same, show
+from rpbench.results.check.core import DERIVED_KPIS, FOLDER, KNOWN_KPIS, FolderResult, RunCheck, as_number, same, show
+from rpbench.results.check.ranking import check_ranking
 from rpbench.results.evaluation import tables as evaluation_tables
 from rpbench.results.layout import BY_DAY, KPIS, LEADERBOARD, META, PAIRED, SUMMARY, SWEEP, UNITS
+from rpbench.results.legacy import current_names
+from rpbench.results.metrics import BOUND_MATCHING_KPIS
 from rpbench.results.parents import by_day_table, sweep_table
+
+#: The bound's matching statistics under their own names (rpbench.results.metrics).
+MATCHING_KPIS = tuple(BOUND_MATCHING_KPIS.values())
 
 
 def _listed_children(meta: dict) -> list[str] | None:
@@ -65,6 +72,7 @@ def _check_parent_tables(fc: RunCheck, parent: Path, meta: dict) -> None:
             _compare_table(fc, parent / UNITS, units, ["day", "seed", "run", "kpi"], ["value"])
             stats = ["mean", "ci_low", "ci_high", "days", "seeds"]
             _compare_table(fc, parent / LEADERBOARD, board, ["run", "kpi"], stats)
+            check_ranking(fc, parent / LEADERBOARD, board)
             tests = ["mean_diff", "ci_low", "ci_high", "wilcoxon_p", "days_a_above", "days_a_below", "days_tied"]
             _compare_table(fc, parent / PAIRED, pairs, ["a", "b", "kpi"], tests)
         elif meta["kind"] == "multi-day":
@@ -90,7 +98,7 @@ def _compare_table(fc: RunCheck, path: Path, expected: pd.DataFrame, keys: list[
         fc.skip("parent-tables", f"the folder has no {path.name}")
         return
     try:
-        found = results.read_csv(path)
+        found = current_names(results.read_csv(path))  # an older rpbench's KPI names read as today's
     except ResultsError as exc:
         fc.fail("parent-tables", one_line(exc))
         return
@@ -108,9 +116,14 @@ def _compare_table(fc: RunCheck, path: Path, expected: pd.DataFrame, keys: list[
         fc.fail("parent-tables", f"{path.name}: a row repeats")
         return
     extra, lost = set(have.index) - set(want.index), set(want.index) - set(have.index)
-    # Rows of KPIs this rpbench does not know (an older version's ratio rows), or ratio rows it renders and an
-    # older version did not: not compared, and said so.
-    other = {k for k in extra if k[-1] not in KNOWN_KPIS} | {k for k in lost if k[-1] in RATIO_KPIS}
+    defined = want.drop(columns=["count", "point"], errors="ignore")  # a count or a sweep point is no value
+    lost = {k for k in lost if defined.loc[[k]].notna().to_numpy().any()}  # an undefined row loses nothing
+    # Rows of KPIs this rpbench does not know, derived rows an older version rendered (an offline run's ratio,
+    # the bound's matching statistics in a leaderboard) or derived KPIs it did not render at all: not compared,
+    # and said so.
+    written = {k[-1] for k in have.index}
+    other = {k for k in extra if k[-1] not in KNOWN_KPIS or k[-1] in {*DERIVED_KPIS, *MATCHING_KPIS}}
+    other |= {k for k in lost if k[-1] in DERIVED_KPIS and k[-1] not in written}
     if other:
         fc.skip(
             "parent-tables",
@@ -124,8 +137,16 @@ def _compare_table(fc: RunCheck, path: Path, expected: pd.DataFrame, keys: list[
             f"{path.name}: rows {unknown[:3]} are not in the children's {KPIS}, rows {absent[:3]} are missing",
         )
         return
-    for column in values:
-        for key, value in want[column].items():
+    older = set()
+    for key in want.index:
+        if key not in have.index:
+            continue  # undefined in the children: nothing to compare
+        if key[-1] in DERIVED_KPIS and defined.loc[key].isna().all():
+            if have.loc[key, list(defined.columns)].notna().any():
+                older.add(key[-1])  # an offline run's ratio, which an older rpbench rendered
+            continue
+        for column in values:
+            value = want.loc[key, column]
             rep = as_number(have.loc[key, column])
             if rep is None or not same(rep, float(value)):
                 fc.fail(
@@ -133,4 +154,10 @@ def _compare_table(fc: RunCheck, path: Path, expected: pd.DataFrame, keys: list[
                     f"{path.name}: {column} of {key} is {show(have.loc[key, column])}, the "
                     f"children's {KPIS} give {float(value)!r}",
                 )
+    if older:
+        fc.skip(
+            "parent-tables",
+            f"{path.name}: values of {', '.join(sorted(older))} where today's rpbench derives none (an offline "
+            "run's, rendered by an older rpbench) not compared",
+        )
     fc.checked[path.stem] = len(want)

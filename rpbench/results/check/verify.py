@@ -1,8 +1,8 @@
 """Which checks a comparison folder gets, and in which order (:mod:`.tree` dispatches any folder).
 
-A comparison folder goes to its folder checks (:mod:`.folder`), each run's (:mod:`.events`,
-:mod:`.kpis` and :mod:`.certificate` for a simulation, :mod:`.oracle` for an offline run), then the tables
-built over all runs (``hourly``, ``report``).
+A comparison folder goes to its folder checks (:mod:`.folder`), each run's (:mod:`.lookahead`, :mod:`.events`,
+:mod:`.kpis` and :mod:`.certificate` for a simulation, :mod:`.oracle` for an offline run), then the rows and
+tables built over all runs (:mod:`.ratios`, ``hourly``, ``report``).
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from rpbench import results
 from rpbench.exceptions import ResultsError, RpbenchError, one_line
 from rpbench.results.check.artefacts import check_artefacts
 from rpbench.results.check.certificate import check_certificate
-from rpbench.results.check.core import EVENT_COLUMNS, FOLDER, FolderResult, RunCheck
+from rpbench.results.check.core import EVENT_COLUMNS, FOLDER, RATIO_KPIS, FolderResult, RunCheck
 from rpbench.results.check.events import check_event_log, check_events, check_movement
 from rpbench.results.check.folder import (
     Folder,
@@ -36,8 +36,10 @@ from rpbench.results.check.kpis import (
     hourly_expected,
     simulation_kpis,
 )
+from rpbench.results.check.lookahead import check_clairvoyant
 from rpbench.results.check.oracle import check_oracle
 from rpbench.results.check.page import check_page
+from rpbench.results.check.ratios import check_ratios
 from rpbench.results.layout import EVENTS, RUNS, TRAJECTORIES
 
 
@@ -75,11 +77,13 @@ def _check_comparison(folder: Path) -> tuple[RunCheck, list[RunCheck]]:
     check_orders(fc, f)
     bound = bound_km(f)
     runs, hourly = [], {}
+    savings: dict[str, float | None] = {}  # each simulated run's saving, recomputed (None: it could not be)
     for name in names:
-        rc, table = _check_run(f, name, bound)
+        rc, table = _check_run(f, name, bound, savings)
         runs.append(rc)
         if table is not None:
             hourly[name] = table
+    check_ratios(fc, f, runs, savings)
     if not any(f.meta["runs"][name]["kind"] == "simulation" for name in names):
         hourly = {}  # hourly.csv is written for the strategy runs (and then the bound's split)
     per_hour = {
@@ -94,37 +98,45 @@ def _check_comparison(folder: Path) -> tuple[RunCheck, list[RunCheck]]:
     return fc, runs
 
 
-def _check_run(f: Folder, name: str, bound: float | None) -> tuple[RunCheck, pd.DataFrame | None]:
+def _check_run(
+    f: Folder, name: str, bound: float | None, savings: dict[str, float | None]
+) -> tuple[RunCheck, pd.DataFrame | None]:
     """One run's checks, and its expected rows of hourly.csv (None: an oracle without any).  A malformation
     the checker did not foresee makes the run unreadable (exit status 2), never a traceback."""
     run_dir = f.path / RUNS / name
     try:
         if f.meta["runs"][name]["kind"] == "oracle":
             return check_oracle(f, name, run_dir)
-        return _check_simulation(f, name, run_dir, bound)
+        return _check_simulation(f, name, run_dir, bound, savings)
     except RpbenchError:
         raise
     except (ValueError, TypeError, KeyError, IndexError, OverflowError, AttributeError) as exc:
         raise ResultsError(f"{str(run_dir)!r} cannot be checked: {type(exc).__name__}: {one_line(exc)}") from None
 
 
-def _check_simulation(f: Folder, name: str, run_dir: Path, bound: float | None) -> tuple[RunCheck, pd.DataFrame | None]:
-    """A simulation run: movement first (nothing else can be read without it), then the event log, the
-    service rules, the KPIs and the bound certificate."""
+def _check_simulation(
+    f: Folder, name: str, run_dir: Path, bound: float | None, savings: dict[str, float | None]
+) -> tuple[RunCheck, pd.DataFrame | None]:
+    """A simulation run: its clairvoyant flag, movement (nothing else can be read without it), then the event
+    log, the service rules, the KPIs and the bound certificate; its recomputed saving goes to ``savings``."""
     rc = RunCheck(name)
+    check_clairvoyant(rc, f, name)
+    savings[name] = None
     events = read_table(run_dir / EVENTS, EVENT_COLUMNS)
     traj = results.load_trajectories(run_dir / TRAJECTORIES)
     if not check_movement(rc, traj, f.network, f.fleet["initial_node"].to_numpy(), f.params):
-        for check in ("service", "max-pickup", "max-detour", "kpi", "bound-certificate", "hourly"):
+        for check in ("service", "max-pickup", "max-detour", "kpi", "competitive-ratio", "bound-certificate", "hourly"):
             rc.skip(check, "the trajectories cannot be read per vehicle (see [movement])")
         return rc, None
     events = check_event_log(rc, events, f, len(f.fleet))
     tab = check_events(rc, events, f, traj)
-    kpis = simulation_kpis(tab, f.solo, f.params, bound)
+    kpis = simulation_kpis(tab, f.solo, f.params)
     reported = f.reported(name)
     kpis |= decision_expected(rc, f, name, reported)
     budget, claims = budget_expected(rc, f, name, reported)
+    claims |= dict.fromkeys(RATIO_KPIS)  # derived from the other runs too: ``competitive-ratio`` checks them
     compare_kpis(rc, "simulation", kpis | budget, reported, claims)
+    savings[name] = float(kpis["total_saving_km"])
     check_certificate(rc, tab, f, kpis["total_saving_km"], bound)
     check_artefacts(rc, f, name, run_dir)
     rc.checked["orders"] = f.n

@@ -16,9 +16,15 @@ import pandas as pd
 from rpbench.results.metrics import KPI_LABELS
 from rpbench.results.plots import (
     HOURLY_PANELS,
+    INTERVAL_MARKS,
     KPI_PANELS,
+    RATIO_ENDS,
+    RATIO_INTERVAL,
     TIMELINE_PANELS,
     axis_label,
+    interval_ends,
+    interval_metrics,
+    interval_rows,
     parameter_label,
     run_colors,
 )
@@ -59,10 +65,16 @@ def _subplots(rows: int, cols: int, titles: Sequence[str], **kw: Any) -> Any:
 
 
 def kpi_bars(table: pd.DataFrame, text: Callable[[str, float], str], styles: Styles | None = None) -> Any:
-    """The headline KPIs (:data:`~rpbench.results.plots.KPI_PANELS`), one bar per run, value on hover."""
+    """The headline KPIs (:data:`~rpbench.results.plots.KPI_PANELS`), one bar per run, value on hover; the
+    competitive ratio as its interval: a bar up to saving / U, an error bar up to saving / LB."""
     import plotly.graph_objects as go
 
-    panels = [(k, name) for k, name in KPI_PANELS if k in table.index and table.loc[k].notna().any()]
+    ends = interval_ends(table)
+    panels = [
+        (k, name)
+        for k, name in KPI_PANELS
+        if (bool(ends[0]) if k == RATIO_INTERVAL else k in table.index and table.loc[k].notna().any())
+    ]
     runs = [str(r) for r in table.columns]
     colors = css_colors(runs, styles)
     cols = 3
@@ -72,22 +84,21 @@ def kpi_bars(table: pd.DataFrame, text: Callable[[str, float], str], styles: Sty
     for i, (kpi, _) in enumerate(panels):
         r, c = divmod(i, cols)
         for run in runs:
-            value = table.loc[kpi, run]
-            if pd.isna(value):
+            bar = _ratio_bar(run, ends, text) if kpi == RATIO_INTERVAL else _kpi_bar(table, kpi, run, text)
+            if bar is None:
                 continue
             label = plotly_text(run_label(run, styles))
             fig.add_trace(
                 go.Bar(
                     x=[label],
-                    y=[float(value)],
                     name=label,
                     legendgroup=run,
                     showlegend=run not in shown,
                     marker_color=colors[run],
-                    text=[text(kpi, float(value))],
                     textposition="outside",
                     cliponaxis=False,
                     hovertemplate=f"{label}<br>{KPI_LABELS.get(kpi, kpi)}: %{{text}}<extra></extra>",
+                    **bar,
                 ),
                 row=r + 1,
                 col=c + 1,
@@ -96,6 +107,34 @@ def kpi_bars(table: pd.DataFrame, text: Callable[[str, float], str], styles: Sty
         fig.update_yaxes(title_text=axis_label(kpi), row=r + 1, col=c + 1)
     fig.update_xaxes(tickangle=-35)
     return _layout(fig, None, 340 * rows + 80)
+
+
+def _kpi_bar(table: pd.DataFrame, kpi: str, run: str, text: Callable[[str, float], str]) -> dict | None:
+    value = table.loc[kpi, run]
+    return None if pd.isna(value) else {"y": [float(value)], "text": [text(kpi, float(value))]}
+
+
+def _ratio_bar(
+    run: str, ends: tuple[list[str], np.ndarray, np.ndarray], text: Callable[[str, float], str]
+) -> dict | None:
+    """A run's competitive ratio: the bar up to saving / U (0 without a bound), the error bar up to saving / LB."""
+    runs, low, high = ends
+    if run not in runs:
+        return None
+    k = runs.index(run)
+    lo, hi = float(low[k]), float(high[k])
+    base = 0.0 if np.isnan(lo) else lo
+    shown = [text(RATIO_ENDS[0], lo) if not np.isnan(lo) else "/", text(RATIO_ENDS[1], hi) if not np.isnan(hi) else "/"]
+    return {
+        "y": [base],
+        "text": [f"[{shown[0]}, {shown[1]}]"],
+        "error_y": {
+            "type": "data",
+            "symmetric": False,
+            "array": [0.0 if np.isnan(hi) else hi - base],
+            "arrayminus": [0.0],
+        },
+    }
 
 
 def timeline(
@@ -240,36 +279,64 @@ def round_times(rounds: pd.DataFrame, styles: Styles | None = None) -> Any:
 def by_parameter(
     table: pd.DataFrame, x: str, kpis: Sequence[str], x_title: str, styles: Styles | None = None, *, dates: bool = False
 ) -> Any:
-    """A KPI chosen from a menu against days or a swept parameter (``table`` columns ``x``, run, kpi, value)."""
+    """A KPI chosen from a menu against days or a swept parameter (``table`` columns ``x``, run, kpi, value);
+    :data:`~rpbench.results.plots.RATIO_INTERVAL` draws the competitive ratio as its interval (markers at
+    saving / U, error bars up to saving / LB)."""
     import plotly.graph_objects as go
 
     runs = list(dict.fromkeys(str(r) for r in table["run"]))
     colors = css_colors(runs, styles)
     fig = go.Figure()
     owner: list[str] = []
-    kpis = [k for k in kpis if ((table["kpi"] == k) & table["value"].notna()).any()]
+    series = {k: _series(table, x, k) for k in kpis}
+    kpis = [k for k in kpis if not series[k].empty]
     for k in kpis:
-        sel = table[(table["kpi"] == k) & table["value"].notna()]
-        for run, g in sel.groupby("run", sort=False):
+        for run, g in series[k].groupby("run", sort=False):
             run = str(run)
             label = plotly_text(run_label(run, styles))
+            low = g["low"].to_numpy(dtype=float)
+            high = g["high"].to_numpy(dtype=float)
+            interval = {
+                "error_y": {
+                    "type": "data",
+                    "symmetric": False,
+                    "array": np.nan_to_num(high - low),
+                    "arrayminus": 0 * low,
+                },
+                "customdata": high,
+                "hovertemplate": f"{label}, %{{x}}: [%{{y:.4~g}}, %{{customdata:.4~g}}]<extra></extra>",
+            }
             fig.add_trace(
                 go.Scatter(
                     x=g[x].astype(str).to_numpy() if dates else g[x].to_numpy(dtype=float),
-                    y=g["value"].to_numpy(dtype=float),
+                    y=low,
                     mode="lines+markers",
                     name=label,
                     legendgroup=run,
                     visible=k == kpis[0],
                     line={"color": colors[run]},
                     marker={"size": 5},
-                    hovertemplate=f"{label}, %{{x}}: %{{y:.4~g}}<extra></extra>",
+                    **(
+                        interval
+                        if k == RATIO_INTERVAL
+                        else {"hovertemplate": f"{label}, %{{x}}: %{{y:.4~g}}<extra></extra>"}
+                    ),
                 )
             )
             owner.append(k)
     _kpi_menu(fig, kpis, owner)
     fig.update_xaxes(title_text=x_title, type="category" if dates else None)
     return _layout(fig, None, 460)
+
+
+def _series(table: pd.DataFrame, x: str, kpi: str) -> pd.DataFrame:
+    """The points of one menu entry: ``x``, run, ``low`` (the value; the interval's lower end) and ``high``
+    (the interval's upper end, the value itself for a KPI).  An interval without a bound starts at 0."""
+    if kpi != RATIO_INTERVAL:
+        sel = table[(table["kpi"] == kpi) & table["value"].notna()]
+        return pd.DataFrame({x: sel[x], "run": sel["run"], "low": sel["value"], "high": sel["value"]})
+    rows = interval_rows(table, x)
+    return rows.assign(low=rows["low"].fillna(0.0), high=rows["high"].fillna(rows["low"]))
 
 
 def _kpi_menu(fig: Any, kpis: Sequence[str], owner: Sequence[str]) -> None:
@@ -378,34 +445,46 @@ def bench_times(table: pd.DataFrame) -> Any:
 
 
 def leaderboard_bars(board: pd.DataFrame, metrics: Sequence[str], styles: Styles | None = None) -> Any:
-    """Each run's mean of a metric (chosen in the menu) with its bootstrap interval as error bars."""
+    """Each run's mean of a metric (chosen in the menu) with its bootstrap interval as error bars; the competitive
+    ratio's two ends as one entry: bars at the mean of saving / U, diamonds at the mean of saving / LB."""
     import plotly.graph_objects as go
 
     runs = list(dict.fromkeys(str(r) for r in board["run"]))
     colors = css_colors(runs, styles)
     fig = go.Figure()
     owner: list[str] = []
-    metrics = [m for m in metrics if (board["kpi"] == m).any()]
+    metrics = interval_metrics([m for m in metrics if (board["kpi"] == m).any()])
     for k in metrics:
-        sel = board[board["kpi"] == k]
-        fig.add_trace(
-            go.Bar(
-                x=[plotly_text(run_label(str(r), styles)) for r in sel["run"]],
-                y=sel["mean"].to_numpy(dtype=float),
-                error_y={
-                    "type": "data",
-                    "symmetric": False,
-                    "array": (sel["ci_high"] - sel["mean"]).to_numpy(dtype=float),
-                    "arrayminus": (sel["mean"] - sel["ci_low"]).to_numpy(dtype=float),
-                },
-                marker_color=[colors[str(r)] for r in sel["run"]],
-                visible=k == metrics[0],
-                name=KPI_LABELS.get(k, k),
-                customdata=np.stack([sel["ci_low"], sel["ci_high"]], axis=1),
-                hovertemplate="%{x}: %{y:.4~g} [%{customdata[0]:.4~g}, %{customdata[1]:.4~g}]<extra></extra>",
+        for end, kpi in enumerate(RATIO_ENDS if k == RATIO_INTERVAL else (k,)):
+            sel = board[board["kpi"] == kpi]
+            trace = go.Bar if end == 0 else go.Scatter
+            fig.add_trace(
+                trace(
+                    x=[plotly_text(run_label(str(r), styles)) for r in sel["run"]],
+                    y=sel["mean"].to_numpy(dtype=float),
+                    error_y={
+                        "type": "data",
+                        "symmetric": False,
+                        "array": (sel["ci_high"] - sel["mean"]).to_numpy(dtype=float),
+                        "arrayminus": (sel["mean"] - sel["ci_low"]).to_numpy(dtype=float),
+                    },
+                    visible=k == metrics[0],
+                    name=KPI_LABELS.get(kpi, kpi),
+                    customdata=np.stack([sel["ci_low"], sel["ci_high"]], axis=1),
+                    hovertemplate="%{x}: %{y:.4~g} [%{customdata[0]:.4~g}, %{customdata[1]:.4~g}]<extra></extra>",
+                    **(
+                        {"marker_color": [colors[str(r)] for r in sel["run"]]}
+                        if end == 0
+                        else {"mode": "markers", "marker": {"symbol": "diamond", "color": "black", "size": 8}}
+                    ),
+                )
             )
-        )
-        owner.append(k)
+            owner.append(k)
     _kpi_menu(fig, metrics, owner)
     fig.update_layout(showlegend=False)
+    if RATIO_INTERVAL in metrics:
+        fig.add_annotation(
+            text=f"competitive ratio: {INTERVAL_MARKS}", xref="paper", yref="paper", x=1, y=1.0, xanchor="right",
+            yanchor="bottom", showarrow=False, font={"size": 10},
+        )  # fmt: skip
     return _layout(fig, None, 440)

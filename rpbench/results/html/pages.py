@@ -17,12 +17,14 @@ import pandas as pd
 
 from rpbench import files, paper, results
 from rpbench.results import layout
+from rpbench.results.evaluation import board_metrics, read_leaderboard
 from rpbench.results.html import figures
 from rpbench.results.html.mapdata import map_payload
 from rpbench.results.html.page import Cell, Page
 from rpbench.results.metrics import KPI_LABELS
 from rpbench.results.report import (
     UNPROVEN_MARK,
+    bracket_lines,
     fmt,
     load_kpis,
     offline_notes,
@@ -93,7 +95,7 @@ def comparison_page(folder: Path, name: str | None = None, *, published: bool = 
     )
     page.heading("Comparison (paper Table 2 layout)", 2, "comparison")
     _comparison_table(page, table, unproven, styles)
-    for line in unproven_notes(unproven, styles) + offline_notes(table, meta):
+    for line in bracket_lines(table, meta, styles) + unproven_notes(unproven, styles) + offline_notes(table, meta):
         if line:
             page.paragraph(_plain(line), "muted")
     if paper.table2_applies(sc["name"], sc.get("args", {}).get("date"), sc.get("args", {}).get("sample")):
@@ -105,7 +107,9 @@ def comparison_page(folder: Path, name: str | None = None, *, published: bool = 
         "fig-kpis",
         figures.kpi_bars(table, fmt, styles),
         "Headline KPIs, one bar per run (hover for the value; click a legend entry to hide or show a run in "
-        "every panel). Offline runs have no response rate nor pick-up time.",
+        "every panel). Offline runs have no response rate nor pick-up time. The competitive ratio of each "
+        "simulated run is an interval: the bar reaches saving / upper bound, the error bar saving / best known "
+        "schedule.",
     )
     timeline = timeline_of(folder)
     if isinstance(timeline, str):
@@ -277,11 +281,11 @@ def evaluation_page(folder: Path, name: str | None = None) -> Page:
     children = [folder / c for c in meta.get("children", [])]
     styles = run_styles(results.read_meta(children[0])) if children else {}
     page = markdown_page(folder, "rpbench evaluation", name, children=children)
-    board = results.read_csv(folder / layout.LEADERBOARD)
+    board = read_leaderboard(folder)
     page.heading("Leaderboard (interactive)", 2)
     page.figure(
         "fig-leaderboard",
-        figures.leaderboard_bars(board, meta["protocol"]["metrics"], styles),
+        figures.leaderboard_bars(board, board_metrics(list(meta["protocol"]["metrics"])), styles),
         "Each strategy's mean over the (day, seed) runs with its bootstrap interval; choose the metric in the menu.",
     )
     return page

@@ -14,13 +14,27 @@ import pytest
 
 from results.check.tamper import build, copy
 from rpbench.harness.comparison import run_comparison
+from rpbench.harness.evaluate import run_evaluation
 from rpbench.harness.spec import RunSpec
+from rpbench.protocols import load_protocol
 from rpbench.scenarios import ScenarioRequest
 
 _HERE = Path(__file__).parent
+#: A protocol whose strongest run read the future.
+SEERS_PROTOCOL = """
+name = "seers"
+version = 1
+scenario = "toy"
+sample = 0.1
+seeds = [0, 1]
+strategies = ["mb", "hindsight", "bound"]
+metrics = ["total_saving_km", "competitive_ratio_bound"]
+[bootstrap]
+resamples = 50
+"""
 
 #: The fixtures (here and in the test modules) that build a six-run toy folder or a folder of several of them.
-SLOW_FOLDERS = {"base", "enroute", "zero_pairs", "zero_served", "empty_hour", "sweep", "multiday"}
+SLOW_FOLDERS = {"base", "enroute", "zero_pairs", "zero_served", "empty_hour", "sweep", "multiday", "seers", "ranked"}
 
 
 def pytest_collection_modifyitems(config, items):
@@ -49,6 +63,26 @@ def enroute(tmp_path_factory) -> Path:
             "oracle2": {"allow_enroute": "true", "pickup_check": "true"},
         },
     )
+
+
+@pytest.fixture(scope="module")
+def seers(tmp_path_factory) -> Path:
+    """Online and clairvoyant runs beside the bound and Oracle-1: hindsight (clairvoyant by its class) and FL
+    counting the day's own orders (clairvoyant under its options), whose best saving is LB."""
+    return build(
+        tmp_path_factory.mktemp("seers") / "toy",
+        ["mb", "hindsight", "fl", "bound", "oracle1"],
+        run_options={"fl": {"rates": "scenario"}},
+    )
+
+
+@pytest.fixture(scope="module")
+def ranked(tmp_path_factory) -> Path:
+    """An evaluation of two toy seeds with a clairvoyant run (hindsight), ranked apart after the online one."""
+    path = tmp_path_factory.mktemp("protocol") / "seers.toml"
+    path.write_text(SEERS_PROTOCOL)
+    folder, _ = run_evaluation(load_protocol(str(path)), tmp_path_factory.mktemp("ranked") / "eval", workers=1)
+    return folder
 
 
 @pytest.fixture

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import shutil
 
+import pandas as pd
 import pytest
 
 from results.check.tamper import (
@@ -75,6 +76,9 @@ def test_zero_pairs_pass_check_and_publish(zero_pairs, tmp_path, capsys):
         "oracle1": 0,
         "oracle2": 0,
     }
+    kpis = pd.read_csv(zero_pairs / "kpis.csv").set_index(["run", "kpi"])["value"]
+    assert kpis[("bound", "best_known_saving_km")] == 0.0  # LB = 0: the ratio to it is undefined, and checked so
+    assert pd.isna(kpis[("mb", "competitive_ratio_best_known")]) and pd.isna(kpis[("bound", "bound_over_best_known")])
     dest = publish(zero_pairs, tmp_path / "pub")
     assert "oracle1: OK" in (dest / "check.txt").read_text()
 
