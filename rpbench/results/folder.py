@@ -8,6 +8,9 @@ the inputs, one folder per run, the KPI, round and hourly tables and
 report needs to show it without importing its class (label, colour, source),
 so that a folder re-renders from its files alone, plug-ins included.  A run given a decision budget
 records it as ``decision_budget_s`` (absent otherwise): the checker and the reports read it there.
+kpis.csv also holds the rows derived from the other runs (:mod:`rpbench.results.ratios`: each simulated
+run's competitive ratios and saving / Oracle-1, the bound's LB and U / LB) and meta.json names the run
+that gave LB (``best_known``).
 """
 
 from __future__ import annotations

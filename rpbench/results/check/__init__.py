@@ -18,10 +18,17 @@ Folder checks (reported as the run ``(folder)``):
 * ``hourly`` — hourly.csv recomputed from the event logs and odometers;
 * ``report`` — the KPI tables of report.md are the rendering of kpis.csv;
 * ``report-html`` — report.html's comparison table shows kpis.csv (printed numbers and raw values);
-* ``parent-tables`` — a multi-day or sweep parent's tables are its children's KPIs.
+* ``competitive-ratio`` — LB (the largest recomputed saving of the simulated runs), every run's ratios
+  against U and LB and its saving / Oracle-1, the bound's rows LB and U / LB, and meta.json's
+  ``best_known`` (:mod:`.ratios`);
+* ``parent-tables`` — a multi-day, sweep or evaluation parent's tables are its children's KPIs;
+* ``ranking`` — an evaluation's leaderboard ranks the online runs first and the clairvoyant runs apart,
+  as its units make them (:mod:`.ranking`).
 
 Simulation runs:
 
+* ``clairvoyant`` — a run whose built-in strategy reads the future under its recorded options is recorded
+  clairvoyant in meta.json (:mod:`.lookahead`);
 * ``event-log`` — every event has a known kind, a finite time, an existing
   order, vehicle and node; one request per order at its request time and
   origin; pick-ups and cancellations at the origin, drop-offs at the
@@ -86,8 +93,9 @@ The modules, in import order: :mod:`.core` (verdicts, tolerances, schemas),
 :mod:`.folder` (reading, the digest, the folder checks), :mod:`.events`
 (movement, event log, service rules), :mod:`.kpis` (kpi, decision-budget, hourly, report),
 :mod:`.certificate` (the checker's pair geometry, bound-certificate),
-:mod:`.matching` (bound-optimal), :mod:`.oracle`, :mod:`.parents`, :mod:`.verify` (a comparison folder's
-checks), :mod:`.replication` (a ``rpbench replicate`` folder, its engines' folders checked by :mod:`.verify`)
+:mod:`.matching` (bound-optimal), :mod:`.oracle`, :mod:`.lookahead` (clairvoyant), :mod:`.ratios`
+(competitive-ratio), :mod:`.ranking`, :mod:`.parents`, :mod:`.verify` (a comparison folder's checks),
+:mod:`.replication` (a ``rpbench replicate`` folder, its engines' folders checked by :mod:`.verify`)
 and :mod:`.tree` (the entry point: any folder).
 """
 
