@@ -20,7 +20,7 @@ import pandas as pd
 from rpbench import files, paper, results
 from rpbench.exceptions import ResultsError
 from rpbench.results import layout
-from rpbench.results.legacy import current_names
+from rpbench.results.legacy import LEGACY_KPIS, current_names
 from rpbench.results.metrics import (
     DECISION_PARTS,
     EXTRA_KPIS,
@@ -658,6 +658,9 @@ def check_metrics(metrics: list[str] | None) -> list[str] | None:
     if metrics is None:
         return None
     known = KPI_ORDER + EXTRA_KPIS + list(DERIVED_KPIS) + ["wall_s"]
+    renamed = [m for m in metrics if m in LEGACY_KPIS]
+    if renamed:
+        raise ResultsError(f"metric {renamed[0]!r} is named {LEGACY_KPIS[renamed[0]]!r} now")
     unknown = [m for m in metrics if m not in known]
     if unknown or not metrics:
         raise ResultsError(f"unknown metric {unknown[0] if unknown else '(none)'!r}; known metrics: {', '.join(known)}")

@@ -12,7 +12,7 @@ import pytest
 
 from rpbench.exceptions import ResultsError
 from rpbench.harness.render import render
-from rpbench.results.report import fmt, load_kpis, text_table
+from rpbench.results.report import check_metrics, fmt, load_kpis, text_table
 
 
 def fixture_folder(
@@ -113,6 +113,12 @@ def test_the_competitive_ratio_divides_by_the_bound(tmp_path):
     assert "OPT lies in [LB, U] = [158, 400] km (U / LB = 2.53; best known schedule: FL)." in md
     tex = (folder / "table.tex").read_text()
     assert "OPT lies in [LB, U] = [158, 400] km" in tex
+
+
+def test_a_metric_under_its_old_name_says_its_new_one():
+    with pytest.raises(ResultsError, match="metric 'competitive_ratio' is named 'saving_over_oracle1' now"):
+        check_metrics(["competitive_ratio"])
+    assert check_metrics(["competitive_ratio_best_known", "saving_over_oracle1"])
 
 
 def test_the_bound_matching_statistics_of_an_older_folder_are_not_shown(tmp_path):
