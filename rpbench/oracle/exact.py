@@ -40,12 +40,13 @@ import numpy as np
 import scipy.sparse as sp
 
 from rpbench.exceptions import ParameterError, SolverError
-from rpbench.geometry import TOLERANCE_M, pair_geometry
+from rpbench.geometry import pair_geometry
 from rpbench.oracle.pairs import bound_rules, find_candidates
 from rpbench.scenarios.base import Scenario
 
 #: Arc kinds of the flow model.
 FREE, EXIT, APPROACH, TO_Q, PAIR = range(5)
+ARC_KINDS = ("free", "exit", "approach", "to_q", "pair")
 #: The MILP solvers the model can be handed to (both exact).
 SOLVERS = ("highs", "cp-sat")
 #: A pair must save at least this many blocks to enter the model (a pair saving nothing is a walk).
@@ -101,7 +102,8 @@ def lattice_view(scenario: Scenario) -> LatticeView:
     tail, head = np.asarray(net.arc_tail, np.int64), np.asarray(net.arc_head, np.int64)
     if not np.isin(head * net.n_nodes + tail, tail * net.n_nodes + head).all():
         raise ParameterError(f"the exact optimum needs two-way streets; scenario {scenario.name!r} has one-way arcs")
-    if scenario.fleet.online_times_s is not None and (scenario.fleet.online_count != len(scenario.fleet)).any():
+    count = scenario.fleet.online_count
+    if count is not None and bool(np.any(np.asarray(count) != len(scenario.fleet))):
         raise ParameterError("the exact optimum needs every vehicle on duty throughout; this fleet has shifts")
     distances = net.distances()
     dist = np.asarray(distances.dist)
@@ -176,7 +178,9 @@ class ExactModel:
         return {
             "states": self.n_states,
             "arcs": self.n_arcs,
-            **{name: int((self.kind == k).sum()) for k, name in enumerate(("free", "exit", "approach", "to_q", "pair"))},
+            **{
+                name: int((self.kind == k).sum()) for k, name in enumerate(("free", "exit", "approach", "to_q", "pair"))
+            },
         }
 
 
@@ -242,7 +246,12 @@ def build_model(view: LatticeView, scenario: Scenario) -> ExactModel:
     for (a, _k, kp), _sid in p_list:
         if (a, kp) not in q_keys:
             q_keys[(a, kp)] = n_pq + len(q_keys)
-    arcs.add(TO_Q, [sid for _, sid in p_list], [q_keys[(a, kp)] for (a, _k, kp), _ in p_list], order_a=[a for (a, _, _), _ in p_list])
+    arcs.add(
+        TO_Q,
+        [sid for _, sid in p_list],
+        [q_keys[(a, kp)] for (a, _k, kp), _ in p_list],
+        order_a=[a for (a, _, _), _ in p_list],
+    )
     _pair_arcs(view, arcs, pairs, p_list, q_keys, free_id, T)
     cols = arcs.cat()
     n_states = n_pq + len(q_keys)
@@ -302,7 +311,9 @@ def _pair_arcs(view: LatticeView, arcs: _Arcs, pairs, p_list, q_keys, free_id, T
         rows_kp.append(np.full(len(ok), kp))
         rows_state.append(np.full(len(ok), sid))
     if rows_a:
-        a_, b_, j_, kp_, s_ = (np.concatenate(r).astype(np.int64) for r in (rows_a, rows_b, rows_k, rows_kp, rows_state))
+        a_, b_, j_, kp_, s_ = (
+            np.concatenate(r).astype(np.int64) for r in (rows_a, rows_b, rows_k, rows_kp, rows_state)
+        )
         _emit(view, arcs, s_, a_, b_, kp_, j_, view.origin[a_], np.zeros(len(a_), np.int64), free_id, T)
     # (2) from Q(A, k_p): B joins in a round j > k_p, the vehicle at node m = j - k_p of A's path
     q_items = list(q_keys.items())
@@ -443,7 +454,9 @@ def _upper_bounds(model: ExactModel) -> np.ndarray:
     return np.where((model.kind == FREE) | (model.kind == EXIT), n_veh, 1.0)
 
 
-def solve_model(model: ExactModel, *, solver: str = "highs", time_limit_s: float = 600.0, threads: int = 1) -> ExactSolution:
+def solve_model(
+    model: ExactModel, *, solver: str = "highs", time_limit_s: float = 600.0, threads: int = 1
+) -> ExactSolution:
     """Maximise the total saving; ``solver`` one of :data:`SOLVERS`."""
     if solver not in SOLVERS:
         raise ParameterError(f"exact solver {solver!r} unknown; expected one of {', '.join(SOLVERS)}")
@@ -473,7 +486,7 @@ def _solve_highs(model: ExactModel, time_limit_s: float, threads: int) -> tuple[
     if res.x is None:
         raise SolverError(f"HiGHS found no plan for the exact model ({res.message})")
     x = np.rint(res.x)
-    objective = int(round(float(model.saving @ x)))
+    objective = round(float(model.saving @ x))
     bound = -float(getattr(res, "mip_dual_bound", -objective) or -objective)
     proven = res.status == 0 or bound < objective + 1 - 1e-6
     return x, objective, max(bound, float(objective)), "optimal" if proven else "time_limit"
@@ -485,7 +498,7 @@ def _solve_cpsat(model: ExactModel, time_limit_s: float, threads: int) -> tuple[
     balance, rhs, once = _matrices(model)
     ub = _upper_bounds(model).astype(np.int64)
     m = cp_model.CpModel()
-    xs = [m.NewIntVar(0, int(u), f"x{i}") for i, u in enumerate(ub.tolist())]
+    xs = [m.new_int_var(0, int(u), f"x{i}") for i, u in enumerate(ub.tolist())]
     for mat, lo, hi in ((balance.tocsr(), rhs, rhs), (once.tocsr(), None, np.ones(once.shape[0]))):
         for r in range(mat.shape[0]):
             idx = mat.indices[mat.indptr[r] : mat.indptr[r + 1]]
@@ -494,20 +507,20 @@ def _solve_cpsat(model: ExactModel, time_limit_s: float, threads: int) -> tuple[
             coef = mat.data[mat.indptr[r] : mat.indptr[r + 1]].astype(np.int64)
             expr = sum(int(cf) * xs[i] for cf, i in zip(coef.tolist(), idx.tolist(), strict=True))
             if lo is not None:
-                m.Add(expr == int(lo[r]))
+                m.add(expr == int(lo[r]))
             else:
-                m.Add(expr <= int(hi[r]))
+                m.add(expr <= int(hi[r]))
     pair = np.flatnonzero(model.kind == PAIR)
-    m.Maximize(sum(int(model.saving[i]) * xs[i] for i in pair.tolist()))
+    m.maximize(sum(int(model.saving[i]) * xs[i] for i in pair.tolist()))
     s = cp_model.CpSolver()
     s.parameters.max_time_in_seconds = float(time_limit_s)
     s.parameters.num_workers = max(1, int(threads))
-    code = s.Solve(m)
+    code = s.solve(m)
     if code not in (cp_model.OPTIMAL, cp_model.FEASIBLE):
-        raise SolverError(f"CP-SAT found no plan for the exact model ({s.StatusName(code)})")
-    x = np.array([s.Value(v) for v in xs], np.float64)
-    objective = int(round(float(model.saving @ x)))
-    return x, objective, float(s.BestObjectiveBound()), "optimal" if code == cp_model.OPTIMAL else "time_limit"
+        raise SolverError(f"CP-SAT found no plan for the exact model ({s.status_name(code)})")
+    x = np.array([s.value(v) for v in xs], np.float64)
+    objective = round(float(model.saving @ x))
+    return x, objective, float(s.best_objective_bound), "optimal" if code == cp_model.OPTIMAL else "time_limit"
 
 
 # ------------------------------------------------------------------- the plan

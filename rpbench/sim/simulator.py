@@ -247,7 +247,8 @@ class Simulator:
         # copied into arrays it can no longer change: the solver and the commit see what was checked.
         rm = self._checked(k, t, lambda: received(built, state, self.strategy.structure))
         model = rm.model
-        if model.n_cols == 0:
+        if model.n_cols == 0:  # nothing to decide: the strategy may still move idle vehicles
+            self._move(k, t, state, rm, np.zeros(0, np.int64))
             return
         try:
             solution = solve(model, self.preset)  # verified there: a valid, feasible answer
@@ -271,11 +272,7 @@ class Simulator:
         if self.canonical_ties:
             solution, tie_moves = canonicalize(model, solution)
         assigned = self._commit(rm, solution.chosen, t)
-        moves = self.strategy.reposition(state, rm, solution.chosen)
-        used = rm.vehicle[solution.chosen]
-        vehicles, targets = self._checked(k, t, lambda: received_moves(moves, state, used, len(self.dist)))
-        for v, node in zip(vehicles, targets, strict=True):
-            self._reposition(int(v), int(node), t)
+        self._move(k, t, state, rm, solution.chosen)
         size = model.size
         self.rounds.append(
             (
@@ -298,6 +295,14 @@ class Simulator:
                 tie_moves,
             )
         )
+
+    def _move(self, k: int, t: float, state: RoundState, rm: RoundModel, chosen: np.ndarray) -> None:
+        """The strategy's repositioning of vacant vehicles after the round's decisions (``chosen`` columns)."""
+        moves = self.strategy.reposition(state, rm, chosen)
+        used = rm.vehicle[chosen]
+        vehicles, targets = self._checked(k, t, lambda: received_moves(moves, state, used, len(self.dist)))
+        for v, node in zip(vehicles, targets, strict=True):
+            self._reposition(int(v), int(node), t)
 
     def _idle_round(self, k: int, t: float) -> None:
         """A round where nobody waits: no model, only the strategy's moves of idle vacant vehicles."""

@@ -125,7 +125,7 @@ class Exact(Strategy[ExactOptions]):
 
     # ------------------------------------------------------------------ rounds
     def _round_of(self, state: RoundState) -> int:
-        return int(round(state.t_s / self.dt))
+        return round(state.t_s / self.dt)
 
     def build(self, state: RoundState) -> RoundModel:
         k = self._round_of(state)
@@ -133,7 +133,7 @@ class Exact(Strategy[ExactOptions]):
         row_of = {int(o): i for i, o in enumerate(state.p_order.tolist())}
         v0_row = {int(v): i for i, v in enumerate(state.v0_vehicle.tolist())}
         v1_row = {int(v): state.n_v0 + i for i, v in enumerate(state.v1_vehicle.tolist())}
-        cols: list[tuple[int, int, int, int, int, int, bool, float]] = []  # row, r1, r2, kind, veh, first/second
+        cols: list[tuple] = []  # vehicle row, request rows, kind, vehicle, first, second, fofo, pick-up
         for d in self._decisions.get(k, []):
             a, b, v = d["order_a"], d.get("order_b", -1), d["vehicle"]
             if d["kind"] == "join":
@@ -186,7 +186,9 @@ class Exact(Strategy[ExactOptions]):
 
     def _check_walks(self, state: RoundState, k: int) -> None:
         """Every free vehicle stands at the node the plan has it at in this round."""
-        for v, node, pre in zip(state.v0_vehicle.tolist(), state.v0_node.tolist(), state.v0_pre_m.tolist(), strict=True):
+        for v, node, pre in zip(
+            state.v0_vehicle.tolist(), state.v0_node.tolist(), state.v0_pre_m.tolist(), strict=True
+        ):
             planned = self._walk.get(v, {}).get(k)
             if planned is not None and (planned != node or pre > _AT_NODE_M):
                 raise ModelError(
@@ -194,7 +196,7 @@ class Exact(Strategy[ExactOptions]):
                     f"{node}, planned at node {planned}"
                 )
 
-    def _moves(self, state: RoundState, busy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _moves(self, state: RoundState, busy: set[int]) -> tuple[np.ndarray, np.ndarray]:
         k = self._round_of(state)
         vehicles, targets = [], []
         for v in state.v0_vehicle.tolist():

@@ -9,7 +9,10 @@ from helpers import line_network, network_from_edges, scenario_of
 
 from rpbench.backends.presets import load_preset
 from rpbench.harness.comparison import simulate_strategy
+from rpbench.model import Structure, TripPackingModel
 from rpbench.results.metrics import TIMING_KPIS
+from rpbench.sim.simulator import Simulator
+from rpbench.strategies.base import RoundModel, Strategy
 
 
 @pytest.fixture(scope="module")
@@ -124,3 +127,51 @@ def test_a_solver_failure_names_the_round_and_saves_its_model(monkeypatch, tmp_p
     [dump] = (tmp_path / "failed-rounds").glob("mb-round00000-*.npz")
     model, meta = load_instance(dump)
     assert model.n_passengers == 1 and meta["strategy"] == "mb" and meta["round"] == 0
+
+
+class _Mover(Strategy):
+    """Keeps everyone waiting and sends every vacant vehicle to node 0, in every round (``idle``: also in rounds
+    where nobody waits)."""
+
+    name = "mover"
+    label = "Mover"
+    structure = Structure.TRIP_PACKING
+
+    def __init__(self, idle: bool):
+        super().__init__()
+        self.idle = idle
+        self.calls: list[tuple[str, float]] = []
+
+    def build(self, state):
+        empty = np.zeros(0, np.int64)
+        model = TripPackingModel(state.n_passengers, state.n_v0 + state.n_v1, empty, empty, empty, np.zeros(0))
+        return RoundModel(
+            model, empty.astype(np.int8), empty, empty, empty, empty.astype(bool), np.zeros(0), np.zeros(0)
+        )
+
+    def reposition(self, state, rm, chosen):
+        self.calls.append(("reposition", state.t_s))
+        return state.v0_vehicle, np.zeros(state.n_v0, np.int64)
+
+    def idle_moves(self, state):
+        self.calls.append(("idle", state.t_s))
+        return state.v0_vehicle, np.zeros(state.n_v0, np.int64)
+
+
+class _WaitingMover(_Mover):
+    idle_moves = Strategy.idle_moves  # does not move idle vehicles where nobody waits
+
+
+def test_vehicles_are_moved_in_rounds_without_columns_and_where_nobody_waits():
+    """A round whose model has no column still repositions; a strategy that overrides ``idle_moves`` is asked
+    in the rounds where nobody waits too, and only such a strategy."""
+    sc = scenario_of(line_network(6, 1000.0), [(50.0, 5, 4)], [3], patience_s=20.0)
+    mover = _Mover(idle=True)
+    res = Simulator(sc, mover, load_preset("highs")).run()
+    kinds = {kind for kind, _ in mover.calls}
+    assert kinds == {"reposition", "idle"}
+    assert [t for kind, t in mover.calls if kind == "reposition"] == [50.0, 60.0, 70.0]
+    assert (res.events["event"] == "reposition").sum() == len(mover.calls)
+    waiting = _WaitingMover(idle=False)
+    Simulator(sc, waiting, load_preset("highs")).run()
+    assert {kind for kind, _ in waiting.calls} == {"reposition"}

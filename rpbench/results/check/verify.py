@@ -18,6 +18,7 @@ from rpbench.results.check.artefacts import check_artefacts
 from rpbench.results.check.certificate import check_certificate
 from rpbench.results.check.core import EVENT_COLUMNS, FOLDER, RATIO_KPIS, FolderResult, RunCheck
 from rpbench.results.check.events import check_event_log, check_events, check_movement
+from rpbench.results.check.exact import check_exact_plan
 from rpbench.results.check.folder import (
     Folder,
     bound_km,
@@ -139,6 +140,7 @@ def _check_simulation(
     savings[name] = float(kpis["total_saving_km"])
     check_certificate(rc, tab, f, kpis["total_saving_km"], bound)
     check_artefacts(rc, f, name, run_dir)
+    check_exact_plan(rc, f, name, run_dir, tab, kpis["total_saving_km"])
     rc.checked["orders"] = f.n
     rc.checked["served"] = int(tab["served"].sum())
     return rc, hourly_expected(tab, f.solo)
