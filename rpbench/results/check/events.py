@@ -348,7 +348,9 @@ def _check_capacity(
         return
     for label, start in (("assigned or on board", t_assign), ("on board", t_pick)):
         veh = np.concatenate([vehicle[o], vehicle[o]])
-        t = np.concatenate([start[o], t_drop[o]])
+        # A drop-off up to TOL_S after a start is at the same instant (float noise in summed arc times): the
+        # simulator processes the stops due by a round before deciding it.
+        t = np.concatenate([start[o], t_drop[o] - TOL_S])
         delta = np.concatenate([np.ones(len(o)), -np.ones(len(o))])
         # Drop-offs before starts at the same instant: a vehicle can hand over at a node.
         srt = np.lexsort((delta, t, veh))

@@ -359,3 +359,23 @@ def test_assignment_after_patience_is_caught(clean_copy):
     orders["patience_s"] = 0.5
     orders.to_csv(clean_copy / "orders.csv.gz", index=False)
     assert "within-patience" in run_violations(clean_copy)
+
+
+@pytest.mark.parametrize("late_s, fails", [(1e-12, False), (1e-7, False), (1.0, True)])
+def test_a_drop_off_in_float_noise_after_the_next_assignment_is_at_the_same_instant(late_s, fails):
+    """A pair dropped off at 100 s (plus float noise from summed arc times) hands its vehicle to an order
+    assigned in the round at 100 s: the simulator processed the drop-off first; a second later it did not."""
+    from rpbench.results.check.core import RunCheck
+    from rpbench.results.check.events import _check_capacity
+
+    rc = RunCheck("x")
+    t_drop = np.array([100.0 + late_s, 100.0 + late_s, 200.0])
+    _check_capacity(
+        rc,
+        vehicle=np.array([0, 0, 0]),
+        t_assign=np.array([0.0, 0.0, 100.0]),
+        t_pick=np.array([10.0, 20.0, 150.0]),
+        t_drop=t_drop,
+        served=np.ones(3, bool),
+    )
+    assert ("capacity" in rc.violations) is fails
