@@ -20,7 +20,7 @@ from rpbench.harness.spec import RunEntry, RunSpec, resolve_runs, typed_options
 from rpbench.scenarios import ScenarioRequest
 
 #: What ``rpbench run`` compares without ``--strategies``.
-DEFAULT_STRATEGIES = "np,mb,rtv,fl-nd,fl,bound,oracle1,oracle2"
+DEFAULT_STRATEGIES = "np,mb,rtv,fl-nd,fl,fl-perfect,hindsight,bound,oracle1,oracle2"
 
 
 def add_run_args(parser: argparse.ArgumentParser, *, strategies: str | None = DEFAULT_STRATEGIES) -> None:
