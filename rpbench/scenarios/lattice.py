@@ -33,7 +33,7 @@ from rpbench.scenarios.common import (
     place_fleet,
     require_orders,
 )
-from rpbench.scenarios.toy import hotspot_nodes
+from rpbench.scenarios.toy import grid_demand
 
 #: Nodes per side of the grid.
 SIZE = 10
@@ -72,22 +72,13 @@ def lattice_network(size: int, block_m: float) -> RoadNetwork:
     return RoadNetwork.from_tables(tables)
 
 
-def _demand(rng: Streams, n: int, size: int, span_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``n`` requests over ``[0, span_s)``: times (sorted), origins and destinations (node indices)."""
-    homes = np.array([1 * size + 1, (size - 2) * size + 2, (size // 2) * size + size - 2])
-    work = np.array([(size // 2) * size + size // 2, 2 * size + size - 3])
-    origin = hotspot_nodes(rng.od, homes, 0.6, n, size)
-    destination = hotspot_nodes(rng.od, work, 0.6, n, size)
-    same = origin == destination
-    destination[same] = (destination[same] + size + 1) % (size * size)
-    return np.sort(rng.times.uniform(0, span_s, size=n)), origin, destination
-
-
 def lattice_history(seed: int, n: int, size: int) -> History:
     """Past days of the lattice city of ``seed``: each an hour of its generator at the day's rate (``n`` orders
     per :data:`HORIZON_S`), drawn at seeds that are never a scenario's own."""
     per_hour = round(n * 3600.0 / HORIZON_S)
-    days = [_demand(Streams(2**33 + HISTORY_DAYS * int(seed) + k), per_hour, size, 3600.0) for k in range(HISTORY_DAYS)]
+    days = [
+        grid_demand(Streams(2**33 + HISTORY_DAYS * int(seed) + k), per_hour, size, 3600.0) for k in range(HISTORY_DAYS)
+    ]
     return History(
         request_s=np.concatenate([d[0] for d in days]),
         origin=np.concatenate([d[1] for d in days]).astype(np.int32),
@@ -114,7 +105,7 @@ def build_lattice(
     rng = Streams(seed)
     n = round(sample * BASE_ORDERS)
     require_orders(n, BASE_ORDERS, sample, "the lattice city")
-    request_s, origin, destination = _demand(rng, n, size, HORIZON_S)
+    request_s, origin, destination = grid_demand(rng, n, size, HORIZON_S)
     orders = make_orders(np.arange(n), request_s, origin, destination, draw_patience(rng.patience, n, params))
     fleet = Fleet(
         initial_node=place_fleet(rng.fleet, fleet_size(n, params), fleet_placement, orders.origin, network.n_nodes)

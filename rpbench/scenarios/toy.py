@@ -89,20 +89,21 @@ def history_seeds(seed: int) -> list[int]:
     return [2**32 + HISTORY_DAYS * int(seed) + k for k in range(HISTORY_DAYS)]
 
 
-def _demand(rng: Streams, n: int, size: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """One day's ``n`` requests: times (sorted), origins and destinations (node indices)."""
+def grid_demand(rng: Streams, n: int, size: int, span_s: float = 3600.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``n`` requests at uniform times over ``[0, span_s)`` on a ``size x size`` grid: times (sorted), origins
+    near three "residential" hot spots and destinations near two "business" ones (60 % each; node indices)."""
     homes = np.array([1 * size + 1, (size - 2) * size + 2, (size // 2) * size + size - 2])
     work = np.array([(size // 2) * size + size // 2, 2 * size + size - 3])
     origin = hotspot_nodes(rng.od, homes, 0.6, n, size)
     destination = hotspot_nodes(rng.od, work, 0.6, n, size)
     same = origin == destination
     destination[same] = (destination[same] + size + 1) % (size * size)
-    return np.sort(rng.times.uniform(0, 3600.0, size=n)), origin, destination
+    return np.sort(rng.times.uniform(0, span_s, size=n)), origin, destination
 
 
 def toy_history(seed: int, n: int, size: int) -> History:
     """The demand history of the toy city of ``seed``: its generator's ``n`` requests on each past day."""
-    days = [_demand(Streams(s), n, size) for s in history_seeds(seed)]
+    days = [grid_demand(Streams(s), n, size) for s in history_seeds(seed)]
     return History(
         request_s=np.concatenate([d[0] for d in days]),
         origin=np.concatenate([d[1] for d in days]).astype(np.int32),
@@ -128,7 +129,7 @@ def build_toy(
     rng = Streams(seed)
     n = round(sample * BASE_ORDERS)
     require_orders(n, BASE_ORDERS, sample, "the toy city")
-    request_s, origin, destination = _demand(rng, n, size)
+    request_s, origin, destination = grid_demand(rng, n, size)
     orders = make_orders(np.arange(n), request_s, origin, destination, draw_patience(rng.patience, n, params))
     fleet = Fleet(
         initial_node=place_fleet(rng.fleet, fleet_size(n, params), fleet_placement, orders.origin, network.n_nodes)
