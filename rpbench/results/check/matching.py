@@ -101,14 +101,13 @@ def prove_maximum(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, target: f
         return MatchingProof(0, 0.0, "no edges")
     w = np.asarray(w, dtype=np.float64)
     degree = _degree(n, a, b)
-    sets: list[np.ndarray] = []
+    sets = OddSets(n, a, b)
     best = 0
     for _ in range(MAX_ROUNDS):
-        rows = [degree] + [sp.csr_matrix(_inside(n, s, a, b).astype(np.float64)) for s in sets]
         res = linprog(
             -w,
-            A_ub=sp.vstack(rows).tocsr(),
-            b_ub=np.r_[np.ones(n), [(len(s) - 1) // 2 for s in sets]],
+            A_ub=sp.vstack([degree, sets.rows()]).tocsr(),
+            b_ub=np.r_[np.ones(n), sets.capacity],
             bounds=(0, None),
             method="highs",
         )
@@ -119,10 +118,8 @@ def prove_maximum(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, target: f
         if best > target or upper < np.floor(target + 1e-9) + 1 - 1e-6:
             return MatchingProof(best, upper, "dual certificate", len(sets))
         frac = (res.x > FRACTIONAL) & (res.x < 1 - FRACTIONAL)
-        new = _odd_components(n, a[frac], b[frac])
-        if not new:
+        if not sets.add(_odd_components(n, a[frac], b[frac])):
             break
-        sets += new
     return _exact(n, a, b, w, sets)
 
 
@@ -131,22 +128,47 @@ def _degree(n: int, a: np.ndarray, b: np.ndarray) -> sp.csr_matrix:
     return sp.csr_matrix((np.ones(2 * len(a)), (np.r_[a, b], np.r_[edges, edges])), shape=(n, len(a)))
 
 
-def _inside(n: int, s: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    member = np.zeros(n, dtype=bool)
-    member[s] = True
-    return member[a] & member[b]
+class OddSets:
+    """The odd vertex sets found so far, each with the edges inside it (computed once, when it is added: the
+    loop's rows and dual read them every round, and the full day's graph has millions of edges)."""
+
+    def __init__(self, n: int, a: np.ndarray, b: np.ndarray):
+        self.n, self.a, self.b = n, a, b
+        self.capacity = np.zeros(0)  # (|S| - 1) / 2 per set
+        self.set_of = np.zeros(0, np.int64)  # per (set, inside edge) entry: the set
+        self.edge = np.zeros(0, np.int64)  # and the edge
+
+    def __len__(self) -> int:
+        return len(self.capacity)
+
+    def add(self, sets: list[np.ndarray]) -> bool:
+        """Add ``sets`` (disjoint vertex sets); False when there are none."""
+        if not sets:
+            return False
+        label = np.full(self.n, -1, np.int64)
+        for i, s in enumerate(sets):
+            label[s] = len(self) + i
+        la, lb = label[self.a], label[self.b]
+        inside = np.flatnonzero((la >= 0) & (la == lb))
+        self.set_of = np.r_[self.set_of, la[inside]]
+        self.edge = np.r_[self.edge, inside]
+        self.capacity = np.r_[self.capacity, [(len(s) - 1) // 2 for s in sets]]
+        return True
+
+    def rows(self) -> sp.csr_matrix:
+        """One row per set: 1 on every edge inside it."""
+        shape = (len(self), len(self.a))
+        return sp.csr_matrix((np.ones(len(self.edge)), (self.set_of, self.edge)), shape=shape)
 
 
-def _dual_value(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, sets: list[np.ndarray], dual: np.ndarray) -> float:
+def _dual_value(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, sets: OddSets, dual: np.ndarray) -> float:
     """The value of the solver's dual made feasible here: y, z clipped at 0, each edge's shortfall (float
     tolerance of the solver) added to its first end.  Feasible, so an upper bound on every matching."""
     y, z = np.maximum(dual[:n], 0.0), np.maximum(dual[n:], 0.0)
-    cover = y[a] + y[b]
-    for s, zs in zip(sets, z, strict=True):
-        cover += zs * _inside(n, s, a, b)
+    cover = y[a] + y[b] + np.bincount(sets.edge, weights=z[sets.set_of], minlength=len(a))
     short = np.maximum(w - cover, 0.0)
     np.maximum.at(y, a, y[a] + short)
-    return float(y.sum() + sum(zs * ((len(s) - 1) // 2) for s, zs in zip(sets, z, strict=True)))
+    return float(y.sum() + z @ sets.capacity)
 
 
 def _rounded_matching(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, x: np.ndarray) -> int:
@@ -162,22 +184,24 @@ def _odd_components(n: int, a: np.ndarray, b: np.ndarray) -> list[np.ndarray]:
     if not len(a):
         return []
     _, label = connected_components(sp.coo_matrix((np.ones(len(a)), (a, b)), shape=(n, n)), directed=False)
-    out = []
-    for c in np.unique(label[np.r_[a, b]]):
-        s = np.flatnonzero(label == c)
-        if len(s) % 2 == 1 and len(s) >= 3:
-            out.append(s)
-    return out
+    touched = np.unique(np.r_[a, b])
+    size = np.bincount(label, minlength=label.max() + 1)
+    odd = np.zeros(len(size), bool)
+    odd[label[touched]] = True
+    odd &= (size % 2 == 1) & (size >= 3)
+    nodes = np.flatnonzero(odd[label])
+    nodes = nodes[np.argsort(label[nodes], kind="stable")]
+    return np.split(nodes, np.flatnonzero(np.diff(label[nodes])) + 1) if len(nodes) else []
 
 
-def _exact(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, sets: list[np.ndarray]) -> MatchingProof:
+def _exact(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, sets: OddSets) -> MatchingProof:
     """The HiGHS MIP over the degree and odd-set constraints, no gap allowed (its optimality is the solver's
     claim: the last resort when the certificate did not close)."""
-    rows = [_degree(n, a, b)] + [sp.csr_matrix(_inside(n, s, a, b).astype(np.float64)) for s in sets]
-    upper = np.r_[np.ones(n), [(len(s) - 1) // 2 for s in sets]]
     res = milp(
         -w,
-        constraints=LinearConstraint(sp.vstack(rows).tocsr(), -np.inf, upper),
+        constraints=LinearConstraint(
+            sp.vstack([_degree(n, a, b), sets.rows()]).tocsr(), -np.inf, np.r_[np.ones(n), sets.capacity]
+        ),
         integrality=np.ones(len(w)),
         bounds=Bounds(0, 1),
         options={"mip_rel_gap": 0.0},
