@@ -111,6 +111,8 @@ def check_bound_optimal(rc: RunCheck, f: Folder, unit_m: float, reported: pd.Dat
         )
     rc.checked["bound_graph_pairs"] = len(a)
     rc.checked["odd_sets"] = proof.odd_sets
+    if proof.mip_edges is not None:
+        rc.checked["mip_edges"] = proof.mip_edges  # decided by HiGHS's MIP, on its own claim
 
 
 def _oracle_rules(rc: RunCheck, recorded: dict, params: Params) -> dict:

@@ -42,6 +42,26 @@ def test_the_proof_finds_the_maximum_of_random_graphs(seed):
     assert proof.best > best - 1
 
 
+@pytest.mark.parametrize("seed", [0, 4, 6, 7])  # graphs whose degree LP is fractional at the maximum
+def test_a_stalled_cutting_plane_loop_still_decides_by_reduced_cost_fixing(monkeypatch, seed):
+    """With no odd set ever found, the loop stalls at the degree LP: the dual then fixes every edge whose slack
+    exceeds the gap, the MIP decides the rest, and the answer is still the maximum, either way of the target."""
+    from rpbench.results.check import matching
+
+    monkeypatch.setattr(matching, "_odd_components", lambda n, a, b: [])
+    n, a, b, w = random_graph(seed, n=60, m=240)
+    g = nx.Graph()
+    g.add_weighted_edges_from(zip(a.tolist(), b.tolist(), w.astype(int).tolist(), strict=True))
+    best = sum(g[u][v]["weight"] for u, v in nx.max_weight_matching(g))
+    proof = prove_maximum(n, a, b, w, best)
+    # proven: nothing beats the maximum (the matching found may be smaller: the MIP saw only the edges that
+    # a matching worth more than the target could use)
+    assert proof.best <= best <= proof.upper < best + 1
+    assert proof.mip_edges is not None and proof.mip_edges < len(a) / 2
+    proof = prove_maximum(n, a, b, w, best - 1)
+    assert proof.best > best - 1  # a target below the maximum is caught
+
+
 def test_the_checker_enumerates_the_bound_graph_the_run_used(tmp_path):
     """The checker's graph has exactly the run's candidate pairs, with their weights."""
     folder = build(tmp_path / "toy", ["bound"])
