@@ -59,6 +59,22 @@ def test_its_run_on_the_toy_city_passes_the_checker_between_mb_and_the_bound(tmp
     assert main(["check", str(folder)]) == 0
 
 
+def test_a_hindsight_run_that_breaks_a_simulator_rule_fails_the_checker_by_name(tmp_path):
+    """Its schedule is a lower bound on OPT only because it is checked: a join edited to a round after its
+    passenger's patience ran out fails ``within-patience``, like any run's."""
+    import pandas as pd
+
+    spec = RunSpec.of(ScenarioRequest("toy", sample=0.2, seed=4), ["hindsight", "bound"], oracle_preset="matching")
+    folder, _ = run_comparison(spec, tmp_path / "run", progress=False)
+    path = folder / "runs" / "hindsight" / "events.csv.gz"
+    events = pd.read_csv(path)
+    joins = events.index[(events["event"] == "assign") & (events["kind"] == "join")]
+    events.loc[joins[0], "t_s"] += 3600.0
+    events.to_csv(path, index=False)
+    failed = {check for rc in check_folder(folder) for check in rc.violations}
+    assert "within-patience" in failed
+
+
 @pytest.mark.parametrize("seed", [0, 1, 2, 3])
 def test_it_saves_at_least_what_mb_saves_on_small_toy_scenarios(seed):
     scenario = build_scenario("toy", sample=0.1, seed=seed)
