@@ -4,7 +4,8 @@ The checker enumerates the bound's graph itself (every pair of orders inside the
 orientation valued by :mod:`.certificate`'s own rule), so a pair left out of the candidate set counts as
 much as a pair left out of the matching.  The maximum is then bounded by a dual certificate of the
 matching polytope: degree constraints plus the odd-set (blossom) constraints that a cutting-plane loop
-finds (the odd components of the fractional edges), solved with HiGHS (one instance, warm-started as rows are added).
+finds (odd components of the fractional edges, or odd cycles of its even ones), solved with HiGHS (one instance,
+warm-started as rows are added).
 The solver only searches: the dual it returns is made feasible and summed by numpy here, and any feasible
 dual bounds every matching (weak duality), so the verdict rests on that arithmetic, not on the solver's
 claim.  Weights are integral (the model's unit), so a dual below ``U + 1`` proves ``max <= U``.  When the
@@ -145,9 +146,9 @@ def prove_maximum(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, target: f
 
 class _CuttingPlaneLP:
     """The matching LP ``max w·x, degree <= 1, x >= 0`` in one HiGHS instance that the loop's odd-set rows are
-    added to: each re-solve starts from the last basis (dual simplex), where solving afresh every round took
-    minutes a round on the full day's 1.4 M pairs.  HiGHS only searches: its duals are made feasible and
-    summed by :func:`_dual_value`."""
+    added to: each re-solve starts from the last basis (dual simplex), where solving afresh took minutes a round
+    on the full day's 1.4 M pairs.  HiGHS only searches: its duals are made feasible and summed by
+    :func:`_dual_value`."""
 
     def __init__(self, n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray):
         import highspy
@@ -263,18 +264,47 @@ def _rounded_matching(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, x: np
 
 
 def _odd_components(n: int, a: np.ndarray, b: np.ndarray) -> list[np.ndarray]:
-    """Vertex sets of the odd components (>= 3 nodes) of the fractional edges: violated blossom constraints."""
+    """Disjoint vertex sets of violated blossom constraints among the fractional edges ``(a, b)``: each odd
+    component (>= 3 nodes), and in each even component that is not bipartite, the vertices of one odd cycle
+    (its edges at 1/2 sum to more than (|S| - 1)/2).  The fractional edges are few (tens to hundreds)."""
     if not len(a):
         return []
     _, label = connected_components(sp.coo_matrix((np.ones(len(a)), (a, b)), shape=(n, n)), directed=False)
-    touched = np.unique(np.r_[a, b])
     size = np.bincount(label, minlength=label.max() + 1)
-    odd = np.zeros(len(size), bool)
-    odd[label[touched]] = True
-    odd &= (size % 2 == 1) & (size >= 3)
-    nodes = np.flatnonzero(odd[label])
-    nodes = nodes[np.argsort(label[nodes], kind="stable")]
-    return np.split(nodes, np.flatnonzero(np.diff(label[nodes])) + 1) if len(nodes) else []
+    out = []
+    for comp in np.unique(label[a]).tolist():
+        members = np.flatnonzero(label == comp) if size[comp] % 2 == 1 else None
+        if members is not None and len(members) >= 3:
+            out.append(members)
+        elif members is None:
+            inside = label[a] == comp
+            cycle = _odd_cycle(a[inside], b[inside])
+            if cycle is not None:
+                out.append(cycle)
+    return out
+
+
+def _odd_cycle(a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
+    """The vertices of an odd cycle of the connected graph ``(a, b)`` (None: it is bipartite), by breadth-first
+    search: an edge joining two vertices of the same depth closes one with their paths to the root."""
+    adjacent: dict[int, list[int]] = {}
+    for u, v in zip(a.tolist(), b.tolist(), strict=True):
+        adjacent.setdefault(u, []).append(v)
+        adjacent.setdefault(v, []).append(u)
+    root = int(a[0])
+    parent, depth, queue = {root: root}, {root: 0}, [root]
+    for u in queue:
+        for v in adjacent[u]:
+            if v not in depth:
+                parent[v], depth[v] = u, depth[u] + 1
+                queue.append(v)
+            elif depth[v] == depth[u]:
+                x, y, cycle = u, v, {u, v}
+                while x != y:
+                    x, y = parent[x], parent[y]
+                    cycle |= {x, y}
+                return np.array(sorted(cycle), np.int64)
+    return None
 
 
 def _exact(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, sets: OddSets) -> MatchingProof:

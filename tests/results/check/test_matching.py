@@ -62,6 +62,17 @@ def test_a_stalled_cutting_plane_loop_still_decides_by_reduced_cost_fixing(monke
     assert proof.best > best - 1  # a target below the maximum is caught
 
 
+def test_odd_sets_are_odd_components_and_odd_cycles_of_even_ones():
+    """A triangle with a pendant edge is an even component holding the odd set {0, 1, 2}; a path of three
+    nodes is an odd component; a square is even and bipartite: no odd set."""
+    from rpbench.results.check.matching import _odd_components
+
+    a = np.array([0, 1, 0, 2, 5, 6, 10, 11, 12, 10])
+    b = np.array([1, 2, 2, 3, 6, 7, 11, 12, 13, 13])
+    found = sorted(s.tolist() for s in _odd_components(14, a, b))
+    assert found == [[0, 1, 2], [5, 6, 7]]
+
+
 def test_the_checker_enumerates_the_bound_graph_the_run_used(tmp_path):
     """The checker's graph has exactly the run's candidate pairs, with their weights."""
     folder = build(tmp_path / "toy", ["bound"])
