@@ -33,7 +33,7 @@ from rpbench.scenarios.common import (
     place_fleet,
     require_orders,
 )
-from rpbench.scenarios.toy import grid_demand
+from rpbench.scenarios.toy import grid_demand, grid_history
 
 #: Nodes per side of the grid.
 SIZE = 10
@@ -76,16 +76,9 @@ def lattice_history(seed: int, n: int, size: int) -> History:
     """Past days of the lattice city of ``seed``: each an hour of its generator at the day's rate (``n`` orders
     per :data:`HORIZON_S`), drawn at seeds that are never a scenario's own."""
     per_hour = round(n * 3600.0 / HORIZON_S)
-    days = [
-        grid_demand(Streams(2**33 + HISTORY_DAYS * int(seed) + k), per_hour, size, 3600.0) for k in range(HISTORY_DAYS)
-    ]
-    return History(
-        request_s=np.concatenate([d[0] for d in days]),
-        origin=np.concatenate([d[1] for d in days]).astype(np.int32),
-        destination=np.concatenate([d[2] for d in days]).astype(np.int32),
-        days=len(days),
-        source=f"the lattice generator on {len(days)} past hours (other seeds, {per_hour} orders an hour)",
-    )
+    seeds = [2**33 + HISTORY_DAYS * int(seed) + k for k in range(HISTORY_DAYS)]
+    source = f"the lattice generator on {len(seeds)} past hours (other seeds, {per_hour} orders an hour)"
+    return grid_history(seeds, per_hour, size, source)
 
 
 def build_lattice(

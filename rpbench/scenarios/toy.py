@@ -101,16 +101,22 @@ def grid_demand(rng: Streams, n: int, size: int, span_s: float = 3600.0) -> tupl
     return np.sort(rng.times.uniform(0, span_s, size=n)), origin, destination
 
 
-def toy_history(seed: int, n: int, size: int) -> History:
-    """The demand history of the toy city of ``seed``: its generator's ``n`` requests on each past day."""
-    days = [grid_demand(Streams(s), n, size) for s in history_seeds(seed)]
+def grid_history(seeds: list[int], n: int, size: int, source: str) -> History:
+    """Past days of the grid generator: ``n`` requests over an hour at each of ``seeds`` (``source``: one line)."""
+    days = [grid_demand(Streams(s), n, size) for s in seeds]
     return History(
         request_s=np.concatenate([d[0] for d in days]),
         origin=np.concatenate([d[1] for d in days]).astype(np.int32),
         destination=np.concatenate([d[2] for d in days]).astype(np.int32),
         days=len(days),
-        source=f"the toy generator on {len(days)} past days (other seeds, {n} orders a day)",
+        source=source,
     )
+
+
+def toy_history(seed: int, n: int, size: int) -> History:
+    """The demand history of the toy city of ``seed``: its generator's ``n`` requests on each past day."""
+    seeds = history_seeds(seed)
+    return grid_history(seeds, n, size, f"the toy generator on {len(seeds)} past days (other seeds, {n} orders a day)")
 
 
 def build_toy(
