@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from rpbench.data.road import NetworkTables
 from rpbench.exceptions import ParameterError
 from rpbench.network import RoadNetwork
 from rpbench.scenarios.base import Demand, Fleet, History, Params, Scenario
@@ -33,7 +32,7 @@ from rpbench.scenarios.common import (
     place_fleet,
     require_orders,
 )
-from rpbench.scenarios.toy import grid_demand, grid_history
+from rpbench.scenarios.toy import grid_demand, grid_history, grid_of
 
 #: Nodes per side of the grid.
 SIZE = 10
@@ -41,8 +40,6 @@ SIZE = 10
 BASE_ORDERS = 100
 HORIZON_S = 1800.0
 HISTORY_DAYS = 10
-_LON0, _LAT0 = 110.30, 19.98
-_M_PER_DEG_LAT = 110_540.0
 
 
 def lattice_network(size: int, block_m: float) -> RoadNetwork:
@@ -51,25 +48,7 @@ def lattice_network(size: int, block_m: float) -> RoadNetwork:
         raise ParameterError(f"lattice size {size!r} must be an integer >= 2")
     if not np.isfinite(block_m) or block_m <= 0:
         raise ParameterError(f"lattice block length {block_m!r} m must be > 0 (speed x batch interval)")
-    ids = np.arange(size * size)
-    row, col = np.divmod(ids, size)
-    right = ids[col < size - 1]
-    down = ids[row < size - 1]
-    a = np.concatenate([right, down])
-    b = np.concatenate([right + 1, down + size])
-    m_per_deg_lon = _M_PER_DEG_LAT * np.cos(np.radians(_LAT0))
-    tables = NetworkTables(
-        name=f"lattice-{size}",
-        node_id=ids,
-        lon=_LON0 + col * block_m / m_per_deg_lon,
-        lat=_LAT0 + row * block_m / _M_PER_DEG_LAT,
-        arc_from=np.concatenate([a, b]),
-        arc_to=np.concatenate([b, a]),
-        arc_length_m=np.full(2 * len(a), float(block_m)),
-        arc_link_id=np.concatenate([np.arange(len(a))] * 2),
-        source="generated in code",
-    )
-    return RoadNetwork.from_tables(tables)
+    return grid_of(size, block_m, np.full(2 * size * (size - 1), float(block_m)), f"lattice-{size}")
 
 
 def lattice_history(seed: int, n: int, size: int) -> History:

@@ -47,26 +47,32 @@ HISTORY_DAYS = 10
 
 
 def grid_network(size: int = 12, seed: int = 0) -> RoadNetwork:
-    """A seeded ``size x size`` two-way grid (node ids ``0..size²-1``)."""
+    """A seeded ``size x size`` two-way grid (node ids ``0..size²-1``), blocks of 500 m stretched by [1, 1.2)."""
     if not isinstance(size, (int, np.integer)) or size < 2:
         raise ParameterError(f"toy grid size {size!r} must be an integer >= 2")
     rng = np.random.default_rng(np.random.SeedSequence([int(seed), 7]))
+    n_links = 2 * size * (size - 1)
+    return grid_of(size, BLOCK_M, BLOCK_M * (1.0 + 0.2 * rng.random(n_links)), f"toy-grid-{size}")
+
+
+def grid_of(size: int, spacing_m: float, link_m: np.ndarray, name: str) -> RoadNetwork:
+    """A ``size x size`` two-way grid placed near Haikou with nodes ``spacing_m`` apart: the links (every
+    right neighbour, then every lower one) ``link_m`` long in both directions."""
     ids = np.arange(size * size)
     row, col = np.divmod(ids, size)
     right = ids[col < size - 1]
     down = ids[row < size - 1]
     a = np.concatenate([right, down])
     b = np.concatenate([right + 1, down + size])
-    length = BLOCK_M * (1.0 + 0.2 * rng.random(len(a)))
     m_per_deg_lon = _M_PER_DEG_LAT * np.cos(np.radians(_LAT0))
     tables = NetworkTables(
-        name=f"toy-grid-{size}",
+        name=name,
         node_id=ids,
-        lon=_LON0 + col * BLOCK_M / m_per_deg_lon,
-        lat=_LAT0 + row * BLOCK_M / _M_PER_DEG_LAT,
+        lon=_LON0 + col * spacing_m / m_per_deg_lon,
+        lat=_LAT0 + row * spacing_m / _M_PER_DEG_LAT,
         arc_from=np.concatenate([a, b]),
         arc_to=np.concatenate([b, a]),
-        arc_length_m=np.concatenate([length, length]),
+        arc_length_m=np.concatenate([link_m, link_m]),
         arc_link_id=np.concatenate([np.arange(len(a))] * 2),
         source="generated in code",
     )
