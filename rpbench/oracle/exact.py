@@ -484,7 +484,10 @@ def _solve_highs(model: ExactModel, time_limit_s: float, threads: int) -> tuple[
         options={"time_limit": float(time_limit_s), "mip_rel_gap": 0.0, "disp": False},
     )
     if res.x is None:
-        raise SolverError(f"HiGHS found no plan for the exact model ({res.message})")
+        raise SolverError(
+            f"exact: HiGHS found no plan for the day's model within {time_limit_s:g} s ({res.message}); raise "
+            "--opt exact.time_limit_s"
+        )
     x = np.rint(res.x)
     objective = round(float(model.saving @ x))
     bound = -float(getattr(res, "mip_dual_bound", -objective) or -objective)
@@ -517,7 +520,10 @@ def _solve_cpsat(model: ExactModel, time_limit_s: float, threads: int) -> tuple[
     s.parameters.num_workers = max(1, int(threads))
     code = s.solve(m)
     if code not in (cp_model.OPTIMAL, cp_model.FEASIBLE):
-        raise SolverError(f"CP-SAT found no plan for the exact model ({s.status_name(code)})")
+        raise SolverError(
+            f"exact: CP-SAT found no plan for the day's model within {time_limit_s:g} s ({s.status_name(code)}); "
+            "raise --opt exact.time_limit_s"
+        )
     x = np.array([s.value(v) for v in xs], np.float64)
     objective = round(float(model.saving @ x))
     return x, objective, float(s.best_objective_bound), "optimal" if code == cp_model.OPTIMAL else "time_limit"

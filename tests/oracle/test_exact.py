@@ -50,6 +50,16 @@ def test_a_city_that_is_not_a_lattice_is_refused_in_one_line(capsys):
     assert code == 2 and len(errors) == 1 and "needs a lattice city" in errors[0]
 
 
+def test_a_solve_stopped_before_any_plan_is_one_error_line_and_writes_nothing(tmp_path, capsys):
+    out = tmp_path / "run"
+    code = main(
+        ["run", "--scenario", "lattice", "--sample", "0.8", "--strategies", "exact", "--opt", "exact.time_limit_s=1",
+         "--out", str(out), "--no-progress"]
+    )  # fmt: skip
+    errors = [line for line in capsys.readouterr().err.splitlines() if "error" in line]
+    assert code == 2 and len(errors) == 1 and "exact.time_limit_s" in errors[0] and not out.exists()
+
+
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_two_exact_solvers_prove_the_same_optimum(seed):
     sc = _lattice(seed, sample=0.12)
