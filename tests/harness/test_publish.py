@@ -60,6 +60,34 @@ def test_a_published_multi_day_report_names_the_published_folder(two_day_data, t
     assert "rpbench check PATH/<date>" in report and "`published-days`" in report and "partial" not in report
 
 
+def test_a_published_parent_keeps_one_page_and_its_days_reports(two_day_data, tmp_path):
+    """A day keeps its tables, report and verdict but no page: the parent's page links the day's report."""
+    from rpbench.harness.multiday import run_days
+
+    request = ScenarioRequest("haikou-peak", sample=1.0, data_dir=str(two_day_data))
+    spec = RunSpec.of(request, ["mb"], command="test")
+    folder = run_days(spec, ["2017-05-01", "2017-05-02"], str(tmp_path / "days"), workers=1)
+    dest = publish(folder, tmp_path / "published-days")
+    for day in ("2017-05-01", "2017-05-02"):
+        assert (dest / day / "report.md").is_file() and (dest / day / "check.txt").is_file()
+        assert not (dest / day / "report.html").exists()
+        assert f'href="{day}/report.md"' in (dest / "report.html").read_text()
+
+
+def test_a_page_over_the_budget_is_published_without_its_map(run_folder, tmp_path, monkeypatch):
+    from rpbench.harness import publish as publishing
+
+    full = publish(run_folder, tmp_path / "with-map")
+    monkeypatch.setattr(publishing, "PAGE_BUDGET_BYTES", 1000)
+    light = publish(run_folder, tmp_path / "without-map")
+    assert "No map" not in (full / "report.html").read_text()
+    assert not (light / "report.html").exists()  # without its map still over the budget: no page
+    size = (full / "report.html").stat().st_size
+    monkeypatch.setattr(publishing, "PAGE_BUDGET_BYTES", size - 1)
+    mapless = publish(run_folder, tmp_path / "mapless")
+    assert "No map" in (mapless / "report.html").read_text()
+
+
 def test_the_published_command_names_the_published_folder():
     """A reader reruns the recorded command: ``--out`` names the published folder, no machine path remains."""
     from rpbench.harness.publish import published_command
@@ -85,6 +113,7 @@ def test_a_published_folder_records_the_rewritten_command(run_folder, tmp_path):
     published = json.loads((dest / "meta.json").read_text())
     assert published["command"] == "rpbench run --scenario toy --out toy-published"
     assert str(tmp_path) not in (dest / "report.md").read_text()
+    assert str(tmp_path) not in (dest / "report.html").read_text()  # the page too, drawn from the snapshot
 
 
 # ---------------------------------------------------------------- links, snapshots, concurrent publishes
