@@ -44,7 +44,9 @@ class ExactOptions(RunOptions):
 
     solver: str = option("highs", "the MILP solver of the flow model (both exact)", choices=("highs", "cp-sat"))
     time_limit_s: float = option(
-        600.0, "time allowed to prove the optimum (else the run stops, saying so)", range=Range(1.0, 86400.0, "s")
+        600.0,
+        "time allowed to prove the optimum (past it the run ends with one error line)",
+        range=Range(1.0, 86400.0, "s"),
     )
     threads: int = option(1, "solver threads", range=Range(1, 64))
 
@@ -81,7 +83,7 @@ class Exact(Strategy[ExactOptions]):
         sol = solve_model(model, solver=opts.solver, time_limit_s=opts.time_limit_s, threads=opts.threads)
         if not sol.proven:
             raise SolverError(
-                f"exact: the {opts.solver} solve of the day's model ({model.n_arcs:,} arcs) stopped after "
+                f"exact: the {opts.solver} solve of the day's model ({model.n_arcs:,} arcs) ran out of time after "
                 f"{sol.solve_s:.0f} s without proving its optimum (best {sol.objective} blocks, bound "
                 f"{sol.bound:.1f}); raise --opt exact.time_limit_s"
             )
@@ -185,7 +187,7 @@ class Exact(Strategy[ExactOptions]):
         return (row, lo, hi, int(kind), v, first, second, bool(fofo), pickup)
 
     def _check_walks(self, state: RoundState, k: int) -> None:
-        """Every free vehicle stands at the node the plan has it at in this round."""
+        """Every free vehicle stands at the node the plan gives it for round ``k``."""
         for v, node, pre in zip(
             state.v0_vehicle.tolist(), state.v0_node.tolist(), state.v0_pre_m.tolist(), strict=True
         ):
