@@ -42,7 +42,7 @@ Options (``--opt fl.NAME=VALUE``):
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
@@ -118,26 +118,19 @@ def fraction(num: np.ndarray, den: np.ndarray) -> np.ndarray:
     return out
 
 
-class _ForwardBase(Strategy[ForwardOptions]):
-    structure = Structure.ASSIGNMENT
-    Options = ForwardOptions
-    calibrated_by = "mb"
+class MBCalibrated:
+    """τ_0 (A4) and l̄ from an MB run of the same scenario: FL's calibration, for any strategy whose options
+    carry ``tau0_s`` and ``mean_pickup_m`` (FL, FL-no_delay, FL-perfect).  Listed before :class:`Strategy`."""
 
-    def __init__(self, options: ForwardOptions | None = None, **raw: Any):
-        super().__init__(options, **raw)
-        self.predictions: list[Prediction] = []
-        self.mean_pickup_m: np.ndarray = np.array([FALLBACK_MEAN_PICKUP_M])
+    calibrated_by: ClassVar[str | None] = "mb"
 
-    # ----------------------------------------------------------- calibration
     @classmethod
-    def needs_calibration(cls, options: ForwardOptions) -> bool:
+    def needs_calibration(cls, options: Any) -> bool:
         return options.tau0_s is None or options.mean_pickup_m is None
 
     @classmethod
-    def calibrate(
-        cls, options: ForwardOptions, kpis: dict[str, float], hourly: pd.DataFrame, hours: int
-    ) -> ForwardOptions:
-        """τ_0 (A4) and l̄ from the MB run "for the same hour" (docs/algorithms.md §1-§2), per hour where the
+    def calibrate(cls, options: Any, kpis: dict[str, float], hourly: pd.DataFrame, hours: int) -> Any:
+        """τ_0 and l̄ from the MB run "for the same hour" (docs/algorithms.md §1-§2), per hour where the
         scenario spans several; options the user set are kept."""
         tau0: float | tuple[float, ...]
         pickup: float | tuple[float, ...]
@@ -151,6 +144,16 @@ class _ForwardBase(Strategy[ForwardOptions]):
             tau0_s=tau0 if options.tau0_s is None else options.tau0_s,
             mean_pickup_m=pickup if options.mean_pickup_m is None else options.mean_pickup_m,
         )
+
+
+class _ForwardBase(MBCalibrated, Strategy[ForwardOptions]):
+    structure = Structure.ASSIGNMENT
+    Options = ForwardOptions
+
+    def __init__(self, options: ForwardOptions | None = None, **raw: Any):
+        super().__init__(options, **raw)
+        self.predictions: list[Prediction] = []
+        self.mean_pickup_m: np.ndarray = np.array([FALLBACK_MEAN_PICKUP_M])
 
     # ----------------------------------------------------------- lookahead
     @property

@@ -50,8 +50,7 @@ from rpbench.strategies.foresight import Foresight, PickupTimes
 from rpbench.strategies.forward import (
     FALLBACK_MEAN_PICKUP_M,
     FALLBACK_TAU0_S,
-    ForwardLooking,
-    ForwardOptions,
+    MBCalibrated,
     _per_hour,
     forward_options,
     forward_round,
@@ -60,7 +59,7 @@ from rpbench.strategies.myopic import PoolingOptions
 from rpbench.strategies.options import Range, option
 
 if TYPE_CHECKING:
-    import pandas as pd
+    pass
 
 
 @dataclass(frozen=True)
@@ -89,13 +88,12 @@ class PerfectValues:
     wait: np.ndarray  # ē*(0,p)
 
 
-class ForwardPerfect(Strategy[PerfectOptions]):
+class ForwardPerfect(MBCalibrated, Strategy[PerfectOptions]):
     name = "fl-perfect"
     label = "FL-perfect"
     color = "tab:cyan"
     structure = Structure.ASSIGNMENT
     Options = PerfectOptions
-    calibrated_by = "mb"
     description = (
         "clairvoyant: FL, paper Eqs. (13)-(14), with ē(p) and ē(0,p) computed from the realised orders "
         "(each order's best partner) instead of predicted"
@@ -106,20 +104,6 @@ class ForwardPerfect(Strategy[PerfectOptions]):
         super().__init__(options, **raw)
         self.tau0_s: np.ndarray = np.array([FALLBACK_TAU0_S])
         self.mean_pickup_m: np.ndarray = np.array([FALLBACK_MEAN_PICKUP_M])
-
-    # ----------------------------------------------------------- calibration
-    @classmethod
-    def needs_calibration(cls, options: PerfectOptions) -> bool:
-        return options.tau0_s is None or options.mean_pickup_m is None
-
-    @classmethod
-    def calibrate(
-        cls, options: PerfectOptions, kpis: dict[str, float], hourly: pd.DataFrame, hours: int
-    ) -> PerfectOptions:
-        """τ_0 and l̄ from the MB run, exactly as FL's (options the user set are kept)."""
-        fl = ForwardOptions(tau0_s=options.tau0_s, mean_pickup_m=options.mean_pickup_m)
-        done = ForwardLooking.calibrate(fl, kpis, hourly, hours)
-        return options.replace(tau0_s=done.tau0_s, mean_pickup_m=done.mean_pickup_m)
 
     # ----------------------------------------------------------- prepare
     def prepare(self, scenario: Scenario | OnlineView) -> None:
