@@ -12,6 +12,7 @@ import shutil
 import numpy as np
 import pandas as pd
 import pytest
+from results.check.tamper import run_violations
 
 from rpbench.cli import main
 from rpbench.exceptions import ParameterError
@@ -26,14 +27,6 @@ ONLINE = ["np", "mb", "rtv", "fl-nd", "fl"]
 
 def _lattice(seed: int, sample: float = 0.15, **params):
     return build_scenario("lattice", sample=sample, seed=seed, param_overrides={"dt_s": 30.0, **params})
-
-
-def _violations(folder) -> dict[str, list[str]]:
-    out: dict[str, list[str]] = {}
-    for rc in check_folder(folder):
-        for check, messages in rc.violations.items():
-            out.setdefault(check, []).extend(messages)
-    return out
 
 
 def test_rounds_follow_the_simulators_reveal_and_cancel_rules():
@@ -133,7 +126,7 @@ def test_an_edited_plan_fails_by_name(exact_run, tmp_path):
     folder = _copy(exact_run[0], tmp_path)
     path = folder / "runs" / "exact" / "exact-plan" / "plan.json"
     path.write_text(path.read_text().replace('"optimal"', '"optimal" '))
-    assert "SHA-256 differs" in " ".join(_violations(folder)["exact-optimum"])
+    assert "SHA-256 differs" in " ".join(run_violations(folder)["exact-optimum"])
 
 
 def test_a_plan_claiming_more_than_the_run_realised_fails_by_name(exact_run, tmp_path):
@@ -146,19 +139,19 @@ def test_a_plan_claiming_more_than_the_run_realised_fails_by_name(exact_run, tmp
         plan["pairs"][0][2] += plan["block_m"]
 
     _rewrite_plan(folder, inflate)
-    assert any("the plan's proven optimum" in m for m in _violations(folder)["exact-optimum"])
+    assert any("the plan's proven optimum" in m for m in run_violations(folder)["exact-optimum"])
 
 
 def test_an_unproven_plan_fails_by_name(exact_run, tmp_path):
     folder = _copy(exact_run[0], tmp_path)
     _rewrite_plan(folder, lambda plan: plan.update(status="time_limit", bound_blocks=plan["bound_blocks"] + 5))
-    assert any("not proven optimal" in m for m in _violations(folder)["exact-optimum"])
+    assert any("not proven optimal" in m for m in run_violations(folder)["exact-optimum"])
 
 
 def test_a_plan_of_other_pairs_fails_by_name(exact_run, tmp_path):
     folder = _copy(exact_run[0], tmp_path)
     _rewrite_plan(folder, lambda plan: plan["pairs"][0].__setitem__(1, plan["pairs"][0][1] + 1))
-    assert any("not in the plan" in m for m in _violations(folder)["exact-optimum"])
+    assert any("not in the plan" in m for m in run_violations(folder)["exact-optimum"])
 
 
 @pytest.mark.slow
