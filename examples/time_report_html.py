@@ -15,7 +15,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from rpbench.results.html import write_html
+from rpbench.report.html import write_html
 
 ARGS = ["--no-sandbox", "--disable-gpu", "--no-first-run", "--disable-background-networking"]
 

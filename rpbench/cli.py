@@ -20,8 +20,8 @@ import sys
 import threading
 from collections.abc import Iterator
 
-from rpbench import __version__
 from rpbench.exceptions import RpbenchError
+from rpbench.version import __version__
 
 #: Subcommand modules, in the order ``rpbench --help`` lists them.
 COMMANDS = (

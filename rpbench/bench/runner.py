@@ -25,7 +25,7 @@
   ``wrong``, ``time_limit``, ``feasible`` (stopped at a gap),
   ``infeasible`` (claimed so, nothing known against it), ``memory_limit``,
   ``error`` or ``killed``.  Known values of a ``.solu`` file
-  (:mod:`rpbench.bench.solu`) decide when they are given;
+  (:mod:`rpbench.results.solu`) decide when they are given;
 * ``tier``: the instance's size tier (``all`` when it has none).
 
 Each preset is warmed up on a tiny model first so library imports are not
@@ -59,9 +59,10 @@ from rpbench.backends import Preset, load_preset, preset_names, solve
 from rpbench.bench.synthetic import assignment, pairing, trip_packing
 from rpbench.exceptions import ParameterError, RpbenchError
 from rpbench.model import Model, Status
+from rpbench.report.bench import NO_TIER
 
 if TYPE_CHECKING:
-    from rpbench.bench.solu import Known
+    from rpbench.results.solu import Known
 
 COLUMNS = [
     "model",
@@ -94,8 +95,6 @@ COLUMNS = [
 ]
 #: Every ``verdict`` of a row; only ``optimal`` counts as solved.
 VERDICTS = ("optimal", "wrong", "time_limit", "feasible", "infeasible", "memory_limit", "error", "killed")
-#: The tier of an instance whose metadata names none.
-NO_TIER = "all"
 #: Bytes of the ``memory_limit_gb`` unit.
 GB = 2**30
 #: Relative tolerance when an objective is compared with a known value (both are integral sums; this only

@@ -20,13 +20,13 @@ from rpbench.harness.comparison import calibrated, simulate_strategy
 from rpbench.harness.spec import RunSpec
 from rpbench.instances import save_instance
 from rpbench.model import Model, Solution
+from rpbench.options import RunOptions
 from rpbench.oracle.pairs import find_candidates
 from rpbench.oracle.runs import ORACLE_RUNS
 from rpbench.oracle.solve import oracle_model
 from rpbench.results.store import check_new_folder
 from rpbench.scenarios.base import Scenario
 from rpbench.strategies.base import RoundModel
-from rpbench.strategies.options import RunOptions
 
 #: A captured round: its number, time, model, the solver's objective and status.
 _Captured = tuple[int, float, Model, float, str]

@@ -1,7 +1,7 @@
 """Argument helpers shared by subcommands (data folder, scenario choice, output).
 
 Every numeric option is declared with :func:`add_number_arg` and its sane
-:class:`~rpbench.strategies.options.Range`; the command's handler calls
+:class:`~rpbench.options.Range`; the command's handler calls
 :func:`check_numbers` first, so a value out of range is one line (not
 argparse's usage block) before anything runs or downloads.
 """
@@ -26,13 +26,13 @@ from rpbench.backends.presets import MAX_TIME_LIMIT_S
 from rpbench.data.first_run import ensure_data_dir
 from rpbench.exceptions import ParameterError, RpbenchError
 from rpbench.harness.spec import MAX_DECISION_BUDGET_S
+from rpbench.options import Range
 from rpbench.results import run_folders, to_jsonable
-from rpbench.results.report import over_budget_runs, unproven_runs
+from rpbench.results.read import over_budget_runs, unproven_runs
 from rpbench.results.runs import run_label
 from rpbench.scenarios import ScenarioRequest, default_scenario_name, scenario_spec
 from rpbench.scenarios.base import Params
 from rpbench.scenarios.request import parse_date
-from rpbench.strategies.options import Range
 
 # ---------------------------------------------------------------- numbers
 #: Sane ranges shared by several commands.  A seed is numpy's classic 32-bit range; a solve's time limit

@@ -8,7 +8,7 @@ and a verdict (:func:`rpbench.bench.runner.verdict`): ``optimal``, ``wrong``
 (against the known values of ``--solu FILE``, a folder's ``rpbench.solu``,
 or another preset's proven optimum; exit status 1), ``time_limit``,
 ``memory_limit`` (``--memory-limit``), ``error`` or ``killed`` (the hard
-timeout).  Then one line per (tier, preset) (:mod:`rpbench.bench.summary`):
+timeout).  Then one line per (tier, preset) (:mod:`rpbench.report.bench`):
 instances solved, the shifted geometric mean of the time with unsolved
 instances at the time limit, its ratio to the best preset.  ``--out FOLDER``
 writes all of it with the performance profile, the machine and the library
@@ -28,10 +28,9 @@ import numpy as np
 import pandas as pd
 
 from rpbench.backends.presets import load_preset, preset_names
-from rpbench.bench.runner import NO_TIER, format_table, run_benchmark
-from rpbench.bench.solu import Known, check_names, read_solu, write_solu
-from rpbench.bench.summary import SHIFTS, environment, format_summary, summarise, write_outputs
+from rpbench.bench.runner import format_table, run_benchmark
 from rpbench.bench.synthetic import SUITES, suite
+from rpbench.check.bench import KNOWN_FILE
 from rpbench.commands._common import (
     SEED,
     TIME_LIMIT,
@@ -48,12 +47,12 @@ from rpbench.exceptions import ParameterError
 from rpbench.instances import find_instances, load_instances
 from rpbench.library.manifest import library_names
 from rpbench.model import OBJECTIVES, Structure
-from rpbench.results.benchmarks import SHIFT_S
-from rpbench.results.check.bench import KNOWN_FILE
-from rpbench.results.html.bench import write_bench_html
-from rpbench.results.plots import bench_figure
+from rpbench.options import Range
+from rpbench.report.bench import NO_TIER, SHIFT_S, SHIFTS, format_summary, solver_environment, summarise, write_outputs
+from rpbench.report.html.bench import write_bench_html
+from rpbench.report.plots import bench_figure
+from rpbench.results.solu import Known, check_names, read_solu, write_solu
 from rpbench.results.store import check_new_folder, new_results_folder, write_json
-from rpbench.strategies.options import Range
 
 #: About the default hard timeout (2 x limit + 30 s) of the longest time limit a preset may set.
 HARD_TIMEOUT = Range(0.0, 2 * TIME_LIMIT.high, "s", low_open=True)
@@ -277,7 +276,7 @@ def run(args: argparse.Namespace) -> int:
     )
     what = f"{len(models)} models x {table['preset'].nunique()} presets"
     settings = _settings(args, table, solu_files)
-    env = environment() if csv_out is not None or html_out is not None or args.out is not None else None
+    env = solver_environment() if csv_out is not None or html_out is not None or args.out is not None else None
     if csv_out is not None and sidecar is not None:
         write_out_file(csv_out, "--csv", lambda tmp: table.to_csv(tmp, index=False))
         write_out_file(sidecar, "--csv", lambda tmp: write_json(tmp, {**(env or {}), "bench": settings}))

@@ -6,8 +6,8 @@ from __future__ import annotations
 import argparse
 import sys
 
+from rpbench.check import EXIT_FAILED, EXIT_OK, EXIT_UNREADABLE, check_tree, exit_status, format_report
 from rpbench.commands._common import print_json
-from rpbench.results.check import EXIT_FAILED, EXIT_OK, EXIT_UNREADABLE, check_tree, exit_status, format_report
 
 STATUS = {EXIT_OK: "ok", EXIT_FAILED: "failed", EXIT_UNREADABLE: "unreadable"}
 

@@ -14,10 +14,8 @@ import json
 import time
 from pathlib import Path
 
-from rpbench import __version__
 from rpbench.backends import load_preset
 from rpbench.bench.runner import IsolatedWorker
-from rpbench.bench.solu import write_solu
 from rpbench.commands._common import (
     TIME_LIMIT,
     add_data_arg,
@@ -29,13 +27,13 @@ from rpbench.commands._common import (
     print_json,
     write_out_file,
 )
+from rpbench.digests import arrays_sha256
 from rpbench.exceptions import ParameterError
 from rpbench.instances import find_instances, load_instances
 from rpbench.library.build import build_set
 from rpbench.library.export import FORMATS, export_formats, write_model
 from rpbench.library.manifest import (
     MANIFEST,
-    content_sha256,
     packaged_manifest,
     read_manifest,
     same_files,
@@ -46,6 +44,8 @@ from rpbench.library.prove import prove, with_time_limit
 from rpbench.library.sets import SETS, instance_set
 from rpbench.model import Model
 from rpbench.results import store
+from rpbench.results.solu import write_solu
+from rpbench.version import __version__
 
 #: Where a set's files are looked for without --dir: the committed tier in a checkout, else the default
 #: place `build` writes to.
@@ -185,7 +185,7 @@ def _distinct_by_name(paths: list[str | Path]) -> list[Model]:
     out = []
     for f, model in zip(files, models, strict=True):
         if f.stem in seen:
-            if content_sha256(f, skip=MODEL_META) != content_sha256(seen[f.stem], skip=MODEL_META):
+            if arrays_sha256(f, skip=MODEL_META) != arrays_sha256(seen[f.stem], skip=MODEL_META):
                 raise ParameterError(
                     f"two different instances are named {f.stem!r}: {str(seen[f.stem])!r} and {str(f)!r}; "
                     "a .solu file needs one value per name"

@@ -22,6 +22,7 @@ from rpbench.commands._common import (
 )
 from rpbench.exceptions import ParameterError
 from rpbench.harness.strict import require_proven
+from rpbench.options import Range
 from rpbench.oracle.pairs import bound_rules
 from rpbench.oracle.solve import (
     MAX_UNIT_M,
@@ -32,8 +33,7 @@ from rpbench.oracle.solve import (
     find_candidates,
     solve_oracle,
 )
-from rpbench.results.report import UNPROVEN_MARK
-from rpbench.strategies.options import Range
+from rpbench.report.comparison import UNPROVEN_MARK
 
 UNIT_M_RANGE = Range(MIN_UNIT_M, MAX_UNIT_M, "m")
 

@@ -29,6 +29,7 @@ from rpbench.commands._common import (
 )
 from rpbench.data.first_run import ensure_data_dir
 from rpbench.exceptions import ParameterError
+from rpbench.options import Range
 from rpbench.predict import PredictConfig, build_model, predict, solve_model
 from rpbench.predict.compare import compare
 from rpbench.predict.config import ACCELERATIONS, PRIORITIES
@@ -36,7 +37,6 @@ from rpbench.predict.fcfs import simulate, validate
 from rpbench.predict.rates import DEFAULT_DATE, RATE_KINDS, load_rates
 from rpbench.scenarios.base import Params
 from rpbench.scenarios.common import haikou_network
-from rpbench.strategies.options import Range
 
 #: τ_0 is a sojourn (a mean pick-up time): a day bounds it, as it bounds FL's tau0_s.
 TAU0 = Range(0.0, 86400.0, "s")

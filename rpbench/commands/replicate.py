@@ -21,14 +21,15 @@ from rpbench.commands._common import (
 from rpbench.data import available_peak_dates
 from rpbench.data.first_run import ensure_data_dir
 from rpbench.exceptions import ParameterError
-from rpbench.replication.folder import engine_folder, file_manifest, write_engine_folder
+from rpbench.harness.replicate import parse_strategies, replicate
+from rpbench.replication.folder import file_manifest, write_engine_folder
 from rpbench.replication.reference import has_committed
 from rpbench.replication.report import criterion, markdown
-from rpbench.replication.runner import parse_strategies, replicate
 from rpbench.replication.switches import steps_for
+from rpbench.report.html import write_html
+from rpbench.results import layout
 from rpbench.results import store as results
-from rpbench.results.check import replication as audit
-from rpbench.results.html import write_html
+from rpbench.results.layout import engine_folder
 from rpbench.results.store import check_new_folder
 from rpbench.scenarios.request import parse_dates
 
@@ -125,7 +126,7 @@ def run(args: argparse.Namespace) -> int:
         frame.to_csv(folder / "runs.csv", index=False)
         (folder / "report.md").write_text(text)
         write_html(folder, name=final.name)
-        (folder / audit.RECORDS_DIR).mkdir()
+        (folder / layout.RECORDS_DIR).mkdir()
         for (date, strategy, engine), outcome in result.outcomes.items():
             if engine != "authors":
                 continue  # records of the authors' full semantics only (size)
@@ -137,7 +138,7 @@ def run(args: argparse.Namespace) -> int:
             rec["solo_m"] = outcome.solo_m[rec["order"].to_numpy()]
             partner = rec["partner"].to_numpy()
             rec["partner"] = [int(orders.order_id[p]) if p >= 0 else -1 for p in partner]
-            rec.drop(columns=["order"]).to_csv(audit.records_file(folder, date, strategy, engine), index=False)
+            rec.drop(columns=["order"]).to_csv(layout.records_file(folder, date, strategy, engine), index=False)
         for date, strategy, engine, strategy_run, scenario in own:
             dest = engine_folder(folder, date, strategy, engine)
             write_engine_folder(dest, scenario, strategy_run, preset, meta["command"])

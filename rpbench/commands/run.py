@@ -28,11 +28,12 @@ from rpbench.exceptions import ParameterError
 from rpbench.harness.comparison import run_comparison
 from rpbench.harness.multiday import mean_bracket_lines, run_days
 from rpbench.harness.spec import RunSpec
+from rpbench.report.comparison import fmt, text_table
 from rpbench.results import layout
 from rpbench.results.layout import REPORT_HTML
 from rpbench.results.parents import bracket_by_day
 from rpbench.results.ratios import bracket_line, bracket_record
-from rpbench.results.report import fmt, load_kpis, text_table
+from rpbench.results.read import load_kpis
 from rpbench.results.runs import run_styles
 from rpbench.results.store import check_new_folder, read_meta
 

@@ -17,8 +17,8 @@ from rpbench.commands._common import (
 )
 from rpbench.commands._runs import check_presets, parse_runs, run_spec
 from rpbench.exceptions import ParameterError
+from rpbench.options import Range
 from rpbench.results.store import check_new_folder
-from rpbench.strategies.options import Range
 
 #: A round index: a day of 0.1 s rounds (Δt's lower bound) has 864,000.
 ROUND = Range(0, 864_000, integer=True)

@@ -19,12 +19,13 @@ from rpbench.commands._common import (
     scenario_request,
 )
 from rpbench.exceptions import ParameterError
+from rpbench.harness.training import train
 from rpbench.results import store
 from rpbench.scenarios.registry import scenario_spec
 from rpbench.scenarios.request import ScenarioRequest
 from rpbench.strategies.value import ValueFunction, ValueOptions
 from rpbench.valuefn.model import save_model
-from rpbench.valuefn.train import train, training_record
+from rpbench.valuefn.training import training_record
 
 #: What the --dates, --seeds and --out arguments give: not options of a training.
 _NOT_TRAINING_OPTIONS = {"model": "--out", "train_dates": "--dates", "train_seeds": "--seeds"}

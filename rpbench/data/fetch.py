@@ -71,10 +71,10 @@ from typing import BinaryIO
 
 from tqdm import tqdm
 
-from rpbench import __version__
 from rpbench.data.orders import PEAK_DIR
 from rpbench.exceptions import ChecksumError, DataError, DownloadError, ParameterError, RpbenchError
 from rpbench.paths import DATA_MIRROR_ENV, fetched_data_dir
+from rpbench.version import __version__
 
 REGISTRY_RESOURCE = "registry.toml"
 TRANSFORMS = ("gzip", "none")

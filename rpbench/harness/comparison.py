@@ -22,15 +22,16 @@ import pandas as pd
 from rpbench.backends import Preset, load_preset
 from rpbench.harness.spec import RunEntry, RunSpec, resolve_runs
 from rpbench.harness.strict import require_proven
+from rpbench.harness.training import supply_model
 from rpbench.model import Structure
 from rpbench.oracle import find_candidates, solve_oracle
 from rpbench.oracle.runs import ORACLE_RUNS
 from rpbench.oracle.solve import OracleResult
+from rpbench.report.comparison import write_report
+from rpbench.report.html import write_html
 from rpbench.results import metrics
 from rpbench.results.folder import StrategyRun, oracle_kpis, write_folder
-from rpbench.results.html import write_html
 from rpbench.results.ratios import with_ratios
-from rpbench.results.report import write_report
 from rpbench.results.runs import run_label
 from rpbench.results.store import check_new_folder, new_results_folder, timestamp
 from rpbench.scenarios.base import Scenario
@@ -166,6 +167,7 @@ def simulate_strategy(
     cls = entry.strategy_class()
     strategy = cls(entry.options)
     preset.require(strategy.structure, needed_by=f"strategy {entry.name!r}")
+    supply_model(strategy, scenario, progress=progress)
     bar = progress_bar(scenario, entry.name, progress)
     try:
         sim = Simulator(

@@ -2,7 +2,7 @@
 
 An evaluation folder holds one ordinary results folder per (day, seed) — each written whole or not at all,
 and checkable with ``rpbench check`` — plus ``units.csv`` (day, seed, run, kpi, value: every child's
-KPIs), ``leaderboard.csv`` and ``paired.csv`` (:mod:`rpbench.results.leaderboard`), report.md and
+KPIs), ``leaderboard.csv`` and ``paired.csv`` (:mod:`rpbench.report.leaderboard`), report.md and
 report.html.  A second invocation on the same folder runs only the children that are missing (an
 interrupted evaluation resumes), and refuses a folder of another protocol or of another decision budget
 (every unit's ``rounds_over_budget`` counts against the same one).
@@ -20,10 +20,10 @@ from rpbench.harness.comparison import ComparisonTask, run_task
 from rpbench.harness.parallel import run_tasks
 from rpbench.harness.spec import RunSpec
 from rpbench.protocols import Protocol
+from rpbench.report.evaluation import summarize, unit_name, write_evaluation_report
+from rpbench.report.html import write_html
 from rpbench.results import layout
-from rpbench.results.evaluation import summarize, unit_name, write_evaluation_report
 from rpbench.results.folder import write_parent_meta
-from rpbench.results.html import write_html
 from rpbench.results.store import DEFAULT_PARENT, remove_stale_partials
 from rpbench.scenarios import ScenarioRequest
 

@@ -16,17 +16,18 @@ from rpbench import files, results
 from rpbench.harness.comparison import ComparisonTask, run_task
 from rpbench.harness.parallel import run_tasks
 from rpbench.harness.spec import RunSpec
+from rpbench.report.comparison import findings, fmt, markdown_table, offline_notes, table_rows
+from rpbench.report.html import write_html
+from rpbench.report.plots import MULTIDAY_PLOT_KPIS, per_day_figures
+from rpbench.report.tables import csv_table, latex_table
 from rpbench.results import layout
 from rpbench.results.folder import write_parent_meta
-from rpbench.results.html import write_html
 from rpbench.results.metrics import KPI_LABELS
-from rpbench.results.parents import MULTIDAY_PLOT_KPIS, bracket_by_day, by_day_table, day_folders
-from rpbench.results.plots import per_day_figures
+from rpbench.results.parents import bracket_by_day, by_day_table, day_folders
 from rpbench.results.ratios import RATIO_KPIS
-from rpbench.results.report import findings, fmt, load_kpis, markdown_table, offline_notes, table_rows
+from rpbench.results.read import load_kpis
 from rpbench.results.runs import markdown_cell, run_label, run_styles
 from rpbench.results.store import check_new_folder
-from rpbench.results.tables import csv_table, latex_table
 from rpbench.scenarios import SCENARIOS
 
 

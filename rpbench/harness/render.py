@@ -11,13 +11,14 @@ from rpbench import files, results
 from rpbench.exceptions import ResultsError
 from rpbench.harness.multiday import write_multiday_report
 from rpbench.harness.sweep import write_sweep_report
+from rpbench.report.combine import combine, combined_markdown, write_combined
+from rpbench.report.comparison import check_metrics, selected_markdown, write_report
+from rpbench.report.evaluation import write_evaluation_report
+from rpbench.report.html import write_html
+from rpbench.report.html.bench import bench_tables, write_bench_folder
 from rpbench.results import layout
-from rpbench.results.combine import combine, combined_markdown, write_combined
-from rpbench.results.evaluation import write_evaluation_report
-from rpbench.results.html import write_html
-from rpbench.results.html.bench import bench_tables, write_bench_folder
 from rpbench.results.layout import HEAVY, REPORT
-from rpbench.results.report import check_metrics, load_kpis, selected_markdown, write_report
+from rpbench.results.read import load_kpis
 from rpbench.results.runs import run_styles
 
 #: A report's figures: PNG, and the vector copies beside each.
@@ -34,9 +35,9 @@ def render(
 
     One folder: its own report (comparison, multi-day or sweep), rewritten in it from its files, or
     with ``dest`` written into ``dest`` (the folder is then only read); ``page``: its ``report.html``
-    too (:func:`rpbench.results.html.write_html`).  A ``rpbench replicate`` folder's report.md is
+    too (:func:`rpbench.report.html.write_html`).  A ``rpbench replicate`` folder's report.md is
     written by the replication only: here it gets its page.  Several folders: comparison folders of
-    one scenario combined into one comparison (:mod:`rpbench.results.combine`); nothing is written in
+    one scenario combined into one comparison (:mod:`rpbench.report.combine`); nothing is written in
     them, and with ``dest`` the combined table and figure go there.
     """
     metrics = check_metrics(metrics)

@@ -31,12 +31,12 @@ from dataclasses import dataclass
 from typing import Any
 
 from rpbench.exceptions import ParameterError
+from rpbench.options import RunOptions
 from rpbench.oracle.runs import ORACLE_RUNS
 from rpbench.plugins import is_spec
 from rpbench.scenarios import ScenarioRequest
 from rpbench.strategies import REGISTRY as STRATEGY_REGISTRY
 from rpbench.strategies import Strategy, plugin_names, strategy_class
-from rpbench.strategies.options import RunOptions
 
 #: A run name is a folder name and an ``--opt`` prefix: letters, digits and ``._-``, not starting with a dot.
 _RUN_NAME = re.compile(r"^[A-Za-z0-9_-][A-Za-z0-9._-]*$")

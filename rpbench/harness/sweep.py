@@ -25,16 +25,16 @@ from rpbench.exceptions import ParameterError
 from rpbench.harness.comparison import ComparisonTask, run_task
 from rpbench.harness.parallel import run_tasks
 from rpbench.harness.spec import RunSpec
+from rpbench.report.comparison import fmt
+from rpbench.report.html import write_html
+from rpbench.report.plots import sweep_figure
+from rpbench.report.tables import booktabs, latex_escape
 from rpbench.results import layout
 from rpbench.results.folder import write_parent_meta
-from rpbench.results.html import write_html
 from rpbench.results.metrics import KPI_LABELS
 from rpbench.results.parents import sweep_table
-from rpbench.results.plots import sweep_figure
-from rpbench.results.report import fmt
 from rpbench.results.runs import markdown_cell, run_label, run_styles
 from rpbench.results.store import check_new_folder
-from rpbench.results.tables import booktabs, latex_escape
 from rpbench.scenarios import ScenarioRequest
 from rpbench.scenarios.base import Params
 

@@ -17,9 +17,10 @@ from typing import Any
 
 from rpbench.bench import synthetic
 from rpbench.bench.snapshot import take_snapshots
+from rpbench.digests import arrays_sha256, file_sha256
 from rpbench.harness.spec import RunSpec
 from rpbench.instances import load_instance, save_instance
-from rpbench.library.manifest import FORMAT, content_sha256, file_sha256
+from rpbench.library.manifest import FORMAT
 from rpbench.library.sets import LIBRARY_VERSION, InstanceSet, Source, Synthetic
 from rpbench.model import Model
 from rpbench.scenarios import ScenarioRequest
@@ -110,5 +111,5 @@ def _write(path: Path, model: Model, provenance: dict[str, Any], tags: tuple[str
             for k in ("scenario_name", "date", "sample", "seed", "strategy", "round", "generator", "args")
         },
         "sha256": file_sha256(path),
-        "content_sha256": content_sha256(path),
+        "content_sha256": arrays_sha256(path),
     }

@@ -10,35 +10,17 @@ digest is independent of the compressor and is what :func:`verify_folder` requir
 
 from __future__ import annotations
 
-import hashlib
 import json
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
+from rpbench.digests import arrays_sha256, file_sha256
 from rpbench.exceptions import ParameterError
 from rpbench.files import load_json_object
 
 FORMAT = "rpbench-instance-set-1"
 MANIFEST = "manifest.json"
-
-
-def file_sha256(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()
-
-
-def content_sha256(path: Path, *, skip: tuple[str, ...] = ()) -> str:
-    """SHA-256 of an instance file's arrays (name, dtype, shape, bytes; by name), not of its zip bytes;
-    ``skip``: members left out (``meta_json``: the model alone, whatever tier or run it is recorded from)."""
-    h = hashlib.sha256()
-    with np.load(path, allow_pickle=False) as z:
-        for name in sorted(set(z.files) - set(skip)):
-            arr = np.ascontiguousarray(z[name])
-            h.update(json.dumps([name, arr.dtype.str, list(arr.shape)]).encode())
-            h.update(arr.tobytes())
-    return h.hexdigest()
 
 
 def packaged_manifest(name: str) -> dict[str, Any] | None:
@@ -80,7 +62,7 @@ def verify_folder(folder: Path, reference: dict[str, Any]) -> list[str]:
             problems.append(f"{name}: missing")
             continue
         try:
-            digest = content_sha256(path)
+            digest = arrays_sha256(path)
         except (OSError, ValueError, EOFError) as exc:
             problems.append(f"{name}: unreadable ({type(exc).__name__}: {exc})")
             continue

@@ -17,9 +17,9 @@ from dataclasses import dataclass
 from rpbench.backends import Preset, solve
 from rpbench.backends.base import SolveOptions
 from rpbench.bench.runner import IsolatedWorker
-from rpbench.bench.solu import Known
 from rpbench.exceptions import ResultsError, RpbenchError
 from rpbench.model import Model, Status, Structure
+from rpbench.results.solu import Known
 
 #: Backends that are front ends of HiGHS (scipy.optimize.milp and linprog are HiGHS too).
 _HIGHS_FRONT_ENDS = {"highs", "scipy", "cvxpy", "pyomo"}

@@ -13,9 +13,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from rpbench.options import RunOptions, option
 from rpbench.oracle.pairs import PairRules
 from rpbench.scenarios.base import Params
-from rpbench.strategies.options import RunOptions, option
 
 
 @dataclass(frozen=True)

@@ -18,7 +18,7 @@ from typing import Any
 
 from rpbench.exceptions import ParameterError
 from rpbench.files import parse_toml, read_text
-from rpbench.results.leaderboard import Bootstrap
+from rpbench.report.leaderboard import Bootstrap
 from rpbench.results.metrics import DECISION_KPIS, KPI_ORDER
 from rpbench.results.ratios import RATIO_KPIS
 

@@ -14,7 +14,7 @@ The engine uses rpbench's building blocks: the network's all-pairs distances
 (:class:`~rpbench.network.Distances`), the solver-agnostic
 :class:`~rpbench.model.AssignmentModel` solved by any preset, and the
 scenario's orders and fleet.  It writes no event log for rpbench's checker:
-teleporting vehicles have no trajectory to check; :mod:`rpbench.results.check.replication`
+teleporting vehicles have no trajectory to check; :mod:`rpbench.check.replication`
 re-checks what still applies (assignment and accounting).
 """
 

@@ -7,13 +7,12 @@ from __future__ import annotations
 from pathlib import Path
 
 from rpbench.backends.presets import Preset
-from rpbench.results.check.folder import file_sha256
-from rpbench.results.check.replication import ENGINES_DIR, engine_folder
+from rpbench.digests import file_sha256
+from rpbench.report.comparison import write_report
 from rpbench.results.folder import StrategyRun, write_folder
-from rpbench.results.report import write_report
 from rpbench.scenarios.base import Scenario
 
-__all__ = ["ENGINES_DIR", "engine_folder", "file_manifest", "write_engine_folder"]
+__all__ = ["file_manifest", "write_engine_folder"]
 
 
 def write_engine_folder(dest: Path, scenario: Scenario, run: StrategyRun, preset: Preset, command: str | None) -> None:

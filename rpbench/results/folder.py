@@ -1,7 +1,7 @@
 """Writing a comparison's results folder, and the ``meta.json`` of parent folders (multi-day runs, sweeps).
 
 :func:`write_folder` writes every file of :mod:`.layout` but the report
-(:func:`rpbench.results.report.write_report` renders it from these files):
+(:func:`rpbench.report.comparison.write_report` renders it from these files):
 the inputs, one folder per run, the KPI, round and hourly tables and
 ``meta.json``.  ``meta.json`` records, per run, what the checker holds it to
 (kind, options, rules, status: digested in ``inputs_digest``) and what a
@@ -27,16 +27,16 @@ import numpy as np
 import pandas as pd
 
 from rpbench.backends import Preset
+from rpbench.options import RunOptions
 from rpbench.oracle.runs import ORACLE_RUNS
 from rpbench.oracle.solve import OracleResult
 from rpbench.results import layout
-from rpbench.results.check import inputs_digest
+from rpbench.results.digest import inputs_digest
 from rpbench.results.metrics import BOUND_MATCHING_KPIS
 from rpbench.results.ratios import BEST_KNOWN_FIELD, best_known, derived_rows
 from rpbench.results.store import environment, save_network, save_trajectories, write_json
 from rpbench.scenarios.base import Scenario
 from rpbench.sim.simulator import SimResult
-from rpbench.strategies.options import RunOptions
 
 #: Format version of ``meta.json`` (``rpbench_results``).
 RESULTS_FORMAT = 1

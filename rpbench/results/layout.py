@@ -29,6 +29,8 @@ adds ``check.txt``, the checker's verdict on the full folder.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 META = "meta.json"
 KPIS = "kpis.csv"
 ROUNDS = "rounds.csv.gz"
@@ -60,3 +62,18 @@ VECTOR_SUFFIXES = (".svg", ".pdf")
 #: Inputs and logs a published light copy leaves out (the checker's raw material; the recorded command
 #: regenerates them).
 HEAVY = (RUNS, ORDERS, NETWORK, FLEET)
+
+# A replication folder (``rpbench replicate``): the authors' and rpbench's passenger records of each run, and
+# each run of rpbench's own engine as a comparison folder.
+RECORDS_DIR = "records"
+ENGINES_DIR = "engines"
+
+
+def engine_folder(folder: Path, date: str, strategy: str, engine: str) -> Path:
+    """Where a replication folder keeps one run of rpbench's own engine (a results folder)."""
+    return folder / ENGINES_DIR / f"{date}_{strategy}_{engine}"
+
+
+def records_file(folder: Path, date: str, strategy: str, engine: str) -> Path:
+    """Where a replication folder keeps one run's passenger records."""
+    return folder / RECORDS_DIR / f"{date}_{strategy}_{engine}.csv.gz"

@@ -13,14 +13,9 @@ import pandas as pd
 
 from rpbench import results
 from rpbench.exceptions import ResultsError
-from rpbench.results.metrics import KPI_ORDER
-from rpbench.results.plots import RATIO_INTERVAL
 from rpbench.results.ratios import BOUND, best_known, over, savings_of
-from rpbench.results.report import load_kpis
+from rpbench.results.read import load_kpis
 from rpbench.results.runs import simulated_runs
-
-#: The KPIs of a multi-day report's per-day plots (PNG and report.html); the competitive ratio as its interval.
-MULTIDAY_PLOT_KPIS = [k for k in KPI_ORDER if k != "platform_profit_cny"] + [RATIO_INTERVAL, "saving_over_oracle1"]
 
 
 def day_folders(parent: Path) -> list[Path]:

@@ -10,7 +10,7 @@ Layout of one folder::
     network.npz               the road network (nodes, arcs, lengths) the run drove on
     runs/<run>/events.csv.gz  the event log (request, assign, pickup, dropoff, cancel)
     runs/<run>/trajectories.npz  every vehicle's driven node sequence with times and odometer
-    report.md                 the comparison table (rendered by rpbench.results.report)
+    report.md                 the comparison table (rendered by rpbench.report.comparison)
 
 Everything is first written to a hidden sibling folder and renamed into
 place at the end, so an interrupted run leaves no half-written folder.
@@ -38,11 +38,12 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from rpbench import __version__, files
+from rpbench import files
 from rpbench.data.road import NetworkTables
 from rpbench.exceptions import ResultsError, RpbenchError, one_line
 from rpbench.network import RoadNetwork
 from rpbench.paths import source_root
+from rpbench.version import __version__
 
 VERSIONED_PACKAGES = ("numpy", "scipy", "pandas", "numba", "highspy", "ortools", "pyomo", "cvxpy", "pymatching", "lap")
 

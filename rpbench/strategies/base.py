@@ -24,8 +24,8 @@ import numpy as np
 
 from rpbench.exceptions import ModelError, one_line
 from rpbench.model import AssignmentModel, Structure, TripPackingModel
+from rpbench.options import RunOptions
 from rpbench.scenarios.base import OnlineView, Params, Scenario
-from rpbench.strategies.options import RunOptions
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -313,6 +313,9 @@ class Strategy(ABC, Generic[OptionsT]):
     Options: ClassVar[type[RunOptions]] = RunOptions
     #: The strategy whose run on the same scenario calibrates this one (None: none needed).
     calibrated_by: ClassVar[str | None] = None
+    #: The policy whose simulated runs on training scenarios teach this strategy its value model (None: it
+    #: learns none); the harness trains it before the run (:mod:`rpbench.harness.training`).
+    trained_by: ClassVar[str | None] = None
 
     def __init__(self, options: OptionsT | None = None, **raw: Any):
         """Options as a parsed :attr:`Options` object, or as keyword values (parsed and checked here)."""

@@ -27,9 +27,9 @@ import numpy as np
 
 from rpbench.exceptions import LookaheadError, ModelError, SolverError
 from rpbench.model import Structure, TripPackingModel
+from rpbench.options import Range, RunOptions, option
 from rpbench.scenarios.base import OnlineView, Scenario
 from rpbench.strategies.base import Kind, RoundModel, RoundState, Strategy
-from rpbench.strategies.options import Range, RunOptions, option
 
 #: The artefact holding the plan (``runs/exact/exact-plan/plan.json``).
 EXACT_PLAN = "exact-plan"

@@ -48,6 +48,7 @@ import numpy as np
 
 from rpbench.exceptions import ParameterError
 from rpbench.model import Structure
+from rpbench.options import Range, option
 from rpbench.predict import RATE_SOURCES, PredictConfig, Prediction, scenario_predictions
 from rpbench.predict.config import ACCELERATIONS, PRIORITIES, RHO_MODES
 from rpbench.predict.hourly import reads_realised_orders
@@ -62,7 +63,6 @@ from rpbench.strategies.candidates import (
     vacant_options,
 )
 from rpbench.strategies.myopic import PoolingOptions
-from rpbench.strategies.options import Range, option
 
 if TYPE_CHECKING:
     import pandas as pd

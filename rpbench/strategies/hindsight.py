@@ -68,6 +68,7 @@ from scipy.optimize import linear_sum_assignment
 from rpbench.backends import Preset, solve
 from rpbench.exceptions import LookaheadError
 from rpbench.model import PairingModel, Structure
+from rpbench.options import Range, RunOptions, option
 from rpbench.oracle.pairs import bound_rules, find_candidates
 from rpbench.scenarios.base import OnlineView, Scenario
 from rpbench.strategies.base import Kind, RoundModel, RoundState, Strategy
@@ -79,7 +80,6 @@ from rpbench.strategies.candidates import (
     vacant_options,
 )
 from rpbench.strategies.foresight import Foresight, PickupTimes
-from rpbench.strategies.options import Range, RunOptions, option
 
 #: Resolution of the plan's matching weights (1 cm, as the oracles').
 PLAN_UNIT_M = 0.01

@@ -17,9 +17,9 @@ import numpy as np
 
 from rpbench.geometry import ORDER_RULES
 from rpbench.model import Structure
+from rpbench.options import RunOptions, option
 from rpbench.strategies.base import RoundModel, RoundState, Strategy
 from rpbench.strategies.candidates import NO_WAIT_UTILITY_M, JoinOptions, assignment_round, join_options, vacant_options
-from rpbench.strategies.options import RunOptions, option
 
 
 @dataclass(frozen=True)

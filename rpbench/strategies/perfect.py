@@ -42,6 +42,7 @@ import numpy as np
 
 from rpbench.exceptions import LookaheadError
 from rpbench.model import Structure
+from rpbench.options import Range, option
 from rpbench.predict.hourly import TAU0_RESOLUTION_S
 from rpbench.predict.savings import waiting_saving
 from rpbench.scenarios.base import OnlineView, Scenario
@@ -56,7 +57,6 @@ from rpbench.strategies.forward import (
     forward_round,
 )
 from rpbench.strategies.myopic import PoolingOptions
-from rpbench.strategies.options import Range, option
 
 if TYPE_CHECKING:
     pass

@@ -40,10 +40,10 @@ from scipy.optimize import linear_sum_assignment
 from rpbench.exceptions import ParameterError
 from rpbench.geometry import pool
 from rpbench.model import Structure, TripPackingModel, quantize
+from rpbench.options import Range, option
 from rpbench.strategies.base import Kind, RoundModel, RoundState, Strategy
 from rpbench.strategies.candidates import VALUE_UNIT_M, join_options, vacant_options
 from rpbench.strategies.myopic import PoolingOptions
-from rpbench.strategies.options import Range, option
 
 LARGE_C_KO_M = 1e6
 PICKUP_TIE_BREAK = 1e-3

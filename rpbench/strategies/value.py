@@ -10,9 +10,10 @@ Each option's MB weight (paper Eq. 7) gets the discounted value change of the ve
 * keep waiting: ``-10⁶ m`` as MB (A13).
 
 ``V`` is the tabular value of :mod:`rpbench.valuefn`, learned by policy evaluation of MB on training
-days (``model=auto``: trained on ``train_dates`` x ``train_seeds`` and cached) or loaded from a model
-folder written by ``rpbench train vf``.  With ``V ≡ 0`` the weights, and so the run, are MB's.
-A model is never used on a scenario it was trained on (:func:`rpbench.valuefn.train.check_held_out`).
+days (``model=auto``: trained on ``train_dates`` x ``train_seeds`` by the harness before the run, as it
+calibrates FL, and cached: :mod:`rpbench.harness.training`) or loaded from a model folder written by
+``rpbench train vf``.  With ``V ≡ 0`` the weights, and so the run, are MB's.  A model is never used on a
+scenario it was trained on (:func:`rpbench.valuefn.training.check_held_out`).
 """
 
 from __future__ import annotations
@@ -23,15 +24,16 @@ from typing import Any
 
 import numpy as np
 
+from rpbench.exceptions import ParameterError
 from rpbench.model import Structure
+from rpbench.options import Range, option
 from rpbench.scenarios.base import OnlineView, Scenario
 from rpbench.strategies.base import RoundModel, RoundState, Strategy
 from rpbench.strategies.candidates import NO_WAIT_UTILITY_M, assignment_round, join_options, vacant_options
 from rpbench.strategies.myopic import PoolingOptions
-from rpbench.strategies.options import Range, option
 from rpbench.valuefn.learn import LEARN_METHODS
 from rpbench.valuefn.model import ValueModel, load_model
-from rpbench.valuefn.train import Settings, cached_model, check_held_out, training_record, training_scenarios
+from rpbench.valuefn.training import Settings, check_held_out
 
 #: The artefact name of the value model in a run's folder (``runs/vf/value-model/``).
 VALUE_MODEL = "value-model"
@@ -81,6 +83,7 @@ class ValueFunction(Strategy[ValueOptions]):
     structure = Structure.ASSIGNMENT
     Options = ValueOptions
     description = "value-function dispatch: MB's weights plus a learned V(cell, time) (Xu et al. 2018)"
+    trained_by = "mb"
 
     def __init__(self, options: ValueOptions | None = None, **raw: Any):
         super().__init__(options, **raw)
@@ -95,19 +98,27 @@ class ValueFunction(Strategy[ValueOptions]):
         out.model = model
         return out
 
+    @property
+    def needs_model(self) -> bool:
+        """Whether the harness must train (or take from the cache) this run's value model: ``model=auto`` and
+        none handed over yet (:func:`rpbench.harness.training.supply_model`)."""
+        return self.model is None and self.options.model == "auto"
+
+    def use_model(self, model: ValueModel, digest: str, folder: Path | None) -> None:
+        """Dispatch with ``model`` (its digest and folder recorded as the run's artefact)."""
+        self.model, self.model_digest, self.model_folder = model, digest, folder
+
     def prepare(self, scenario: Scenario | OnlineView) -> None:
-        """The value model, loaded or trained on other days or seeds of the scenario's generator (read off the
-        view: its name, sample, parameters and data folder), and checked to be held out from it."""
+        """The value model loaded from ``model=FOLDER`` and checked to fit the scenario's network and to be held
+        out from it (an ``auto`` one is handed over, checked, by the harness)."""
         if self.model is None:
             if self.options.model == "auto":
-                scenarios = training_scenarios(scenario, self.options.train_dates, self.options.train_seeds)
-                check_held_out(scenario, training_record(scenarios, self.options.settings()))
-                self.model, self.model_digest, self.model_folder = cached_model(
-                    scenarios, self.options.settings(), next_policy=self.next_policy
+                raise ParameterError(
+                    "vf: model=auto is trained by the harness before the run (rpbench run, or "
+                    "rpbench.run_comparison); elsewhere give a model folder from `rpbench train vf` (model=FOLDER)"
                 )
-            else:
-                self.model_folder = Path(self.options.model)
-                self.model, self.model_digest = load_model(self.model_folder)
+            self.model_folder = Path(self.options.model)
+            self.model, self.model_digest = load_model(self.model_folder)
             self.model.check_network(scenario.network, "vf")
             check_held_out(scenario, self.model.training)
 

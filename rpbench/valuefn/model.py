@@ -22,10 +22,10 @@ from typing import Any
 
 import numpy as np
 
-from rpbench import __version__
 from rpbench.exceptions import ParameterError, one_line
 from rpbench.files import load_json_object
 from rpbench.network import RoadNetwork
+from rpbench.version import __version__
 
 MODEL_JSON = "model.json"
 ARRAYS = ("values", "visits", "node_cell")
@@ -35,7 +35,7 @@ FORMAT_VERSION = 1
 
 @dataclass(frozen=True, eq=False)
 class ValueModel:
-    """V(cell, time bin) and what it was learned from (:mod:`rpbench.valuefn.train`)."""
+    """V(cell, time bin) and what it was learned from (:mod:`rpbench.valuefn.training`)."""
 
     values: np.ndarray  # (n_cells, n_bins) float64
     visits: np.ndarray  # (n_cells, n_bins) int64

@@ -20,12 +20,12 @@ from rpbench.backends.highs import HighsBackend
 from rpbench.backends.presets import parse_preset
 from rpbench.backends.registry import plugin_names
 from rpbench.bench import synthetic
+from rpbench.check import check_folder
 from rpbench.cli import main
 from rpbench.exceptions import PresetError, SolverError
 from rpbench.harness.comparison import run_comparison
 from rpbench.harness.spec import RunSpec
 from rpbench.model import Status
-from rpbench.results.check import check_folder
 from rpbench.results.metrics import TIMING_KPIS
 from rpbench.scenarios import ScenarioRequest
 

@@ -128,7 +128,7 @@ def test_csv_keeps_the_rows_and_puts_the_environment_beside_it(tmp_path):
 
 
 def test_the_html_page_shows_the_verdict_summary(tmp_path):
-    from rpbench.results.html.bench import write_bench_html
+    from rpbench.report.html.bench import write_bench_html
 
     rows = [
         ("m1", "a", "optimal", "optimal", 0.002),

@@ -12,10 +12,10 @@ import pytest
 from rpbench.backends.presets import Preset
 from rpbench.bench import synthetic
 from rpbench.bench.runner import cross_check, run_benchmark, verdict
-from rpbench.bench.solu import Known, write_solu
-from rpbench.bench.summary import summarise
 from rpbench.cli import main
 from rpbench.instances import save_instance
+from rpbench.report.bench import summarise
+from rpbench.results.solu import Known, write_solu
 
 OPT, TL, FEAS, INF = "optimal", "time_limit", "feasible", "infeasible"
 

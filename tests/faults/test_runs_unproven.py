@@ -20,7 +20,7 @@ from faults.test_runs_helpers import (
     preset_file,
     run_cli,
 )
-from rpbench.results.report import unproven_runs
+from rpbench.results.read import unproven_runs
 
 
 @pytest.fixture(autouse=True)

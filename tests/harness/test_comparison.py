@@ -8,12 +8,12 @@ import json
 import pandas as pd
 import pytest
 
+from rpbench.check import check_folder
 from rpbench.harness import comparison
 from rpbench.harness.comparison import run_comparison
 from rpbench.harness.spec import RunSpec
-from rpbench.results.check import check_folder
 from rpbench.results.metrics import TIMING_KPIS
-from rpbench.results.report import over_budget_runs
+from rpbench.results.read import over_budget_runs
 from rpbench.results.store import read_meta
 from rpbench.scenarios import ScenarioRequest
 from rpbench.strategies.forward import ForwardOptions
@@ -75,10 +75,10 @@ def test_fully_specified_fl_needs_no_calibration(toy_request, tmp_path, monkeypa
 
 def test_two_variants_of_one_strategy_in_one_run(tmp_path):
     """Each variant is simulated with its own options, labelled and coloured apart, and checked."""
+    from rpbench.check import check_folder
     from rpbench.harness.comparison import run_comparison
     from rpbench.harness.spec import RunSpec
-    from rpbench.results.check import check_folder
-    from rpbench.results.plots import run_colors
+    from rpbench.report.plots import run_colors
     from rpbench.results.runs import run_styles
     from rpbench.results.store import read_meta
     from rpbench.scenarios import ScenarioRequest

@@ -9,13 +9,13 @@ import shutil
 import pandas as pd
 import pytest
 
+from rpbench.check import check_tree
 from rpbench.cli import main
 from rpbench.exceptions import ParameterError
 from rpbench.harness.evaluate import run_evaluation
 from rpbench.protocols import load_protocol
-from rpbench.results.check import check_tree
+from rpbench.report.comparison import fmt
 from rpbench.results.metrics import TIMING_KPIS
-from rpbench.results.report import fmt
 from rpbench.results.store import read_meta
 
 PROTOCOL = """

@@ -31,7 +31,7 @@ def test_multi_day_folder(two_day_data, tmp_path, workers):
     page = (folder / "report.html").read_text()  # the parent's page links each day's page, which exists
     assert all(f'href="{d}/report.html"' in page and (folder / d / "report.html").is_file() for d in by_day["date"])
     assert "Mean over days" in page and "fig-by-day" in page and "by_day_total_saving_km.png" not in page
-    from rpbench.results.check import check_folder
+    from rpbench.check import check_folder
 
     assert all(rc.ok for d in ("2017-05-01", "2017-05-02") for rc in check_folder(folder / d))
 
@@ -61,8 +61,8 @@ def test_a_published_parent_page_is_titled_with_its_name(two_day_data, tmp_path)
 def test_every_day_is_flagged_against_the_decision_budget(two_day_data, tmp_path, capsys):
     """``rpbench run --dates --decision-budget``: each day's folder records the budget and counts against it,
     one note per day and run on stderr, and the tree checks clean."""
+    from rpbench.check import check_tree
     from rpbench.cli import main
-    from rpbench.results.check import check_tree
     from rpbench.results.store import read_meta
 
     out = tmp_path / "days"

@@ -11,13 +11,13 @@ import pandas as pd
 import pytest
 from faults.test_runs_helpers import assert_one_error, error_lines
 
+from rpbench.check import check_tree
 from rpbench.cli import main
 from rpbench.exceptions import ResultsError
 from rpbench.harness.comparison import run_comparison
 from rpbench.harness.publish import _only_publish_to, publish
 from rpbench.harness.render import render
 from rpbench.harness.spec import RunSpec
-from rpbench.results.check import check_tree
 from rpbench.scenarios import ScenarioRequest
 
 

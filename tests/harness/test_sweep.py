@@ -78,8 +78,8 @@ def test_sweep_runs_end_to_end_on_the_toy_city(tmp_path):
 def test_a_sweep_over_a_strategy_option(tmp_path, capsys):
     """``--over fl.tau0_s=...``: each point runs FL with that option (recorded in the point's meta.json),
     the other runs as given; a bad option or value is one line before anything runs."""
+    from rpbench.check import check_tree
     from rpbench.cli import main
-    from rpbench.results.check import check_tree
     from rpbench.results.store import read_meta
 
     out = tmp_path / "sw"

@@ -10,14 +10,15 @@ import pytest
 from faults.test_runs_helpers import assert_one_error, run_cli
 
 from rpbench.backends import load_preset, solve
-from rpbench.bench.solu import read_solu
+from rpbench.digests import arrays_sha256
 from rpbench.exceptions import ResultsError
 from rpbench.instances import load_instance, load_instances, save_instance
 from rpbench.library.build import build_set
 from rpbench.library.export import read_mps_optimum, write_model
-from rpbench.library.manifest import MANIFEST, content_sha256, packaged_manifest, verify_folder
+from rpbench.library.manifest import MANIFEST, packaged_manifest, verify_folder
 from rpbench.library.prove import prove
 from rpbench.library.sets import SETS, InstanceSet, instance_set
+from rpbench.results.solu import read_solu
 
 ROOT = Path(__file__).resolve().parents[2]
 COMMITTED_S = ROOT / "instances" / "library" / "S"
@@ -101,10 +102,10 @@ def test_content_digest_ignores_the_compressor_but_not_the_arrays(tmp_path):
         arrays = {k: z[k] for k in z.files}
     np.savez(tmp_path / "plain.npz", **arrays)  # stored, not deflated, other member times
     assert (tmp_path / "plain.npz").read_bytes() != source.read_bytes()
-    assert content_sha256(tmp_path / "plain.npz") == content_sha256(source)
+    assert arrays_sha256(tmp_path / "plain.npz") == arrays_sha256(source)
     arrays["values"] = arrays["values"] + 1
     np.savez(tmp_path / "edited.npz", **arrays)
-    assert content_sha256(tmp_path / "edited.npz") != content_sha256(source)
+    assert arrays_sha256(tmp_path / "edited.npz") != arrays_sha256(source)
 
 
 def test_bad_set_names_and_folders_are_one_line(tmp_path, capsys):

@@ -11,12 +11,12 @@ import pytest
 from helpers import line_network, scenario_of
 
 from rpbench import results
+from rpbench.check import bound_weights, check_folder
 from rpbench.exceptions import ParameterError
 from rpbench.harness.comparison import run_comparison
 from rpbench.harness.spec import RunSpec
 from rpbench.oracle import find_candidates, solve_oracle
 from rpbench.oracle.pairs import PairRules, bound_rules
-from rpbench.results.check import bound_weights, check_folder
 from rpbench.scenarios import ScenarioRequest, build_scenario
 
 STRATEGIES = ["np", "mb", "rtv", "fl-nd", "fl", "hindsight"]

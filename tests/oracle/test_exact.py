@@ -12,14 +12,14 @@ import shutil
 import numpy as np
 import pandas as pd
 import pytest
-from results.check.tamper import run_violations
+from check.tamper import run_violations
 
+from rpbench.check import check_folder
 from rpbench.cli import main
 from rpbench.exceptions import ParameterError
 from rpbench.harness.comparison import run_comparison
 from rpbench.harness.spec import RunSpec
 from rpbench.oracle.exact import PAIR, build_model, extract_plan, lattice_view, order_rounds, solve_model
-from rpbench.results.check import check_folder
 from rpbench.scenarios import ScenarioRequest, build_scenario
 
 ONLINE = ["np", "mb", "rtv", "fl-nd", "fl"]

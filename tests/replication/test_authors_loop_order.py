@@ -98,8 +98,8 @@ def test_the_paper_input_carries_sample_order_and_idle_origins(data_dir):
 
 
 def test_run_authors_passes_the_inputs_order_and_origins(monkeypatch):
-    from rpbench.replication import runner
-    from rpbench.replication.runner import Inputs, run_authors
+    from rpbench.harness import replicate as runner
+    from rpbench.harness.replicate import Inputs, run_authors
     from rpbench.replication.switches import Switches
     from rpbench.scenarios.paper_input import PaperInput
 

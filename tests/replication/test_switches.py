@@ -11,11 +11,11 @@ from helpers import line_network, scenario_of
 from rpbench.backends.presets import load_preset
 from rpbench.data.road import NetworkTables
 from rpbench.exceptions import ParameterError
+from rpbench.harness.replicate import Inputs, run_authors
 from rpbench.network import RoadNetwork
 from rpbench.replication import weights
 from rpbench.replication.cells import NO_CELL, node_cells
 from rpbench.replication.engine import AuthorsEngine, Leg, Vehicle
-from rpbench.replication.runner import Inputs, run_authors
 from rpbench.replication.switches import NAMES, Switches, ablation_steps, steps_for
 from rpbench.scenarios.paper_input import PaperInput
 

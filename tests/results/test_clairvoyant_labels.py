@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pandas as pd
 
-from rpbench.results.evaluation import leaderboard_rows
+from rpbench.report.evaluation import leaderboard_rows
 from rpbench.results.ranking import ranked, run_groups
 from rpbench.results.runs import CLAIRVOYANT_MARK, clairvoyant_runs, run_label, run_styles
 

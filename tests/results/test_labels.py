@@ -10,12 +10,12 @@ import pandas as pd
 import pytest
 from plugin_helpers import forget
 
+from rpbench.check.kpis import _metric_tables
 from rpbench.cli import main
-from rpbench.results.check.kpis import _metric_tables
-from rpbench.results.html.figures import plotly_text
-from rpbench.results.report import markdown_table, selected_markdown
+from rpbench.report.comparison import markdown_table, selected_markdown
+from rpbench.report.html.figures import plotly_text
+from rpbench.report.tables import latex_escape, latex_table
 from rpbench.results.runs import markdown_cell
-from rpbench.results.tables import latex_escape, latex_table
 
 LABEL = "A|B <b>&\nnew line"
 MODULE = f"""

@@ -7,8 +7,8 @@ import math
 import pandas as pd
 import pytest
 
+from rpbench.report.comparison import fmt
 from rpbench.results.ratios import best_known, bracket_line, bracket_record, derived_rows, over, with_ratios
-from rpbench.results.report import fmt
 
 
 def table(**savings: float) -> pd.DataFrame:

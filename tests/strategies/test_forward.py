@@ -124,6 +124,6 @@ def test_fl_runs_on_the_toy_city(tmp_path):
     # τ_0 and l̄ come from the MB run of the same scenario (A4)
     assert meta["runs"]["fl"]["options"]["mean_pickup_m"] == pytest.approx(table.loc["avg_pickup_distance_m", "mb"])
     assert meta["runs"]["fl"]["options"]["tau0_s"] == pytest.approx(table.loc["avg_pickup_time_s", "mb"])
-    from rpbench.results.check import check_folder
+    from rpbench.check import check_folder
 
     assert all(rc.ok for rc in check_folder(folder))

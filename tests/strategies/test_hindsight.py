@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 
 from rpbench.backends import load_preset
+from rpbench.check import check_folder
 from rpbench.cli import main
 from rpbench.exceptions import LookaheadError
 from rpbench.harness.comparison import run_comparison
 from rpbench.harness.spec import RunSpec
 from rpbench.oracle.pairs import bound_rules, find_candidates
-from rpbench.results.check import check_folder
 from rpbench.results.metrics import kpis, occupied_distance_m, odometer_at, passenger_table
 from rpbench.scenarios import ScenarioRequest, build_scenario
 from rpbench.sim.simulator import Simulator

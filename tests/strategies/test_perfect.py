@@ -11,13 +11,13 @@ import pytest
 from helpers import line_network, network_from_edges, round_state, scenario_of
 
 from rpbench.backends import load_preset
+from rpbench.check import check_folder
 from rpbench.cli import main
 from rpbench.exceptions import LookaheadError, ParameterError
 from rpbench.geometry import pool
 from rpbench.harness.comparison import run_comparison
 from rpbench.harness.spec import RunSpec
 from rpbench.predict.savings import waiting_saving
-from rpbench.results.check import check_folder
 from rpbench.results.metrics import kpis, occupied_distance_m, passenger_table
 from rpbench.scenarios import ScenarioRequest, build_scenario
 from rpbench.sim.simulator import Simulator

@@ -25,12 +25,12 @@ from helpers import line_network, round_state
 from plugin_helpers import EXAMPLE, declare_entry_points, forget
 
 from rpbench import plugins
+from rpbench.check import check_folder
 from rpbench.cli import main
 from rpbench.commands._runs import parse_runs
 from rpbench.exceptions import ModelError, ParameterError
 from rpbench.harness.spec import resolve_runs
 from rpbench.model import Structure
-from rpbench.results.check import check_folder
 from rpbench.results.metrics import TIMING_KPIS
 from rpbench.strategies import plugin_names, strategy_class
 from rpbench.strategies.base import Kind, received
@@ -46,7 +46,7 @@ from rpbench.exceptions import ParameterError
 from rpbench.model import Structure
 from rpbench.strategies.base import Strategy
 from rpbench.strategies.candidates import NO_WAIT_UTILITY_M, assignment_round, join_options, vacant_options
-from rpbench.strategies.options import RunOptions, option
+from rpbench.options import RunOptions, option
 
 
 @dataclass(frozen=True)

@@ -11,6 +11,7 @@ from helpers import line_network, round_state, scenario_of
 
 from rpbench.backends import load_preset
 from rpbench.exceptions import ParameterError
+from rpbench.harness.training import supply_model, train
 from rpbench.scenarios.base import Params
 from rpbench.scenarios.registry import build_scenario
 from rpbench.sim.simulator import Simulator
@@ -19,7 +20,7 @@ from rpbench.strategies.myopic import MyopicBatch
 from rpbench.strategies.value import VALUE_MODEL, ValueFunction, ValueOptions
 from rpbench.valuefn.cells import Grid
 from rpbench.valuefn.model import ValueModel, save_model
-from rpbench.valuefn.train import CACHE_FOLDER, Settings, train, training_scenarios
+from rpbench.valuefn.training import CACHE_FOLDER, Settings, training_scenarios
 
 SAMPLE = 0.4
 NET = line_network(6)  # nodes 0-5, 1000 m apart
@@ -151,7 +152,7 @@ def test_a_model_trained_on_the_test_seed_is_refused(toy, models):
 def test_auto_refuses_the_test_seed_before_training(toy, tmp_path, monkeypatch):
     monkeypatch.setenv("RPBENCH_CACHE", str(tmp_path / "cache"))
     with pytest.raises(ParameterError, match=r"seed 0 is one of its training seeds") as info:
-        ValueFunction(train_seeds=(3, 0)).prepare(toy.online_view())
+        supply_model(ValueFunction(train_seeds=(3, 0)), toy)
     assert "\n" not in str(info.value)
     assert not (tmp_path / "cache" / CACHE_FOLDER).exists()  # refused before any training
 
@@ -160,12 +161,12 @@ def test_auto_trains_once_into_the_cache(toy, tmp_path, monkeypatch, models):
     """model=auto trains on train_seeds (the same model as train() gives) and a second run loads it."""
     monkeypatch.setenv("RPBENCH_CACHE", str(tmp_path / "cache"))
     first = ValueFunction(train_seeds=(1,))
-    first.prepare(toy.online_view())
+    supply_model(first, toy)
     (name,) = [p.name for p in (tmp_path / "cache" / CACHE_FOLDER).iterdir()]
     assert first.model_folder == tmp_path / "cache" / CACHE_FOLDER / name
     assert first.model_digest == models[1][1]  # the same training as the seed-1 folder, the same bytes
     second = ValueFunction(train_seeds=(1,))
-    second.prepare(toy.online_view())
+    supply_model(second, toy)
     assert second.artefacts() == first.artefacts() == {VALUE_MODEL: (models[1][1], first.model_folder)}
 
 
@@ -174,11 +175,18 @@ def test_a_dated_scenarios_day_must_be_held_out(two_day_data, tmp_path, monkeypa
     monkeypatch.setenv("RPBENCH_CACHE", str(tmp_path / "cache"))
     day1 = build_scenario("haikou-peak", data_dir=two_day_data, date="2017-05-01", sample=1.0)
     with pytest.raises(ParameterError, match="2017-05-01 is one of its training days"):
-        ValueFunction().prepare(day1.online_view())
+        supply_model(ValueFunction(), day1)
     day2 = build_scenario("haikou-peak", data_dir=two_day_data, date="2017-05-02", sample=1.0)
     vf = ValueFunction(train_dates="2017-05-01")
-    vf.prepare(day2.online_view())
+    supply_model(vf, day2)
     assert [r["date"] for r in vf.model.training["runs"]] == ["2017-05-01"]
+
+
+def test_an_auto_model_is_the_harness_s_to_train(toy):
+    """Outside the harness, model=auto has no model to dispatch with: one line saying where one comes from."""
+    with pytest.raises(ParameterError, match=r"model=auto is trained by the harness before the run") as info:
+        ValueFunction().prepare(toy.online_view())
+    assert "\n" not in str(info.value)
 
 
 def test_a_model_of_another_network_is_refused(models):

@@ -12,21 +12,19 @@ import pytest
 
 from rpbench.backends import load_preset
 from rpbench.exceptions import ParameterError
+from rpbench.harness import training
+from rpbench.harness.training import cached_model, recording, train
 from rpbench.scenarios.registry import build_scenario
 from rpbench.sim.simulator import Simulator
 from rpbench.strategies.myopic import MyopicBatch
 from rpbench.strategies.value import ValueFunction
-from rpbench.valuefn import train as training
 from rpbench.valuefn.model import MODEL_JSON, load_model, save_model
-from rpbench.valuefn.train import (
+from rpbench.valuefn.training import (
     CACHE_FOLDER,
     Settings,
     cache_key,
-    cached_model,
     check_held_out,
     held_out_problem,
-    recording,
-    train,
     training_record,
     training_scenarios,
 )

@@ -18,12 +18,12 @@ import pandas as pd
 import pytest
 
 from rpbench.backends import load_preset
+from rpbench.harness.training import recording
 from rpbench.results import metrics
 from rpbench.scenarios.registry import build_scenario
 from rpbench.sim.simulator import Simulator
 from rpbench.strategies.myopic import MyopicBatch
 from rpbench.valuefn.cells import Grid
-from rpbench.valuefn.train import recording
 from rpbench.valuefn.transitions import Observations, Transitions, transitions_of_run
 
 GRID = Grid(cell_m=1000.0, bin_s=100.0, n_bins=2, node_cell=np.array([0, 1, 2]), n_cells=3)

@@ -21,9 +21,9 @@ import numpy as np
 
 from rpbench.exceptions import ParameterError
 from rpbench.model import Structure
+from rpbench.options import RunOptions, option
 from rpbench.strategies.base import RoundModel, RoundState, Strategy
 from rpbench.strategies.candidates import NO_WAIT_UTILITY_M, assignment_round, join_options, vacant_options
-from rpbench.strategies.options import RunOptions, option
 
 #: Largest pick-up weight: utilities (in mm) must stay exact in float64 sums.
 MAX_WEIGHT = 100.0

@@ -1,0 +1,325 @@
+"""``bound-optimal``: the bound's value is at least the maximum-weight matching of its graph, proven here.
+
+The checker enumerates the bound's graph itself (every pair of orders inside the widest time window, each
+orientation valued by :mod:`.certificate`'s own rule), so a pair left out of the candidate set counts as
+much as a pair left out of the matching.  The maximum is then bounded by a dual certificate of the
+matching polytope: degree constraints plus the odd-set (blossom) constraints that a cutting-plane loop
+finds (odd components of the fractional edges, or odd cycles of its even ones), solved with HiGHS (one instance,
+warm-started as rows are added).
+The solver only searches: the dual it returns is made feasible and summed by numpy here, and any feasible
+dual bounds every matching (weak duality), so the verdict rests on that arithmetic, not on the solver's
+claim.  Weights are integral (the model's unit), so a dual below ``U + 1`` proves ``max <= U``.  When the
+loop stalls above ``U + 1`` (the full day: no odd component left, a few metres above), the dual still fixes
+every edge whose slack exceeds the gap (no matching using it can reach ``U + 1``), and HiGHS's MIP decides the
+few edges left, on its own optimality claim; the check says so (``mip_edges``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.optimize import Bounds, LinearConstraint, milp
+from scipy.sparse.csgraph import connected_components
+
+from rpbench.check.certificate import _orientation_weight
+from rpbench.check.core import TOL_M, TOL_S
+from rpbench.check.folder import Folder
+
+#: Pairs (one orientation each) valued per numpy block: bounds memory to a few hundred MB.
+BLOCK_PAIRS = 1 << 20
+#: A weight this close above a multiple of the unit is float noise: rounded down, never up (the checker's
+#: rounded weights then never exceed the run's, whose optimum is the bound).
+ROUND_SLACK = 1e-6
+#: Cutting-plane rounds before the exact fallback.
+MAX_ROUNDS = 100
+FRACTIONAL = 1e-6
+
+
+def bound_graph(f: Folder) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(a, b, weight) of every edge of the upper bound's graph (docs/bound.md), enumerated from the folder's
+    orders alone.  An unordered pair lies inside the widest window of its earlier order i,
+    ``t_j - t_i <= K_i + (R̄ + l_i)/v`` (the later order joining; i joining waits at most ``K_i``); an
+    orientation is valued only when A's detour at ``h = o_A`` is within D̄, which turning later never
+    shortens (the triangle inequality along A's shortest path, docs/bound.md step 3)."""
+    p = f.params
+    t, k, ids = f.col("request_s"), f.col("patience_s"), f.col("order_id")
+    rank = np.lexsort((ids, t))
+    ts = t[rank]
+    reach = k[rank] + (p.max_pickup_m + TOL_M + f.solo[rank]) / p.speed_mps + TOL_S
+    hi = np.searchsorted(ts, ts + reach + 1e-9 * (1.0 + np.abs(ts)), side="right")
+    count = np.maximum(hi - np.arange(len(ts)) - 1, 0)
+    parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+    cum = np.cumsum(count)
+    i0 = 0
+    while i0 < len(ts):
+        i1 = max(i0 + 1, int(np.searchsorted(cum, (cum[i0 - 1] if i0 else 0) + BLOCK_PAIRS, side="right")))
+        ii = np.repeat(np.arange(i0, min(i1, len(ts))), count[i0:i1])
+        if len(ii):
+            starts = np.cumsum(count[i0:i1]) - count[i0:i1]
+            jj = ii + 1 + np.arange(len(ii)) - np.repeat(starts, count[i0:i1])
+            a, b = rank[ii], rank[jj]
+            w = np.full(len(a), -np.inf)
+            for x, y in ((a, b), (b, a)):
+                m = np.flatnonzero(_may_turn_at_origin(f, x, y))
+                w[m] = np.fmax(w[m], _orientation_weight(f, x[m], y[m]))
+            edge = np.isfinite(w)
+            parts.append((a[edge], b[edge], w[edge]))
+        i0 = i1
+    if not parts:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0)
+    return tuple(np.concatenate(c) for c in zip(*parts, strict=True))  # type: ignore[return-value]
+
+
+def _may_turn_at_origin(f: Folder, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """A necessary condition of "x first, y joins": x's ride to its destination via o_y within D̄."""
+    dist, o, d = f.distances.dist, f.col("origin"), f.col("destination")
+    detour = dist[o[x], o[y]] + dist[o[y], d[x]] - f.solo[x]
+    return detour <= f.params.max_detour_m + 1e-6 * (1.0 + np.abs(detour))
+
+
+def unit_values(weight: np.ndarray, unit_m: float) -> np.ndarray:
+    """Weights in model units, rounded up as the bound's model does (docs/bound.md), float noise excepted."""
+    return np.ceil(weight / unit_m - ROUND_SLACK)
+
+
+@dataclass
+class MatchingProof:
+    """What the checker proved about the maximum-weight matching of a graph (weights in integral units)."""
+
+    best: int  # the weight of a matching the checker found (a lower bound on the maximum)
+    upper: float  # a verified upper bound on the maximum (a feasible dual's value, or the exact maximum)
+    method: str
+    odd_sets: int = 0
+    #: Edges whose matching HiGHS's MIP decided, on its own optimality claim (None: the dual certificate alone).
+    mip_edges: int | None = None
+
+
+def prove_maximum(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, target: float) -> MatchingProof:
+    """A matching and an upper bound on the maximum weight of any matching of ``(n, a, b, w)`` (``w`` positive
+    integers); stops as soon as the upper bound is below ``target + 1`` or a matching above ``target`` is
+    found, else solves the MIP."""
+    m = len(w)
+    if m == 0:
+        return MatchingProof(0, 0.0, "no edges")
+    w = np.asarray(w, dtype=np.float64)
+    sets = OddSets(n, a, b)
+    lp = _CuttingPlaneLP(n, a, b, w)
+    best = 0
+    beat = np.floor(target + 1e-9) + 1  # a matching worth this much would beat the target
+    slack: np.ndarray | None = None
+    upper = float("inf")
+    for _ in range(MAX_ROUNDS):
+        solved = lp.solve()
+        if solved is None:
+            break
+        x, dual = solved
+        best = max(best, _rounded_matching(n, a, b, w, x))
+        upper, slack = _dual_value(n, a, b, w, sets, dual)
+        if best > target or upper < beat - 1e-6:
+            return MatchingProof(best, upper, "dual certificate", len(sets))
+        frac = (x > FRACTIONAL) & (x < 1 - FRACTIONAL)
+        first = len(sets)
+        if not sets.add(_odd_components(n, a[frac], b[frac])):
+            break
+        lp.add_rows(sets, first)
+    if slack is None:
+        return dataclasses.replace(_exact(n, a, b, w, sets), mip_edges=len(a))
+    # Reduced-cost fixing: with a feasible dual of value ``upper``, every matching M has
+    # w(M) <= upper - (the dual slack of M's edges), so one worth ``beat`` uses only edges of slack
+    # <= upper - beat; the MIP need only decide the graph of those (a few thousand of the full day's
+    # 1.4 M pairs, when the loop stalls a few metres above the optimum).
+    near = np.flatnonzero(slack <= upper - beat + 1e-6)
+    proof = _exact(n, a[near], b[near], w[near], OddSets(n, a[near], b[near]))
+    if proof.best < beat:  # no matching of the whole graph reaches ``beat`` either
+        return MatchingProof(
+            max(best, proof.best),
+            float(max(proof.best, beat - 1)),
+            f"dual certificate and reduced-cost fixing; {proof.method} on the {len(near)} edges left",
+            len(sets),
+            len(near),
+        )
+    return MatchingProof(proof.best, float(proof.best), proof.method, len(sets), len(near))
+
+
+class _CuttingPlaneLP:
+    """The matching LP ``max w·x, degree <= 1, x >= 0`` in one HiGHS instance that the loop's odd-set rows are
+    added to: each re-solve starts from the last basis (dual simplex), where solving afresh took minutes a round
+    on the full day's 1.4 M pairs.  HiGHS only searches: its duals are made feasible and summed by
+    :func:`_dual_value`."""
+
+    def __init__(self, n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray):
+        import highspy
+
+        self.h = h = highspy.Highs()
+        h.setOptionValue("output_flag", False)
+        h.setOptionValue("threads", 1)
+        degree = _degree(n, a, b).tocsc()
+        m = len(w)
+        status = h.passModel(
+            m,
+            n,
+            degree.nnz,
+            int(highspy.MatrixFormat.kColwise),
+            int(highspy.ObjSense.kMinimize),
+            0.0,
+            -w,
+            np.zeros(m),
+            np.full(m, highspy.kHighsInf),
+            np.full(n, -highspy.kHighsInf),
+            np.ones(n),
+            degree.indptr.astype(np.int32),
+            degree.indices.astype(np.int32),
+            degree.data.astype(np.float64),
+            np.zeros(m, np.int32),  # continuous: the LP relaxation
+        )
+        self.ok = status.name != "kError"
+
+    def add_rows(self, sets: OddSets, first: int) -> None:
+        """The rows of the odd sets from index ``first`` on."""
+        import highspy
+
+        rows = sets.rows()[first:].tocsr()
+        self.h.addRows(
+            rows.shape[0],
+            np.full(rows.shape[0], -highspy.kHighsInf),
+            sets.capacity[first:].astype(np.float64),
+            rows.nnz,
+            rows.indptr[:-1].astype(np.int32),
+            rows.indices.astype(np.int32),
+            rows.data.astype(np.float64),
+        )
+
+    def solve(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """(x, dual of every row, for ``max w·x``) or None when HiGHS reached no optimum."""
+        if not self.ok:
+            return None
+        self.h.run()
+        if self.h.getModelStatus().name != "kOptimal":
+            return None
+        sol = self.h.getSolution()
+        return np.asarray(sol.col_value, np.float64), -np.asarray(sol.row_dual, np.float64)
+
+
+def _degree(n: int, a: np.ndarray, b: np.ndarray) -> sp.csr_matrix:
+    edges = np.arange(len(a))
+    return sp.csr_matrix((np.ones(2 * len(a)), (np.r_[a, b], np.r_[edges, edges])), shape=(n, len(a)))
+
+
+class OddSets:
+    """The odd vertex sets found so far, each with the edges inside it (computed once, when it is added: the
+    loop's rows and dual read them every round, and the full day's graph has millions of edges)."""
+
+    def __init__(self, n: int, a: np.ndarray, b: np.ndarray):
+        self.n, self.a, self.b = n, a, b
+        self.capacity = np.zeros(0)  # (|S| - 1) / 2 per set
+        self.set_of = np.zeros(0, np.int64)  # per (set, inside edge) entry: the set
+        self.edge = np.zeros(0, np.int64)  # and the edge
+
+    def __len__(self) -> int:
+        return len(self.capacity)
+
+    def add(self, sets: list[np.ndarray]) -> bool:
+        """Add ``sets`` (disjoint vertex sets); False when there are none."""
+        if not sets:
+            return False
+        label = np.full(self.n, -1, np.int64)
+        for i, s in enumerate(sets):
+            label[s] = len(self) + i
+        la, lb = label[self.a], label[self.b]
+        inside = np.flatnonzero((la >= 0) & (la == lb))
+        self.set_of = np.r_[self.set_of, la[inside]]
+        self.edge = np.r_[self.edge, inside]
+        self.capacity = np.r_[self.capacity, [(len(s) - 1) // 2 for s in sets]]
+        return True
+
+    def rows(self) -> sp.csr_matrix:
+        """One row per set: 1 on every edge inside it."""
+        shape = (len(self), len(self.a))
+        return sp.csr_matrix((np.ones(len(self.edge)), (self.set_of, self.edge)), shape=shape)
+
+
+def _dual_value(
+    n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, sets: OddSets, dual: np.ndarray
+) -> tuple[float, np.ndarray]:
+    """The value of the solver's dual made feasible here, and each edge's slack under it (cover - w >= 0): y, z
+    clipped at 0, each edge's shortfall (float tolerance of the solver) added to its first end.  Feasible,
+    so an upper bound on every matching."""
+    y, z = np.maximum(dual[:n], 0.0), np.maximum(dual[n:], 0.0)
+    inside = np.bincount(sets.edge, weights=z[sets.set_of], minlength=len(a))
+    short = np.maximum(w - (y[a] + y[b] + inside), 0.0)
+    np.maximum.at(y, a, y[a] + short)
+    slack = np.maximum(y[a] + y[b] + inside - w, 0.0)
+    return float(y.sum() + z @ sets.capacity), slack
+
+
+def _rounded_matching(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, x: np.ndarray) -> int:
+    """The weight of the edges with x > 1/2 (a matching: two such edges at one node would exceed degree 1)."""
+    take = x > 0.5
+    if (np.bincount(np.r_[a[take], b[take]], minlength=n) > 1).any():
+        return 0
+    return int(w[take].sum())
+
+
+def _odd_components(n: int, a: np.ndarray, b: np.ndarray) -> list[np.ndarray]:
+    """Disjoint vertex sets of violated blossom constraints among the fractional edges ``(a, b)``: each odd
+    component (>= 3 nodes), and in each even component that is not bipartite, the vertices of one odd cycle
+    (its edges at 1/2 sum to more than (|S| - 1)/2).  The fractional edges are few (tens to hundreds)."""
+    if not len(a):
+        return []
+    _, label = connected_components(sp.coo_matrix((np.ones(len(a)), (a, b)), shape=(n, n)), directed=False)
+    size = np.bincount(label, minlength=label.max() + 1)
+    out = []
+    for comp in np.unique(label[a]).tolist():
+        members = np.flatnonzero(label == comp) if size[comp] % 2 == 1 else None
+        if members is not None and len(members) >= 3:
+            out.append(members)
+        elif members is None:
+            inside = label[a] == comp
+            cycle = _odd_cycle(a[inside], b[inside])
+            if cycle is not None:
+                out.append(cycle)
+    return out
+
+
+def _odd_cycle(a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
+    """The vertices of an odd cycle of the connected graph ``(a, b)`` (None: it is bipartite), by breadth-first
+    search: an edge joining two vertices of the same depth closes one with their paths to the root."""
+    adjacent: dict[int, list[int]] = {}
+    for u, v in zip(a.tolist(), b.tolist(), strict=True):
+        adjacent.setdefault(u, []).append(v)
+        adjacent.setdefault(v, []).append(u)
+    root = int(a[0])
+    parent, depth, queue = {root: root}, {root: 0}, [root]
+    for u in queue:
+        for v in adjacent[u]:
+            if v not in depth:
+                parent[v], depth[v] = u, depth[u] + 1
+                queue.append(v)
+            elif depth[v] == depth[u]:
+                x, y, cycle = u, v, {u, v}
+                while x != y:
+                    x, y = parent[x], parent[y]
+                    cycle |= {x, y}
+                return np.array(sorted(cycle), np.int64)
+    return None
+
+
+def _exact(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, sets: OddSets) -> MatchingProof:
+    """The HiGHS MIP over the degree and odd-set constraints, no gap allowed (its optimality is the solver's
+    claim: the last resort when the certificate did not close)."""
+    res = milp(
+        -w,
+        constraints=LinearConstraint(
+            sp.vstack([_degree(n, a, b), sets.rows()]).tocsr(), -np.inf, np.r_[np.ones(n), sets.capacity]
+        ),
+        integrality=np.ones(len(w)),
+        bounds=Bounds(0, 1),
+        options={"mip_rel_gap": 0.0},
+    )
+    if res.status != 0 or res.x is None:
+        return MatchingProof(0, float("inf"), "HiGHS MIP (no solution)", len(sets))
+    value = _rounded_matching(n, a, b, w, res.x)
+    return MatchingProof(value, float(value), "HiGHS MIP (the solver's optimality claim)", len(sets))

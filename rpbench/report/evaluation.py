@@ -1,0 +1,248 @@
+"""An evaluation folder's tables and report, from its (day, seed) children alone.
+
+``units.csv`` gathers every child's KPI table (the ratio and bracket rows included); ``leaderboard.csv``
+and ``paired.csv`` are :func:`rpbench.report.leaderboard.leaderboard` and
+:func:`~rpbench.report.leaderboard.paired` of it under the protocol recorded in meta.json, the leaderboard
+with its ranking (:mod:`rpbench.results.ranking`), so the checker recomputes all three from the children.
+A protocol ranking by the competitive ratio against the bound gets its other end, saving / best known
+schedule, beside it (:func:`board_metrics`): the ratio is an interval.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+
+from rpbench import files, results
+from rpbench.exceptions import ResultsError
+from rpbench.report.comparison import fmt
+from rpbench.report.leaderboard import RATIO_OF_MEANS, Bootstrap, leaderboard, paired
+from rpbench.report.plots import leaderboard_figure, seeds_by_day_figure
+from rpbench.report.tables import booktabs, latex_escape
+from rpbench.results import layout
+from rpbench.results.legacy import current_names
+from rpbench.results.metrics import KPI_LABELS
+from rpbench.results.ranking import RANKING_COLUMNS, ranked, run_groups
+from rpbench.results.ratios import RATIO_KPIS
+from rpbench.results.read import load_kpis
+from rpbench.results.runs import markdown_cell, run_label, run_styles
+
+#: The leaderboard's figure (and its SVG and PDF beside it).
+LEADERBOARD_PNG = "leaderboard.png"
+
+
+def unit_name(day: str | None, seed: int) -> str:
+    """The child folder of a (day, seed) unit."""
+    return f"{day}_seed{seed}" if day else f"seed{seed}"
+
+
+def units_table(folder: Path) -> pd.DataFrame:
+    """Tidy (day, seed, run, kpi, value) over the children meta.json lists, in its order."""
+    meta = results.read_meta(folder)
+    frames = []
+    for name in meta.get("children", []):
+        child = folder / name
+        if not (child / layout.KPIS).is_file():
+            raise ResultsError(f"{str(child)!r}: the evaluation's unit has no results (resume the evaluation)")
+        args = results.read_meta(child)["scenario"].get("args", {})
+        wide = load_kpis(child)
+        tidy = wide.reset_index().melt(id_vars="kpi", var_name="run", value_name="value")
+        frames.append(tidy.assign(day=args.get("date") or "", seed=int(args.get("seed", 0))))
+    if not frames:
+        raise ResultsError(f"{str(folder)!r} holds no evaluation units")
+    return pd.concat(frames, ignore_index=True)[["day", "seed", "run", "kpi", "value"]]
+
+
+def bootstrap_of(meta: dict) -> Bootstrap:
+    boot = meta["protocol"]["bootstrap"]
+    return Bootstrap(resamples=int(boot["resamples"]), seed=int(boot["seed"]), level=float(boot["level"]))
+
+
+def board_metrics(metrics: list[str]) -> list[str]:
+    """The leaderboard's metrics: the protocol's, ``competitive_ratio_best_known`` added after
+    ``competitive_ratio_bound`` (the two ends of the competitive ratio's interval)."""
+    if "competitive_ratio_bound" in metrics and "competitive_ratio_best_known" not in metrics:
+        at = metrics.index("competitive_ratio_bound") + 1
+        return [*metrics[:at], "competitive_ratio_best_known", *metrics[at:]]
+    return list(metrics)
+
+
+def unit_records(folder: Path) -> list[dict]:
+    """Every unit's run records (meta.json's ``runs``), in the order meta.json lists the units."""
+    meta = results.read_meta(folder)
+    return [results.read_meta(folder / name).get("runs") or {} for name in meta.get("children", [])]
+
+
+def tables(folder: Path) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame]:
+    """(units, leaderboard with its ranking, paired) recomputed from the children."""
+    meta = results.read_meta(folder)
+    units = units_table(folder)
+    units["day"] = units["day"].fillna("").astype(str)
+    runs = list(meta["protocol"]["strategies"])
+    metrics = list(meta["protocol"]["metrics"])
+    boot = bootstrap_of(meta)
+    groups = run_groups(unit_records(folder), runs)
+    board = ranked(leaderboard(units, runs, board_metrics(metrics), boot), groups, metrics[0], runs)
+    simulated = [r for r in runs if groups[r] != "offline"]
+    return units, board, paired(units, simulated, metrics, boot)
+
+
+def read_leaderboard(folder: Path) -> pd.DataFrame:
+    """``leaderboard.csv`` as today's rpbench names it, with its ranking (recomputed from the units' records
+    for a leaderboard written before rpbench recorded one)."""
+    board = current_names(results.read_csv(folder / layout.LEADERBOARD))
+    if set(RANKING_COLUMNS) <= set(board.columns):
+        return board
+    protocol = results.read_meta(folder)["protocol"]
+    runs = list(protocol["strategies"])
+    return ranked(board, run_groups(unit_records(folder), runs), protocol["metrics"][0], runs)
+
+
+def summarize(folder: Path) -> None:
+    """Write units.csv, leaderboard.csv and paired.csv (each whole or not at all)."""
+    units, board, pairs = tables(folder)
+    for name, table in ((layout.UNITS, units), (layout.LEADERBOARD, board), (layout.PAIRED, pairs)):
+        tmp = folder / f".{name}.partial"
+        table.to_csv(tmp, index=False)
+        tmp.replace(folder / name)
+
+
+def write_evaluation_report(folder: Path, name: str | None = None) -> Path:
+    """report.md: the protocol, the leaderboard (mean [interval]) ranked by its first metric, the paired
+    comparisons of that metric, and where each unit's folder is."""
+    meta = results.read_meta(folder)
+    protocol = meta["protocol"]
+    board = read_leaderboard(folder)
+    pairs = results.read_csv(folder / layout.PAIRED)
+    child = results.read_meta(folder / meta["children"][0])
+    styles = run_styles(child)
+    metrics = list(protocol["metrics"])
+    rank = metrics[0]
+    level = f"{protocol['bootstrap']['level']:.0%}"
+    unit = "days" if protocol.get("dates") else "seeds"  # the independent draws: the bootstrap's clusters
+    lines = [
+        f"# rpbench evaluation: protocol `{protocol['name']}` version {protocol['version']}",
+        "",
+        f"- {protocol['description']}",
+        f"- scenario `{protocol['scenario']}`,"
+        f" dates {protocol.get('dates') or '(undated)'}, sample "
+        f"{protocol.get('sample')}, seeds {', '.join(map(str, protocol['seeds']))}; {len(meta['children'])} runs "
+        f"per strategy; solver presets `{protocol['preset']}` / `{protocol.get('oracle_preset') or protocol['preset']}`"
+        " (offline runs)",
+        f"- rpbench {meta['versions']['rpbench']}, commit `{meta.get('git_commit')}`; protocol digest "
+        f"`{protocol['digest']}`",
+        "",
+    ]
+    if meta.get("command"):
+        lines += ["Command:", "", f"    {meta['command']}", ""]
+    lines += [
+        "## Leaderboard",
+        "",
+        f"Mean over the (day, seed) runs and its {level} interval: a two-stage bootstrap over days, then seeds "
+        f"within a day (undated: over seeds; {protocol['bootstrap']['resamples']} resamples, generator seed "
+        f"{protocol['bootstrap']['seed']}). Ranked by {KPI_LABELS.get(rank, rank)}: the online runs first, then "
+        "the clairvoyant runs apart (they read the day's orders before they were revealed), then the offline "
+        "runs (references, not schedules); `leaderboard.csv` records each run's group and rank. The competitive "
+        "ratio is an interval, from the mean over runs of saving / upper bound to the mean of saving / best known "
+        "schedule (means of ratios); the last column is mean saving / mean bound saving (a ratio of means).",
+        "",
+    ]
+    head, body = leaderboard_rows(board, protocol, styles)
+    lines += ["| " + " | ".join(map(markdown_cell, head)) + " |", "|---|" + "---:|" * (len(head) - 1)]
+    lines += ["| " + " | ".join(map(markdown_cell, row)) + " |" for row in body]
+    lines += ["", *_figure_lines(folder, board, protocol, styles, level)]
+    sel = pairs[pairs["kpi"] == rank]
+    if len(sel):
+        lines += [
+            f"## Paired differences: {KPI_LABELS.get(rank, rank)}",
+            "",
+            f"A - B over the same (day, seed) runs, mean and {level} bootstrap interval; Wilcoxon signed-rank "
+            f"test (two-sided) of the per-{unit[:-1]} mean differences; {unit} where A is above / below B.",
+            "",
+            f"| A | B | mean A - B | interval | Wilcoxon p | {unit} A above / below / tied |",
+            "|---|---|---:|---:|---:|---:|",
+        ]
+        for _, r in sel.iterrows():
+            lines.append(
+                f"| {markdown_cell(run_label(r['a'], styles))} | {markdown_cell(run_label(r['b'], styles))} | "
+                f"{fmt(rank, r['mean_diff'])} | "
+                f"[{fmt(rank, r['ci_low'])}, {fmt(rank, r['ci_high'])}] | {r['wilcoxon_p']:.3g} | "
+                f"{int(r['days_a_above'])} / {int(r['days_a_below'])} / {int(r['days_tied'])} |"
+            )
+        lines += ["", f"Every metric's paired differences: `{layout.PAIRED}`; every run's KPIs: `{layout.UNITS}`.", ""]
+    lines += [
+        "Each (day, seed) run is an ordinary results folder: `rpbench check PATH`, PATH being the path to "
+        f"`{name or folder.name}`, checks them all and recomputes these tables from them.",
+        "",
+    ]
+    caption = f"rpbench evaluation {protocol['name']} version {protocol['version']}: mean [{level} interval]"
+    latex = [[latex_escape(cell) for cell in row] for row in [head, *body]]
+    files.write_text(folder / layout.TABLE_TEX, booktabs(latex[0], latex[1:], caption=caption, what="the leaderboard"))
+    path = folder / layout.REPORT
+    files.write_text(path, "\n".join(lines))
+    return path
+
+
+def leaderboard_rows(board: pd.DataFrame, protocol: dict, styles) -> tuple[list[str], list[list[str]]]:
+    """The leaderboard as printed: a header (rank, strategy, each metric, the ratio of means) and a row per run
+    in the order of its recorded ranking (:mod:`rpbench.results.ranking`), each cell "mean [low, high]" as the
+    report formats the KPI; a run without rows comes last."""
+    cols = [*board_metrics(list(protocol["metrics"])), RATIO_OF_MEANS]
+    head = ["Rank", "Strategy"] + [KPI_LABELS.get(k, "Saving: ratio of means") for k in cols]
+    first = board.drop_duplicates("run").set_index("run")
+    order = [str(r) for r in first.sort_values("rank", kind="stable").index]
+    order += [r for r in protocol["strategies"] if r not in order]
+    cell = board.set_index(["run", "kpi"])
+    body = []
+    for run in order:
+        row = [_rank_cell(run, first), run_label(run, styles)]
+        offline = run in first.index and first.loc[run, "group"] == "offline"
+        for k in cols:
+            if (run, k) in cell.index and not (offline and k in RATIO_KPIS):  # an older leaderboard ranked its 1.000
+                r = cell.loc[(run, k)]
+                key = "competitive_ratio_bound" if k == RATIO_OF_MEANS else k
+                row.append(f"{fmt(key, r['mean'])} [{fmt(key, r['ci_low'])}, {fmt(key, r['ci_high'])}]")
+            else:
+                row.append("/")
+        body.append(row)
+    return head, body
+
+
+def _rank_cell(run: str, first: pd.DataFrame) -> str:
+    """A run's place in the printed leaderboard: "online 1", "clairvoyant 1" (ranked apart), or "reference"
+    for an offline run (``first``: the leaderboard's first row per run, with its group and rank)."""
+    if run not in first.index:
+        return "/"
+    group = str(first.loc[run, "group"])
+    if group == "offline":
+        return "reference"
+    peers = first[first["group"] == group]["rank"]
+    return f"{group} {int((peers < first.loc[run, 'rank']).sum()) + 1}"
+
+
+def _figure_lines(folder: Path, board: pd.DataFrame, protocol: dict, styles, level: str) -> list[str]:
+    """Draw the leaderboard and the first metric per day; return the report lines embedding them."""
+    title = f"rpbench evaluation {protocol['name']} version {protocol['version']}"
+    metrics = board_metrics(list(protocol["metrics"]))
+    leaderboard_figure(board, metrics, folder / LEADERBOARD_PNG, f"{title}: mean and {level} interval", styles)
+    lines = [
+        f"![leaderboard: mean and {level} interval]({LEADERBOARD_PNG})",
+        "",
+    ]
+    rank = protocol["metrics"][0]
+    units = results.read_csv(folder / layout.UNITS)
+    units["day"] = units["day"].astype(object).fillna("").astype(str)  # undated units have no day
+    name = f"by_day_{rank}.png"
+    label = KPI_LABELS.get(rank, rank)
+    drawn = seeds_by_day_figure(units, rank, protocol["strategies"], folder / name,
+                                f"{title}: {label}, mean over the seeds of each day (bars: their range)",
+                                styles)  # fmt: skip
+    if drawn is not None:
+        lines += [f"![{label} per day]({name})", ""]
+    lines += [
+        f"Every figure is also beside its PNG as SVG and PDF; the leaderboard is `{layout.TABLE_TEX}` (LaTeX, "
+        f"booktabs) and `{layout.LEADERBOARD}` (raw values).",
+        "",
+    ]
+    return lines
