@@ -10,10 +10,10 @@ import pytest
 from rpbench.backends.presets import load_preset, preset_names
 from rpbench.bench.snapshot import take_snapshots
 from rpbench.exceptions import ResultsError
-from rpbench.harness.spec import RunSpec
 from rpbench.instances import find_instances, load_instance, save_instance
 from rpbench.model import AssignmentModel, PairingModel, TripPackingModel
 from rpbench.scenarios import ScenarioRequest
+from rpbench.spec import RunSpec
 
 
 def installed():

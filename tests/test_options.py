@@ -7,8 +7,8 @@ import pytest
 from rpbench.cli import main
 from rpbench.commands._runs import parse_runs
 from rpbench.exceptions import ParameterError
-from rpbench.harness.spec import options_class
 from rpbench.oracle.runs import ORACLE_RUNS
+from rpbench.spec import options_class
 from rpbench.strategies import REGISTRY, strategy_class
 from rpbench.strategies.forward import ForwardOptions
 from rpbench.strategies.rtv import RTVOptions

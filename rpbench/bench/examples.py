@@ -21,9 +21,9 @@ from pathlib import Path
 
 from rpbench.bench import synthetic
 from rpbench.bench.snapshot import take_snapshots
-from rpbench.harness.spec import RunSpec
 from rpbench.instances import save_instance
 from rpbench.scenarios import ScenarioRequest
+from rpbench.spec import RunSpec
 
 
 def write_examples(folder: str | Path) -> list[Path]:

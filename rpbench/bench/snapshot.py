@@ -17,7 +17,6 @@ from pathlib import Path
 from rpbench import results
 from rpbench.backends import load_preset
 from rpbench.harness.comparison import calibrated, simulate_strategy
-from rpbench.harness.spec import RunSpec
 from rpbench.instances import save_instance
 from rpbench.model import Model, Solution
 from rpbench.options import RunOptions
@@ -26,6 +25,7 @@ from rpbench.oracle.runs import ORACLE_RUNS
 from rpbench.oracle.solve import oracle_model
 from rpbench.results.store import check_new_folder
 from rpbench.scenarios.base import Scenario
+from rpbench.spec import RunSpec
 from rpbench.strategies.base import RoundModel
 
 #: A captured round: its number, time, model, the solver's objective and status.

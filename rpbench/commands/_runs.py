@@ -1,6 +1,6 @@
-"""Command-line text -> :class:`~rpbench.harness.spec.RunSpec`: the run arguments shared by run, sweep and snapshot.
+"""Command-line text -> :class:`~rpbench.spec.RunSpec`: the run arguments shared by run, sweep and snapshot.
 
-``--strategies a,b,...`` names the runs (:func:`~rpbench.harness.spec.resolve_runs`
+``--strategies a,b,...`` names the runs (:func:`~rpbench.spec.resolve_runs`
 resolves them), ``--opt RUN.OPTION=VALUE`` sets a run's option (RUN is the
 run's name, or the source it was given by), ``--solver`` / ``--oracle-solver``
 name the presets, ``--strict`` the policy for unproven solves and ``--decision-budget`` the time a round's
@@ -14,10 +14,11 @@ import dataclasses
 from collections.abc import Sequence
 
 from rpbench.backends.presets import load_preset
-from rpbench.commands._common import add_decision_budget_arg, add_strict_arg, command_line, decision_budget
+from rpbench.commands.args import add_decision_budget_arg, add_strict_arg, decision_budget
+from rpbench.commands.output import command_line
 from rpbench.exceptions import ParameterError
-from rpbench.harness.spec import RunEntry, RunSpec, resolve_runs, typed_options
 from rpbench.scenarios import ScenarioRequest
+from rpbench.spec import RunEntry, RunSpec, resolve_runs, typed_options
 
 #: What ``rpbench run`` compares without ``--strategies``.
 DEFAULT_STRATEGIES = "np,mb,rtv,fl-nd,fl,fl-perfect,hindsight,bound,oracle1,oracle2"

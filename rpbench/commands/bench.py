@@ -31,18 +31,9 @@ from rpbench.backends.presets import load_preset, preset_names
 from rpbench.bench.runner import format_table, run_benchmark
 from rpbench.bench.synthetic import SUITES, suite
 from rpbench.check.bench import KNOWN_FILE
-from rpbench.commands._common import (
-    SEED,
-    TIME_LIMIT,
-    add_number_arg,
-    check_numbers,
-    check_out_file,
-    check_unique,
-    command_line,
-    note,
-    print_json,
-    write_out_file,
-)
+from rpbench.commands.args import SEED, TIME_LIMIT, add_number_arg, check_numbers
+from rpbench.commands.checks import check_out_file, check_unique, write_out_file
+from rpbench.commands.output import command_line, note, print_json
 from rpbench.exceptions import ParameterError
 from rpbench.instances import find_instances, load_instances
 from rpbench.library.manifest import library_names

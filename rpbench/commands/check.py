@@ -7,7 +7,7 @@ import argparse
 import sys
 
 from rpbench.check import EXIT_FAILED, EXIT_OK, EXIT_UNREADABLE, check_tree, exit_status, format_report
-from rpbench.commands._common import print_json
+from rpbench.commands.output import print_json
 
 STATUS = {EXIT_OK: "ok", EXIT_FAILED: "failed", EXIT_UNREADABLE: "unreadable"}
 

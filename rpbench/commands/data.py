@@ -14,7 +14,7 @@ import argparse
 import sys
 
 from rpbench import paths
-from rpbench.commands._common import print_json
+from rpbench.commands.output import print_json
 from rpbench.data.fetch import check_verified, fetch, source_urls, verify
 from rpbench.exceptions import DataNotFoundError
 from rpbench.paths import (

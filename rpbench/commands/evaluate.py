@@ -4,19 +4,16 @@ from __future__ import annotations
 
 import argparse
 
-from rpbench.commands._common import (
+from rpbench.commands.args import (
     add_data_arg,
     add_decision_budget_arg,
     add_offline_arg,
     add_parallel_args,
     check_numbers,
-    check_out_name,
-    check_parallel,
-    command_line,
     decision_budget,
-    note,
-    note_over_budget,
 )
+from rpbench.commands.checks import check_out_name, check_parallel
+from rpbench.commands.output import command_line, note, note_outcome
 from rpbench.data.first_run import ensure_data_dir
 from rpbench.harness.evaluate import run_evaluation
 from rpbench.protocols import builtin_names, load_protocol
@@ -51,7 +48,7 @@ def run(args: argparse.Namespace) -> int:
     data = None
     if protocol.scenario != "toy":
         data = str(ensure_data_dir(args.data, what=f"protocol {protocol.name!r}", offline=args.offline))
-    folder, ran = run_evaluation(
+    outcome = run_evaluation(
         protocol,
         args.out,
         data_dir=data,
@@ -60,7 +57,8 @@ def run(args: argparse.Namespace) -> int:
         command=command_line(),
         decision_budget_s=budget,
     )
-    note_over_budget(folder)
+    folder, ran = outcome.folder, sum(unit.fresh for unit in outcome.children)
+    note_outcome(outcome)
     note(f"{ran} run(s) made now; the others were already in the folder" if ran else "every run was already there")
     print((folder / REPORT).read_text())
     print(f"results written to {folder}  (verify: rpbench check {folder}; in a browser: {folder / REPORT_HTML})")

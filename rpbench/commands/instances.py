@@ -16,17 +16,9 @@ from pathlib import Path
 
 from rpbench.backends import load_preset
 from rpbench.bench.runner import IsolatedWorker
-from rpbench.commands._common import (
-    TIME_LIMIT,
-    add_data_arg,
-    add_number_arg,
-    check_numbers,
-    check_out_file,
-    check_unique,
-    note,
-    print_json,
-    write_out_file,
-)
+from rpbench.commands.args import TIME_LIMIT, add_data_arg, add_number_arg, check_numbers
+from rpbench.commands.checks import check_out_file, check_unique, write_out_file
+from rpbench.commands.output import note, print_json
 from rpbench.digests import arrays_sha256
 from rpbench.exceptions import ParameterError
 from rpbench.instances import find_instances, load_instances

@@ -5,15 +5,16 @@ from __future__ import annotations
 import argparse
 
 from rpbench.backends.presets import load_preset, preset_names
-from rpbench.commands._common import add_data_arg, print_json
+from rpbench.commands.args import add_data_arg
+from rpbench.commands.output import print_json
 from rpbench.data import available_peak_dates
 from rpbench.data.first_run import fetch_plan
 from rpbench.exceptions import RpbenchError
-from rpbench.harness.spec import options_class
 from rpbench.oracle.runs import ORACLE_RUNS
 from rpbench.paths import default_data_candidates, describe_candidate, fetched_data_dir, locate_data_dir
 from rpbench.scenarios import SCENARIOS
 from rpbench.scenarios.base import Params
+from rpbench.spec import options_class
 from rpbench.strategies import REGISTRY as STRATEGY_REGISTRY
 from rpbench.strategies import plugin_names, strategy_class
 

@@ -8,18 +8,16 @@ import math
 from pathlib import Path
 
 from rpbench.backends import load_preset
-from rpbench.commands._common import (
+from rpbench.commands.args import (
     TIME_LIMIT,
     add_number_arg,
     add_scenario_args,
     add_strict_arg,
     check_numbers,
-    check_out_file,
-    note,
-    print_json,
     scenario_request,
-    write_out_file,
 )
+from rpbench.commands.checks import check_out_file, write_out_file
+from rpbench.commands.output import note, print_json
 from rpbench.exceptions import ParameterError
 from rpbench.harness.strict import require_proven
 from rpbench.options import Range

@@ -15,18 +15,16 @@ import argparse
 import time
 from pathlib import Path
 
-from rpbench.commands._common import (
+from rpbench.commands.args import (
     SEED,
     add_data_arg,
     add_number_arg,
     add_offline_arg,
     check_numbers,
-    check_out_file,
-    note,
     parse_param_overrides,
-    print_json,
-    write_out_file,
 )
+from rpbench.commands.checks import check_out_file, write_out_file
+from rpbench.commands.output import note, print_json
 from rpbench.data.first_run import ensure_data_dir
 from rpbench.exceptions import ParameterError
 from rpbench.options import Range

@@ -9,15 +9,9 @@ import sys
 import pandas as pd
 
 from rpbench.backends.presets import load_preset
-from rpbench.commands._common import (
-    add_data_arg,
-    add_offline_arg,
-    check_date_list,
-    check_out_name,
-    check_unique,
-    command_line,
-    print_json,
-)
+from rpbench.commands.args import add_data_arg, add_offline_arg
+from rpbench.commands.checks import check_date_list, check_out_name, check_unique
+from rpbench.commands.output import command_line, print_json
 from rpbench.data import available_peak_dates
 from rpbench.data.first_run import ensure_data_dir
 from rpbench.exceptions import ParameterError

@@ -9,7 +9,7 @@ import tempfile
 from functools import partial
 from pathlib import Path
 
-from rpbench.commands._common import check_out_file, write_out_file
+from rpbench.commands.checks import check_out_file, write_out_file
 from rpbench.files import printable, write_text
 from rpbench.harness.render import render
 

@@ -4,38 +4,28 @@ from __future__ import annotations
 
 import argparse
 
-import pandas as pd
-
-from rpbench.commands._common import (
+from rpbench.commands._runs import add_run_args, check_presets, parse_runs, run_spec
+from rpbench.commands.args import (
     WORKERS,
     add_number_arg,
     add_scenario_args,
-    check_date_list,
     check_numbers,
-    check_out_name,
-    check_parallel,
-    check_unique,
     decision_budget,
-    note,
-    note_over_budget,
-    note_unproven,
-    print_json,
     scenario_request,
 )
-from rpbench.commands._runs import add_run_args, check_presets, parse_runs, run_spec
+from rpbench.commands.checks import check_date_list, check_out_name, check_parallel, check_unique
+from rpbench.commands.output import note, note_outcome, print_json
 from rpbench.data.first_run import FETCH_COMMAND
 from rpbench.exceptions import ParameterError
 from rpbench.harness.comparison import run_comparison
 from rpbench.harness.multiday import mean_bracket_lines, run_days
-from rpbench.harness.spec import RunSpec
 from rpbench.report.comparison import fmt, text_table
-from rpbench.results import layout
 from rpbench.results.layout import REPORT_HTML
 from rpbench.results.parents import bracket_by_day
 from rpbench.results.ratios import bracket_line, bracket_record
-from rpbench.results.read import load_kpis
 from rpbench.results.runs import run_styles
 from rpbench.results.store import check_new_folder, read_meta
+from rpbench.spec import RunSpec
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -97,9 +87,9 @@ def run(args: argparse.Namespace) -> int:
 def run_one(args: argparse.Namespace, spec: RunSpec) -> int:
     scenario = spec.request.build()
     note(scenario.label)
-    folder, table = run_comparison(spec, args.out, scenario=scenario, progress=False if args.no_progress else None)
-    unproven = note_unproven(folder)
-    note_over_budget(folder)
+    outcome = run_comparison(spec, args.out, scenario=scenario, progress=False if args.no_progress else None)
+    folder, table = outcome.folder, outcome.table
+    unproven = note_outcome(outcome)
     simulated = [e.name for e in spec.simulated]
     if args.json:
         print_json(
@@ -128,11 +118,9 @@ def run_many_days(args: argparse.Namespace, spec: RunSpec) -> int:
     check_unique(f"--dates {args.dates!r}", dates)
     name = spec.request.name
     note(f"running {len(dates)} days of {name} ({dates[0]} .. {dates[-1]}) x {', '.join(spec.names)}")
-    folder = run_days(spec, dates, args.out, workers=args.workers, scheduler=args.scheduler)
-    summary = pd.read_csv(folder / layout.SUMMARY)
-    mean = summary.pivot(index="kpi", columns="run", values="mean")[spec.names]
-    unproven = note_unproven(folder)
-    note_over_budget(folder)
+    outcome = run_days(spec, dates, args.out, workers=args.workers, scheduler=args.scheduler)
+    folder, mean = outcome.folder, outcome.table
+    unproven = note_outcome(outcome)
     if args.json:
         print_json(
             {
@@ -140,7 +128,9 @@ def run_many_days(args: argparse.Namespace, spec: RunSpec) -> int:
                 "dates": dates,
                 "unproven": unproven,
                 "mean_kpis": {col: mean[col].to_dict() for col in mean.columns},
-                "per_day": {d: {c: t[c].to_dict() for c in t.columns} for d in dates for t in [load_kpis(folder / d)]},
+                "per_day": {
+                    day.folder.name: {c: day.table[c].to_dict() for c in day.table.columns} for day in outcome.children
+                },
                 "bracket_per_day": bracket_by_day(folder).set_index("date").to_dict(orient="index"),
             }
         )

@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 import time
 
-from rpbench.commands._common import add_scenario_args, print_json, scenario_request
+from rpbench.commands.args import add_scenario_args, scenario_request
+from rpbench.commands.output import print_json
 
 
 def register(sub: argparse._SubParsersAction) -> None:

@@ -5,17 +5,10 @@ from __future__ import annotations
 import argparse
 
 from rpbench.bench.snapshot import take_snapshots
-from rpbench.commands._common import (
-    add_number_arg,
-    add_scenario_args,
-    check_numbers,
-    check_out_name,
-    check_unique,
-    note,
-    print_json,
-    scenario_request,
-)
 from rpbench.commands._runs import check_presets, parse_runs, run_spec
+from rpbench.commands.args import add_number_arg, add_scenario_args, check_numbers, scenario_request
+from rpbench.commands.checks import check_out_name, check_unique
+from rpbench.commands.output import note, print_json
 from rpbench.exceptions import ParameterError
 from rpbench.options import Range
 from rpbench.results.store import check_new_folder

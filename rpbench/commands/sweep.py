@@ -4,26 +4,19 @@ from __future__ import annotations
 
 import argparse
 
-import pandas as pd
-
-from rpbench.commands._common import (
+from rpbench.commands._runs import add_run_args, check_presets, parse_runs, run_spec, split_list
+from rpbench.commands.args import (
     add_parallel_args,
     add_scenario_args,
     check_numbers,
-    check_out_name,
-    check_parallel,
     decision_budget,
-    note,
-    note_over_budget,
-    note_unproven,
     parse_param_overrides,
-    print_json,
     scenario_request,
 )
-from rpbench.commands._runs import add_run_args, check_presets, parse_runs, run_spec, split_list
+from rpbench.commands.checks import check_out_name, check_parallel
+from rpbench.commands.output import note, note_outcome, print_json
 from rpbench.exceptions import ParameterError
 from rpbench.harness.sweep import SWEEPS, SweepSpec, expand, option_target, parse_over, run_sweep
-from rpbench.results import layout
 from rpbench.results.layout import REPORT_HTML
 from rpbench.results.store import check_new_folder
 
@@ -109,10 +102,9 @@ def run(args: argparse.Namespace) -> int:
     for point in points:  # a run option's values and a --param set by the sweep too are refused before any run
         point.spec_of(spec, spec.request)
     note(f"sweep {sweep.name}: {len(points)} points x {', '.join(spec.names)} on {spec.request.name}")
-    folder = run_sweep(sweep, points, spec, args.out, workers=args.workers, scheduler=args.scheduler)
-    table = pd.read_csv(folder / layout.SWEEP)
-    unproven = note_unproven(folder)
-    note_over_budget(folder)
+    outcome = run_sweep(sweep, points, spec, args.out, workers=args.workers, scheduler=args.scheduler)
+    folder, table = outcome.folder, outcome.table
+    unproven = note_outcome(outcome)
     if args.json:
         print_json(
             {

@@ -10,14 +10,9 @@ from __future__ import annotations
 import argparse
 import time
 
-from rpbench.commands._common import (
-    add_scenario_args,
-    check_date_list,
-    check_numbers,
-    note,
-    print_json,
-    scenario_request,
-)
+from rpbench.commands.args import add_scenario_args, check_numbers, scenario_request
+from rpbench.commands.checks import check_date_list
+from rpbench.commands.output import note, print_json
 from rpbench.exceptions import ParameterError
 from rpbench.harness.training import train
 from rpbench.results import store

@@ -1,4 +1,4 @@
-"""One comparison: a :class:`~rpbench.harness.spec.RunSpec` -> one results folder.
+"""One comparison: a :class:`~rpbench.spec.RunSpec` -> one results folder.
 
 :func:`run_comparison` walks the same steps every time: check the presets,
 calibrate and simulate each strategy (:func:`simulate_strategy`: the event
@@ -20,7 +20,7 @@ import numpy as np
 import pandas as pd
 
 from rpbench.backends import Preset, load_preset
-from rpbench.harness.spec import RunEntry, RunSpec, resolve_runs
+from rpbench.harness.outcome import Outcome
 from rpbench.harness.strict import require_proven
 from rpbench.harness.training import supply_model
 from rpbench.model import Structure
@@ -30,19 +30,22 @@ from rpbench.oracle.solve import OracleResult
 from rpbench.report.comparison import write_report
 from rpbench.report.html import write_html
 from rpbench.results import metrics
-from rpbench.results.folder import StrategyRun, oracle_kpis, write_folder
+from rpbench.results.folder import StrategyRun, oracle_kpis, rounds_table, write_folder
 from rpbench.results.ratios import with_ratios
+from rpbench.results.read import over_budget_in, unproven_in
 from rpbench.results.runs import run_label
 from rpbench.results.store import check_new_folder, new_results_folder, timestamp
 from rpbench.scenarios.base import Scenario
 from rpbench.sim.simulator import Capture, SimResult, Simulator
+from rpbench.spec import RunEntry, RunSpec, resolve_runs
 
 
 def run_comparison(
     spec: RunSpec, out: str | Path | None = None, *, scenario: Scenario | None = None, progress: bool | None = None
-) -> tuple[Path, pd.DataFrame]:
+) -> Outcome:
     """Run every strategy and offline run of ``spec`` and write one new results folder (``out``, or
-    ``./rpbench-runs/<stamp>_<scenario>_<preset>``); returns the folder and the KPI table.
+    ``./rpbench-runs/<stamp>_<scenario>_<preset>``); returns its :class:`~rpbench.harness.outcome.Outcome`
+    (the folder, the KPI table, the unproven runs and the runs over the decision budget).
 
     ``scenario`` is the scenario ``spec.request`` builds (pass it when it is built already);
     ``progress``: a progress bar per strategy (default: when stderr is a terminal).  With
@@ -66,20 +69,16 @@ def run_comparison(
         )
     table = kpi_table(runs, offline, spec.names)
     with new_results_folder(out, f"{timestamp()}_{scenario.name}_{preset.name}") as (folder, final):
-        write_folder(
-            folder,
-            scenario,
-            runs,
-            offline,
-            order=spec.names,
-            preset=preset,
-            scenario_args=spec.request.meta(),
-            command=spec.command,
-            decision_budget_s=spec.decision_budget_s,
-        )
+        meta = write_folder(folder, spec, scenario, runs, offline, preset)
         write_report(folder, name=final.name)
         write_html(folder, name=final.name)
-    return final, table
+    rounds = rounds_table(runs)
+    return Outcome(
+        final,
+        table,
+        unproven=unproven_in(rounds, meta["runs"], spec.names),
+        over_budget=over_budget_in(rounds, spec.decision_budget_s),
+    )
 
 
 @dataclass(frozen=True)
@@ -90,10 +89,9 @@ class ComparisonTask:
     out: str
 
 
-def run_task(task: ComparisonTask) -> str:
-    """Worker entry point: ``task``'s comparison written to ``task.out``; returns the folder."""
-    folder, _ = run_comparison(task.spec, task.out, progress=False)
-    return str(folder)
+def run_task(task: ComparisonTask) -> Outcome:
+    """Worker entry point: ``task``'s comparison written to ``task.out``; returns its outcome."""
+    return run_comparison(task.spec, task.out, progress=False)
 
 
 def simulate_all(spec: RunSpec, scenario: Scenario, preset: Preset, progress: bool | None) -> list[StrategyRun]:

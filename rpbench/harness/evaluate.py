@@ -17,15 +17,16 @@ from typing import Any
 from rpbench import results
 from rpbench.exceptions import ParameterError, ResultsError
 from rpbench.harness.comparison import ComparisonTask, run_task
+from rpbench.harness.outcome import Outcome
 from rpbench.harness.parallel import run_tasks
-from rpbench.harness.spec import RunSpec
 from rpbench.protocols import Protocol
-from rpbench.report.evaluation import summarize, unit_name, write_evaluation_report
+from rpbench.report.evaluation import unit_name, write_evaluation_report, write_evaluation_tables
 from rpbench.report.html import write_html
 from rpbench.results import layout
 from rpbench.results.folder import write_parent_meta
 from rpbench.results.store import DEFAULT_PARENT, remove_stale_partials
 from rpbench.scenarios import ScenarioRequest
+from rpbench.spec import RunSpec
 
 
 def units_of(protocol: Protocol, request: ScenarioRequest) -> list[tuple[str | None, int]]:
@@ -43,8 +44,9 @@ def run_evaluation(
     scheduler: str | None = None,
     command: str | None = None,
     decision_budget_s: float | None = None,
-) -> tuple[Path, int]:
-    """Run (or resume) ``protocol`` into ``out``; returns the folder and how many units ran now.
+) -> Outcome:
+    """Run (or resume) ``protocol`` into ``out``; returns the folder's outcome (its table: the leaderboard; its
+    children: the units, those found already written with ``fresh`` false).
 
     ``decision_budget_s``: flag the rounds slower than it in every unit (the simulation is unchanged)."""
     request = ScenarioRequest(protocol.scenario, sample=protocol.sample, data_dir=data_dir).resolved()
@@ -68,17 +70,18 @@ def run_evaluation(
             fields["decision_budget_s"] = decision_budget_s
         write_parent_meta(folder, "evaluate", names, fields)
     remove_stale_partials(folder)
-    todo = [
+    tasks = [
         ComparisonTask(spec.for_request(request.replace(date=d, seed=s)), str(folder / name))
         for (d, s), name in zip(units, names, strict=True)
-        if not (folder / name / layout.KPIS).is_file()
     ]
-    if todo:
-        run_tasks(run_task, todo, workers=workers, scheduler=scheduler, label=f"evaluate {protocol.name}")
-    summarize(folder)
+    todo = [task for task in tasks if not (Path(task.out) / layout.KPIS).is_file()]
+    ran = run_tasks(run_task, todo, workers=workers, scheduler=scheduler, label=f"evaluate {protocol.name}")
+    fresh = {Path(o.folder).name: o for o in ran}
+    children = tuple(fresh.get(name) or Outcome.read(folder / name) for name in names)
+    board = write_evaluation_tables(folder)
     write_evaluation_report(folder, folder.name)
     write_html(folder, folder.name)
-    return folder, len(todo)
+    return Outcome(folder, board, children=children)
 
 
 def _check_resumable(folder: Path, record: dict, decision_budget_s: float | None) -> None:

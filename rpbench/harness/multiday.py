@@ -14,8 +14,8 @@ import pandas as pd
 
 from rpbench import files, results
 from rpbench.harness.comparison import ComparisonTask, run_task
+from rpbench.harness.outcome import Outcome
 from rpbench.harness.parallel import run_tasks
-from rpbench.harness.spec import RunSpec
 from rpbench.report.comparison import findings, fmt, markdown_table, offline_notes, table_rows
 from rpbench.report.html import write_html
 from rpbench.report.plots import MULTIDAY_PLOT_KPIS, per_day_figures
@@ -29,12 +29,14 @@ from rpbench.results.read import load_kpis
 from rpbench.results.runs import markdown_cell, run_label, run_styles
 from rpbench.results.store import check_new_folder
 from rpbench.scenarios import SCENARIOS
+from rpbench.spec import RunSpec
 
 
 def run_days(
     spec: RunSpec, dates: list[str], out: str | None = None, *, workers: int | None = None, scheduler: str | None = None
-) -> Path:
-    """One comparison per date of ``spec``'s scenario, in parallel, then the per-day and mean tables.
+) -> Outcome:
+    """One comparison per date of ``spec``'s scenario, in parallel, then the per-day and mean tables; returns
+    the folder's outcome (its table: each KPI's mean over the days; its children: the days).
 
     The data folder is resolved once, here (:meth:`~rpbench.scenarios.ScenarioRequest.resolved`): worker
     processes look for none of their own.
@@ -44,7 +46,7 @@ def run_days(
     default = f"{results.timestamp()}_{request.name}_{dates[0]}..{dates[-1]}_{spec.preset}"
     with results.new_results_folder(out, default) as (tmp, final):
         tasks = [ComparisonTask(spec.for_request(request.replace(date=d)), str(tmp / d)) for d in dates]
-        run_tasks(run_task, tasks, workers=workers, scheduler=scheduler, label="days")
+        days = run_tasks(run_task, tasks, workers=workers, scheduler=scheduler, label="days")
         write_parent_meta(
             tmp,
             "multi-day",
@@ -61,13 +63,16 @@ def run_days(
                 **({"decision_budget_s": spec.decision_budget_s} if spec.decision_budget_s is not None else {}),
             },
         )
-        summarize(tmp)
+        stats = write_summary(tmp)
         write_multiday_report(tmp, name=final.name)
         write_html(tmp, name=final.name)
-    return final
+    mean = stats["mean"].unstack("run")[spec.names]
+    return Outcome(tmp, mean, children=tuple(days)).moved_to(final)
 
 
-def summarize(parent: Path) -> pd.DataFrame:
+def write_summary(parent: Path) -> pd.DataFrame:
+    """``by_day.csv`` (every day's KPIs) and ``summary.csv`` (mean, std, min, max and count over the days, per
+    run and KPI); returns the latter, indexed by (run, kpi)."""
     table = by_day_table(parent)
     table.to_csv(parent / "by_day.csv", index=False)
     stats = table.groupby(["run", "kpi"], sort=False)["value"].agg(["mean", "std", "min", "max", "count"])

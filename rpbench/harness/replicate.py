@@ -29,12 +29,14 @@ import pandas as pd
 from rpbench.backends.presets import Preset
 from rpbench.data.paper_orders import PREDICTION_COLUMNS
 from rpbench.exceptions import ParameterError
+from rpbench.harness.comparison import calibrated, simulate_strategy
 from rpbench.replication import reference
 from rpbench.replication.engine import STRATEGIES, AuthorsEngine, AuthorsRun
 from rpbench.replication.switches import Switches, steps_for
 from rpbench.scenarios.base import Scenario
 from rpbench.scenarios.paper_input import PaperInput, load_paper_input
 from rpbench.scenarios.peak import build_peak
+from rpbench.spec import resolve_runs
 
 KPIS = (
     "response_rate",
@@ -112,9 +114,6 @@ def run_authors(inputs: Inputs, strategy: str, switches: Switches, preset: Prese
 
 def run_rpbench(chosen: PaperInput, strategy: str, preset: Preset, done: dict[str, Any]) -> dict[str, float]:
     """rpbench's own engine on ``chosen``; response over its denominator (the authors': the whole sample)."""
-    from rpbench.harness.comparison import calibrated, simulate_strategy
-    from rpbench.harness.spec import resolve_runs
-
     scenario = chosen.scenario
     (entry,) = resolve_runs([strategy])
     run = simulate_strategy(scenario, calibrated(entry, scenario, preset, done, False), preset, progress=False)

@@ -4,7 +4,7 @@ A preset's time limit (or a relative gap) can stop a round's model or an
 offline run before its optimum is proven.  By default the run goes on with
 the incumbent, the terminal says so in one note line per run and the report
 marks the run (:func:`rpbench.report.comparison.unproven_runs`).  With
-:attr:`RunSpec.strict <rpbench.harness.spec.RunSpec.strict>` such a stop is a
+:attr:`RunSpec.strict <rpbench.spec.RunSpec.strict>` such a stop is a
 :class:`~rpbench.exceptions.SolverError` instead, and nothing is written.
 """
 

@@ -23,8 +23,8 @@ from pathlib import Path
 from rpbench import files, paper, results
 from rpbench.exceptions import ParameterError
 from rpbench.harness.comparison import ComparisonTask, run_task
+from rpbench.harness.outcome import Outcome
 from rpbench.harness.parallel import run_tasks
-from rpbench.harness.spec import RunSpec
 from rpbench.report.comparison import fmt
 from rpbench.report.html import write_html
 from rpbench.report.plots import sweep_figure
@@ -37,6 +37,7 @@ from rpbench.results.runs import markdown_cell, run_label, run_styles
 from rpbench.results.store import check_new_folder
 from rpbench.scenarios import ScenarioRequest
 from rpbench.scenarios.base import Params
+from rpbench.spec import RunSpec
 
 ALIASES = {
     "K": ("patience_mean_s", "planner_patience_s"),
@@ -201,15 +202,16 @@ def run_sweep(
     *,
     workers: int | None = None,
     scheduler: str | None = None,
-) -> Path:
+) -> Outcome:
     """One comparison of ``spec`` per point (its request with the point's overrides), in parallel, then the
-    sweep table and report.  The data folder is resolved once, here, for every worker."""
+    sweep table and report; returns the folder's outcome (its table: the sweep table, tidy point, run, kpi,
+    value; its children: the points).  The data folder is resolved once, here, for every worker."""
     check_new_folder(out)
     request = spec.request.resolved()
     default = f"{results.timestamp()}_sweep-{sweep.name}_{request.name}_{spec.preset}"
     with results.new_results_folder(out, default) as (tmp, final):
         tasks = [ComparisonTask(p.spec_of(spec, request), str(tmp / p.label)) for p in points]
-        run_tasks(run_task, tasks, workers=workers, scheduler=scheduler, label=f"sweep {sweep.name}")
+        done = run_tasks(run_task, tasks, workers=workers, scheduler=scheduler, label=f"sweep {sweep.name}")
         write_parent_meta(
             tmp,
             "sweep",
@@ -229,10 +231,11 @@ def run_sweep(
                 **({"decision_budget_s": spec.decision_budget_s} if spec.decision_budget_s is not None else {}),
             },
         )
-        sweep_table(tmp).to_csv(tmp / layout.SWEEP, index=False)
+        table = sweep_table(tmp)
+        table.to_csv(tmp / layout.SWEEP, index=False)
         write_sweep_report(tmp, name=final.name)
         write_html(tmp, name=final.name)
-    return final
+    return Outcome(tmp, table, children=tuple(done)).moved_to(final)
 
 
 def write_sweep_report(parent: Path, name: str | None = None) -> Path:

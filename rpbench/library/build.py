@@ -18,12 +18,12 @@ from typing import Any
 from rpbench.bench import synthetic
 from rpbench.bench.snapshot import take_snapshots
 from rpbench.digests import arrays_sha256, file_sha256
-from rpbench.harness.spec import RunSpec
 from rpbench.instances import load_instance, save_instance
 from rpbench.library.manifest import FORMAT
 from rpbench.library.sets import LIBRARY_VERSION, InstanceSet, Source, Synthetic
 from rpbench.model import Model
 from rpbench.scenarios import ScenarioRequest
+from rpbench.spec import RunSpec
 
 PRESET = "highs"
 

@@ -11,6 +11,8 @@ from rpbench.digests import file_sha256
 from rpbench.report.comparison import write_report
 from rpbench.results.folder import StrategyRun, write_folder
 from rpbench.scenarios.base import Scenario
+from rpbench.scenarios.request import ScenarioRequest
+from rpbench.spec import RunEntry, RunSpec
 
 __all__ = ["file_manifest", "write_engine_folder"]
 
@@ -19,17 +21,17 @@ def write_engine_folder(dest: Path, scenario: Scenario, run: StrategyRun, preset
     """One run of rpbench's own engine as a results folder (inputs, event log, trajectories, KPIs, report.md
     without figures): ``rpbench check`` verifies it as it verifies ``rpbench run``'s."""
     dest.mkdir(parents=True)
-    write_folder(
-        dest,
-        scenario,
-        [run],
-        {},
-        order=[run.name],
-        preset=preset,
-        scenario_args={"name": scenario.name},
-        command=command,
-    )
+    write_folder(dest, engine_spec(scenario, run, preset, command), scenario, [run], {}, preset)
     write_report(dest, name=dest.name, figures=False)
+
+
+def engine_spec(scenario: Scenario, run: StrategyRun, preset: Preset, command: str | None) -> RunSpec:
+    """What an engine folder records of its comparison: the scenario as its provenance names it, and its run."""
+    provenance = scenario.provenance
+    request = ScenarioRequest(
+        scenario.name, date=provenance.get("date"), sample=provenance.get("sample"), seed=scenario.seed
+    )
+    return RunSpec(request, (RunEntry(run.name, run.source, run.options),), preset=preset.name, command=command)
 
 
 def file_manifest(folder: Path) -> dict[str, str]:

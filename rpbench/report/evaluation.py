@@ -99,13 +99,14 @@ def read_leaderboard(folder: Path) -> pd.DataFrame:
     return ranked(board, run_groups(unit_records(folder), runs), protocol["metrics"][0], runs)
 
 
-def summarize(folder: Path) -> None:
-    """Write units.csv, leaderboard.csv and paired.csv (each whole or not at all)."""
+def write_evaluation_tables(folder: Path) -> pd.DataFrame:
+    """Write units.csv, leaderboard.csv and paired.csv (each whole or not at all); returns the leaderboard."""
     units, board, pairs = tables(folder)
     for name, table in ((layout.UNITS, units), (layout.LEADERBOARD, board), (layout.PAIRED, pairs)):
         tmp = folder / f".{name}.partial"
         table.to_csv(tmp, index=False)
         tmp.replace(folder / name)
+    return board
 
 
 def write_evaluation_report(folder: Path, name: str | None = None) -> Path:

@@ -37,6 +37,7 @@ from rpbench.results.ratios import BEST_KNOWN_FIELD, best_known, derived_rows
 from rpbench.results.store import environment, save_network, save_trajectories, write_json
 from rpbench.scenarios.base import Scenario
 from rpbench.sim.simulator import SimResult
+from rpbench.spec import RunSpec
 
 #: Format version of ``meta.json`` (``rpbench_results``).
 RESULTS_FORMAT = 1
@@ -98,18 +99,25 @@ def copy_artefacts(artefacts: dict[str, tuple[str, Path]], run_dir: Path) -> dic
 
 def write_folder(
     folder: Path,
+    spec: RunSpec,
     scenario: Scenario,
     runs: Sequence[StrategyRun],
     offline: dict[str, OracleResult],
-    *,
-    order: Sequence[str],
     preset: Preset,
-    scenario_args: dict[str, Any],
-    command: str | None,
-    decision_budget_s: float | None = None,
-) -> None:
-    """Write the comparison of ``runs`` and ``offline`` on ``scenario`` into ``folder`` (``order``: columns;
-    ``decision_budget_s``: the budget the runs' ``over_budget`` flags were set against, recorded in meta.json)."""
+) -> dict[str, Any]:
+    """Write the comparison ``spec`` ran on ``scenario`` (its ``runs`` and ``offline`` runs, the simulations
+    solved by ``preset``) into ``folder``; returns the ``meta.json`` record it wrote."""
+    write_inputs(folder, scenario)
+    records = {r.name: write_simulated_run(folder, r) for r in runs}
+    records.update({name: write_offline_run(folder, name, res) for name, res in offline.items()})
+    write_tables(folder, runs, offline)
+    meta = meta_record(folder, spec, scenario, preset, records, runs)
+    write_json(folder / layout.META, meta)
+    return meta
+
+
+def write_inputs(folder: Path, scenario: Scenario) -> None:
+    """The scenario's orders, road network and fleet: what every run of the folder was given."""
     orders = scenario.orders
     solo = scenario.network.distances()(orders.origin, orders.destination)
     pd.DataFrame(
@@ -126,70 +134,93 @@ def write_folder(
     pd.DataFrame({"vehicle": np.arange(len(scenario.fleet)), "initial_node": scenario.fleet.initial_node}).to_csv(
         folder / layout.FLEET, index=False, compression=REPRODUCIBLE_GZIP
     )
-    tidy: list[dict[str, Any]] = []
-    rounds, hourly = [], []
-    meta_runs: dict[str, dict[str, Any]] = {}
-    for r in runs:
-        d = folder / layout.RUNS / r.name
-        d.mkdir(parents=True)
-        r.sim.events.to_csv(d / layout.EVENTS, index=False)
-        save_trajectories(d / layout.TRAJECTORIES, r.sim.trajectories)
-        tidy += [{"run": r.name, "kpi": k, "value": v} for k, v in r.kpis.items()]
-        rounds.append(r.sim.rounds.assign(run=r.name))
-        hourly.append(r.hourly.assign(run=r.name))
-        meta_runs[r.name] = {
-            "kind": "simulation",
-            "options": r.options.as_dict(),
-            "wall_s": r.sim.wall_s,
-            "prepare_s": r.sim.prepare_s,
-            **({"artefacts": copy_artefacts(r.sim.artefacts, d)} if r.sim.artefacts else {}),
-            "end_s": r.sim.end_s,
-            "rounds_solved": len(r.sim.rounds),
-            "clairvoyant": r.sim.clairvoyant,
-            "source": r.source,
-            "label": r.label,
-            "color": r.color,
-        }
-    for name, res in offline.items():
-        d = folder / layout.RUNS / name
-        d.mkdir(parents=True)
-        res.pairs.to_csv(d / layout.PAIRS, index=False)
-        tidy += [{"run": name, "kpi": k, "value": v} for k, v in oracle_kpis(res).items()]
-        facts = res.kpis()
-        meta_runs[name] = {
-            "kind": "oracle",
-            "variant": res.variant,
-            "solver": res.solver,
-            "status": facts["status"],
-            "rules": dataclasses.asdict(res.rules),
-            "objective_m": facts["objective_m"],
-            "bound_m": facts["bound_m"],
-            "gap": facts["gap"],
-            "candidates": res.n_candidates,
-            "evaluated": res.n_evaluated,
-            "unit_m": res.model.unit_m,
-            "timings_s": res.timings,
-            "source": name,
-            "label": ORACLE_RUNS[name].label,
-            "color": ORACLE_RUNS[name].color,
-        }
+
+
+def write_simulated_run(folder: Path, r: StrategyRun) -> dict[str, Any]:
+    """``runs/<name>/``: a simulation's event log, trajectories and artefacts; returns its meta.json record."""
+    d = folder / layout.RUNS / r.name
+    d.mkdir(parents=True)
+    r.sim.events.to_csv(d / layout.EVENTS, index=False)
+    save_trajectories(d / layout.TRAJECTORIES, r.sim.trajectories)
+    return {
+        "kind": "simulation",
+        "options": r.options.as_dict(),
+        "wall_s": r.sim.wall_s,
+        "prepare_s": r.sim.prepare_s,
+        **({"artefacts": copy_artefacts(r.sim.artefacts, d)} if r.sim.artefacts else {}),
+        "end_s": r.sim.end_s,
+        "rounds_solved": len(r.sim.rounds),
+        "clairvoyant": r.sim.clairvoyant,
+        "source": r.source,
+        "label": r.label,
+        "color": r.color,
+    }
+
+
+def write_offline_run(folder: Path, name: str, res: OracleResult) -> dict[str, Any]:
+    """``runs/<name>/``: an offline run's pairs; returns its meta.json record (its solver's facts)."""
+    d = folder / layout.RUNS / name
+    d.mkdir(parents=True)
+    res.pairs.to_csv(d / layout.PAIRS, index=False)
+    facts = res.kpis()
+    return {
+        "kind": "oracle",
+        "variant": res.variant,
+        "solver": res.solver,
+        "status": facts["status"],
+        "rules": dataclasses.asdict(res.rules),
+        "objective_m": facts["objective_m"],
+        "bound_m": facts["bound_m"],
+        "gap": facts["gap"],
+        "candidates": res.n_candidates,
+        "evaluated": res.n_evaluated,
+        "unit_m": res.model.unit_m,
+        "timings_s": res.timings,
+        "source": name,
+        "label": ORACLE_RUNS[name].label,
+        "color": ORACLE_RUNS[name].color,
+    }
+
+
+def rounds_table(runs: Sequence[StrategyRun]) -> pd.DataFrame | None:
+    """``rounds.csv.gz``: every simulated run's rounds, with its name (None: no simulated run)."""
+    return pd.concat([r.sim.rounds.assign(run=r.name) for r in runs], ignore_index=True) if runs else None
+
+
+def write_tables(folder: Path, runs: Sequence[StrategyRun], offline: dict[str, OracleResult]) -> None:
+    """``kpis.csv`` (every run's KPIs and the rows derived from them), ``rounds.csv.gz`` and ``hourly.csv``."""
+    tidy = [{"run": r.name, "kpi": k, "value": v} for r in runs for k, v in r.kpis.items()]
+    tidy += [{"run": name, "kpi": k, "value": v} for name, res in offline.items() for k, v in oracle_kpis(res).items()]
     tidy += derived_kpi_rows(runs, offline)
     pd.DataFrame(tidy).to_csv(folder / layout.KPIS, index=False)
-    lb = best_known({r.name: r.kpis["total_saving_km"] for r in runs})
-    if rounds:
-        pd.concat(rounds, ignore_index=True).to_csv(folder / layout.ROUNDS, index=False)
+    rounds = rounds_table(runs)
+    if rounds is not None:
+        rounds.to_csv(folder / layout.ROUNDS, index=False)
+    hourly = [r.hourly.assign(run=r.name) for r in runs]
     if hourly and "bound" in offline:
         hourly.append(bound_by_hour(offline["bound"].pairs))
     if hourly:
         pd.concat(hourly, ignore_index=True).to_csv(folder / layout.HOURLY, index=False)
-    meta = {
+
+
+def meta_record(
+    folder: Path,
+    spec: RunSpec,
+    scenario: Scenario,
+    preset: Preset,
+    records: dict[str, dict[str, Any]],
+    runs: Sequence[StrategyRun],
+) -> dict[str, Any]:
+    """``meta.json`` of a comparison whose inputs and runs are written in ``folder`` (``records``: each run's)."""
+    lb = best_known({r.name: r.kpis["total_saving_km"] for r in runs})
+    return {
         "rpbench_results": RESULTS_FORMAT,
-        "command": command,
+        "command": spec.command,
         "scenario": {
             "name": scenario.name,
             "label": scenario.label,
             "synthetic": scenario.synthetic,
-            "args": scenario_args,
+            "args": spec.request.meta(),
             "seed": scenario.seed,
             "start_time": scenario.start_time,
             "horizon_s": scenario.horizon_s,
@@ -199,20 +230,19 @@ def write_folder(
         },
         "params": scenario.params.as_dict(),
         # only with a budget: without one, meta.json holds what it held before budgets existed
-        **({"decision_budget_s": decision_budget_s} if decision_budget_s is not None else {}),
+        **({"decision_budget_s": spec.decision_budget_s} if spec.decision_budget_s is not None else {}),
         "preset": preset.as_dict(),
-        "strategies": list(order),
-        "runs": meta_runs,
+        "strategies": spec.names,
+        "runs": records,
         # the run that gave LB, the best known schedule (docs/simulator.md; rpbench check recomputes it)
         BEST_KNOWN_FIELD: lb.record() if lb is not None else None,
         # What `rpbench check` holds the folder to (docs/guarantees.md): every run folder written, and the
         # SHA-256 of the inputs, parameters and run options, so that a deleted run or an edit is caught.
-        "manifest": {"runs": list(meta_runs)},
-        "inputs_digest": inputs_digest(folder, scenario.params.as_dict(), meta_runs),
+        "manifest": {"runs": list(records)},
+        "inputs_digest": inputs_digest(folder, scenario.params.as_dict(), records),
         **environment(),
         "written": time.strftime("%Y-%m-%dT%H:%M:%S"),
     }
-    write_json(folder / layout.META, meta)
 
 
 def write_parent_meta(folder: Path, kind: str, children: Sequence[str], fields: dict[str, Any]) -> None:

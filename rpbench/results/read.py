@@ -7,6 +7,7 @@ Reports, the harness and the commands read a folder through these, so every read
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -40,23 +41,30 @@ def unproven_runs(folder: Path) -> dict[str, str]:
     ("3 of 95 rounds ended unproven (time_limit 3)", "stopped with status time_limit (gap unknown)"), in
     the folder's run order.  Read from the files alone, like every report."""
     meta = results.read_meta(folder)
-    found: dict[str, str] = {}
     path = folder / "rounds.csv.gz"
-    if path.is_file():
-        rounds = pd.read_csv(path, usecols=["run", "status"])
+    rounds = pd.read_csv(path, usecols=["run", "status"]) if path.is_file() else None
+    return unproven_in(rounds, meta.get("runs", {}), meta.get("strategies", []))
+
+
+def unproven_in(
+    rounds: pd.DataFrame | None, records: Mapping[str, Mapping[str, Any]], order: Sequence[str]
+) -> dict[str, str]:
+    """:func:`unproven_runs` of a folder's ``rounds`` table (columns ``run``, ``status``), its meta.json run
+    ``records`` and run ``order``: what the writer knows without reading the folder back."""
+    found: dict[str, str] = {}
+    if rounds is not None:
         for run, status in rounds.groupby("run", sort=False)["status"]:
             bad = status[status != "optimal"].value_counts()
             if len(bad):
                 kinds = ", ".join(f"{s} {n}" for s, n in bad.items())
                 found[str(run)] = f"{int(bad.sum())} of {len(status)} rounds ended unproven ({kinds})"
-    for run, facts in meta.get("runs", {}).items():
+    for run, facts in records.items():
         if facts.get("kind") == "oracle" and facts.get("status", "optimal") != "optimal":
             gap = facts.get("gap")
             found[run] = (
                 f"stopped with status {facts['status']} "
                 f"(gap {'unknown' if gap is None or gap != gap else f'{gap:.3g}'})"
             )
-    order = meta.get("strategies", [])
     return dict(sorted(found.items(), key=lambda kv: order.index(kv[0]) if kv[0] in order else len(order)))
 
 
@@ -77,7 +85,13 @@ def over_budget_runs(folder: Path) -> dict[str, str]:
     path = folder / "rounds.csv.gz"
     if budget is None or not path.is_file():
         return {}
-    rounds = pd.read_csv(path)
+    return over_budget_in(pd.read_csv(path), budget)
+
+
+def over_budget_in(rounds: pd.DataFrame | None, budget: float | None) -> dict[str, str]:
+    """:func:`over_budget_runs` of a folder's ``rounds`` table and decision ``budget`` (s; None: no budget)."""
+    if budget is None or rounds is None:
+        return {}
     rounds = rounds.assign(decision_s=rounds[list(DECISION_PARTS)].sum(axis=1))
     found = {}
     for run, decision in rounds.groupby("run", sort=False)["decision_s"]:

@@ -24,10 +24,10 @@ from rpbench.check import check_folder
 from rpbench.cli import main
 from rpbench.exceptions import PresetError, SolverError
 from rpbench.harness.comparison import run_comparison
-from rpbench.harness.spec import RunSpec
 from rpbench.model import Status
 from rpbench.results.metrics import TIMING_KPIS
 from rpbench.scenarios import ScenarioRequest
+from rpbench.spec import RunSpec
 
 SPEC = "rpbench_greedy.backend:DenseLSABackend"
 
@@ -55,14 +55,13 @@ def test_a_module_class_backend_solves_a_toy_run_through_a_preset_file(example, 
     preset = load_preset(preset_file(example, SPEC))
     assert preset.backend == SPEC and type(preset.adapter()).__name__ == "DenseLSABackend"
     request = ScenarioRequest("toy", sample=0.1, seed=2)
-    folder, table = run_comparison(
-        RunSpec.of(request, ["mb", "fl"], preset=preset.path), tmp_path / "run", progress=False
-    )
+    outcome = run_comparison(RunSpec.of(request, ["mb", "fl"], preset=preset.path), tmp_path / "run", progress=False)
+    folder, table = outcome.folder, outcome.table
     meta = json.loads((folder / "meta.json").read_text())
     assert meta["preset"]["backend"] == SPEC and meta["preset"]["name"] == "mine"
     assert all(c.ok for c in check_folder(folder))
     # the same optimum as a built-in exact backend (the simulator breaks ties canonically)
-    _, reference = run_comparison(RunSpec.of(request, ["mb", "fl"]), tmp_path / "highs", progress=False)
+    reference = run_comparison(RunSpec.of(request, ["mb", "fl"]), tmp_path / "highs", progress=False).table
     same = [k for k in table.index if k not in TIMING_KPIS]
     assert np.allclose(table.loc[same].to_numpy(float), reference.loc[same].to_numpy(float), equal_nan=True)
 

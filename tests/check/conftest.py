@@ -15,9 +15,9 @@ import pytest
 from check.tamper import build, copy
 from rpbench.harness.comparison import run_comparison
 from rpbench.harness.evaluate import run_evaluation
-from rpbench.harness.spec import RunSpec
 from rpbench.protocols import load_protocol
 from rpbench.scenarios import ScenarioRequest
+from rpbench.spec import RunSpec
 
 _HERE = Path(__file__).parent
 #: A protocol whose strongest run read the future.
@@ -81,7 +81,7 @@ def ranked(tmp_path_factory) -> Path:
     """An evaluation of two toy seeds with a clairvoyant run (hindsight), ranked apart after the online one."""
     path = tmp_path_factory.mktemp("protocol") / "seers.toml"
     path.write_text(SEERS_PROTOCOL)
-    folder, _ = run_evaluation(load_protocol(str(path)), tmp_path_factory.mktemp("ranked") / "eval", workers=1)
+    folder = run_evaluation(load_protocol(str(path)), tmp_path_factory.mktemp("ranked") / "eval", workers=1).folder
     return folder
 
 
@@ -95,7 +95,7 @@ def folder(base, tmp_path) -> Path:
 def clean_run(tmp_path_factory) -> Path:
     """A small clean folder (mb, rtv, oracle1: no prediction, no bound), quick to build."""
     spec = RunSpec.of(ScenarioRequest("toy", sample=0.25, seed=3), ["mb", "rtv", "oracle1"])
-    folder, _ = run_comparison(spec, tmp_path_factory.mktemp("runs") / "clean", progress=False)
+    folder = run_comparison(spec, tmp_path_factory.mktemp("runs") / "clean", progress=False).folder
     return folder
 
 

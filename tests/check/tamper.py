@@ -19,8 +19,8 @@ from helpers import write_fake_haikou as _write_fake_haikou
 from rpbench.check import check_folder, check_tree
 from rpbench.cli import main
 from rpbench.harness.comparison import run_comparison
-from rpbench.harness.spec import RunSpec
 from rpbench.scenarios import ScenarioRequest
+from rpbench.spec import RunSpec
 
 #: The clean folder every tampering starts from: each kind of run rpbench writes.
 RUNS = ["mb", "rtv", "fl", "bound", "oracle1", "oracle2"]
@@ -29,7 +29,7 @@ RUNS = ["mb", "rtv", "fl", "bound", "oracle1", "oracle2"]
 def build(out: Path, runs=RUNS, *, sample: float = 0.25, seed: int = 3, run_options=None, **overrides) -> Path:
     request = ScenarioRequest("toy", sample=sample, seed=seed, params=tuple(overrides.items()))
     spec = RunSpec.of(request, list(runs), options=run_options, oracle_preset="matching")
-    folder, _ = run_comparison(spec, out, progress=False)
+    folder = run_comparison(spec, out, progress=False).folder
     return folder
 
 

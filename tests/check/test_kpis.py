@@ -25,8 +25,8 @@ from check.tamper import (
 )
 from rpbench.check import check_tree
 from rpbench.harness.comparison import run_comparison
-from rpbench.harness.spec import RunSpec
 from rpbench.scenarios import ScenarioRequest
+from rpbench.spec import RunSpec
 
 
 def nudge(value):
@@ -301,7 +301,7 @@ def test_a_folder_from_before_decision_times_is_said_not_failed(folder):
 def budget_run(tmp_path_factory) -> Path:
     """A small clean folder run with a decision budget no round meets: every round is flagged."""
     spec = RunSpec.of(ScenarioRequest("toy", sample=0.25, seed=3), ["mb", "rtv", "oracle1"], decision_budget_s=1e-9)
-    folder, _ = run_comparison(spec, tmp_path_factory.mktemp("budget") / "clean", progress=False)
+    folder = run_comparison(spec, tmp_path_factory.mktemp("budget") / "clean", progress=False).folder
     return folder
 
 

@@ -19,9 +19,9 @@ from check.tamper import (
     write_fake_haikou,
 )
 from rpbench.harness.multiday import run_days
-from rpbench.harness.spec import RunSpec
 from rpbench.harness.sweep import SweepSpec, expand, run_sweep
 from rpbench.scenarios import ScenarioRequest
+from rpbench.spec import RunSpec
 
 
 @pytest.fixture(scope="module")
@@ -29,7 +29,9 @@ def sweep(tmp_path_factory):
     """A sweep of Δt over 10 and 30 s (mb, rtv) on the toy city."""
     spec = SweepSpec("check-test", "dt", (10.0, 30.0), ("mb", "rtv"), ("total_saving_km", "response_rate"))
     runs = RunSpec.of(ScenarioRequest("toy", sample=0.2, seed=1), ["mb", "rtv"], command="test")
-    return run_sweep(spec, expand("dt", spec.values), runs, str(tmp_path_factory.mktemp("sweep") / "dt"), workers=1)
+    return run_sweep(
+        spec, expand("dt", spec.values), runs, str(tmp_path_factory.mktemp("sweep") / "dt"), workers=1
+    ).folder
 
 
 @pytest.fixture(scope="module")
@@ -38,7 +40,7 @@ def multiday(tmp_path_factory):
     data = write_fake_haikou(tmp_path_factory.mktemp("data") / "haikou")
     request = ScenarioRequest("haikou-peak", sample=1.0, data_dir=str(data))
     spec = RunSpec.of(request, ["mb", "oracle1"], oracle_preset="matching", command="test")
-    return run_days(spec, ["2017-05-01", "2017-05-02"], str(tmp_path_factory.mktemp("days") / "days"), workers=1)
+    return run_days(spec, ["2017-05-01", "2017-05-02"], str(tmp_path_factory.mktemp("days") / "days"), workers=1).folder
 
 
 def test_a_sweep_folder_passes(sweep, capsys):

@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 
 from check.tamper import assert_passes, copy, edit_csv, violations
-from rpbench.report.evaluation import summarize
+from rpbench.report.evaluation import write_evaluation_tables
 
 
 @pytest.fixture
@@ -59,7 +59,7 @@ def test_flags_edited_to_online_neither_move_the_run_nor_pass(ranked_copy):
         meta = json.loads((ranked_copy / unit / "meta.json").read_text())
         meta["runs"]["hindsight"]["clairvoyant"] = False
         (ranked_copy / unit / "meta.json").write_text(json.dumps(meta))
-    summarize(ranked_copy)
+    write_evaluation_tables(ranked_copy)
     assert ranking(ranked_copy)["hindsight"] == ("clairvoyant", 2)
     found = violations(ranked_copy)
     assert set(found) <= {"clairvoyant", "report"} and len(found["clairvoyant"]) == 2, found

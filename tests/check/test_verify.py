@@ -26,8 +26,8 @@ from rpbench.cli import main
 from rpbench.exceptions import ResultsError
 from rpbench.harness.comparison import run_comparison
 from rpbench.harness.publish import publish
-from rpbench.harness.spec import RunSpec
 from rpbench.scenarios import ScenarioRequest
+from rpbench.spec import RunSpec
 
 
 @pytest.fixture(scope="module")
@@ -56,7 +56,7 @@ def empty_hour(tmp_path_factory):
     request = ScenarioRequest("toy", sample=0.3, seed=2)
     spec = RunSpec.of(request, ["mb", "fl", "bound", "oracle1"], oracle_preset="matching")
     scenario = with_empty_hour(request.build())
-    folder, _ = run_comparison(spec, tmp_path_factory.mktemp("gap") / "toy", scenario=scenario, progress=False)
+    folder = run_comparison(spec, tmp_path_factory.mktemp("gap") / "toy", scenario=scenario, progress=False).folder
     return folder
 
 

@@ -11,11 +11,11 @@ import pytest
 from rpbench.check import check_folder
 from rpbench.harness import comparison
 from rpbench.harness.comparison import run_comparison
-from rpbench.harness.spec import RunSpec
 from rpbench.results.metrics import TIMING_KPIS
 from rpbench.results.read import over_budget_runs
 from rpbench.results.store import read_meta
 from rpbench.scenarios import ScenarioRequest
+from rpbench.spec import RunSpec
 from rpbench.strategies.forward import ForwardOptions
 
 
@@ -33,7 +33,8 @@ def test_fl_is_calibrated_by_one_mb_run_shared_with_the_mb_column(toy_request, t
         return real(scenario, entry, preset, **kw)
 
     monkeypatch.setattr(comparison, "simulate_strategy", counting)
-    folder, table = run_comparison(RunSpec.of(toy_request, ["fl", "mb"]), tmp_path / "r", progress=False)
+    outcome = run_comparison(RunSpec.of(toy_request, ["fl", "mb"]), tmp_path / "r", progress=False)
+    folder, table = outcome.folder, outcome.table
     assert [name for name, _ in calls] == ["mb", "fl"]  # the calibration run is the MB column
     fl_options = calls[1][1]
     mb = table["mb"]
@@ -77,14 +78,14 @@ def test_two_variants_of_one_strategy_in_one_run(tmp_path):
     """Each variant is simulated with its own options, labelled and coloured apart, and checked."""
     from rpbench.check import check_folder
     from rpbench.harness.comparison import run_comparison
-    from rpbench.harness.spec import RunSpec
     from rpbench.report.plots import run_colors
     from rpbench.results.runs import run_styles
     from rpbench.results.store import read_meta
     from rpbench.scenarios import ScenarioRequest
+    from rpbench.spec import RunSpec
 
     spec = RunSpec.of(ScenarioRequest("toy", sample=0.1, seed=2), ["fl", "fl@tau0_s=30", "fl@tau0_s=600"])
-    folder, table = run_comparison(spec, tmp_path / "variants", progress=False)
+    folder = run_comparison(spec, tmp_path / "variants", progress=False).folder
     meta = read_meta(folder)
     assert [meta["runs"][r]["options"]["tau0_s"] for r in ("fl@tau0_s=30", "fl@tau0_s=600")] == [30.0, 600.0]
     assert meta["runs"]["fl@tau0_s=30"]["label"] == "FL (tau0_s=30)"
@@ -102,7 +103,7 @@ def budget_folders(tmp_path_factory):
     root = tmp_path_factory.mktemp("budget")
     spec = RunSpec.of(ScenarioRequest("toy", sample=0.1, seed=4), ["mb", "fl", "oracle1"])
     specs = {budget: dataclasses.replace(spec, decision_budget_s=budget) for budget in (None, 1e-9, 86400.0)}
-    return {budget: run_comparison(s, root / str(budget), progress=False)[0] for budget, s in specs.items()}
+    return {budget: run_comparison(s, root / str(budget), progress=False).folder for budget, s in specs.items()}
 
 
 def test_a_tiny_budget_flags_every_solved_round_and_a_huge_one_none(budget_folders):

@@ -6,8 +6,8 @@ import pandas as pd
 import pytest
 
 from rpbench.harness.multiday import run_days
-from rpbench.harness.spec import RunSpec
 from rpbench.scenarios import ScenarioRequest
+from rpbench.spec import RunSpec
 
 
 @pytest.mark.slow
@@ -17,7 +17,7 @@ def test_multi_day_folder(two_day_data, tmp_path, workers):
     data = two_day_data
     request = ScenarioRequest("haikou-peak", sample=1.0, data_dir=str(data))
     spec = RunSpec.of(request, ["mb", "rtv"], command="test")
-    folder = run_days(spec, ["2017-05-01", "2017-05-02"], str(tmp_path / "days"), workers=workers)
+    folder = run_days(spec, ["2017-05-01", "2017-05-02"], str(tmp_path / "days"), workers=workers).folder
     by_day = pd.read_csv(folder / "by_day.csv")
     assert set(by_day["date"]) == {"2017-05-01", "2017-05-02"} and set(by_day["run"]) == {"mb", "rtv"}
     summary = pd.read_csv(folder / "summary.csv")
@@ -42,7 +42,7 @@ def test_dates_of_the_synthetic_full_day(fake_data, tmp_path):
     request = ScenarioRequest("haikou-day", sample=0.1, data_dir=str(fake_data))
     dates = request.dates("2017-05-01..2017-05-31")
     assert dates and all(d.startswith("2017-05") for d in dates)
-    folder = run_days(RunSpec.of(request, ["mb"], command="test"), dates[:1], str(tmp_path / "days"), workers=1)
+    folder = run_days(RunSpec.of(request, ["mb"], command="test"), dates[:1], str(tmp_path / "days"), workers=1).folder
     meta = __import__("json").loads((folder / dates[0] / "meta.json").read_text())
     assert meta["scenario"]["name"] == "haikou-day" and meta["scenario"]["args"]["date"] == dates[0]
     assert "scenario `haikou-day`" in (folder / "report.md").read_text()
@@ -53,7 +53,9 @@ def test_a_published_parent_page_is_titled_with_its_name(two_day_data, tmp_path)
     from rpbench.harness.publish import publish
 
     request = ScenarioRequest("haikou-peak", sample=0.3, data_dir=str(two_day_data))
-    folder = run_days(RunSpec.of(request, ["mb"], command="test"), ["2017-05-01"], str(tmp_path / "days"), workers=1)
+    folder = run_days(
+        RunSpec.of(request, ["mb"], command="test"), ["2017-05-01"], str(tmp_path / "days"), workers=1
+    ).folder
     out = publish(folder, tmp_path / "published-days")
     assert "<title>rpbench multi-day results: published-days</title>" in (out / "report.html").read_text()
 

@@ -17,14 +17,14 @@ from rpbench.exceptions import ResultsError
 from rpbench.harness.comparison import run_comparison
 from rpbench.harness.publish import _only_publish_to, publish
 from rpbench.harness.render import render
-from rpbench.harness.spec import RunSpec
 from rpbench.scenarios import ScenarioRequest
+from rpbench.spec import RunSpec
 
 
 @pytest.fixture(scope="module")
 def run_folder(tmp_path_factory):
     spec = RunSpec.of(ScenarioRequest("toy", sample=0.2, seed=5), ["mb", "oracle1"])
-    folder, _ = run_comparison(spec, tmp_path_factory.mktemp("runs") / "toy", progress=False)
+    folder = run_comparison(spec, tmp_path_factory.mktemp("runs") / "toy", progress=False).folder
     return folder
 
 
@@ -54,7 +54,7 @@ def test_a_published_multi_day_report_names_the_published_folder(two_day_data, t
 
     request = ScenarioRequest("haikou-peak", sample=1.0, data_dir=str(two_day_data))
     spec = RunSpec.of(request, ["mb"], command="test")
-    folder = run_days(spec, ["2017-05-01", "2017-05-02"], str(tmp_path / "days"), workers=1)
+    folder = run_days(spec, ["2017-05-01", "2017-05-02"], str(tmp_path / "days"), workers=1).folder
     dest = publish(folder, tmp_path / "published-days")
     report = (dest / "report.md").read_text()
     assert "rpbench check PATH/<date>" in report and "`published-days`" in report and "partial" not in report
@@ -66,7 +66,7 @@ def test_a_published_parent_keeps_one_page_and_its_days_reports(two_day_data, tm
 
     request = ScenarioRequest("haikou-peak", sample=1.0, data_dir=str(two_day_data))
     spec = RunSpec.of(request, ["mb"], command="test")
-    folder = run_days(spec, ["2017-05-01", "2017-05-02"], str(tmp_path / "days"), workers=1)
+    folder = run_days(spec, ["2017-05-01", "2017-05-02"], str(tmp_path / "days"), workers=1).folder
     dest = publish(folder, tmp_path / "published-days")
     for day in ("2017-05-01", "2017-05-02"):
         assert (dest / day / "report.md").is_file() and (dest / day / "check.txt").is_file()
@@ -223,7 +223,7 @@ def test_dest_inside_the_source_is_refused(run_folder, tmp_path, capsys):
 @pytest.fixture(scope="module")
 def other_folder(tmp_path_factory):
     spec = RunSpec.of(ScenarioRequest("toy", sample=0.2, seed=6), ["np"])
-    folder, _ = run_comparison(spec, tmp_path_factory.mktemp("runs") / "toy-np", progress=False)
+    folder = run_comparison(spec, tmp_path_factory.mktemp("runs") / "toy-np", progress=False).folder
     return folder
 
 

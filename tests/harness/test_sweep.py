@@ -56,15 +56,15 @@ def test_sweep_cli_rejects_unknown_parameter(capsys):
 @pytest.mark.slow
 def test_sweep_runs_end_to_end_on_the_toy_city(tmp_path):
     from rpbench.harness.render import render
-    from rpbench.harness.spec import RunSpec
     from rpbench.harness.sweep import SweepSpec, run_sweep
     from rpbench.scenarios import ScenarioRequest
+    from rpbench.spec import RunSpec
 
     spec = SweepSpec("dt", "dt", (10, 30), ("mb",), ("total_saving_km", "response_rate"))
     request = ScenarioRequest("toy", sample=0.1, seed=1)
     folder = run_sweep(
         spec, expand("dt", spec.values), RunSpec.of(request, ["mb"], command="test"), str(tmp_path / "sw"), workers=1
-    )
+    ).folder
     assert (folder / "dt=10").is_dir() and (folder / "dt=30").is_dir()
     assert all((folder / f"sweep{suffix}").is_file() for suffix in (".png", ".svg", ".pdf"))
     tex = (folder / "table.tex").read_text()  # the report's table in LaTeX: a header and a row per point

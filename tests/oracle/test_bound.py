@@ -14,10 +14,10 @@ from rpbench import results
 from rpbench.check import bound_weights, check_folder
 from rpbench.exceptions import ParameterError
 from rpbench.harness.comparison import run_comparison
-from rpbench.harness.spec import RunSpec
 from rpbench.oracle import find_candidates, solve_oracle
 from rpbench.oracle.pairs import PairRules, bound_rules
 from rpbench.scenarios import ScenarioRequest, build_scenario
+from rpbench.spec import RunSpec
 
 STRATEGIES = ["np", "mb", "rtv", "fl-nd", "fl", "hindsight"]
 
@@ -126,7 +126,8 @@ def test_the_bound_rules_cannot_be_relaxed_or_tightened():
 def test_certificate_holds_for_every_strategy_on_random_toy_scenarios(tmp_path, seed, sample, overrides):
     request = ScenarioRequest("toy", sample=sample, seed=seed, params=tuple(overrides.items()))
     spec = RunSpec.of(request, [*STRATEGIES, "bound"], oracle_preset="matching")
-    folder, table = run_comparison(spec, tmp_path / "r", progress=False)
+    outcome = run_comparison(spec, tmp_path / "r", progress=False)
+    folder, table = outcome.folder, outcome.table
     checks = {rc.run: rc for rc in check_folder(folder)}
     assert all(rc.ok for rc in checks.values()), {k: v.violations for k, v in checks.items() if not v.ok}
     assert sum(checks[s].checked["certified_pairs"] for s in STRATEGIES) > 0
@@ -137,7 +138,7 @@ def test_certificate_holds_for_every_strategy_on_random_toy_scenarios(tmp_path, 
 @pytest.fixture(scope="module")
 def bounded_run(tmp_path_factory):
     spec = RunSpec.of(ScenarioRequest("toy", sample=0.4, seed=7), ["mb", "bound"], oracle_preset="matching")
-    folder, _ = run_comparison(spec, tmp_path_factory.mktemp("b") / "run", progress=False)
+    folder = run_comparison(spec, tmp_path_factory.mktemp("b") / "run", progress=False).folder
     return folder
 
 

@@ -18,9 +18,9 @@ from rpbench.check import check_folder
 from rpbench.cli import main
 from rpbench.exceptions import ParameterError
 from rpbench.harness.comparison import run_comparison
-from rpbench.harness.spec import RunSpec
 from rpbench.oracle.exact import PAIR, build_model, extract_plan, lattice_view, order_rounds, solve_model
 from rpbench.scenarios import ScenarioRequest, build_scenario
+from rpbench.spec import RunSpec
 
 ONLINE = ["np", "mb", "rtv", "fl-nd", "fl"]
 
@@ -89,7 +89,8 @@ def test_the_plan_decomposes_into_one_walk_per_vehicle_and_its_pairs_sum_to_the_
 def exact_run(tmp_path_factory):
     request = ScenarioRequest("lattice", sample=0.2, seed=4, params=(("dt_s", 30.0),))
     spec = RunSpec.of(request, ["mb", "hindsight", "exact", "bound"], oracle_preset="matching")
-    folder, table = run_comparison(spec, tmp_path_factory.mktemp("exact") / "run", progress=False)
+    outcome = run_comparison(spec, tmp_path_factory.mktemp("exact") / "run", progress=False)
+    folder, table = outcome.folder, outcome.table
     return folder, table
 
 
@@ -171,7 +172,8 @@ def test_every_strategy_saves_at_most_opt_and_opt_at_most_the_bound(tmp_path, se
     folder's best known schedule saves OPT."""
     request = ScenarioRequest("lattice", sample=sample, seed=seed, params=tuple(overrides.items()))
     spec = RunSpec.of(request, [*ONLINE, "fl-perfect", "hindsight", "exact", "bound"], oracle_preset="matching")
-    folder, table = run_comparison(spec, tmp_path / "r", progress=False)
+    outcome = run_comparison(spec, tmp_path / "r", progress=False)
+    folder, table = outcome.folder, outcome.table
     checks = {rc.run: rc for rc in check_folder(folder)}
     assert all(rc.ok for rc in checks.values()), {k: v.violations for k, v in checks.items() if not v.ok}
     saving = table.loc["total_saving_km"]

@@ -19,13 +19,13 @@ from rpbench.cli import main
 from rpbench.exceptions import ResultsError
 from rpbench.harness.comparison import run_comparison
 from rpbench.harness.render import render
-from rpbench.harness.spec import RunSpec
 from rpbench.report.combine import combine
 from rpbench.results import layout
 from rpbench.results.metrics import TIMING_KPIS
 from rpbench.results.ratios import DERIVED_KPIS
 from rpbench.results.read import load_kpis
 from rpbench.scenarios import ScenarioRequest
+from rpbench.spec import RunSpec
 
 TOY = ScenarioRequest("toy", sample=0.1, seed=5)
 
@@ -39,7 +39,7 @@ def runs(tmp_path_factory) -> dict[str, Path]:
         "three": RunSpec.of(TOY, ["fl"], options={"fl": {"tau0_s": 60.0}}),
         "seed-6": RunSpec.of(ScenarioRequest("toy", sample=0.1, seed=6), ["mb"]),
     }
-    return {name: run_comparison(spec, root / name, progress=False)[0] for name, spec in specs.items()}
+    return {name: run_comparison(spec, root / name, progress=False).folder for name, spec in specs.items()}
 
 
 def light_copy(folder: Path, dest: Path) -> Path:

@@ -13,7 +13,6 @@ import pytest
 from rpbench import results
 from rpbench.check import check_folder
 from rpbench.harness.comparison import run_comparison
-from rpbench.harness.spec import RunSpec
 from rpbench.report.comparison import fmt, timeline_of
 from rpbench.report.plots import (
     RATIO_INTERVAL,
@@ -29,6 +28,7 @@ from rpbench.report.plots import (
 from rpbench.results.metrics import count_at, state_spells
 from rpbench.results.read import load_kpis
 from rpbench.scenarios import ScenarioRequest
+from rpbench.spec import RunSpec
 
 matplotlib.use("Agg")
 
@@ -267,7 +267,7 @@ def test_the_ratio_per_day_and_in_a_leaderboard_is_an_interval(tmp_path, figures
 @pytest.fixture(scope="module")
 def toy_run(tmp_path_factory):
     spec = RunSpec.of(ScenarioRequest("toy", sample=0.2, seed=5), ["np", "mb", "bound"])
-    folder, _ = run_comparison(spec, tmp_path_factory.mktemp("runs") / "toy", progress=False)
+    folder = run_comparison(spec, tmp_path_factory.mktemp("runs") / "toy", progress=False).folder
     return folder
 
 

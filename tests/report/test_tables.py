@@ -6,11 +6,11 @@ import pandas as pd
 import pytest
 
 from rpbench.harness.comparison import run_comparison
-from rpbench.harness.spec import RunSpec
 from rpbench.report.comparison import fmt, markdown_table, table_rows
 from rpbench.report.tables import latex_escape, latex_table
 from rpbench.results.read import load_kpis
 from rpbench.scenarios import ScenarioRequest
+from rpbench.spec import RunSpec
 
 
 def test_latex_escapes_what_latex_would_read():
@@ -22,7 +22,7 @@ def test_latex_escapes_what_latex_would_read():
 @pytest.fixture(scope="module")
 def folder(tmp_path_factory):
     spec = RunSpec.of(ScenarioRequest("toy", sample=0.1, seed=4), ["mb", "fl-nd", "bound"])
-    return run_comparison(spec, tmp_path_factory.mktemp("tables") / "toy", progress=False)[0]
+    return run_comparison(spec, tmp_path_factory.mktemp("tables") / "toy", progress=False).folder
 
 
 def test_the_latex_table_prints_what_report_md_prints(folder):

@@ -113,11 +113,12 @@ def test_unknown_options_rejected():
 @pytest.mark.slow
 def test_fl_runs_on_the_toy_city(tmp_path):
     from rpbench.harness.comparison import run_comparison
-    from rpbench.harness.spec import RunSpec
     from rpbench.scenarios import ScenarioRequest
+    from rpbench.spec import RunSpec
 
     spec = RunSpec.of(ScenarioRequest("toy", sample=0.25, seed=8), ["mb", "fl-nd", "fl"])
-    folder, table = run_comparison(spec, tmp_path / "fl", progress=False)
+    outcome = run_comparison(spec, tmp_path / "fl", progress=False)
+    folder, table = outcome.folder, outcome.table
     import json
 
     meta = json.loads((folder / "meta.json").read_text())

@@ -13,11 +13,11 @@ from rpbench.check import check_folder
 from rpbench.cli import main
 from rpbench.exceptions import LookaheadError
 from rpbench.harness.comparison import run_comparison
-from rpbench.harness.spec import RunSpec
 from rpbench.oracle.pairs import bound_rules, find_candidates
 from rpbench.results.metrics import kpis, occupied_distance_m, odometer_at, passenger_table
 from rpbench.scenarios import ScenarioRequest, build_scenario
 from rpbench.sim.simulator import Simulator
+from rpbench.spec import RunSpec
 from rpbench.strategies import make_strategy, strategy_class
 from rpbench.strategies.hindsight import Hindsight
 
@@ -48,7 +48,8 @@ def test_an_online_view_is_refused():
 def test_its_run_on_the_toy_city_passes_the_checker_between_mb_and_the_bound(tmp_path):
     request = ScenarioRequest("toy", sample=0.3, seed=2)
     spec = RunSpec.of(request, ["mb", "hindsight", "bound"], oracle_preset="matching")
-    folder, table = run_comparison(spec, tmp_path / "run", progress=False)
+    outcome = run_comparison(spec, tmp_path / "run", progress=False)
+    folder, table = outcome.folder, outcome.table
     checks = {rc.run: rc for rc in check_folder(folder)}
     assert all(rc.ok for rc in checks.values()), {k: v.violations for k, v in checks.items() if not v.ok}
     assert checks["hindsight"].checked["certified_pairs"] > 0
@@ -65,7 +66,7 @@ def test_a_hindsight_run_that_breaks_a_simulator_rule_fails_the_checker_by_name(
     import pandas as pd
 
     spec = RunSpec.of(ScenarioRequest("toy", sample=0.2, seed=4), ["hindsight", "bound"], oracle_preset="matching")
-    folder, _ = run_comparison(spec, tmp_path / "run", progress=False)
+    folder = run_comparison(spec, tmp_path / "run", progress=False).folder
     path = folder / "runs" / "hindsight" / "events.csv.gz"
     events = pd.read_csv(path)
     joins = events.index[(events["event"] == "assign") & (events["kind"] == "join")]

@@ -16,11 +16,11 @@ from rpbench.cli import main
 from rpbench.exceptions import LookaheadError, ParameterError
 from rpbench.geometry import pool
 from rpbench.harness.comparison import run_comparison
-from rpbench.harness.spec import RunSpec
 from rpbench.predict.savings import waiting_saving
 from rpbench.results.metrics import kpis, occupied_distance_m, passenger_table
 from rpbench.scenarios import ScenarioRequest, build_scenario
 from rpbench.sim.simulator import Simulator
+from rpbench.spec import RunSpec
 from rpbench.strategies import Kind, make_strategy, strategy_class
 from rpbench.strategies.forward import ForwardLooking
 from rpbench.strategies.perfect import ForwardPerfect
@@ -126,7 +126,8 @@ def test_its_run_on_the_toy_city_passes_the_checker_calibrated_by_mb(tmp_path):
     spec = RunSpec.of(
         ScenarioRequest("toy", sample=0.2, seed=3), ["mb", "fl-perfect", "bound"], oracle_preset="matching"
     )
-    folder, table = run_comparison(spec, tmp_path / "run", progress=False)
+    outcome = run_comparison(spec, tmp_path / "run", progress=False)
+    folder, table = outcome.folder, outcome.table
     checks = check_folder(folder)
     assert all(rc.ok for rc in checks), {rc.run: rc.violations for rc in checks if not rc.ok}
     meta = json.loads((folder / "meta.json").read_text())

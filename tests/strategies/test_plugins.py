@@ -29,9 +29,9 @@ from rpbench.check import check_folder
 from rpbench.cli import main
 from rpbench.commands._runs import parse_runs
 from rpbench.exceptions import ModelError, ParameterError
-from rpbench.harness.spec import resolve_runs
 from rpbench.model import Structure
 from rpbench.results.metrics import TIMING_KPIS
+from rpbench.spec import resolve_runs
 from rpbench.strategies import plugin_names, strategy_class
 from rpbench.strategies.base import Kind, received
 from rpbench.strategies.myopic import MyopicBatch

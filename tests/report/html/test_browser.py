@@ -12,10 +12,10 @@ import shutil
 from pathlib import Path
 
 import pytest
-from tests.report.html.test_mapdata import direct_layers
 
 from rpbench import results
 from rpbench.report.comparison import fmt
+from tests.report.html.test_mapdata import direct_layers
 
 playwright = pytest.importorskip(
     "playwright.sync_api", reason="Playwright is not installed (pip install -e '.[browser]')"

@@ -7,9 +7,9 @@ import pickle
 import pytest
 
 from rpbench.exceptions import ParameterError
-from rpbench.harness.spec import RunSpec, resolve_runs
 from rpbench.oracle.runs import OracleOptions
 from rpbench.scenarios import ScenarioRequest
+from rpbench.spec import RunSpec, resolve_runs
 from rpbench.strategies.rtv import RTVOptions
 
 

@@ -175,10 +175,6 @@ class RunSpec:
         runs = tuple(dataclasses.replace(r, options=options) if r.name == name else r for r in self.runs)
         return dataclasses.replace(self, runs=runs)
 
-    def with_runs(self, names: Sequence[str]) -> RunSpec:
-        """The comparison restricted to (or reordered as) ``names``; entries keep their options."""
-        return dataclasses.replace(self, runs=tuple(self.entry(n) for n in names))
-
 
 def _merged(entry: RunEntry, given: RunOptions | Mapping[str, Any] | None) -> RunOptions | Mapping[str, Any] | None:
     """A variant's settings under the options given for it (which win)."""
