@@ -48,9 +48,9 @@ import statistics
 import sys
 import time
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import replace
+from dataclasses import dataclass, field, replace
 from multiprocessing.context import SpawnProcess
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -60,9 +60,7 @@ from rpbench.bench.synthetic import assignment, pairing, trip_packing
 from rpbench.exceptions import ParameterError, RpbenchError
 from rpbench.model import Model, Status
 from rpbench.report.bench import NO_TIER
-
-if TYPE_CHECKING:
-    from rpbench.results.solu import Known
+from rpbench.results.solu import Known
 
 COLUMNS = [
     "model",
@@ -108,61 +106,71 @@ def installed_presets(names: Iterable[str] | None = None) -> list[Preset]:
     return [p for p in presets if p.is_installed()]
 
 
-def run_benchmark(
-    models: Sequence[Model],
-    presets: Sequence[str | Preset] | None = None,
-    *,
-    time_limit_s: float | None = None,
-    time_limits: dict[str, float] | None = None,
-    repeat: int = 1,
-    isolate: bool = False,
-    hard_timeout_s: float | None = None,
-    memory_limit_gb: float | None = None,
-    progress: bool | None = False,
-    recorded: dict[str, float] | None = None,
-    known: Mapping[str, Known] | None = None,
-    tiers: Mapping[str, str] | None = None,
-) -> pd.DataFrame:
-    """Solve every model with every preset; one row per pair (see the module docstring).
+@dataclass(frozen=True)
+class BenchSpec:
+    """How a benchmark solves its models, and what it judges the answers against (checked once, here).
 
-    ``time_limit_s`` overrides every preset's limit, ``time_limits`` single
-    presets' (by name).  ``hard_timeout_s`` (only with ``isolate``) defaults
-    to twice the solve's time limit plus 30 s; ``memory_limit_gb`` (GB of
-    2**30 bytes, only with ``isolate``) caps each worker's address space.
-    ``recorded`` maps model names to optima proven elsewhere (e.g. by the
-    run a snapshot was taken from), ``known`` to the values of a ``.solu``
-    file, ``tiers`` to size tiers.  ``progress``: a bar on stderr (``None``:
-    when stderr is a terminal).
+    ``presets``: names or presets (None: every installed preset); ``time_limit_s`` overrides every preset's
+    limit, ``time_limits`` single presets' (by name); ``repeat`` solves per (model, preset), the fastest
+    kept; ``isolate``: each preset in a worker process of its own, killed after ``hard_timeout_s`` (default:
+    twice the solve's time limit plus 30 s) and capped at ``memory_limit_gb`` (GB of 2**30 bytes) of address
+    space.  ``recorded`` maps model names to optima proven elsewhere (e.g. by the run a snapshot was taken
+    from), ``known`` to the values of a ``.solu`` file, ``tiers`` to size tiers.
     """
-    if not isinstance(repeat, int) or repeat < 1:
-        raise ParameterError(f"repeat = {repeat!r} must be an integer >= 1")
-    if memory_limit_gb is not None:
-        if not isolate:
-            raise ParameterError("a memory limit caps an isolated worker; it needs isolate=True")
-        if not (math.isfinite(memory_limit_gb) and memory_limit_gb > 0):
-            raise ParameterError(f"memory_limit_gb = {memory_limit_gb!r} must be a positive number")
-    chosen = (
-        installed_presets(None)
-        if presets is None
-        else [p if isinstance(p, Preset) else load_preset(p) for p in presets]
-    )
+
+    presets: Sequence[str | Preset] | None = None
+    time_limit_s: float | None = None
+    time_limits: Mapping[str, float] = field(default_factory=dict)
+    repeat: int = 1
+    isolate: bool = False
+    hard_timeout_s: float | None = None
+    memory_limit_gb: float | None = None
+    recorded: Mapping[str, float] = field(default_factory=dict)
+    known: Mapping[str, Known] = field(default_factory=dict)
+    tiers: Mapping[str, str] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.repeat, int) or self.repeat < 1:
+            raise ParameterError(f"repeat = {self.repeat!r} must be an integer >= 1")
+        if self.memory_limit_gb is not None:
+            if not self.isolate:
+                raise ParameterError("a memory limit caps an isolated worker; it needs isolate=True")
+            if not (math.isfinite(self.memory_limit_gb) and self.memory_limit_gb > 0):
+                raise ParameterError(f"memory_limit_gb = {self.memory_limit_gb!r} must be a positive number")
+
+    def chosen(self) -> list[Preset]:
+        """The presets, loaded, each with the time limit it runs under."""
+        presets = (
+            installed_presets(None)
+            if self.presets is None
+            else [p if isinstance(p, Preset) else load_preset(p) for p in self.presets]
+        )
+        return [replace(p, options=replace(p.options, time_limit_s=self.limit_of(p))) for p in presets]
+
+    def limit_of(self, preset: Preset) -> float | None:
+        """The time limit ``preset`` solves under."""
+        default = self.time_limit_s if self.time_limit_s is not None else preset.options.time_limit_s
+        return self.time_limits.get(preset.name, default)
+
+
+def run_benchmark(models: Sequence[Model], spec: BenchSpec, *, progress: bool | None = False) -> pd.DataFrame:
+    """Solve every model with every preset of ``spec``; one row per pair (see the module docstring).
+    ``progress``: a bar on stderr (``None``: when stderr is a terminal)."""
+    chosen = spec.chosen()
     bar = _bar(len(chosen) * len(models), progress)
     rows = []
     try:
         for preset in chosen:
-            limit = (time_limits or {}).get(
-                preset.name, time_limit_s if time_limit_s is not None else preset.options.time_limit_s
-            )
-            preset = replace(preset, options=replace(preset.options, time_limit_s=limit))
-            hard = hard_timeout_s if hard_timeout_s is not None else (2 * limit + 30 if limit else None)
-            runner = IsolatedWorker(preset, hard, memory_limit_gb) if isolate else _Inline(preset)
+            limit = preset.options.time_limit_s
+            hard = spec.hard_timeout_s if spec.hard_timeout_s is not None else (2 * limit + 30 if limit else None)
+            runner = IsolatedWorker(preset, hard, spec.memory_limit_gb) if spec.isolate else _Inline(preset)
             try:
                 for model in models:
                     if bar is not None:
                         bar.set_postfix_str(f"{preset.name} {model.name}", refresh=False)
-                    row = _row(model, preset, runner.run(model, repeat))
-                    row["recorded"] = (recorded or {}).get(model.name, math.nan)
-                    row["tier"] = (tiers or {}).get(model.name, NO_TIER)
+                    row = _row(model, preset, runner.run(model, spec.repeat))
+                    row["recorded"] = spec.recorded.get(model.name, math.nan)
+                    row["tier"] = spec.tiers.get(model.name, NO_TIER)
                     row["time_limit_s"] = math.nan if limit is None else float(limit)
                     rows.append(row)
                     if bar is not None:
@@ -175,7 +183,7 @@ def run_benchmark(
     table = pd.DataFrame(rows, columns=COLUMNS)
     order = {m.name: i for i, m in enumerate(models)}
     table = table.sort_values("model", key=lambda col: col.map(order), kind="stable").reset_index(drop=True)
-    return cross_check(table, known)
+    return cross_check(table, spec.known)
 
 
 def _bar(total: int, enabled: bool | None) -> Any:

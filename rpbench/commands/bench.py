@@ -28,7 +28,7 @@ import numpy as np
 import pandas as pd
 
 from rpbench.backends.presets import load_preset, preset_names
-from rpbench.bench.runner import format_table, run_benchmark
+from rpbench.bench.runner import BenchSpec, format_table, run_benchmark
 from rpbench.bench.synthetic import SUITES, suite
 from rpbench.check.bench import KNOWN_FILE
 from rpbench.commands.args import SEED, TIME_LIMIT, add_number_arg, check_numbers
@@ -66,6 +66,15 @@ def register(sub: argparse._SubParsersAction) -> None:
         "solve apart; check every answer against the other presets and the known values (--solu), and "
         "summarise per preset: instances solved, shifted geometric mean of the time, performance profile.",
     )
+    add_model_args(p)
+    add_solve_args(p)
+    add_judging_args(p)
+    add_output_args(p)
+    p.set_defaults(handler=run)
+
+
+def add_model_args(p: argparse.ArgumentParser) -> None:
+    """What is benchmarked: instance files or folders, or seeded synthetic models."""
     p.add_argument(
         "paths",
         nargs="*",
@@ -95,6 +104,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="only models of these structures, comma-separated: assignment, trip_packing, pairing",
     )
     add_number_arg(p, "--seed", SEED, default=0, help="seed of the synthetic models (default 0)")
+
+
+def add_solve_args(p: argparse.ArgumentParser) -> None:
+    """How each model is solved: the presets, their time limits, repeats, and the worker that runs them."""
     p.add_argument(
         "--solver",
         action="append",
@@ -144,6 +157,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         action="store_false",
         help="solve in this process (no hard timeout, no memory limit)",
     )
+
+
+def add_judging_args(p: argparse.ArgumentParser) -> None:
+    """What the answers and times are judged by: the known values and the shifted geometric mean's shift."""
     p.add_argument(
         "--solu",
         metavar="FILE",
@@ -158,6 +175,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="S",
         help=f"shift of the shifted geometric mean, for every tier (default per tier: {_SHIFTS_TEXT})",
     )
+
+
+def add_output_args(p: argparse.ArgumentParser) -> None:
+    """Where the results go besides the terminal table: a folder, CSV, a plot, a page, JSON."""
     p.add_argument(
         "--no-progress", action="store_true", help="no progress bar (there is none when stderr is not a terminal)"
     )
@@ -183,7 +204,6 @@ def register(sub: argparse._SubParsersAction) -> None:
         "performance profile, times against model size, every solve",
     )
     p.add_argument("--json", action="store_true", help="print the table as JSON records")
-    p.set_defaults(handler=run)
 
 
 def _limits(items: list[str], run: list[str]) -> dict[str, float]:
@@ -251,8 +271,7 @@ def run(args: argparse.Namespace) -> int:
         models = [m for m in models if m.structure.value in wanted]
         if not models:
             raise ParameterError(f"no model of structure {args.structures!r} to benchmark")
-    table = run_benchmark(
-        models,
+    spec = BenchSpec(
         presets,
         time_limit_s=args.time_limit,
         time_limits=limits,
@@ -260,11 +279,11 @@ def run(args: argparse.Namespace) -> int:
         isolate=args.isolate,
         hard_timeout_s=args.hard_timeout,
         memory_limit_gb=args.memory_limit,
-        progress=False if args.no_progress else None,
         recorded=recorded,
         known=known,
         tiers=tiers,
     )
+    table = run_benchmark(models, spec, progress=False if args.no_progress else None)
     what = f"{len(models)} models x {table['preset'].nunique()} presets"
     settings = _settings(args, table, solu_files)
     env = solver_environment() if csv_out is not None or html_out is not None or args.out is not None else None

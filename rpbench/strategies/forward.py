@@ -42,7 +42,7 @@ Options (``--opt fl.NAME=VALUE``):
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar, TypeVar
 
 import numpy as np
 
@@ -72,15 +72,9 @@ FALLBACK_MEAN_PICKUP_M = 900.0
 
 
 @dataclass(frozen=True)
-class ForwardOptions(PoolingOptions):
-    """FL's and FL-no_delay's options (the prediction's among them, :class:`rpbench.predict.PredictConfig`)."""
+class CalibratedOptions(PoolingOptions):
+    """The options :class:`MBCalibrated` completes from an MB run: τ_0 (A4) and l̄ of the waiting utility."""
 
-    rates: str = option(
-        "auto",
-        "where λ_w comes from: the demand known before the day, the 21-day table, the demand history, or the "
-        "scenario's own orders (clairvoyant)",
-        choices=RATE_SOURCES,
-    )
     # a day bounds a sojourn and R̄'s own bound (1000 km) a mean pick-up distance
     tau0_s: float | tuple[float, ...] | None = option(
         None,
@@ -91,6 +85,18 @@ class ForwardOptions(PoolingOptions):
         None,
         "l̄ of the waiting utility in metres, one value or one per hour (default: MB calibration run's)",
         range=Range(0.0, 1e6, "m"),
+    )
+
+
+@dataclass(frozen=True)
+class ForwardOptions(CalibratedOptions):
+    """FL's and FL-no_delay's options (the prediction's among them, :class:`rpbench.predict.PredictConfig`)."""
+
+    rates: str = option(
+        "auto",
+        "where λ_w comes from: the demand known before the day, the 21-day table, the demand history, or the "
+        "scenario's own orders (clairvoyant)",
+        choices=RATE_SOURCES,
     )
     priority: str | None = option(None, "taker priority of the prediction (§2.4, A7)", choices=PRIORITIES)
     include_origin_state: bool | None = option(None, "taker state k = 0 at the origin (A4)")
@@ -111,6 +117,10 @@ class ForwardOptions(PoolingOptions):
         return PredictConfig(accel=self.accel, **chosen)
 
 
+#: The options of a strategy :class:`MBCalibrated` calibrates.
+CalibratedOptionsT = TypeVar("CalibratedOptionsT", bound=CalibratedOptions)
+
+
 def fraction(num: np.ndarray, den: np.ndarray) -> np.ndarray:
     """``num / den`` with ``0/0 := 0`` (§2.8)."""
     out = np.zeros(np.broadcast(num, den).shape)
@@ -120,16 +130,18 @@ def fraction(num: np.ndarray, den: np.ndarray) -> np.ndarray:
 
 class MBCalibrated:
     """τ_0 (A4) and l̄ from an MB run of the same scenario: FL's calibration, for any strategy whose options
-    carry ``tau0_s`` and ``mean_pickup_m`` (FL, FL-no_delay, FL-perfect).  Listed before :class:`Strategy`."""
+    are :class:`CalibratedOptions` (FL, FL-no_delay, FL-perfect).  Listed before :class:`Strategy`."""
 
     calibrated_by: ClassVar[str | None] = "mb"
 
     @classmethod
-    def needs_calibration(cls, options: Any) -> bool:
+    def needs_calibration(cls, options: CalibratedOptionsT) -> bool:
         return options.tau0_s is None or options.mean_pickup_m is None
 
     @classmethod
-    def calibrate(cls, options: Any, kpis: dict[str, float], hourly: pd.DataFrame, hours: int) -> Any:
+    def calibrate(
+        cls, options: CalibratedOptionsT, kpis: dict[str, float], hourly: pd.DataFrame, hours: int
+    ) -> CalibratedOptionsT:
         """τ_0 and l̄ from the MB run "for the same hour" (docs/algorithms.md §1-§2), per hour where the
         scenario spans several; options the user set are kept."""
         tau0: float | tuple[float, ...]

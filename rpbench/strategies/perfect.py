@@ -36,13 +36,12 @@ Options (``--opt fl-perfect.NAME=VALUE``): ``order_rule``, ``tau0_s`` and ``mean
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from rpbench.exceptions import LookaheadError
 from rpbench.model import Structure
-from rpbench.options import Range, option
 from rpbench.predict.hourly import TAU0_RESOLUTION_S
 from rpbench.predict.savings import waiting_saving
 from rpbench.scenarios.base import OnlineView, Scenario
@@ -51,31 +50,17 @@ from rpbench.strategies.foresight import Foresight, PickupTimes
 from rpbench.strategies.forward import (
     FALLBACK_MEAN_PICKUP_M,
     FALLBACK_TAU0_S,
+    CalibratedOptions,
     MBCalibrated,
     _per_hour,
     forward_options,
     forward_round,
 )
-from rpbench.strategies.myopic import PoolingOptions
-
-if TYPE_CHECKING:
-    pass
 
 
 @dataclass(frozen=True)
-class PerfectOptions(PoolingOptions):
+class PerfectOptions(CalibratedOptions):
     """FL-perfect's options: FL's that do not concern the prediction."""
-
-    tau0_s: float | tuple[float, ...] | None = option(
-        None,
-        "τ_0 in seconds, one value or one per hour (default: MB calibration run's mean pick-up time, A4)",
-        range=Range(0.0, 86400.0, "s"),
-    )
-    mean_pickup_m: float | tuple[float, ...] | None = option(
-        None,
-        "l̄ of the waiting utility in metres, one value or one per hour (default: MB calibration run's)",
-        range=Range(0.0, 1e6, "m"),
-    )
 
 
 @dataclass(frozen=True)

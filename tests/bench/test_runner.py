@@ -12,7 +12,7 @@ import pytest
 from rpbench.backends import Backend
 from rpbench.backends.presets import Preset, SolveOptions
 from rpbench.bench import synthetic
-from rpbench.bench.runner import COLUMNS, cross_check, format_table, run_benchmark
+from rpbench.bench.runner import COLUMNS, BenchSpec, cross_check, format_table, run_benchmark
 from rpbench.cli import main
 from rpbench.exceptions import ParameterError, SolverError
 from rpbench.instances import save_instance
@@ -22,7 +22,7 @@ MODELS = synthetic.suite("tiny", objectives=("weight", "cardinality_then_weight"
 
 
 def test_table_has_one_row_per_model_and_preset():
-    table = run_benchmark(MODELS, ["highs", "matching"], repeat=2)
+    table = run_benchmark(MODELS, BenchSpec(["highs", "matching"], repeat=2))
     assert list(table.columns) == COLUMNS and len(table) == 2 * len(MODELS)
     assert (table["status"] == "optimal").all() and table["agrees"].all()
     assert (table["build_s"] >= 0).all() and (table["solve_s"] >= 0).all() and (table["repeats"] == 2).all()
@@ -33,8 +33,8 @@ def test_table_has_one_row_per_model_and_preset():
 
 @pytest.mark.slow
 def test_isolated_workers_give_the_same_answers():
-    inline = run_benchmark(MODELS[:2], ["matching"])
-    isolated = run_benchmark(MODELS[:2], ["matching"], isolate=True)
+    inline = run_benchmark(MODELS[:2], BenchSpec(["matching"]))
+    isolated = run_benchmark(MODELS[:2], BenchSpec(["matching"], isolate=True))
     assert inline["objective"].tolist() == isolated["objective"].tolist()
 
 
@@ -72,7 +72,7 @@ def test_errors_and_wrong_answers_are_rows_not_crashes(monkeypatch):
             else __import__("rpbench.backends", fromlist=["get_backend"]).get_backend(self.backend)
         ),
     )
-    table = run_benchmark(MODELS[1:3], ["matching", preset])
+    table = run_benchmark(MODELS[1:3], BenchSpec(["matching", preset]))
     broken = table[table["preset"] == "broken"]
     assert broken["status"].tolist() == ["error", "error"] and "broken on purpose" in broken["message"].iloc[0]
 
@@ -80,13 +80,13 @@ def test_errors_and_wrong_answers_are_rows_not_crashes(monkeypatch):
 @pytest.mark.slow
 def test_time_limit_is_a_result():
     model = synthetic.pairing(1500, partners=30)
-    table = run_benchmark([model], ["highs"], time_limit_s=0.3)
+    table = run_benchmark([model], BenchSpec(["highs"], time_limit_s=0.3))
     assert table["status"].iloc[0] == "time_limit" and pd.isna(table["agrees"].iloc[0])
 
 
 def test_bad_repeat():
     with pytest.raises(ParameterError, match="repeat"):
-        run_benchmark(MODELS, ["highs"], repeat=0)
+        run_benchmark(MODELS, BenchSpec(["highs"], repeat=0))
 
 
 def test_bench_command_json(capsys, tmp_path):
@@ -154,7 +154,7 @@ def test_bench_command_on_the_committed_example_instances(capsys):
 
 def test_a_recorded_optimum_the_solvers_do_not_reach_is_flagged(tmp_path, capsys):
     model = synthetic.assignment(6, 10, seed=3)
-    best = run_benchmark([model], ["matching"])["objective"][0]
+    best = run_benchmark([model], BenchSpec(["matching"]))["objective"][0]
     save_instance(tmp_path / "a.npz", model, {"status": "optimal", "objective": best + 1})
     save_instance(tmp_path / "sub" / "a.npz", model, {"status": "optimal", "objective": best})
     assert main(["bench", str(tmp_path), "--solver", "matching", "--repeat", "1", "--no-isolate", "--json"]) == 1

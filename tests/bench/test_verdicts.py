@@ -11,7 +11,7 @@ import pytest
 
 from rpbench.backends.presets import Preset
 from rpbench.bench import synthetic
-from rpbench.bench.runner import cross_check, run_benchmark, verdict
+from rpbench.bench.runner import BenchSpec, cross_check, run_benchmark, verdict
 from rpbench.cli import main
 from rpbench.instances import save_instance
 from rpbench.report.bench import summarise
@@ -74,7 +74,7 @@ def instance_folder(tmp_path_factory):
     a, b = synthetic.assignment(6, 10, seed=3), synthetic.pairing(40, partners=5, seed=2)
     save_instance(folder / "a.npz", a, {"tier": "S"})
     save_instance(folder / "b.npz", b, {})
-    optima = run_benchmark([a.renamed("a"), b.renamed("b")], ["matching"])["objective"].tolist()
+    optima = run_benchmark([a.renamed("a"), b.renamed("b")], BenchSpec(["matching"]))["objective"].tolist()
     return folder, optima
 
 
@@ -128,7 +128,7 @@ def test_a_bad_solu_file_is_one_line_before_any_solve(instance_folder, tmp_path,
 
 def test_a_time_limited_run_is_unsolved_and_counted_at_the_limit():
     model = synthetic.pairing(300, seed=1, objective="cardinality_then_weight")  # HiGHS: about 1 s
-    table = run_benchmark([model], ["highs", "matching"], time_limit_s=0.02)
+    table = run_benchmark([model], BenchSpec(["highs", "matching"], time_limit_s=0.02))
     highs = table[table["preset"] == "highs"].iloc[0]
     assert highs["status"] == "time_limit" and highs["verdict"] == "time_limit" and highs["time_limit_s"] == 0.02
     summary = summarise(table, shift=0.0).set_index("preset")
@@ -140,7 +140,7 @@ def test_a_time_limited_run_is_unsolved_and_counted_at_the_limit():
 def test_a_solve_over_the_memory_limit_reports_memory_limit():
     model = synthetic.pairing(300, seed=1)
     # 0.1 GB is less than the worker holds once HiGHS is imported: its next allocation fails
-    table = run_benchmark([model], ["highs"], isolate=True, memory_limit_gb=0.1)
+    table = run_benchmark([model], BenchSpec(["highs"], isolate=True, memory_limit_gb=0.1))
     row = table.iloc[0]
     assert row["status"] == "memory_limit" and row["verdict"] == "memory_limit"
     assert "memory limit of 0.1 GB" in row["message"] and math.isnan(row["total_s"])
@@ -151,10 +151,10 @@ def test_a_worker_that_dies_under_a_memory_limit_reports_memory_limit_else_kille
 
     preset = Preset.of(Crash())
     models = [synthetic.pairing(20, seed=1).renamed("crash"), synthetic.pairing(20, seed=2)]
-    limited = run_benchmark(models, [preset], isolate=True, memory_limit_gb=8)
+    limited = run_benchmark(models, BenchSpec([preset], isolate=True, memory_limit_gb=8))
     assert limited["verdict"].tolist() == ["memory_limit", "optimal"]  # a new worker takes the next model
     assert "signal SIGKILL" in limited["message"][0] and "memory limit of 8 GB" in limited["message"][0]
-    unlimited = run_benchmark(models[:1], [preset], isolate=True)
+    unlimited = run_benchmark(models[:1], BenchSpec([preset], isolate=True))
     assert unlimited["verdict"].tolist() == ["killed"] and "signal SIGKILL" in unlimited["message"][0]
 
 
