@@ -34,7 +34,7 @@ from rpbench.exceptions import ModelError, ResultsError, one_line
 from rpbench.files import check_schema, parse_json
 from rpbench.model import AssignmentModel, Model, PairingModel, Status, Structure, TripPackingModel
 
-FORMAT = "rpbench-instance-1"
+INSTANCE_FORMAT = "rpbench-instance-1"
 #: Largest declared row count (passengers, vehicles, requests, orders): ~1000 times the largest fleet or
 #: order count of a Haikou run, and small enough that per-row arrays stay within a few hundred MB.
 MAX_ROWS = 10_000_000
@@ -81,7 +81,7 @@ def save_instance(path: str | Path, model, meta: dict[str, Any] | None = None) -
     if path.suffix != ".npz":
         path = path.with_suffix(path.suffix + ".npz") if path.suffix else path.with_suffix(".npz")
     arrays: dict[str, Any] = {
-        "format": np.array(FORMAT),
+        "format": np.array(INSTANCE_FORMAT),
         "structure": np.array(model.structure.value),
         "values": model.values,
         "unit_m": np.array(model.unit_m),
@@ -128,10 +128,10 @@ def load_instance(path: str | Path) -> tuple[Model, dict[str, Any]]:
     if not path.is_file():
         raise ResultsError(f"snapshot file {str(path)!r} does not exist")
     data = _read_arrays(path)
-    if str(data.get("format", "")) != FORMAT:
+    if str(data.get("format", "")) != INSTANCE_FORMAT:
         raise ResultsError(
             f"snapshot file {str(path)!r} is not an rpbench instance (format "
-            f"{str(data.get('format', 'missing'))!r}, expected {FORMAT!r})"
+            f"{str(data.get('format', 'missing'))!r}, expected {INSTANCE_FORMAT!r})"
         )
     try:
         structure = Structure(str(data["structure"]))

@@ -17,6 +17,8 @@ K = 90 s; FL profit 4438 vs 4238).
 from __future__ import annotations
 
 NAN = float("nan")
+#: The day of the paper's Table 2: the default day of every dated Haikou scenario.
+PAPER_DATE = "2017-05-01"
 
 #: Table 2, per strategy column; keys as in rpbench.results.metrics.
 TABLE2 = {
@@ -225,6 +227,6 @@ def table2_applies(scenario_name: str, date: str | None, sample: float | None) -
     """The paper's Table 2 describes haikou-peak on 2017-05-01 at (about) a 30 % sample."""
     return (
         scenario_name == "haikou-peak"
-        and date in (None, "2017-05-01")
+        and date in (None, PAPER_DATE)
         and (sample is None or abs(float(sample) - 0.3) < 1e-9)
     )

@@ -35,8 +35,7 @@ from rpbench.options import RunOptions
 from rpbench.oracle.runs import ORACLE_RUNS
 from rpbench.plugins import is_spec
 from rpbench.scenarios import ScenarioRequest
-from rpbench.strategies import REGISTRY as STRATEGY_REGISTRY
-from rpbench.strategies import Strategy, plugin_names, strategy_class
+from rpbench.strategies import STRATEGY_REGISTRY, Strategy, strategy_class, strategy_plugin_names
 
 #: A run name is a folder name and an ``--opt`` prefix: letters, digits and ``._-``, not starting with a dot.
 _RUN_NAME = re.compile(r"^[A-Za-z0-9_-][A-Za-z0-9._-]*$")
@@ -202,7 +201,7 @@ def typed_options(entry: RunEntry, raw: RunOptions | Mapping[str, Any] | None) -
 
 def known_runs() -> list[str]:
     """Every name ``--strategies`` accepts without a ``module:`` prefix (an oracle hides a plug-in's name)."""
-    return [*STRATEGY_REGISTRY, *(n for n in plugin_names() if n not in ORACLE_RUNS), *ORACLE_RUNS]
+    return [*STRATEGY_REGISTRY, *(n for n in strategy_plugin_names() if n not in ORACLE_RUNS), *ORACLE_RUNS]
 
 
 def resolve_runs(items: Sequence[str]) -> list[RunEntry]:
@@ -242,7 +241,7 @@ def resolve_runs(items: Sequence[str]) -> list[RunEntry]:
 def _resolve_one(source: str) -> RunEntry:
     if source in ORACLE_RUNS or source in STRATEGY_REGISTRY:
         return RunEntry(source, source, options_class(source)())
-    if not is_spec(source) and source not in plugin_names():
+    if not is_spec(source) and source not in strategy_plugin_names():
         raise ParameterError(
             f"unknown strategy {source!r}; choose from {', '.join(known_runs())}, "
             "or give a strategy class as MODULE:CLASS (e.g. mypkg.rules:Greedy)"

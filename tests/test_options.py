@@ -9,11 +9,11 @@ from rpbench.commands._runs import parse_runs
 from rpbench.exceptions import ParameterError
 from rpbench.oracle.runs import ORACLE_RUNS
 from rpbench.spec import options_class
-from rpbench.strategies import REGISTRY, strategy_class
+from rpbench.strategies import STRATEGY_REGISTRY, strategy_class
 from rpbench.strategies.forward import ForwardOptions
 from rpbench.strategies.rtv import RTVOptions
 
-RUNS = list(REGISTRY) + list(ORACLE_RUNS)
+RUNS = list(STRATEGY_REGISTRY) + list(ORACLE_RUNS)
 
 
 @pytest.mark.parametrize("name", RUNS)
@@ -25,7 +25,7 @@ def test_every_run_refuses_an_unknown_option_naming_the_known_ones(name):
         parse_runs([name], [f"{name}.rebalence=true"])
 
 
-@pytest.mark.parametrize("name", list(REGISTRY))
+@pytest.mark.parametrize("name", list(STRATEGY_REGISTRY))
 def test_every_strategy_declares_label_and_defaults(name):
     cls = strategy_class(name)
     assert cls.label and cls.name == name

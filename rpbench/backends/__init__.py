@@ -7,7 +7,7 @@
 * :mod:`.solve` — :func:`solve`, what the simulator, the oracle and the
   benchmark call: support and installation checked, the solution verified once.
 
-Adding a backend is one adapter module, one :data:`REGISTRY` line and one
+Adding a backend is one adapter module, one :data:`BACKEND_REGISTRY` line and one
 preset file.  A backend defined outside the package needs no registry line:
 its preset names it as an installed entry point of the group
 ``rpbench.backends`` or as ``module:Class`` (:func:`backend_class`).
@@ -15,11 +15,11 @@ its preset names it as an installed entry point of the group
 
 from rpbench.backends.base import Backend, SolveOptions
 from rpbench.backends.presets import Preset, load_preset, preset_names
-from rpbench.backends.registry import REGISTRY, backend_class, get_backend
+from rpbench.backends.registry import BACKEND_REGISTRY, backend_class, get_backend
 from rpbench.backends.solve import solve
 
 __all__ = [
-    "REGISTRY",
+    "BACKEND_REGISTRY",
     "Backend",
     "Preset",
     "SolveOptions",

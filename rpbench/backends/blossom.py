@@ -98,7 +98,7 @@ class BlossomBackend(Backend):
             return replace(sol, backend=self.name, message=note)
         if model.n_cols == 0:
             return empty_solution(model, self.name)
-        return solve_pairing(model, options, Clock(), self.name)
+        return blossom_v_pairing(model, options, Clock(), self.name)
 
 
 @functools.cache
@@ -137,7 +137,7 @@ def min_cost_perfect_matching(n: int, a: np.ndarray, b: np.ndarray, cost: np.nda
     return mate
 
 
-def max_weight_matching(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, bonus: int = 0) -> np.ndarray:
+def blossom_v_matching(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, bonus: int = 0) -> np.ndarray:
     """Edge indices of a maximum-weight matching for integral weights ``w + bonus`` (doubled graph).
 
     Only vertices with an edge enter the doubled graph; ``bonus`` is the
@@ -166,7 +166,7 @@ def max_weight_matching(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, bon
     return edge_indices(n, a, b, used[v], used[first[v]])
 
 
-def solve_pairing(model: PairingModel, options: SolveOptions, clock: Clock, backend: str) -> Solution:
+def blossom_v_pairing(model: PairingModel, options: SolveOptions, clock: Clock, backend: str) -> Solution:
     """Oracle-1 or Oracle-2 by one Blossom V solve; ``TIME_LIMIT`` with the best known matching at the deadline."""
     lexi = model.objective == "cardinality_then_weight"
     with clock("build_s"):
@@ -188,7 +188,7 @@ def solve_pairing(model: PairingModel, options: SolveOptions, clock: Clock, back
         with clock("solve_s"):
             sel = use[
                 run_in_child(
-                    max_weight_matching, (model.n_orders, a[use], b[use], w[use], bonus), deadline, solver="Blossom V"
+                    blossom_v_matching, (model.n_orders, a[use], b[use], w[use], bonus), deadline, solver="Blossom V"
                 )
             ]
     except Timeout:

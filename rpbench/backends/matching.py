@@ -46,8 +46,7 @@ import scipy.sparse as sp
 from rpbench.backends._common import Clock
 from rpbench.backends._forked import Timeout, run_in_child
 from rpbench.backends.base import Backend, SolveOptions
-from rpbench.backends.blossom import BlossomBackend
-from rpbench.backends.blossom import solve_pairing as blossom_v_pairing
+from rpbench.backends.blossom import BlossomBackend, blossom_v_pairing
 from rpbench.backends.cardinality import columns_of_mate, edge_indices, mate_of, maximum_cardinality_matching
 from rpbench.backends.highs import HighsBackend
 from rpbench.backends.jv import lapmod_solution

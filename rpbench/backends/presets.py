@@ -39,7 +39,7 @@ from importlib import resources
 from pathlib import Path
 
 from rpbench.backends.base import Backend, SolveOptions
-from rpbench.backends.registry import REGISTRY, backend_class, honoured_options, plugin_names
+from rpbench.backends.registry import BACKEND_REGISTRY, backend_class, backend_plugin_names, honoured_options
 from rpbench.exceptions import PresetError, one_line
 from rpbench.files import parse_toml, require_regular
 from rpbench.model import Structure
@@ -193,14 +193,14 @@ def parse_preset(name: str, text: str, where: str) -> Preset:
         )
     backend = data.get("backend")
     if not isinstance(backend, str) or not (
-        backend in REGISTRY or is_spec(backend) or backend.lower() in plugin_names()
+        backend in BACKEND_REGISTRY or is_spec(backend) or backend.lower() in backend_plugin_names()
     ):
         raise PresetError(
             f"solver preset {where!r}: backend = {backend!r} is not one of "
-            f"{', '.join([*REGISTRY, *plugin_names()])} (installed plug-ins included) nor a "
+            f"{', '.join([*BACKEND_REGISTRY, *backend_plugin_names()])} (installed plug-ins included) nor a "
             '"module:Class" spec'
         )
-    if backend not in REGISTRY:
+    if backend not in BACKEND_REGISTRY:
         try:
             backend_class(backend)
         except PresetError as exc:

@@ -47,7 +47,7 @@ def _state(condition, solver: str) -> str:
     return raw_state(STATUS, getattr(condition, "name", str(condition)), solver)
 
 
-def build_model(prog: Program, relax: bool):
+def pyomo_model(prog: Program, relax: bool):
     """The Pyomo model of a 0/1 program (``x[j]``, ``row[r]``, ``objective``)."""
     import pyomo.environ as pyo
 
@@ -95,7 +95,7 @@ class PyomoBackend(ProgramBackend):
         from pyomo.contrib.appsi.solvers import Highs
 
         with clock("build_s"):
-            m, x = build_model(prog, relax)
+            m, x = pyomo_model(prog, relax)
             opt = Highs()
             opt.config.load_solution = False
             settings = highs_settings(options, time_limit, relax=relax)
@@ -146,7 +146,7 @@ class PyomoBackend(ProgramBackend):
                 f"Pyomo solver {solver!r} is not available; install it or use the default appsi_highs"
             )
         with clock("build_s"):
-            m, x = build_model(prog, relax)
+            m, x = pyomo_model(prog, relax)
         with clock("solve_s"):
             kwargs = {"load_solutions": False, "options": dict(options.extra)}
             if time_limit is not None:

@@ -14,7 +14,7 @@ from rpbench.backends.base import Backend
 from rpbench.exceptions import PresetError
 
 #: Backend name -> "module:Class" (modules under rpbench.backends).
-REGISTRY: dict[str, str] = {
+BACKEND_REGISTRY: dict[str, str] = {
     "highs": "highs:HighsBackend",
     "ortools": "ortools:OrtoolsBackend",
     "pyomo": "pyomo:PyomoBackend",
@@ -42,16 +42,16 @@ HONOURS: dict[str, frozenset[str]] = {
 }
 
 #: Entry-point group of backends installed by other distributions.
-ENTRY_POINT_GROUP = "rpbench.backends"
+BACKEND_ENTRY_POINTS = "rpbench.backends"
 
 
 def backend_class(name: str) -> type[Backend]:
     """The adapter class of a backend name, or one :class:`PresetError` line.
 
     ``name`` is, in this order of precedence, a built-in name of
-    :data:`REGISTRY`; a ``module:Class`` spec (the module imported by its
+    :data:`BACKEND_REGISTRY`; a ``module:Class`` spec (the module imported by its
     absolute name: installed or on ``PYTHONPATH``); or the name of an
-    installed entry point of :data:`ENTRY_POINT_GROUP` (compared
+    installed entry point of :data:`BACKEND_ENTRY_POINTS` (compared
     case-insensitively).  An entry point named like a built-in backend is
     ignored: the built-in always wins.  The class must subclass
     :class:`Backend`, implement ``solve`` and declare ``name``, ``requires``
@@ -59,9 +59,9 @@ def backend_class(name: str) -> type[Backend]:
     """
     return plugins.resolve(
         name,
-        builtin=REGISTRY,
+        builtin=BACKEND_REGISTRY,
         package="rpbench.backends",
-        group=ENTRY_POINT_GROUP,
+        group=BACKEND_ENTRY_POINTS,
         base=Backend,
         what="backend",
         required=("name", "requires", "exact"),
@@ -69,9 +69,9 @@ def backend_class(name: str) -> type[Backend]:
     )
 
 
-def plugin_names() -> list[str]:
+def backend_plugin_names() -> list[str]:
     """Names of the installed plug-in backends (entry points not shadowed by a built-in name)."""
-    return plugins.plugin_names(ENTRY_POINT_GROUP, REGISTRY)
+    return plugins.plugin_names(BACKEND_ENTRY_POINTS, BACKEND_REGISTRY)
 
 
 def honoured_options(name: str) -> frozenset[str]:

@@ -62,7 +62,7 @@ from rpbench.model import Model, Status
 from rpbench.report.bench import NO_TIER
 from rpbench.results.solu import Known
 
-COLUMNS = [
+RESULT_COLUMNS = [
     "model",
     "tier",
     "structure",
@@ -180,7 +180,7 @@ def run_benchmark(models: Sequence[Model], spec: BenchSpec, *, progress: bool | 
     finally:
         if bar is not None:
             bar.close()
-    table = pd.DataFrame(rows, columns=COLUMNS)
+    table = pd.DataFrame(rows, columns=RESULT_COLUMNS)
     order = {m.name: i for i, m in enumerate(models)}
     table = table.sort_values("model", key=lambda col: col.map(order), kind="stable").reset_index(drop=True)
     return cross_check(table, spec.known)

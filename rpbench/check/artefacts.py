@@ -19,8 +19,8 @@ from rpbench.check.core import RunCheck
 from rpbench.check.exact import EXACT_PLAN
 from rpbench.check.folder import Folder
 from rpbench.digests import file_sha256
+from rpbench.strategies.value import VALUE_MODEL
 
-VALUE_MODEL = "value-model"
 #: Strategies whose runs must name a value model.
 NEEDS_VALUE_MODEL = ("vf",)
 _ARRAYS = ("values", "visits", "node_cell")

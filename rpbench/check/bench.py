@@ -31,12 +31,13 @@ import pandas as pd
 from rpbench import results
 from rpbench.check.core import FOLDER, FolderResult, RunCheck
 from rpbench.exceptions import ResultsError, RpbenchError, one_line
+from rpbench.report.bench import TOTAL
 from rpbench.results.solu import Known, read_solu
 
 #: The meta.json ``kind`` of a bench folder.
 KIND = "bench"
 KNOWN_FILE = "known.solu"
-RESULT_COLUMNS = (
+REQUIRED_RESULT_COLUMNS = (
     "model",
     "tier",
     "preset",
@@ -51,7 +52,7 @@ RESULT_COLUMNS = (
     "repeats",
     "time_limit_s",
 )
-SUMMARY_COLUMNS = ("tier", "preset", "instances", "solved", "sgm_s", "sgm_ratio", "shift_s", "repeat_spread")
+CHECKED_SUMMARY_COLUMNS = ("tier", "preset", "instances", "solved", "sgm_s", "sgm_ratio", "shift_s", "repeat_spread")
 FAILURES = ("wrong", "time_limit", "memory_limit", "error", "killed")
 #: What environment.json must name.
 MACHINE_KEYS = ("platform", "cpu_model")
@@ -59,7 +60,6 @@ MACHINE_KEYS = ("platform", "cpu_model")
 RTOL = 1e-9
 #: Times and means are floored here before logarithms and ratios (as the bench does: a zero-time solve).
 FLOOR_S = 1e-6
-TOTAL = "total"
 
 
 def check_bench(folder: Path) -> FolderResult:
@@ -98,7 +98,7 @@ def _audit(folder: Path) -> tuple[RunCheck, list[RunCheck]]:
             if want != r["verdict"]:
                 run.fail("verdict", f"{r['model']}: verdict {r['verdict']!r}, but its answer earns {want!r}")
         runs.append(run)
-    summary = _read(folder / "summary.csv", SUMMARY_COLUMNS)
+    summary = _read(folder / "summary.csv", CHECKED_SUMMARY_COLUMNS)
     _check_summary(table, summary, own)
     _check_profile(table, _read(folder / "profile.csv", ("preset", "tau", "fraction")), own)
     _check_report(folder / "report.md", summary, own)
@@ -117,10 +117,10 @@ def _read(path: Path, columns: tuple[str, ...]) -> pd.DataFrame:
 
 
 def _results(path: Path) -> pd.DataFrame:
-    table = _read(path, RESULT_COLUMNS)
+    table = _read(path, REQUIRED_RESULT_COLUMNS)
     for name in ("model", "tier", "preset", "status", "verdict"):
         table[name] = table[name].fillna("").astype(str)
-    for name in set(RESULT_COLUMNS) - {"model", "tier", "preset", "status", "verdict"}:
+    for name in set(REQUIRED_RESULT_COLUMNS) - {"model", "tier", "preset", "status", "verdict"}:
         number = pd.to_numeric(table[name], errors="coerce")
         if (number.isna() & table[name].notna()).any():
             raise ResultsError(f"bench folder file {str(path)!r}: column {name!r} holds text, not numbers")

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from rpbench.results.metrics import BOUND_MATCHING_KPIS
-from rpbench.results.ratios import BRACKET_KPIS, RATIO_KPIS
+from rpbench.results.ratios import DERIVED_KPIS
 
 TOL_M = 1e-6
 TOL_S = 1e-6
@@ -30,7 +30,6 @@ CERT_TOL_M = 1e-3
 FOLDER = "(folder)"
 #: ``rpbench check`` exit statuses.
 EXIT_OK, EXIT_FAILED, EXIT_UNREADABLE = 0, 1, 2
-PARENT_KINDS = ("multi-day", "sweep", "evaluate")
 EVENT_KINDS = ("request", "assign", "pickup", "dropoff", "cancel", "reposition")
 #: Reported figures the files cannot reproduce (timings: a run's wall time, a strategy's one-off
 #: ``prepare()``, the oracle's stages; sizes of the oracle's enumeration and model; the solver's gap): listed
@@ -73,8 +72,6 @@ ORACLE_KPIS = (
 )
 #: The bound's matching statistics, under their own names (they bound nothing).
 BOUND_KPIS = tuple(BOUND_MATCHING_KPIS.get(k, k) for k in ORACLE_KPIS)
-#: Rows derived from the other runs (``competitive-ratio``): a simulated run's ratios, the bound's bracket.
-DERIVED_KPIS = (*RATIO_KPIS, *BRACKET_KPIS)
 KNOWN_KPIS = {
     *SIMULATION_KPIS,
     *ORACLE_KPIS,
@@ -104,7 +101,7 @@ ORDER_COLUMNS = {
     "solo_m": "float",
 }
 FLEET_COLUMNS = {"vehicle": "int", "initial_node": "int"}
-EVENT_COLUMNS = {"t_s": "float", "event": "str", "order": "int", "vehicle": "int", "node": "int", "partner": "int"}
+EVENT_SCHEMA = {"t_s": "float", "event": "str", "order": "int", "vehicle": "int", "node": "int", "partner": "int"}
 PAIR_COLUMNS = {
     "first_id": "int",
     "second_id": "int",

@@ -21,9 +21,7 @@ import pandas as pd
 from rpbench.check.core import CERT_TOL_M, RunCheck
 from rpbench.check.folder import Folder
 from rpbench.digests import file_sha256
-
-EXACT_PLAN = "exact-plan"
-PLAN_FILE = "plan.json"
+from rpbench.strategies.exact import EXACT_PLAN, PLAN_FILE
 
 
 def plan_problem(folder: Path, digest: str) -> str | None:

@@ -71,7 +71,7 @@ def read_folder(folder: Path) -> Folder:
     params = _read_params(folder, meta)
     _read_run_records(folder, meta)
     network = results.load_network(folder / NETWORK)
-    orders = read_table(folder / ORDERS, ORDER_COLUMNS)
+    orders = read_results_table(folder / ORDERS, ORDER_COLUMNS)
     _require(
         folder / ORDERS,
         orders,
@@ -84,11 +84,11 @@ def read_folder(folder: Path) -> Folder:
             f"results file {str(folder / ORDERS)!r}: order ids repeat "
             f"(e.g. {int(orders['order_id'][orders['order_id'].duplicated()].iloc[0])})"
         )
-    fleet = read_table(folder / FLEET, FLEET_COLUMNS)
+    fleet = read_results_table(folder / FLEET, FLEET_COLUMNS)
     _require(folder / FLEET, fleet, network.n_nodes, nodes=("initial_node",), finite=())
     if not np.array_equal(fleet["vehicle"].to_numpy(), np.arange(len(fleet))):
         raise ResultsError(f"results file {str(folder / FLEET)!r}: vehicles are not numbered 0..{len(fleet) - 1}")
-    kpis = current_names(read_table(folder / KPIS, KPI_COLUMNS))  # an older rpbench's names read as today's
+    kpis = current_names(read_results_table(folder / KPIS, KPI_COLUMNS))  # an older rpbench's names read as today's
     distances = network.distances()
     solo = distances.dist[orders["origin"].to_numpy(), orders["destination"].to_numpy()]
     return Folder(folder, meta, params, orders, fleet, network, distances, solo, kpis)
@@ -144,7 +144,7 @@ def _read_run_records(folder: Path, meta: dict) -> None:
             raise ResultsError(f"{where!r}: oracle run {name!r}: unit_m must be a positive number")
 
 
-def read_table(path: Path, columns: dict[str, str]) -> pd.DataFrame:
+def read_results_table(path: Path, columns: dict[str, str]) -> pd.DataFrame:
     """A CSV results file with ``columns`` coerced to their kinds (``int``, ``float``, ``bool``, ``str``,
     ``raw``: as read); anything else is one :class:`ResultsError` line."""
     table = results.read_csv(path)
@@ -157,7 +157,7 @@ def read_table(path: Path, columns: dict[str, str]) -> pd.DataFrame:
 
 
 def _coerce(path: Path, name: str, col: pd.Series, kind: str) -> pd.Series:
-    """One column as its kind (see :func:`read_table`)."""
+    """One column as its kind (see :func:`read_results_table`)."""
     if kind == "raw":
         return col
     if kind == "str":

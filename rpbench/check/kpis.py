@@ -20,7 +20,7 @@ from rpbench.check.folder import Folder
 from rpbench.exceptions import ResultsError, RpbenchError, one_line
 from rpbench.report.comparison import fmt, report_markdown
 from rpbench.results.layout import HOURLY, KPIS, META, REPORT, ROUNDS
-from rpbench.results.metrics import BOUND_MATCHING_KPIS, KPI_LABELS
+from rpbench.results.metrics import BOUND_MATCHING_KPIS, DECISION_KPIS, KPI_LABELS
 from rpbench.results.ratios import BOUND, BRACKET_PREFIX, DENOMINATORS
 from rpbench.results.read import load_kpis
 from rpbench.scenarios.base import Params
@@ -141,8 +141,6 @@ def compare_kpis(
 
 
 # ----------------------------------------------------------------------- decision time
-#: The decision-time KPIs (rpbench.results.metrics.DECISION_KPIS), recomputed here from rounds.csv.gz.
-DECISION_KPIS = ("decision_p50_s", "decision_p95_s", "decision_max_s", "rounds_over_dt")
 _DECISION_COLUMNS = ("strategy_build_s", "solver_build_s", "solve_s", "extract_s")
 
 

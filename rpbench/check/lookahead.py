@@ -15,7 +15,7 @@ from rpbench.results.layout import META
 from rpbench.results.lookahead import declared_clairvoyant
 from rpbench.results.runs import run_label
 
-CHECK = "clairvoyant"
+CLAIRVOYANT_CHECK = "clairvoyant"
 
 
 def check_clairvoyant(rc: RunCheck, f: Folder, name: str) -> None:
@@ -23,14 +23,14 @@ def check_clairvoyant(rc: RunCheck, f: Folder, name: str) -> None:
     record = f.meta["runs"][name]
     flag = record.get("clairvoyant")
     if flag is not None and not isinstance(flag, bool):
-        rc.fail(CHECK, f"{META} records clairvoyant {flag!r} for the run, not true or false")
+        rc.fail(CLAIRVOYANT_CHECK, f"{META} records clairvoyant {flag!r} for the run, not true or false")
         return
     declared = declared_clairvoyant(name, record)
     if declared is None:
         return  # a plug-in, or options of another rpbench version: nothing to hold the flag to
     if declared and flag is not True:
         rc.fail(
-            CHECK,
+            CLAIRVOYANT_CHECK,
             f"{META} records the run as online (clairvoyant: {'absent' if flag is None else 'false'}), but its "
             f"strategy {run_label(str(record.get('source', name)))} reads the future under the recorded options",
         )

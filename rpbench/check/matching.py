@@ -29,7 +29,7 @@ from rpbench.check.core import TOL_M, TOL_S
 from rpbench.check.folder import Folder
 
 #: Pairs (one orientation each) valued per numpy block: bounds memory to a few hundred MB.
-BLOCK_PAIRS = 1 << 20
+CHECK_BLOCK_PAIRS = 1 << 20
 #: A weight this close above a multiple of the unit is float noise: rounded down, never up (the checker's
 #: rounded weights then never exceed the run's, whose optimum is the bound).
 ROUND_SLACK = 1e-6
@@ -55,7 +55,7 @@ def bound_graph(f: Folder) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     cum = np.cumsum(count)
     i0 = 0
     while i0 < len(ts):
-        i1 = max(i0 + 1, int(np.searchsorted(cum, (cum[i0 - 1] if i0 else 0) + BLOCK_PAIRS, side="right")))
+        i1 = max(i0 + 1, int(np.searchsorted(cum, (cum[i0 - 1] if i0 else 0) + CHECK_BLOCK_PAIRS, side="right")))
         ii = np.repeat(np.arange(i0, min(i1, len(ts))), count[i0:i1])
         if len(ii):
             starts = np.cumsum(count[i0:i1]) - count[i0:i1]

@@ -15,7 +15,6 @@ import pandas as pd
 
 from rpbench.check.certificate import Geometry, bound_geometry, edge_weights, first_true, order_paths
 from rpbench.check.core import (
-    BRACKET_KPIS,
     DETOUR_TOL_M,
     HOURLY_COLUMNS,
     PAIR_COLUMNS,
@@ -27,11 +26,12 @@ from rpbench.check.core import (
     as_number,
     same,
 )
-from rpbench.check.folder import Folder, read_table
+from rpbench.check.folder import Folder, read_results_table
 from rpbench.check.kpis import compare_kpis
 from rpbench.check.matching import bound_graph, prove_maximum, unit_values
 from rpbench.results.layout import META, ORDERS, PAIRS
 from rpbench.results.metrics import BOUND_MATCHING_KPIS
+from rpbench.results.ratios import BRACKET_KPIS
 from rpbench.scenarios.base import Params
 
 
@@ -41,7 +41,7 @@ def check_oracle(f: Folder, name: str, run_dir: Path) -> tuple[RunCheck, pd.Data
     rc = RunCheck(name)
     rec = f.meta["runs"][name]
     rules = _oracle_rules(rc, rec["rules"], f.params)
-    pairs = read_table(run_dir / PAIRS, PAIR_COLUMNS)
+    pairs = read_results_table(run_dir / PAIRS, PAIR_COLUMNS)
     rows = _pair_rows(rc, pairs, f)
     if rows is None:
         rc.skip("kpi", "the pairs name unknown orders (see [oracle-pairs])")

@@ -18,7 +18,7 @@ from rpbench.results.read import load_kpis
 
 _CELL = re.compile(r'<td class="num" data-run="([^"]*)" data-kpi="([^"]*)" data-value="([^"]*)">([^<]*)</td>')
 #: Raw values are written with repr(): they round-trip exactly; the ratio rows are recomputed, hence a tolerance.
-REL_TOL = 1e-12
+PAGE_REL_TOL = 1e-12
 
 
 def check_page(fc: RunCheck, f: Folder) -> None:
@@ -52,7 +52,9 @@ def check_page(fc: RunCheck, f: Folder) -> None:
             continue
         missing = value is None or (isinstance(value, float) and math.isnan(value))
         try:
-            agrees = (raw == "") if missing else math.isclose(float(raw), float(value), rel_tol=REL_TOL, abs_tol=1e-12)
+            agrees = (
+                (raw == "") if missing else math.isclose(float(raw), float(value), rel_tol=PAGE_REL_TOL, abs_tol=1e-12)
+            )
         except ValueError:
             agrees = False
         if not agrees or shown != fmt(kpi, value):

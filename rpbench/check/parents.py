@@ -13,7 +13,7 @@ from pathlib import Path
 import pandas as pd
 
 from rpbench import results
-from rpbench.check.core import DERIVED_KPIS, FOLDER, KNOWN_KPIS, FolderResult, RunCheck, as_number, same, show
+from rpbench.check.core import FOLDER, KNOWN_KPIS, FolderResult, RunCheck, as_number, same, show
 from rpbench.check.ranking import check_ranking
 from rpbench.exceptions import ResultsError, RpbenchError, one_line
 from rpbench.report.evaluation import tables as evaluation_tables
@@ -21,6 +21,7 @@ from rpbench.results.layout import BY_DAY, KPIS, LEADERBOARD, META, PAIRED, SUMM
 from rpbench.results.legacy import current_names
 from rpbench.results.metrics import BOUND_MATCHING_KPIS
 from rpbench.results.parents import by_day_table, sweep_table
+from rpbench.results.ratios import DERIVED_KPIS
 
 #: The bound's matching statistics under their own names (rpbench.results.metrics).
 MATCHING_KPIS = tuple(BOUND_MATCHING_KPIS.values())

@@ -18,7 +18,7 @@ from rpbench.check.core import RunCheck
 from rpbench.exceptions import ResultsError, one_line
 from rpbench.results.ranking import RANKING_COLUMNS, misranked
 
-CHECK = "ranking"
+RANKING_CHECK = "ranking"
 
 
 def check_ranking(fc: RunCheck, path: Path, expected: pd.DataFrame) -> None:
@@ -29,13 +29,13 @@ def check_ranking(fc: RunCheck, path: Path, expected: pd.DataFrame) -> None:
     try:
         found = results.read_csv(path)
     except ResultsError as exc:
-        fc.fail(CHECK, one_line(exc))
+        fc.fail(RANKING_CHECK, one_line(exc))
         return
     if not set(RANKING_COLUMNS) <= set(found.columns):
-        fc.skip(CHECK, f"{path.name} records no ranking (written before rpbench recorded one)")
+        fc.skip(RANKING_CHECK, f"{path.name} records no ranking (written before rpbench recorded one)")
         return
     for problem in misranked(found):
-        fc.fail(CHECK, f"{path.name}: {problem}")
+        fc.fail(RANKING_CHECK, f"{path.name}: {problem}")
     want = expected.drop_duplicates("run").set_index("run")
     have = found.drop_duplicates("run").set_index("run")
     for run in want.index:
@@ -44,10 +44,10 @@ def check_ranking(fc: RunCheck, path: Path, expected: pd.DataFrame) -> None:
         group, rank = want.loc[run, "group"], int(want.loc[run, "rank"])
         if have.loc[run, "group"] != group:
             fc.fail(
-                CHECK,
+                RANKING_CHECK,
                 f"{path.name} puts {run} among the {have.loc[run, 'group']} runs; its units (meta.json, and the "
                 f"strategy under its recorded options) make it {group}",
             )
         elif pd.to_numeric(have.loc[run, "rank"], errors="coerce") != rank:
-            fc.fail(CHECK, f"{path.name} ranks {run} {have.loc[run, 'rank']}; the units' means rank it {rank}")
+            fc.fail(RANKING_CHECK, f"{path.name} ranks {run} {have.loc[run, 'rank']}; the units' means rank it {rank}")
     fc.checked["ranked_runs"] = len(want)

@@ -16,12 +16,12 @@ from collections.abc import Collection, Mapping
 
 import pandas as pd
 
-from rpbench.check.core import BRACKET_KPIS, RATIO_KPIS, RunCheck, as_number, same, show
+from rpbench.check.core import RunCheck, as_number, same, show
 from rpbench.check.folder import Folder, bound_km
 from rpbench.results.layout import KPIS, META
-from rpbench.results.ratios import BEST_KNOWN_FIELD
+from rpbench.results.ratios import BEST_KNOWN_FIELD, BRACKET_KPIS, RATIO_KPIS
 
-CHECK = "competitive-ratio"
+RATIO_CHECK = "competitive-ratio"
 #: The offline run whose saving ``saving_over_oracle1`` divides by.
 ORACLE1 = "oracle1"
 
@@ -37,7 +37,7 @@ def check_ratios(fc: RunCheck, f: Folder, runs: list[RunCheck], savings: Mapping
     reported = set(f.kpis["kpi"])
     older = BEST_KNOWN_FIELD not in f.meta and not {"competitive_ratio_best_known", *BRACKET_KPIS} & reported
     if older:
-        fc.skip(CHECK, f"the folder was written before rpbench recorded the best known schedule: only the ratios "
+        fc.skip(RATIO_CHECK, f"the folder was written before rpbench recorded the best known schedule: only the ratios "
                        f"its {KPIS} reports are compared")  # fmt: skip
     unknown = sorted(run for run, saving in savings.items() if saving is None)
     known = {run: float(saving) for run, saving in savings.items() if saving is not None}
@@ -59,7 +59,9 @@ def check_ratios(fc: RunCheck, f: Folder, runs: list[RunCheck], savings: Mapping
     if older:
         return
     if unknown:
-        fc.skip(CHECK, f"LB cannot be recomputed: the saving of {', '.join(unknown)} could not be (see its checks)")
+        fc.skip(
+            RATIO_CHECK, f"LB cannot be recomputed: the saving of {', '.join(unknown)} could not be (see its checks)"
+        )
         return
     _check_record(fc, f.meta.get(BEST_KNOWN_FIELD), lb_run, lb, known)
     name = _bound_run(f)
@@ -77,11 +79,11 @@ def _compare(
         number = found.get(key)
         if key not in found:
             if key in required:
-                rc.fail(CHECK, f"KPI {key} is not reported in {KPIS}")
+                rc.fail(RATIO_CHECK, f"KPI {key} is not reported in {KPIS}")
         elif number is None or not same(number, value):
-            rc.fail(CHECK, f"KPI {key}: reported {show(number)}, recomputed {value!r}")
+            rc.fail(RATIO_CHECK, f"KPI {key}: reported {show(number)}, recomputed {value!r}")
     for key in sorted(set(found) - set(expected)):
-        rc.fail(CHECK, f"KPI {key} is reported, but the folder has no run it divides by or derives from")
+        rc.fail(RATIO_CHECK, f"KPI {key} is reported, but the folder has no run it divides by or derives from")
     rc.checked["ratios"] = rc.checked.get("ratios", 0) + len(expected)
 
 
@@ -89,20 +91,20 @@ def _check_record(fc: RunCheck, record, lb_run: str | None, lb: float | None, kn
     """meta.json's ``best_known``: the run with the largest recomputed saving (any of equals) and LB."""
     if lb_run is None or lb is None:
         if record is not None:
-            fc.fail(CHECK, f"{META} records a best known schedule, but the folder has no simulated run")
+            fc.fail(RATIO_CHECK, f"{META} records a best known schedule, but the folder has no simulated run")
         return
     if not isinstance(record, Mapping) or not isinstance(record.get("run"), str):
-        fc.fail(CHECK, f"{META}'s {BEST_KNOWN_FIELD} is {record!r}, not the run that gave LB and its saving")
+        fc.fail(RATIO_CHECK, f"{META}'s {BEST_KNOWN_FIELD} is {record!r}, not the run that gave LB and its saving")
         return
     run, saving = record["run"], as_number(record.get("saving_km"))
     if run not in known or not same(known[run], lb):
         fc.fail(
-            CHECK,
+            RATIO_CHECK,
             f"{META} names {run!r} as the best known schedule; the largest recomputed saving is "
             f"{lb!r} km, of {lb_run!r}",
         )
     if saving is None or not same(saving, lb):
-        fc.fail(CHECK, f"{META}'s best known saving is {show(record.get('saving_km'))} km, recomputed {lb!r} km")
+        fc.fail(RATIO_CHECK, f"{META}'s best known saving is {show(record.get('saving_km'))} km, recomputed {lb!r} km")
     fc.checked["best_known"] = 1
 
 

@@ -32,7 +32,7 @@ import numpy as np
 import pandas as pd
 
 from rpbench.check.core import FOLDER, KPI_COLUMNS, FolderResult, RunCheck, as_number, same
-from rpbench.check.folder import read_table
+from rpbench.check.folder import read_results_table
 from rpbench.check.verify import check_results
 from rpbench.digests import file_sha256
 from rpbench.exceptions import ResultsError, RpbenchError, one_line
@@ -53,7 +53,7 @@ ENGINE_KPIS = (
     "avg_response_time_s",
     "avg_pickup_time_s",
 )
-TOL_M = 1e-3
+REPLICATION_TOL_M = 1e-3
 ROUND_S = 10.0
 
 SKIPPED = {
@@ -105,9 +105,9 @@ def audit_run(records: pd.DataFrame, row: dict) -> tuple[dict[str, list[str]], d
             continue
         if int(by_id.at[p, "vehicle"]) != int(r["vehicle"]):
             fail("assignment", f"order {int(r['order_id'])} and its partner {p} ride different vehicles")
-        if abs(r["detour_m"] - (r["ride_m"] - r["solo_m"])) > TOL_M:
+        if abs(r["detour_m"] - (r["ride_m"] - r["solo_m"])) > REPLICATION_TOL_M:
             fail("accounting", f"order {int(r['order_id'])}: detour {r['detour_m']:.3f} m != ride - solo")
-        if r["shared_m"] > min(r["ride_m"], by_id.at[p, "ride_m"]) + TOL_M:
+        if r["shared_m"] > min(r["ride_m"], by_id.at[p, "ride_m"]) + REPLICATION_TOL_M:
             fail("accounting", f"order {int(r['order_id'])}: shared distance longer than a ride")
         checked["accounting"] += 3
     lead = pooled[pooled["order_id"] < pooled["partner"]]
@@ -141,7 +141,7 @@ def audit_folder(folder: Path) -> tuple[RunCheck, list[RunCheck]]:
     meta = results.read_meta(folder)
     root = folder.resolve()
     fc = RunCheck(FOLDER)
-    manifest = check_manifest(fc, folder, root, meta)
+    manifest = check_replication_manifest(fc, folder, root, meta)
     runs_csv = folder / "runs.csv"
     if not runs_csv.is_file():
         raise ResultsError(f"replication folder {str(folder)!r} has no runs.csv")
@@ -154,7 +154,7 @@ def audit_folder(folder: Path) -> tuple[RunCheck, list[RunCheck]]:
     missing = [c for c in ("date", "strategy", "engine") if c not in rows.columns]
     if missing:
         raise ResultsError(f"{str(runs_csv)!r} lacks the column(s) {', '.join(missing)}")
-    check_report(fc, folder, root, rows, meta)
+    check_replication_report(fc, folder, root, rows, meta)
     dates = {str(d) for d in meta.get("dates") or []}
     out = [audit_row(folder, root, row, manifest, dates) for row in rows.to_dict("records")]
     return fc, out
@@ -229,7 +229,7 @@ def compare_engine_row(rc: RunCheck, path: Path, name: str, row: dict) -> None:
     """The row's KPIs are its results folder's (which the checker recomputed), the response rate over the
     row's denominator, the vehicles its fleet."""
     try:
-        kpis = read_table(path / KPIS, KPI_COLUMNS)
+        kpis = read_results_table(path / KPIS, KPI_COLUMNS)
         fleet = pd.read_csv(path / FLEET)
     except (RpbenchError, OSError, ValueError) as exc:
         rc.fail("engine-rows", f"{name}: {one_line(exc)}")
@@ -260,7 +260,7 @@ def inside(root: Path, path: Path) -> bool:
     return True
 
 
-def check_manifest(fc: RunCheck, folder: Path, root: Path, meta: dict) -> dict[str, str] | None:
+def check_replication_manifest(fc: RunCheck, folder: Path, root: Path, meta: dict) -> dict[str, str] | None:
     """``manifest``: every file meta.json lists is there with its SHA-256, and nothing was added under
     records/ or engines/; ``paths``: no listed name leads outside the folder.  None: no manifest."""
     manifest = meta.get("manifest")
@@ -300,7 +300,7 @@ def check_manifest(fc: RunCheck, folder: Path, root: Path, meta: dict) -> dict[s
     return ok
 
 
-def check_report(fc: RunCheck, folder: Path, root: Path, rows: pd.DataFrame, meta: dict) -> None:
+def check_replication_report(fc: RunCheck, folder: Path, root: Path, rows: pd.DataFrame, meta: dict) -> None:
     """``report``: the tables of report.md are their rendering from runs.csv (and meta.json)."""
     from rpbench.replication.report import markdown
 

@@ -10,12 +10,12 @@ from pathlib import Path
 from rpbench import results
 from rpbench.check.bench import KIND as BENCH_KIND
 from rpbench.check.bench import check_bench
-from rpbench.check.core import PARENT_KINDS, FolderResult
+from rpbench.check.core import FolderResult
 from rpbench.check.parents import check_parent
 from rpbench.check.replication import check_replication
 from rpbench.check.verify import check_results
 from rpbench.exceptions import RpbenchError, one_line
-from rpbench.results.layout import META
+from rpbench.results.layout import META, PARENT_KINDS
 
 
 def check_tree(path: str | Path) -> list[FolderResult]:

@@ -15,7 +15,7 @@ import pandas as pd
 from rpbench import results
 from rpbench.check.artefacts import check_artefacts
 from rpbench.check.certificate import check_certificate
-from rpbench.check.core import EVENT_COLUMNS, FOLDER, RATIO_KPIS, FolderResult, RunCheck
+from rpbench.check.core import EVENT_SCHEMA, FOLDER, FolderResult, RunCheck
 from rpbench.check.events import check_event_log, check_events, check_movement
 from rpbench.check.exact import check_exact_plan
 from rpbench.check.folder import (
@@ -25,7 +25,7 @@ from rpbench.check.folder import (
     check_manifest,
     check_orders,
     read_folder,
-    read_table,
+    read_results_table,
 )
 from rpbench.check.kpis import (
     budget_expected,
@@ -42,6 +42,7 @@ from rpbench.check.page import check_page
 from rpbench.check.ratios import check_ratios
 from rpbench.exceptions import ResultsError, RpbenchError, one_line
 from rpbench.results.layout import EVENTS, RUNS, TRAJECTORIES
+from rpbench.results.ratios import RATIO_KPIS
 
 
 def check_results(folder: str | Path) -> FolderResult:
@@ -123,7 +124,7 @@ def _check_simulation(
     rc = RunCheck(name)
     check_clairvoyant(rc, f, name)
     savings[name] = None
-    events = read_table(run_dir / EVENTS, EVENT_COLUMNS)
+    events = read_results_table(run_dir / EVENTS, EVENT_SCHEMA)
     traj = results.load_trajectories(run_dir / TRAJECTORIES)
     if not check_movement(rc, traj, f.network, f.fleet["initial_node"].to_numpy(), f.params):
         for check in ("service", "max-pickup", "max-detour", "kpi", "competitive-ratio", "bound-certificate", "hourly"):

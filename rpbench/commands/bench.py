@@ -70,7 +70,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_solve_args(p)
     add_judging_args(p)
     add_output_args(p)
-    p.set_defaults(handler=run)
+    p.set_defaults(handler=_run)
 
 
 def add_model_args(p: argparse.ArgumentParser) -> None:
@@ -224,7 +224,7 @@ def _limits(items: list[str], run: list[str]) -> dict[str, float]:
     return out
 
 
-def run(args: argparse.Namespace) -> int:
+def _run(args: argparse.Namespace) -> int:
     check_numbers(args)  # before any model is built or loaded
     if not args.synthetic and not args.paths:
         raise ParameterError(

@@ -9,7 +9,7 @@ import sys
 from rpbench.check import EXIT_FAILED, EXIT_OK, EXIT_UNREADABLE, check_tree, exit_status, format_report
 from rpbench.commands.output import print_json
 
-STATUS = {EXIT_OK: "ok", EXIT_FAILED: "failed", EXIT_UNREADABLE: "unreadable"}
+CHECK_STATUS = {EXIT_OK: "ok", EXIT_FAILED: "failed", EXIT_UNREADABLE: "unreadable"}
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -39,10 +39,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="print one JSON object: ok, status (ok/failed/unreadable), exit_status, folders (folder -> "
         "run -> ok, status, violations, checked, skipped) and unreadable (folder -> reason)",
     )
-    p.set_defaults(handler=run)
+    p.set_defaults(handler=_run)
 
 
-def run(args: argparse.Namespace) -> int:
+def _run(args: argparse.Namespace) -> int:
     found = [result for given in args.folders for result in check_tree(given)]
     for result in found:
         if len(found) > 1 and not args.json:
@@ -56,7 +56,7 @@ def run(args: argparse.Namespace) -> int:
         print_json(
             {
                 "ok": code == EXIT_OK,
-                "status": STATUS[code],
+                "status": CHECK_STATUS[code],
                 "exit_status": code,
                 "folders": {
                     r.folder: {

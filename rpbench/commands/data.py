@@ -15,7 +15,7 @@ import sys
 
 from rpbench import paths
 from rpbench.commands.output import print_json
-from rpbench.data.fetch import check_verified, fetch, source_urls, verify
+from rpbench.data.fetch import check_verified, fetch, source_urls, verify_data
 from rpbench.exceptions import DataNotFoundError
 from rpbench.paths import (
     DATA_ENV,
@@ -64,7 +64,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     f.add_argument("--dry-run", action="store_true", help="print each file and the URL it comes from; download nothing")
     f.add_argument("--quiet", action="store_true", help="no progress bar")
     f.add_argument("--json", action="store_true", help="print one JSON object")
-    f.set_defaults(handler=run_fetch)
+    f.set_defaults(handler=_run_fetch)
 
     v = actions.add_parser(
         "verify",
@@ -80,7 +80,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="data folder to check (default: the folder rpbench uses, see `rpbench list`)",
     )
     v.add_argument("--json", action="store_true", help="print one JSON object")
-    v.set_defaults(handler=run_verify)
+    v.set_defaults(handler=_run_verify)
 
 
 def _usage(parser: argparse.ArgumentParser) -> int:
@@ -88,7 +88,7 @@ def _usage(parser: argparse.ArgumentParser) -> int:
     return 2
 
 
-def run_fetch(args: argparse.Namespace) -> int:
+def _run_fetch(args: argparse.Namespace) -> int:
     if args.dry_run:
         urls = source_urls(args.mirror)
         if args.json:
@@ -117,7 +117,7 @@ def run_fetch(args: argparse.Namespace) -> int:
     return 0
 
 
-def run_verify(args: argparse.Namespace) -> int:
+def _run_verify(args: argparse.Namespace) -> int:
     folder, origin = locate_data_dir(args.data)
     if folder is None:  # nothing to verify: no download either
         tried = ", ".join(str(c) for c in paths.default_data_candidates())
@@ -125,7 +125,7 @@ def run_verify(args: argparse.Namespace) -> int:
             f"no Haikou data folder found to verify (tried {tried}); fetch it with `rpbench data fetch`, "
             f"pass --data DIR or set ${DATA_ENV}"
         )
-    report = verify(folder)
+    report = verify_data(folder)
     if args.json:
         print_json({**report.as_dict(), "source": origin})
     else:

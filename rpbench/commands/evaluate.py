@@ -36,10 +36,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_decision_budget_arg(p)
     add_data_arg(p)
     add_offline_arg(p)
-    p.set_defaults(handler=run)
+    p.set_defaults(handler=_run)
 
 
-def run(args: argparse.Namespace) -> int:
+def _run(args: argparse.Namespace) -> int:
     check_numbers(args)  # before anything runs or downloads
     check_parallel(args)
     budget = decision_budget(args)

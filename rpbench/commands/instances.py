@@ -42,7 +42,7 @@ from rpbench.version import __version__
 #: Where a set's files are looked for without --dir: the committed tier in a checkout, else the default
 #: place `build` writes to.
 COMMITTED = Path("instances") / "library"
-DEFAULT_PARENT = Path("rpbench-instances")
+DEFAULT_INSTANCES_FOLDER = Path("rpbench-instances")
 #: Exact presets of different algorithms (HiGHS; Jonker-Volgenant and sparse blossom; OR-Tools; Blossom V).
 PROVERS = ("highs", "matching", "blossom-v", "ortools")
 
@@ -56,11 +56,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     verbs = p.add_subparsers(dest="verb", metavar="VERB", required=True)
     lst = verbs.add_parser("list", help="the sets, their tiers and sizes")
     lst.add_argument("--json", action="store_true", help="print one JSON object")
-    lst.set_defaults(handler=run_list)
+    lst.set_defaults(handler=_run_list)
 
     build = verbs.add_parser("build", help="regenerate a set from the data and compare it with its manifest")
     build.add_argument("set", metavar="SET", help=f"one of {', '.join(SETS)}")
-    build.add_argument("--out", default=None, metavar="DIR", help=f"new folder (default ./{DEFAULT_PARENT}/SET)")
+    build.add_argument(
+        "--out", default=None, metavar="DIR", help=f"new folder (default ./{DEFAULT_INSTANCES_FOLDER}/SET)"
+    )
     add_data_arg(build)
     build.add_argument(
         "--write-manifest",
@@ -69,7 +71,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="also write the built manifest to FILE (to record a new reference manifest)",
     )
     build.add_argument("--no-progress", action="store_true", help="no progress lines on stderr")
-    build.set_defaults(handler=run_build)
+    build.set_defaults(handler=_run_build)
 
     verify = verbs.add_parser("verify", help="check a folder of a set's files against the set's manifest")
     verify.add_argument("set", metavar="SET", help=f"one of {', '.join(SETS)}")
@@ -79,7 +81,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="DIR",
         help="the folder (default: instances/library/SET, else ./rpbench-instances/SET)",
     )
-    verify.set_defaults(handler=run_verify)
+    verify.set_defaults(handler=_run_verify)
 
     export = verbs.add_parser("export", help="write instances as MPS, LP, DIMACS assignment or an edge list")
     export.add_argument("paths", nargs="+", metavar="PATH", help="instance files or folders")
@@ -89,7 +91,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         help=f"comma-separated, of {', '.join(FORMATS)} (default mps); each instance in those its structure has",
     )
     export.add_argument("--out", required=True, metavar="DIR", help="new folder for the files")
-    export.set_defaults(handler=run_export)
+    export.set_defaults(handler=_run_export)
 
     solu = verbs.add_parser("solu", help="prove each instance's optimum with several exact presets: .solu lines")
     solu.add_argument("paths", nargs="+", metavar="PATH", help="instance files or folders")
@@ -102,10 +104,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_number_arg(solu, "--time-limit", TIME_LIMIT, default=600.0, metavar="S", help="per solve (default 600)")
     solu.add_argument("--out", required=True, metavar="FILE", help="the .solu file to write (new)")
     solu.add_argument("--no-progress", action="store_true", help="no progress lines on stderr")
-    solu.set_defaults(handler=run_solu)
+    solu.set_defaults(handler=_run_solu)
 
 
-def run_export(args: argparse.Namespace) -> int:
+def _run_export(args: argparse.Namespace) -> int:
     formats = [f.strip().lower() for f in args.format.split(",") if f.strip()]
     unknown = [f for f in formats if f not in FORMATS]
     if unknown or not formats:
@@ -124,7 +126,7 @@ def run_export(args: argparse.Namespace) -> int:
     return 0
 
 
-def run_solu(args: argparse.Namespace) -> int:
+def _run_solu(args: argparse.Namespace) -> int:
     check_numbers(args)
     out = check_out_file(args.out, "--out")
     if out.exists():
@@ -197,7 +199,7 @@ def _reference(name: str) -> dict:
     return reference
 
 
-def run_list(args: argparse.Namespace) -> int:
+def _run_list(args: argparse.Namespace) -> int:
     rows = []
     for name, spec in SETS.items():
         ref = packaged_manifest(name)
@@ -225,10 +227,10 @@ def run_list(args: argparse.Namespace) -> int:
     return 0
 
 
-def run_build(args: argparse.Namespace) -> int:
+def _run_build(args: argparse.Namespace) -> int:
     spec = instance_set(args.set)
     reference = packaged_manifest(spec.name)
-    out = args.out if args.out is not None else str(DEFAULT_PARENT / spec.name)
+    out = args.out if args.out is not None else str(DEFAULT_INSTANCES_FOLDER / spec.name)
     store.check_new_folder(out)
     if args.write_manifest is not None and Path(args.write_manifest).exists():
         raise ParameterError(f"--write-manifest {args.write_manifest!r} already exists; rpbench never overwrites it")
@@ -247,7 +249,7 @@ def run_build(args: argparse.Namespace) -> int:
     return _report(final, reference)
 
 
-def run_verify(args: argparse.Namespace) -> int:
+def _run_verify(args: argparse.Namespace) -> int:
     spec = instance_set(args.set)
     reference = _reference(spec.name)
     folder = Path(args.dir) if args.dir is not None else _default_dir(spec.name)
@@ -260,7 +262,7 @@ def run_verify(args: argparse.Namespace) -> int:
 
 def _default_dir(name: str) -> Path:
     committed = COMMITTED / name
-    return committed if committed.is_dir() else DEFAULT_PARENT / name
+    return committed if committed.is_dir() else DEFAULT_INSTANCES_FOLDER / name
 
 
 def _report(folder: Path, reference: dict) -> int:

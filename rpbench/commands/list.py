@@ -15,8 +15,7 @@ from rpbench.paths import default_data_candidates, describe_candidate, fetched_d
 from rpbench.scenarios import SCENARIOS
 from rpbench.scenarios.base import Params
 from rpbench.spec import options_class
-from rpbench.strategies import REGISTRY as STRATEGY_REGISTRY
-from rpbench.strategies import plugin_names, strategy_class
+from rpbench.strategies import STRATEGY_REGISTRY, strategy_class, strategy_plugin_names
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -28,7 +27,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     add_data_arg(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
-    p.set_defaults(handler=run)
+    p.set_defaults(handler=_run)
 
 
 def gather(data: str | None) -> dict:
@@ -73,12 +72,12 @@ def gather(data: str | None) -> dict:
             for s in SCENARIOS.values()
         ],
         "presets": presets,
-        "strategies": [run_entry(name) for name in [*STRATEGY_REGISTRY, *plugin_names(), *ORACLE_RUNS]],
+        "strategies": [_run_entry(name) for name in [*STRATEGY_REGISTRY, *strategy_plugin_names(), *ORACLE_RUNS]],
         "parameters": Params().as_dict(),
     }
 
 
-def run_entry(name: str) -> dict:
+def _run_entry(name: str) -> dict:
     """A strategy's or oracle run's label, description and declared options (``--opt NAME.OPTION=VALUE``)."""
     if name in ORACLE_RUNS:
         run = ORACLE_RUNS[name]
@@ -89,7 +88,7 @@ def run_entry(name: str) -> dict:
     return {"name": name, "label": label, "description": description, "options": options_class(name).help()}
 
 
-def run(args: argparse.Namespace) -> int:
+def _run(args: argparse.Namespace) -> int:
     info = gather(args.data)
     if args.json:
         print_json(info)

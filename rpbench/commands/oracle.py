@@ -93,10 +93,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--pairs", metavar="CSV", default=None, help="write the chosen pairs to this CSV file")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     add_strict_arg(p)
-    p.set_defaults(handler=run)
+    p.set_defaults(handler=_run)
 
 
-def run(args: argparse.Namespace) -> int:
+def _run(args: argparse.Namespace) -> int:
     check_numbers(args)  # before the scenario is built (or its data fetched)
     pairs_csv = check_out_file(args.pairs, "--pairs") if args.pairs else None  # before solving anything
     if args.variant == "bound" and (args.both_pickup_orders or args.pickup_check or args.allow_enroute):

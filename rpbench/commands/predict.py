@@ -28,11 +28,12 @@ from rpbench.commands.output import note, print_json
 from rpbench.data.first_run import ensure_data_dir
 from rpbench.exceptions import ParameterError
 from rpbench.options import Range
-from rpbench.predict import PredictConfig, build_model, predict, solve_model
+from rpbench.paper import PAPER_DATE
+from rpbench.predict import PredictConfig, build_prediction_model, predict, solve_prediction_model
 from rpbench.predict.compare import compare
 from rpbench.predict.config import ACCELERATIONS, PRIORITIES
 from rpbench.predict.fcfs import simulate, validate
-from rpbench.predict.rates import DEFAULT_DATE, RATE_KINDS, load_rates
+from rpbench.predict.rates import RATE_KINDS, load_rates
 from rpbench.scenarios.base import Params
 from rpbench.scenarios.common import haikou_network
 
@@ -58,7 +59,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="month (21-day table, default), day (a date's peak orders), day-table "
         "(the 2017-05-01 per-day OD table), or a path to an OD table CSV",
     )
-    p.add_argument("--date", default=None, help=f"date for --rates day (default {DEFAULT_DATE})")
+    p.add_argument("--date", default=None, help=f"date for --rates day (default {PAPER_DATE})")
     add_data_arg(p)
     add_offline_arg(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
@@ -109,17 +110,17 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--compare-authors", action="store_true", help="compare with the authors' published 2017-05-01 predictions"
     )
-    p.set_defaults(handler=run)
+    p.set_defaults(handler=_run)
 
 
 def default_csv(kind: str, date: str | None) -> Path:
     label = kind if kind in RATE_KINDS else Path(kind).name.split(".")[0]
     if kind == "day":
-        label += f"-{date or DEFAULT_DATE}"
+        label += f"-{date or PAPER_DATE}"
     return Path(f"prediction-{label}.csv")
 
 
-def run(args: argparse.Namespace) -> int:
+def _run(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     check_numbers(args)  # before the data folder is fetched or anything is built
     given = {"--hours": args.hours, "--min-samples": args.min_samples, "--seed": args.seed}
@@ -144,8 +145,8 @@ def run(args: argparse.Namespace) -> int:
         note(f"rpbench predict: {len(rates)} ODs from {rates.source}; building the model ...")
     out: dict = {}
     if args.validate_fcfs:
-        model = build_model(network, rates, params, config)
-        prediction = solve_model(model)
+        model = build_prediction_model(network, rates, params, config)
+        prediction = solve_prediction_model(model)
         simulated = simulate(model, hours=hours, seed=seed)
         del model
         out["fcfs"], _ = validate(prediction, simulated, min_samples=min_samples)

@@ -23,10 +23,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("source", metavar="RESULTS_DIR")
     p.add_argument("dest", metavar="DEST", help="folder to create (never overwritten)")
-    p.set_defaults(handler=run)
+    p.set_defaults(handler=_run)
 
 
-def run(args: argparse.Namespace) -> int:
+def _run(args: argparse.Namespace) -> int:
     dest = Path(args.dest)
     # before the (slow) checker: DEST must be free (a dangling link counts as taken) and its folder writable
     check_new_folder(dest, what="DEST")

@@ -27,7 +27,7 @@ from rpbench.results.layout import engine_folder
 from rpbench.results.store import check_new_folder
 from rpbench.scenarios.request import parse_dates
 
-DEFAULT_STRATEGIES = "np,mb,rtv,fl-nd,fl"
+REPLICATED_STRATEGIES = "np,mb,rtv,fl-nd,fl"
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -45,8 +45,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--dates", default=None, metavar="A..B|A,B,...", help="several dates, e.g. 2017-05-01..2017-05-14")
     p.add_argument(
         "--strategies",
-        default=DEFAULT_STRATEGIES,
-        help=f"comma-separated subset of {DEFAULT_STRATEGIES} (default all)",
+        default=REPLICATED_STRATEGIES,
+        help=f"comma-separated subset of {REPLICATED_STRATEGIES} (default all)",
     )
     p.add_argument("--solver", default="highs", help="solver preset for every round (default highs)")
     p.add_argument(
@@ -66,10 +66,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         '"response_rate", ...}], "criterion": {...}}',
     )
     p.add_argument("--progress", action="store_true", help="one line on stderr per run")
-    p.set_defaults(handler=run)
+    p.set_defaults(handler=_run)
 
 
-def run(args: argparse.Namespace) -> int:
+def _run(args: argparse.Namespace) -> int:
     strategies = parse_strategies(args.strategies)
     check_unique(
         f"--strategies {args.strategies!r}", [s.strip().lower() for s in args.strategies.split(",") if s.strip()]

@@ -43,10 +43,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         "instead of printing it; the results folders are then left as they are (several folders: the "
         "combined table and its headline-KPI figure)",
     )
-    p.set_defaults(handler=run)
+    p.set_defaults(handler=_run)
 
 
-def run(args: argparse.Namespace) -> int:
+def _run(args: argparse.Namespace) -> int:
     metrics = [m.strip() for m in args.metrics.split(",")] if args.metrics else None
     if args.out is None:
         text, _ = render([Path(f) for f in args.folders], metrics, page=args.html)

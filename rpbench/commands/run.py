@@ -59,10 +59,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="run --dates on an existing Dask cluster (e.g. tcp://host:8786) instead of local worker "
         "processes (needs the dask extra: pip install 'rpbench[dask]')",
     )
-    p.set_defaults(handler=run)
+    p.set_defaults(handler=_run)
 
 
-def run(args: argparse.Namespace) -> int:
+def _run(args: argparse.Namespace) -> int:
     check_numbers(args)  # before anything runs or downloads
     if args.dates and args.date:
         raise ParameterError("--dates and --date exclude each other; drop --date")
@@ -78,13 +78,13 @@ def run(args: argparse.Namespace) -> int:
     check_out_name(args.out, inner=[*days, "runs", max((e.name for e in runs), key=len)])
     check_new_folder(args.out)  # before a first run's data download: a bad --out must cost nothing
     spec = run_spec(args, scenario_request(args).resolved(), runs=runs)
-    code = run_many_days(args, spec) if args.dates else run_one(args, spec)
+    code = _run_many_days(args, spec) if args.dates else _run_one(args, spec)
     if args.scenario is None and spec.request.name == "toy" and not args.json:  # the fall-back city
         note(f"rpbench: SYNTHETIC DATA: the table above is the toy city, not Haikou; get the data: {FETCH_COMMAND}")
     return code
 
 
-def run_one(args: argparse.Namespace, spec: RunSpec) -> int:
+def _run_one(args: argparse.Namespace, spec: RunSpec) -> int:
     scenario = spec.request.build()
     note(scenario.label)
     outcome = run_comparison(spec, args.out, scenario=scenario, progress=False if args.no_progress else None)
@@ -113,7 +113,7 @@ def run_one(args: argparse.Namespace, spec: RunSpec) -> int:
     return 0
 
 
-def run_many_days(args: argparse.Namespace, spec: RunSpec) -> int:
+def _run_many_days(args: argparse.Namespace, spec: RunSpec) -> int:
     dates = spec.request.dates(args.dates)
     check_unique(f"--dates {args.dates!r}", dates)
     name = spec.request.name

@@ -17,10 +17,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     add_scenario_args(p, positional=True)
     p.add_argument("--json", action="store_true", help="print one JSON object")
-    p.set_defaults(handler=run)
+    p.set_defaults(handler=_run)
 
 
-def run(args: argparse.Namespace) -> int:
+def _run(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     scenario = scenario_request(args).build()
     summary = scenario.summary()

@@ -38,10 +38,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--opt", action="append", default=[], metavar="STRATEGY.KEY=VALUE", help="strategy option")
     p.add_argument("--out", required=True, help="folder to create for the instance files")
     p.add_argument("--json", action="store_true", help="print the manifest as JSON")
-    p.set_defaults(handler=run)
+    p.set_defaults(handler=_run)
 
 
-def run(args: argparse.Namespace) -> int:
+def _run(args: argparse.Namespace) -> int:
     check_numbers(args)  # before anything runs or downloads
     runs = parse_runs(args.strategies, args.opt)
     check_presets(args)

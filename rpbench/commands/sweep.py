@@ -43,7 +43,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", default=None, help="sweep folder to create")
     add_parallel_args(p)
     p.add_argument("--json", action="store_true", help="print the sweep table as one JSON object")
-    p.set_defaults(handler=run)
+    p.set_defaults(handler=_run)
 
 
 def build_spec(args: argparse.Namespace) -> SweepSpec:
@@ -82,7 +82,7 @@ def check_opt_conflict(parameter: str, runs: list[str], opts: list[str]) -> None
             )
 
 
-def run(args: argparse.Namespace) -> int:
+def _run(args: argparse.Namespace) -> int:
     check_numbers(args)  # before anything runs or downloads
     check_parallel(args)
     decision_budget(args)

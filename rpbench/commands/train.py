@@ -57,10 +57,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", default=None, metavar="FOLDER", help="the new model folder")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--no-progress", action="store_true", help="no progress lines on stderr")
-    p.set_defaults(handler=run)
+    p.set_defaults(handler=_run)
 
 
-def run(args: argparse.Namespace) -> int:
+def _run(args: argparse.Namespace) -> int:
     if args.single_date is not None:
         raise ParameterError("--date: a model is trained on several days, give --dates A..B or A,B,...")
     if args.single_seed is not None:

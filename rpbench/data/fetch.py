@@ -528,7 +528,7 @@ def _one_line(value: object) -> str:
     return " ".join(str(value).split())
 
 
-def verify(folder: str | os.PathLike, *, entries: list[RegistryEntry] | None = None) -> VerifyReport:
+def verify_data(folder: str | os.PathLike, *, entries: list[RegistryEntry] | None = None) -> VerifyReport:
     """Check every registry file present in ``folder``; list missing and unregistered files."""
     root = Path(folder).expanduser().resolve()
     entries = load_registry() if entries is None else entries

@@ -61,23 +61,27 @@ def read_day_od_shares(data_dir: Path) -> pd.DataFrame:
     return frame
 
 
+#: The columns of the authors' per-OD prediction file: the pairing probability and the expected distances,
+#: for any passenger, as a taker and as a seeker.
+AUTHORS_PREDICTION_COLUMNS = (
+    "matching_prob",
+    "ride_distance",
+    "detour_distance",
+    "shared_distance",
+    "saved_distance",
+    "ride_distance_for_taker",
+    "detour_distance_for_taker",
+    "shared_distance_for_taker",
+    "saved_distance_for_taker",
+    "ride_distance_for_seeker",
+    "detour_distance_for_seeker",
+    "shared_distance_for_seeker",
+    "saved_distance_for_seeker",
+)
+
+
 def read_authors_predictions(data_dir: Path) -> pd.DataFrame:
     """The authors' per-OD predictions for 2017-05-01 (keyed by ``od_id`` of the per-day table)."""
     path = data_dir / AUTHORS_PREDICTION_FILE
-    columns = [
-        "matching_prob",
-        "ride_distance",
-        "detour_distance",
-        "shared_distance",
-        "saved_distance",
-        "ride_distance_for_taker",
-        "detour_distance_for_taker",
-        "shared_distance_for_taker",
-        "saved_distance_for_taker",
-        "ride_distance_for_seeker",
-        "detour_distance_for_seeker",
-        "shared_distance_for_seeker",
-        "saved_distance_for_seeker",
-    ]
-    spec = {"OD_id": INT, **{c: FLOAT for c in columns}}
+    spec = {"OD_id": INT, **{c: FLOAT for c in AUTHORS_PREDICTION_COLUMNS}}
     return read_table(path, "authors' prediction", spec, rename={"OD_id": "od_id"})

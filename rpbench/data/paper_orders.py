@@ -51,7 +51,7 @@ PREDICTION_COLUMNS = (
     "saved_distance_for_seeker",
     "saved_distance_for_taker",
 )
-COLUMNS = ("order_id", "departure_time", "origin_id", "destination_id") + PREDICTION_COLUMNS
+ORDER_FILE_COLUMNS = ("order_id", "departure_time", "origin_id", "destination_id") + PREDICTION_COLUMNS
 
 
 def paper_order_source(data_dir: Path, date: str) -> Path:
@@ -65,7 +65,7 @@ def paper_order_source(data_dir: Path, date: str) -> Path:
 def read_paper_orders(data_dir: Path, date: str) -> pd.DataFrame:
     """The authors' input frame of ``date`` in their row order (index 0..n-1 = their row index).
 
-    Columns :data:`COLUMNS`; ``departure_time`` is a datetime, the prediction
+    Columns :data:`ORDER_FILE_COLUMNS`; ``departure_time`` is a datetime, the prediction
     columns are NaN where no prediction exists for the order's OD pair.
     """
     day = parse_date(date).isoformat()

@@ -174,10 +174,10 @@ def simulate_strategy(
     finally:
         if bar is not None:
             bar.close()
-    return evaluate(scenario, sim, entry, label=entry.label_of(cls.label), color=entry.color_of(cls.color))
+    return evaluate_run(scenario, sim, entry, label=entry.label_of(cls.label), color=entry.color_of(cls.color))
 
 
-def evaluate(scenario: Scenario, sim: SimResult, entry: RunEntry, *, label: str, color: str | None) -> StrategyRun:
+def evaluate_run(scenario: Scenario, sim: SimResult, entry: RunEntry, *, label: str, color: str | None) -> StrategyRun:
     """A simulation's KPIs (the paper's Table 2 rows) from its event log and odometers."""
     orders = scenario.orders
     solo = scenario.network.distances()(orders.origin, orders.destination)

@@ -17,15 +17,13 @@ from rpbench.report.evaluation import write_evaluation_report
 from rpbench.report.html import write_html
 from rpbench.report.html.bench import bench_tables, write_bench_folder
 from rpbench.results import layout
-from rpbench.results.layout import HEAVY, REPORT
+from rpbench.results.layout import HEAVY, PARENT_KINDS, REPORT
 from rpbench.results.read import load_kpis
 from rpbench.results.runs import run_styles
 
 #: A report's figures: PNG, and the vector copies beside each.
 FIGURE_SUFFIXES = (".png", *layout.VECTOR_SUFFIXES)
 FIGURE_PATTERNS = tuple(f"*{s}" for s in FIGURE_SUFFIXES)
-#: Folder kinds whose report is written by their own harness module (all others are comparisons).
-PARENT_KINDS = ("multi-day", "sweep", "evaluate")
 
 
 def render(

@@ -38,7 +38,7 @@ from rpbench.scenarios.paper_input import PaperInput, load_paper_input
 from rpbench.scenarios.peak import build_peak
 from rpbench.spec import resolve_runs
 
-KPIS = (
+ROW_KPIS = (
     "response_rate",
     "pairing_ratio",
     "total_saving_km",
@@ -183,9 +183,9 @@ def _row(
     for k in ("orders", "response_denominator", "vehicles", "served", "pooled_passengers"):
         if k in kpis:
             row[k] = int(kpis[k])
-    ours = {k: _clean(kpis.get(k, float("nan"))) for k in KPIS}
+    ours = {k: _clean(kpis.get(k, float("nan"))) for k in ROW_KPIS}
     row.update(ours)
-    for k in reference.KPIS:
+    for k in reference.REFERENCE_KPIS:
         c = reference.committed_value(committed, strategy, date, k)
         row[f"committed_{k}"] = _clean(c)
         mine = ours[k]

@@ -31,8 +31,8 @@ from rpbench.valuefn.model import MODEL_JSON, ValueModel, load_model, save_model
 from rpbench.valuefn.training import (
     CACHE_FOLDER,
     Settings,
-    cache_key,
     check_held_out,
+    training_key,
     training_record,
     training_scenarios,
 )
@@ -146,7 +146,7 @@ def cached_model(
 ) -> tuple[ValueModel, str, Path]:
     """The model trained on ``scenarios`` with ``settings``: from the cache (its digests verified on load),
     or trained and stored there.  Returns the model, its digest and its folder."""
-    folder = cache_dir() / CACHE_FOLDER / cache_key(scenarios, settings)
+    folder = cache_dir() / CACHE_FOLDER / training_key(scenarios, settings)
     if (folder / MODEL_JSON).is_file():
         try:
             model, digest = load_model(folder)

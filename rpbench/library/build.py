@@ -19,7 +19,7 @@ from rpbench.bench import synthetic
 from rpbench.bench.snapshot import take_snapshots
 from rpbench.digests import arrays_sha256, file_sha256
 from rpbench.instances import load_instance, save_instance
-from rpbench.library.manifest import FORMAT
+from rpbench.library.manifest import SET_FORMAT
 from rpbench.library.sets import LIBRARY_VERSION, InstanceSet, Source, Synthetic
 from rpbench.model import Model
 from rpbench.scenarios import ScenarioRequest
@@ -40,7 +40,7 @@ def build_set(
     for model_spec in spec.synthetic:
         entries.append(_build_synthetic(spec, model_spec, folder))
     return {
-        "format": FORMAT,
+        "format": SET_FORMAT,
         "set": spec.name,
         "tier": spec.tier,
         "description": spec.description,

@@ -19,7 +19,7 @@ from rpbench.digests import arrays_sha256, file_sha256
 from rpbench.exceptions import ParameterError
 from rpbench.files import load_json_object
 
-FORMAT = "rpbench-instance-set-1"
+SET_FORMAT = "rpbench-instance-set-1"
 MANIFEST = "manifest.json"
 
 

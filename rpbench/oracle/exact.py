@@ -204,7 +204,7 @@ class _Arcs:
         return {k: np.concatenate([p[k] for p in self.parts]) for k in self.parts[0]}
 
 
-def build_model(view: LatticeView, scenario: Scenario) -> ExactModel:
+def build_exact_model(view: LatticeView, scenario: Scenario) -> ExactModel:
     """The time-expanded flow model of the lattice city (see the module docstring)."""
     t0 = time.perf_counter()
     n, T = view.n_nodes, view.horizon
@@ -454,7 +454,7 @@ def _upper_bounds(model: ExactModel) -> np.ndarray:
     return np.where((model.kind == FREE) | (model.kind == EXIT), n_veh, 1.0)
 
 
-def solve_model(
+def solve_exact_model(
     model: ExactModel, *, solver: str = "highs", time_limit_s: float = 600.0, threads: int = 1
 ) -> ExactSolution:
     """Maximise the total saving; ``solver`` one of :data:`SOLVERS`."""
@@ -540,7 +540,7 @@ class VehiclePlan:
 
 
 @dataclass
-class Plan:
+class OptimalPlan:
     """The optimum as decisions per round: assignments (vacant and two-passenger), joins, and every free
     vehicle's next node."""
 
@@ -566,7 +566,7 @@ class Plan:
         return out
 
 
-def extract_plan(model: ExactModel, sol: ExactSolution) -> Plan:
+def extract_plan(model: ExactModel, sol: ExactSolution) -> OptimalPlan:
     """Decompose the integer flow into one walk per vehicle (vehicles in id order, arcs in column order)."""
     view = model.view
     n = view.n_nodes
@@ -604,4 +604,4 @@ def extract_plan(model: ExactModel, sol: ExactSolution) -> Plan:
                 job = {}
             state = int(model.head[c])
         plans.append(vp)
-    return Plan(objective_blocks=sol.objective, block_m=view.block_m, vehicles=plans)
+    return OptimalPlan(objective_blocks=sol.objective, block_m=view.block_m, vehicles=plans)

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from rpbench.backends import REGISTRY, Backend, Preset, SolveOptions, backend_class, load_preset, solve
+from rpbench.backends import BACKEND_REGISTRY, Backend, Preset, SolveOptions, backend_class, load_preset, solve
 from rpbench.backends.cardinality import maximum_cardinality_matching
 from rpbench.exceptions import ParameterError, PresetError, RpbenchError
 from rpbench.model import PairingModel, Solution, Status, Structure, quantize
@@ -225,7 +225,7 @@ def resolve_preset(solver: str | Preset | Backend, options: SolveOptions | None 
 def pairing_backends() -> list[str]:
     """Registered backends that declare the pairing structure exact (modules that import)."""
     out = []
-    for name in REGISTRY:
+    for name in BACKEND_REGISTRY:
         try:
             if Structure.PAIRING in backend_class(name).exact:
                 out.append(name)

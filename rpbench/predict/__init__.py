@@ -48,10 +48,10 @@ from rpbench.predict.prediction import (
     Lookup,
     Prediction,
     PredictionModel,
-    build_model,
+    build_prediction_model,
     cached_prediction,
     predict,
-    solve_model,
+    solve_prediction_model,
 )
 from rpbench.predict.rates import (
     RATE_KINDS,
@@ -76,7 +76,7 @@ __all__ = [
     "PredictConfig",
     "Prediction",
     "PredictionModel",
-    "build_model",
+    "build_prediction_model",
     "cached_prediction",
     "day_table_rates",
     "load_rates",
@@ -86,6 +86,6 @@ __all__ = [
     "predict",
     "scenario_predictions",
     "scenario_rates",
-    "solve_model",
+    "solve_prediction_model",
     "table_rates",
 ]

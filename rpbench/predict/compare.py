@@ -18,23 +18,8 @@ import numpy as np
 import pandas as pd
 
 from rpbench.data import read_authors_predictions, read_day_od_shares
+from rpbench.data.od_rates import AUTHORS_PREDICTION_COLUMNS
 from rpbench.predict.prediction import Prediction
-
-COLUMNS = (
-    "matching_prob",
-    "ride_distance",
-    "detour_distance",
-    "shared_distance",
-    "saved_distance",
-    "ride_distance_for_taker",
-    "detour_distance_for_taker",
-    "shared_distance_for_taker",
-    "saved_distance_for_taker",
-    "ride_distance_for_seeker",
-    "detour_distance_for_seeker",
-    "shared_distance_for_seeker",
-    "saved_distance_for_seeker",
-)
 
 
 def joined(prediction: Prediction, data_dir: Path) -> pd.DataFrame:
@@ -53,7 +38,7 @@ def compare(prediction: Prediction, data_dir: Path) -> tuple[dict, pd.DataFrame]
 
     frame = joined(prediction, data_dir)
     rows = []
-    for col in COLUMNS:
+    for col in AUTHORS_PREDICTION_COLUMNS:
         ours, theirs = frame[f"{col}_ours"].to_numpy(), frame[f"{col}_authors"].to_numpy()
         ok = np.isfinite(ours) & np.isfinite(theirs)
         ours, theirs = ours[ok], theirs[ok]

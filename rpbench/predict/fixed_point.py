@@ -21,7 +21,7 @@ a seeker's running product ``λ_s Π Q_c'`` is carried as a
 product and its total ``log(1 - p_s)`` as a sum of ``log Q_c``; ``1 - e^{-x}``
 is ``-expm1(-x)``, and ``log(1 - p_t) = -η_t τ_t`` exactly.  Everything is float64.
 
-:func:`solve` iterates ``ρ <- (1-β)ρ + β clip(ρ')`` from ρ = 0 (A9): β halves
+:func:`solve_fixed_point` iterates ``ρ <- (1-β)ρ + β clip(ρ')`` from ρ = 0 (A9): β halves
 after ``grow_patience`` growing residuals in a row (floor ``beta_floor``), the
 stop is ``max|ρ' - ρ| <= tol`` or ``max_iter``, and the returned evaluation is
 recomputed from the final ρ so that all reported quantities are mutually
@@ -299,7 +299,7 @@ def evaluate(system: System, rho: np.ndarray, sums: PairSums | None = None) -> E
     )
 
 
-def solve(
+def solve_fixed_point(
     system: System, *, progress: Callable[[int, float], None] | None = None, rho0: np.ndarray | None = None
 ) -> tuple[Evaluation, SolveInfo]:
     """Damped fixed-point iteration (§2.6) from ρ = 0; returns the final consistent evaluation.

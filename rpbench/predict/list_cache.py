@@ -64,7 +64,7 @@ from rpbench.predict.states import StateSpace, build_states
 from rpbench.scenarios.base import Params
 
 #: Bump when the files, or the states or lists they hold for the same inputs, change.
-FORMAT_VERSION = "5"  # 5: file digests in the manifest, the verified stamp
+LISTS_FORMAT_VERSION = "5"  # 5: file digests in the manifest, the verified stamp
 #: The network-side parameters and the configuration fields the structure depends on.
 KEY_PARAMS = ("max_pickup_m", "max_detour_m", "speed_mps")
 KEY_CONFIG = ("include_origin_state", "priority", "keep_nonpositive", "order_rule")
@@ -92,7 +92,7 @@ class CachedLists:
 def lists_key(network: RoadNetwork, rates: OdRates, params: Params, config: PredictConfig) -> str:
     """Hash of everything the structure depends on (not λ_w, not τ_0)."""
     h = hashlib.sha256()
-    h.update(f"structure|{FORMAT_VERSION}|{network.content_hash}|".encode())
+    h.update(f"structure|{LISTS_FORMAT_VERSION}|{network.content_hash}|".encode())
     for arr in (rates.origin, rates.destination):
         h.update(np.ascontiguousarray(arr, dtype=np.int64).tobytes())
     h.update(json.dumps({k: float(getattr(params, k)) for k in KEY_PARAMS}, sort_keys=True).encode())
@@ -149,7 +149,7 @@ def _remove_outdated(root: Path) -> None:
     for entry in root.glob("predict-structure-*"):
         try:
             version = json.loads((entry / "manifest.json").read_text()).get("version")
-            outdated = int(version) < int(FORMAT_VERSION)
+            outdated = int(version) < int(LISTS_FORMAT_VERSION)
         except (OSError, ValueError, TypeError, AttributeError):
             continue
         if outdated:
@@ -217,7 +217,7 @@ def _build_into(
     np.savez(directory / "states.npz", **{f.name: getattr(space, f.name) for f in dataclasses.fields(space)})
     np.save(directory / "seeker_off.npy", matching.seeker_off)
     manifest = {
-        "version": FORMAT_VERSION,
+        "version": LISTS_FORMAT_VERSION,
         "n_od": len(rates),
         "n_pairs": matching.n_pairs,
         "local": matching.local.dtype.str,
@@ -258,7 +258,11 @@ def _open_entry(
     n_od = len(rates)
     try:
         manifest = json.loads((directory / "manifest.json").read_text())
-        if not isinstance(manifest, dict) or manifest.get("version") != FORMAT_VERSION or manifest.get("n_od") != n_od:
+        if (
+            not isinstance(manifest, dict)
+            or manifest.get("version") != LISTS_FORMAT_VERSION
+            or manifest.get("n_od") != n_od
+        ):
             raise DamagedEntry("it was written for other inputs")
         _verify_files(directory, manifest)
         with np.load(directory / "states.npz", allow_pickle=False) as data:

@@ -29,7 +29,7 @@ import rpbench.predict.cache as cache
 from rpbench.exceptions import ParameterError
 from rpbench.network import RoadNetwork
 from rpbench.predict.config import PredictConfig
-from rpbench.predict.fixed_point import SolveInfo, System, solve
+from rpbench.predict.fixed_point import SolveInfo, System, solve_fixed_point
 from rpbench.predict.list_cache import load_lists
 from rpbench.predict.match_sets import Matching
 from rpbench.predict.rates import OdRates
@@ -231,7 +231,7 @@ class Prediction:
 
 
 # ---------------------------------------------------------------------- build
-def build_model(
+def build_prediction_model(
     network: RoadNetwork,
     rates: OdRates,
     params: Params | None = None,
@@ -250,7 +250,7 @@ def build_model(
     )
 
 
-def solve_model(
+def solve_prediction_model(
     model: PredictionModel, *, progress: Callable[[int, float], None] | None = None, rho0: np.ndarray | None = None
 ) -> Prediction:
     """Solve the fixed point of a built model (optionally warm-started) and derive the per-OD outcome.
@@ -261,7 +261,7 @@ def solve_model(
     """
     system = model.system
     with _sweep_bar(progress) as report:
-        ev, info = solve(system, progress=report, rho0=rho0)
+        ev, info = solve_fixed_point(system, progress=report, rho0=rho0)
         report(-1, info.residual)
         t0 = time.perf_counter()
         ev, out = savings_result(system, ev.rho)
@@ -337,8 +337,8 @@ def predict(
         if hit is not None:
             return hit
     t0, c0 = time.perf_counter(), time.process_time()
-    model = build_model(network, rates, params, config, use_cache=use_cache)
-    prediction = solve_model(model, progress=progress, rho0=rho0)
+    model = build_prediction_model(network, rates, params, config, use_cache=use_cache)
+    prediction = solve_prediction_model(model, progress=progress, rho0=rho0)
     del model
     prediction.info["time_s"] = round(time.perf_counter() - t0, 4)
     prediction.info["cpu_s"] = round(time.process_time() - c0, 4)  # wall > cpu when the machine is shared

@@ -30,11 +30,11 @@ import pandas as pd
 from rpbench.data import read_day_od_shares, read_month_od_rates, read_od_rates, read_peak_orders
 from rpbench.exceptions import DataError, ParameterError
 from rpbench.network import RoadNetwork
+from rpbench.paper import PAPER_DATE
 
 HOUR_S = 3600.0
 #: Named rate sources of :func:`load_rates` (a path to an OD table CSV is accepted too).
 RATE_KINDS = ("month", "day", "day-table")
-DEFAULT_DATE = "2017-05-01"
 
 
 @dataclass(frozen=True, eq=False)
@@ -213,7 +213,7 @@ def load_rates(kind: str, network: RoadNetwork, data_dir: Path, date: str | None
     if kind == "month":
         return month_rates(network, data_dir)
     if kind == "day":
-        return peak_order_rates(network, data_dir, date or DEFAULT_DATE)
+        return peak_order_rates(network, data_dir, date or PAPER_DATE)
     if kind == "day-table":
         return day_table_rates(network, data_dir)
     path = Path(kind)

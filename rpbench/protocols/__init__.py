@@ -48,7 +48,7 @@ class Protocol:
 
 #: What a protocol's metrics may name: the comparison table's KPIs, the ratios (the competitive ratio's two ends,
 #: saving / Oracle-1), decision times.
-METRICS = (*KPI_ORDER, *RATIO_KPIS, *DECISION_KPIS)
+PROTOCOL_METRICS = (*KPI_ORDER, *RATIO_KPIS, *DECISION_KPIS)
 
 
 def builtin_names() -> list[str]:
@@ -105,9 +105,11 @@ def _parse(raw: dict[str, Any], where: str) -> Protocol:
         raise ParameterError(f"protocol {where!r}: a field has the wrong type ({exc})") from None
     if not seeds or len(set(seeds)) != len(seeds) or min(seeds) < 0:
         raise ParameterError(f"protocol {where!r}: seeds must be distinct non-negative integers")
-    bad = [m for m in protocol.metrics if m not in METRICS]
+    bad = [m for m in protocol.metrics if m not in PROTOCOL_METRICS]
     if bad or not protocol.metrics:
-        raise ParameterError(f"protocol {where!r}: unknown metric(s) {', '.join(bad)} (known: {', '.join(METRICS)})")
+        raise ParameterError(
+            f"protocol {where!r}: unknown metric(s) {', '.join(bad)} (known: {', '.join(PROTOCOL_METRICS)})"
+        )
     if not 1 <= boot.resamples <= 100_000 or not 0.5 <= boot.level < 1.0:
         raise ParameterError(f"protocol {where!r}: bootstrap resamples must be 1..100000 and level in [0.5, 1)")
     if protocol.sample is not None and not 0.0 < protocol.sample <= 1.0:

@@ -23,7 +23,7 @@ REFERENCE_FILE = Path("reference") / "authors_committed_outputs_2017-05-01_14.cs
 METHODS = {"np": "NP", "mb": "MB", "rtv": "RTV", "fl-nd": "FL-no_delay", "fl": "FL"}
 
 #: committed metric key -> rpbench KPI name (and a unit factor).
-METRICS = {
+REFERENCE_METRICS = {
     "response_rate": ("response_rate", 1.0),
     "carpool_rate": ("pairing_ratio", 1.0),
     "saved_ride_distance": ("total_saving_km", 1e-3),
@@ -66,7 +66,7 @@ TABLE2_ORIGIN = {
     "np": {"response_rate": "neither"},
 }
 TABLE2_DATE = "2017-05-01"
-KPIS = ("response_rate", "pairing_ratio", "total_saving_km", "avg_detour_m", "avg_shared_m")
+REFERENCE_KPIS = ("response_rate", "pairing_ratio", "total_saving_km", "avg_detour_m", "avg_shared_m")
 
 
 def has_committed(data_dir: Path) -> bool:
@@ -81,13 +81,13 @@ def read_committed(data_dir: Path) -> pd.DataFrame:
         return pd.DataFrame(columns=["strategy", "date", "kpi", "value"])
     raw = pd.read_csv(path)
     by_method = {v: k for k, v in METHODS.items()}
-    raw = raw[raw["method"].isin(by_method) & raw["metric"].isin(METRICS)]
+    raw = raw[raw["method"].isin(by_method) & raw["metric"].isin(REFERENCE_METRICS)]
     return pd.DataFrame(
         {
             "strategy": raw["method"].map(by_method),
             "date": raw["day"],
-            "kpi": raw["metric"].map(lambda m: METRICS[m][0]),
-            "value": raw["mean_value"].astype(float) * raw["metric"].map(lambda m: METRICS[m][1]),
+            "kpi": raw["metric"].map(lambda m: REFERENCE_METRICS[m][0]),
+            "value": raw["mean_value"].astype(float) * raw["metric"].map(lambda m: REFERENCE_METRICS[m][1]),
         }
     ).reset_index(drop=True)
 

@@ -7,10 +7,10 @@ import pandas as pd
 
 from rpbench.replication.reference import REFERENCE_FILE
 
-#: The agreement criterion with the committed outputs: MB and RTV within REL_TOL on pairing ratio and total
+#: The agreement criterion with the committed outputs: MB and RTV within MATCH_REL_TOL on pairing ratio and total
 #: saving, NP's response rate within NP_RESPONSE_TOL, on at least REQUIRED_DAYS of every OF_DAYS days that
 #: have committed outputs (in proportion, rounded up, for fewer days).
-REL_TOL = 0.15
+MATCH_REL_TOL = 0.15
 NP_RESPONSE_TOL = 0.03
 CRITERION_STRATEGIES = ("mb", "rtv")
 REQUIRED_DAYS, OF_DAYS = 10, 14
@@ -50,7 +50,7 @@ def _within(strategy: str, rel_pairing: float, rel_saving: float, diff_response:
     compared: tuple[float, ...]
     if strategy in CRITERION_STRATEGIES:
         compared = (rel_pairing, rel_saving)
-        tol = REL_TOL
+        tol = MATCH_REL_TOL
     elif strategy == "np":
         compared = (diff_response,)
         tol = NP_RESPONSE_TOL
@@ -123,9 +123,9 @@ def criterion_text(frame: pd.DataFrame, *, reference: bool = True) -> str:
     n = len(days) if days else OF_DAYS
     scaled = "" if n == OF_DAYS else f"; {REQUIRED_DAYS} of {OF_DAYS} in proportion"
     return (
-        f"Criterion: MB and RTV within {REL_TOL * 100:.0f} % on pairing ratio and total saving, NP's response rate "
-        f"within {NP_RESPONSE_TOL}, each on at least {required_days(n)} of {n} {_day(n)} (the days with committed "
-        f"outputs{scaled})."
+        f"Criterion: MB and RTV within {MATCH_REL_TOL * 100:.0f} % on pairing ratio and total saving, "
+        f"NP's response rate within {NP_RESPONSE_TOL}, each on at least {required_days(n)} of {n} {_day(n)} "
+        f"(the days with committed outputs{scaled})."
     )
 
 

@@ -28,7 +28,7 @@ from rpbench.report.comparison import (
     markdown_table,
     offline_notes,
     selected_markdown,
-    synthetic_banner,
+    synthetic_lines,
     table_rows,
     unproven_notes,
 )
@@ -55,7 +55,7 @@ SAME_ATOL = 1e-9
 
 
 @dataclass(frozen=True)
-class Source:
+class SourceFolder:
     """One folder of a combination: where it is, its name in the text, its meta.json and KPI table."""
 
     path: Path
@@ -78,7 +78,7 @@ class Column:
 class Combined:
     """Several folders' runs as one comparison, with what its report says about them."""
 
-    sources: list[Source]
+    sources: list[SourceFolder]
     columns: list[Column]
     table: pd.DataFrame  # KPI rows x column keys, the ratio rows over the combined runs where they can be
     styles: dict[str, tuple[str, str | None]]
@@ -130,7 +130,7 @@ def combine(folders: Sequence[Path]) -> Combined:
 
 
 # ----------------------------------------------------------------------- the folders
-def read_sources(folders: Sequence[Path]) -> list[Source]:
+def read_sources(folders: Sequence[Path]) -> list[SourceFolder]:
     """Each folder's meta.json and KPI table, named by its folder's name (by its path where two share one)."""
     seen: set[Path] = set()
     for folder in folders:
@@ -140,7 +140,7 @@ def read_sources(folders: Sequence[Path]) -> list[Source]:
     names = [folder.name or folder.resolve().name for folder in folders]
     if len(set(names)) < len(names):
         names = [str(folder) for folder in folders]
-    return [Source(f, n, comparison_meta(f), load_kpis(f)) for f, n in zip(folders, names, strict=True)]
+    return [SourceFolder(f, n, comparison_meta(f), load_kpis(f)) for f, n in zip(folders, names, strict=True)]
 
 
 def comparison_meta(folder: Path) -> dict[str, Any]:
@@ -156,7 +156,7 @@ def comparison_meta(folder: Path) -> dict[str, Any]:
 
 
 # ---------------------------------------------------------------- one instance
-def instance_differences(a: Source, b: Source) -> list[str]:
+def instance_differences(a: SourceFolder, b: SourceFolder) -> list[str]:
     """What makes the instances of two folders differ, in words; empty when they hold one instance.
 
     The digests of the input files and parameters decide (a folder without them is compared by its
@@ -214,7 +214,7 @@ def _show(value: Any) -> str:
     return "unset" if value is None else str(value)
 
 
-def differing_inputs(a: Source, b: Source) -> list[str]:
+def differing_inputs(a: SourceFolder, b: SourceFolder) -> list[str]:
     """The input files whose recorded digests differ, but for those both folders hold with one content (a
     gzip file's header may carry the time it was written: one content, other bytes)."""
     files_a = (a.meta["inputs_digest"].get("files")) or {}
@@ -245,7 +245,7 @@ FOLDER_FACTS: tuple[tuple[str, Callable[[dict[str, Any]], Any]], ...] = (
 )
 
 
-def fact_holders(sources: list[Source]) -> dict[str, dict[str, list[str]]]:
+def fact_holders(sources: list[SourceFolder]) -> dict[str, dict[str, list[str]]]:
     """Per :data:`FOLDER_FACTS` entry: each value it takes, with the names of the folders holding it."""
     out: dict[str, dict[str, list[str]]] = {}
     for what, read in FOLDER_FACTS:
@@ -254,7 +254,7 @@ def fact_holders(sources: list[Source]) -> dict[str, dict[str, list[str]]]:
     return out
 
 
-def other_differences(sources: list[Source]) -> list[str]:
+def other_differences(sources: list[SourceFolder]) -> list[str]:
     """``"preset highs (A) vs ortools (B)"`` for the preset, rpbench version and commit the folders differ in."""
     return [
         f"{what} " + " vs ".join(f"{v} ({', '.join(names)})" for v, names in holders.items())
@@ -263,13 +263,13 @@ def other_differences(sources: list[Source]) -> list[str]:
     ]
 
 
-def shared_facts(sources: list[Source]) -> list[str]:
+def shared_facts(sources: list[SourceFolder]) -> list[str]:
     """``"preset highs"`` for the preset, rpbench version and commit every folder shares."""
     return [f"{what} {next(iter(h))}" for what, h in fact_holders(sources).items() if len(h) == 1]
 
 
 # -------------------------------------------------------------------- the runs
-def merged_columns(sources: list[Source]) -> list[Column]:
+def merged_columns(sources: list[SourceFolder]) -> list[Column]:
     """Every run of every folder, a run name of several folders as one column per distinct run; the
     simulations in the order the folders first show them, then the offline runs."""
     groups: dict[str, list[list[int]]] = {}
@@ -289,7 +289,7 @@ def merged_columns(sources: list[Source]) -> list[Column]:
     return sorted(columns, key=lambda c: c.run in ORACLE_RUNS)
 
 
-def same_run(run: str, a: Source, b: Source) -> bool:
+def same_run(run: str, a: SourceFolder, b: SourceFolder) -> bool:
     """Whether ``run`` of two folders is one run: the same options and rules (meta.json's run digest),
     and the same KPIs apart from the clock's (:data:`~rpbench.results.metrics.TIMING_KPIS`)."""
     if run_digest(a.meta, run) != run_digest(b.meta, run):
@@ -310,12 +310,12 @@ def run_digest(meta: dict[str, Any], run: str) -> str | None:
     return json_sha256(recorded_spec(record)) if isinstance(record, dict) else None
 
 
-def simulated_columns(sources: list[Source], columns: list[Column]) -> list[str]:
+def simulated_columns(sources: list[SourceFolder], columns: list[Column]) -> list[str]:
     """The keys of the columns that show a simulated run (by its folder's record)."""
     return [c.key for c in columns if simulated_runs(sources[c.members[0]].meta, [c.run])]
 
 
-def combined_table(sources: list[Source], columns: list[Column]) -> pd.DataFrame:
+def combined_table(sources: list[SourceFolder], columns: list[Column]) -> pd.DataFrame:
     """The KPI table of ``columns``.  One instance: LB is the best saving over every folder's simulated runs,
     and a ratio row whose offline run is one column divides every column by it; with an offline run differing
     between folders (two columns), each folder's own ratio stays."""
@@ -334,7 +334,7 @@ def combined_table(sources: list[Source], columns: list[Column]) -> pd.DataFrame
     return table
 
 
-def column_styles(sources: list[Source], columns: list[Column]) -> dict[str, tuple[str, str | None]]:
+def column_styles(sources: list[SourceFolder], columns: list[Column]) -> dict[str, tuple[str, str | None]]:
     """Each column's label and colour from its folder's record; a qualified column's label names its folders."""
     out = {}
     for col in columns:
@@ -346,7 +346,7 @@ def column_styles(sources: list[Source], columns: list[Column]) -> dict[str, tup
     return out
 
 
-def column_unproven(sources: list[Source], columns: list[Column]) -> dict[str, str]:
+def column_unproven(sources: list[SourceFolder], columns: list[Column]) -> dict[str, str]:
     """The columns whose numbers rest on solver answers not proven optimal, with why (the folders' words)."""
     found = [unproven_runs(s.path) for s in sources]
     out = {}
@@ -358,7 +358,7 @@ def column_unproven(sources: list[Source], columns: list[Column]) -> dict[str, s
 
 
 # ------------------------------------------------------------------- the notes
-def run_notes(sources: list[Source], columns: list[Column]) -> list[str]:
+def run_notes(sources: list[SourceFolder], columns: list[Column]) -> list[str]:
     """What became of each run name found in several folders: one column, or one per distinct run."""
     notes = []
     by_run: dict[str, list[Column]] = {}
@@ -381,7 +381,7 @@ def run_notes(sources: list[Source], columns: list[Column]) -> list[str]:
     return notes
 
 
-def ratio_notes(sources: list[Source], columns: list[Column], table: pd.DataFrame) -> list[str]:
+def ratio_notes(sources: list[SourceFolder], columns: list[Column], table: pd.DataFrame) -> list[str]:
     """Where a ratio row divides a folder's runs by another folder's offline run or schedule, or cannot."""
     notes = []
     lb = best_known(savings_of(table, simulated_columns(sources, columns)))
@@ -411,7 +411,7 @@ def ratio_notes(sources: list[Source], columns: list[Column], table: pd.DataFram
     return notes
 
 
-def _names(sources: list[Source], indices: Sequence[int]) -> str:
+def _names(sources: list[SourceFolder], indices: Sequence[int]) -> str:
     names = [f"`{sources[i].name}`" for i in dict.fromkeys(indices)]
     return names[0] if len(names) == 1 else f"{', '.join(names[:-1])} and {names[-1]}"
 
@@ -423,7 +423,7 @@ def combined_markdown(c: Combined, metrics: list[str] | None = None, *, figures:
     sc = c.scenario
     summary = sc.get("summary") or {}
     lines = [f"# rpbench combined comparison: {c.label}", ""]
-    lines += synthetic_banner(sc)
+    lines += synthetic_lines(sc)
     lines += [
         f"- scenario `{sc.get('name')}`, seed {sc.get('seed')}, {summary.get('orders')} orders, "
         f"{summary.get('vehicles')} vehicles, {summary.get('nodes')} nodes: one instance in every folder "

@@ -243,7 +243,7 @@ def report_markdown(folder: Path, name: str | None = None, figures: list[str] | 
     sc = meta["scenario"]
     args = sc.get("args", {})
     lines = [f"# rpbench results: {sc['label']}", ""]
-    lines += synthetic_banner(sc)
+    lines += synthetic_lines(sc)
     lines += [
         f"- scenario `{sc['name']}`, seed {sc['seed']}, {sc['summary']['orders']} orders, "
         f"{sc['summary']['vehicles']} vehicles, {sc['summary']['nodes']} nodes",
@@ -313,7 +313,7 @@ def budget_lines(meta: dict[str, Any]) -> list[str]:
     ]
 
 
-def synthetic_banner(scenario: dict[str, Any]) -> list[str]:
+def synthetic_lines(scenario: dict[str, Any]) -> list[str]:
     """The banner at the top of the report of a synthetic scenario: what is synthetic about it."""
     if not scenario.get("synthetic"):
         return []

@@ -152,9 +152,9 @@ def run_colors(runs: Sequence[str], styles: Styles | None = None) -> dict[str, s
 def _is_plugin(run: str) -> bool:
     """A run that is neither a built-in strategy nor an offline run (its colour yields to theirs)."""
     from rpbench.oracle.runs import ORACLE_RUNS
-    from rpbench.strategies import REGISTRY
+    from rpbench.strategies import STRATEGY_REGISTRY
 
-    return run not in REGISTRY and run not in ORACLE_RUNS
+    return run not in STRATEGY_REGISTRY and run not in ORACLE_RUNS
 
 
 def axis_label(kpi: str) -> str:

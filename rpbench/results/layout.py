@@ -59,6 +59,9 @@ TABLE_CSV = "table.csv"
 #: Every figure is also written as SVG and PDF beside its PNG (vector copies for papers).
 VECTOR_SUFFIXES = (".svg", ".pdf")
 
+#: The kinds of folder that hold other results folders (their children), not runs of their own.
+PARENT_KINDS = ("multi-day", "sweep", "evaluate")
+
 #: Inputs and logs a published light copy leaves out (the checker's raw material; the recorded command
 #: regenerates them).
 HEAVY = (RUNS, ORDERS, NETWORK, FLEET)

@@ -15,14 +15,14 @@ from collections.abc import Mapping
 from typing import Any
 
 from rpbench.exceptions import RpbenchError
-from rpbench.strategies import REGISTRY, strategy_class
+from rpbench.strategies import STRATEGY_REGISTRY, strategy_class
 
 
 def declared_clairvoyant(name: str, record: Mapping[str, Any]) -> bool | None:
     """Whether run ``name``'s strategy reads the future under its recorded options (meta.json ``record``);
     None when that is not known here: not a simulation of a built-in strategy, or options it cannot read."""
     source = record.get("source", name)
-    if record.get("kind") != "simulation" or not isinstance(source, str) or source not in REGISTRY:
+    if record.get("kind") != "simulation" or not isinstance(source, str) or source not in STRATEGY_REGISTRY:
         return None
     options = record.get("options")
     try:

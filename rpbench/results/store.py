@@ -71,7 +71,7 @@ def new_results_folder(out: str | os.PathLike | None, default_name: str) -> Iter
     """
     final = _unique(Path.cwd() / DEFAULT_PARENT / default_name) if out is None else Path(out)
     check_new_folder(final)  # again: a long run gives the world time to change
-    created = _make_parents(final.parent, final)
+    created = make_parents(final.parent, final)
     remove_stale_partials(final.parent)
     tmp = final.parent / f".{final.name}.partial-{os.getpid()}"
     try:
@@ -79,7 +79,7 @@ def new_results_folder(out: str | os.PathLike | None, default_name: str) -> Iter
             shutil.rmtree(tmp)
         tmp.mkdir()
     except OSError as exc:
-        _remove_empty(created)
+        remove_empty(created)
         raise ResultsError(f"cannot create results folder {str(final)!r}: {exc.strerror or exc}") from None
     try:
         yield tmp, final
@@ -87,7 +87,7 @@ def new_results_folder(out: str | os.PathLike | None, default_name: str) -> Iter
     except BaseException as exc:
         error = _write_error(exc, tmp, final)
         shutil.rmtree(tmp, ignore_errors=True)
-        _remove_empty(created)
+        remove_empty(created)
         if error is not None:
             raise error from None
         raise
@@ -127,7 +127,7 @@ def _check_can_create_in(folder: Path, label: str) -> None:
     os.rmdir(probe)
 
 
-def _make_parents(folder: Path, final: Path) -> list[Path]:
+def make_parents(folder: Path, final: Path) -> list[Path]:
     """Create ``folder`` and its missing parents; return the ones created, deepest first (to undo)."""
     missing = []
     while not os.path.lexists(folder) and folder.parent != folder:
@@ -140,7 +140,7 @@ def _make_parents(folder: Path, final: Path) -> list[Path]:
         except FileExistsError:
             continue  # made meanwhile by a concurrent run: not ours to undo
         except OSError as exc:
-            _remove_empty(created[::-1])
+            remove_empty(created[::-1])
             raise ResultsError(
                 f"cannot create results folder {str(final)!r}: {str(f)!r}: {exc.strerror or exc}"
             ) from None
@@ -148,7 +148,7 @@ def _make_parents(folder: Path, final: Path) -> list[Path]:
     return created[::-1]
 
 
-def _remove_empty(folders: list[Path]) -> None:
+def remove_empty(folders: list[Path]) -> None:
     for f in folders:
         try:
             f.rmdir()

@@ -23,6 +23,7 @@ import pandas as pd
 from rpbench.data import hourly_counts_for, read_month_od_rates
 from rpbench.data.orders import parse_date
 from rpbench.exceptions import DataError
+from rpbench.paper import PAPER_DATE
 from rpbench.scenarios.base import Demand, Params, Scenario
 from rpbench.scenarios.common import (
     Streams,
@@ -35,13 +36,11 @@ from rpbench.scenarios.common import (
     require_orders,
 )
 
-DEFAULT_DATE = "2017-05-01"
-
 
 def build_day(
     data_dir: Path,
     *,
-    date: str = DEFAULT_DATE,
+    date: str = PAPER_DATE,
     sample: float = 1.0,
     seed: int = 0,
     params: Params | None = None,

@@ -32,14 +32,13 @@ from rpbench.scenarios.common import (
     place_fleet,
     require_orders,
 )
-from rpbench.scenarios.toy import grid_demand, grid_history, grid_of
+from rpbench.scenarios.toy import HISTORY_DAYS, grid_demand, grid_history, grid_of
 
 #: Nodes per side of the grid.
 SIZE = 10
 #: Orders at sample 1.0, requested over the first :data:`HORIZON_S` seconds.
-BASE_ORDERS = 100
+LATTICE_BASE_ORDERS = 100
 HORIZON_S = 1800.0
-HISTORY_DAYS = 10
 
 
 def lattice_network(size: int, block_m: float) -> RoadNetwork:
@@ -75,8 +74,8 @@ def build_lattice(
     block_m = params.speed_mps * params.dt_s
     network = lattice_network(size, block_m)
     rng = Streams(seed)
-    n = round(sample * BASE_ORDERS)
-    require_orders(n, BASE_ORDERS, sample, "the lattice city")
+    n = round(sample * LATTICE_BASE_ORDERS)
+    require_orders(n, LATTICE_BASE_ORDERS, sample, "the lattice city")
     request_s, origin, destination = grid_demand(rng, n, size, HORIZON_S)
     orders = make_orders(np.arange(n), request_s, origin, destination, draw_patience(rng.patience, n, params))
     fleet = Fleet(

@@ -39,10 +39,10 @@ import pandas as pd
 from rpbench.data.orders import parse_date
 from rpbench.data.paper_orders import PREDICTION_COLUMNS, paper_order_source, read_paper_orders
 from rpbench.exceptions import ParameterError
+from rpbench.paper import PAPER_DATE
 from rpbench.scenarios.base import Demand, Fleet, Params, Scenario
 from rpbench.scenarios.common import haikou_network, make_orders, require_orders
 
-DEFAULT_DATE = "2017-05-01"
 #: The authors' ``demand_ratio`` and ``order_driver_ratio`` (100 / 25).
 PAPER_SAMPLE = 0.3
 ORDERS_PER_VEHICLE = 4
@@ -83,7 +83,7 @@ def authors_patience(row_index: np.ndarray, mean_s: float = 90.0, sd_s: float = 
 
 
 def load_paper_input(
-    data_dir: Path, *, date: str = DEFAULT_DATE, sample: float = PAPER_SAMPLE, params: Params | None = None
+    data_dir: Path, *, date: str = PAPER_DATE, sample: float = PAPER_SAMPLE, params: Params | None = None
 ) -> PaperInput:
     """Build the authors' input of ``date`` (see the module docstring)."""
     params = params or Params()
@@ -153,7 +153,7 @@ def load_paper_input(
 def build_paper_input(
     data_dir: Path,
     *,
-    date: str = DEFAULT_DATE,
+    date: str = PAPER_DATE,
     sample: float = PAPER_SAMPLE,
     seed: int = 0,
     params: Params | None = None,

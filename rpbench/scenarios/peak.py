@@ -16,6 +16,7 @@ import pandas as pd
 
 from rpbench.data import read_peak_orders
 from rpbench.data.orders import parse_date, peak_order_path
+from rpbench.paper import PAPER_DATE
 from rpbench.scenarios.base import Demand, Fleet, Params, Scenario
 from rpbench.scenarios.common import (
     Streams,
@@ -29,14 +30,13 @@ from rpbench.scenarios.common import (
     require_orders,
 )
 
-DEFAULT_DATE = "2017-05-01"
 DEFAULT_SAMPLE = 0.3
 
 
 def build_peak(
     data_dir: Path,
     *,
-    date: str = DEFAULT_DATE,
+    date: str = PAPER_DATE,
     sample: float = DEFAULT_SAMPLE,
     seed: int = 0,
     params: Params | None = None,

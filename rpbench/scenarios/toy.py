@@ -39,7 +39,7 @@ from rpbench.scenarios.common import (
 )
 
 BLOCK_M = 500.0
-BASE_ORDERS = 400
+TOY_BASE_ORDERS = 400
 _LON0, _LAT0 = 110.30, 19.98
 _M_PER_DEG_LAT = 110_540.0
 #: Past days in a toy city's demand history.
@@ -139,8 +139,8 @@ def build_toy(
     sample, seed = check_sample(sample), check_seed(seed)
     network = grid_network(size, seed=0)  # the city stays the same across seeds; demand varies
     rng = Streams(seed)
-    n = round(sample * BASE_ORDERS)
-    require_orders(n, BASE_ORDERS, sample, "the toy city")
+    n = round(sample * TOY_BASE_ORDERS)
+    require_orders(n, TOY_BASE_ORDERS, sample, "the toy city")
     request_s, origin, destination = grid_demand(rng, n, size)
     orders = make_orders(np.arange(n), request_s, origin, destination, draw_patience(rng.patience, n, params))
     fleet = Fleet(

@@ -23,7 +23,7 @@ from rpbench.exceptions import ParameterError
 from rpbench.strategies.base import Kind, RoundModel, RoundState, Strategy
 
 #: Strategy name -> "module:Class" (modules under rpbench.strategies).
-REGISTRY: dict[str, str] = {
+STRATEGY_REGISTRY: dict[str, str] = {
     "np": "myopic:NonPooling",
     "mb": "myopic:MyopicBatch",
     "rtv": "rtv:RTV",
@@ -36,16 +36,16 @@ REGISTRY: dict[str, str] = {
 }
 
 #: Entry-point group of strategies installed by other distributions.
-ENTRY_POINT_GROUP = "rpbench.strategies"
+STRATEGY_ENTRY_POINTS = "rpbench.strategies"
 
 
 def strategy_class(name: str) -> type[Strategy]:
     """The strategy class of a run name, or one :class:`ParameterError` line.
 
     ``name`` is, in this order of precedence, a built-in name of
-    :data:`REGISTRY`; a ``module:Class`` spec (the module imported by its
+    :data:`STRATEGY_REGISTRY`; a ``module:Class`` spec (the module imported by its
     absolute name: installed or on ``PYTHONPATH``); or the name of an
-    installed entry point of :data:`ENTRY_POINT_GROUP` (compared
+    installed entry point of :data:`STRATEGY_ENTRY_POINTS` (compared
     case-insensitively).  An entry point named like a built-in strategy is
     ignored: the built-in always wins (and the harness gives the oracle runs
     ``bound``, ``oracle1``, ``oracle2`` precedence over both).  The class
@@ -54,9 +54,9 @@ def strategy_class(name: str) -> type[Strategy]:
     """
     return plugins.resolve(
         name,
-        builtin=REGISTRY,
+        builtin=STRATEGY_REGISTRY,
         package=__name__,
-        group=ENTRY_POINT_GROUP,
+        group=STRATEGY_ENTRY_POINTS,
         base=Strategy,
         what="strategy",
         required=("name", "label", "structure"),
@@ -64,9 +64,9 @@ def strategy_class(name: str) -> type[Strategy]:
     )
 
 
-def plugin_names() -> list[str]:
+def strategy_plugin_names() -> list[str]:
     """Names of the installed plug-in strategies (entry points not shadowed by a built-in name)."""
-    return plugins.plugin_names(ENTRY_POINT_GROUP, REGISTRY)
+    return plugins.plugin_names(STRATEGY_ENTRY_POINTS, STRATEGY_REGISTRY)
 
 
 def make_strategy(name: str, **options: Any) -> Strategy:
@@ -74,13 +74,13 @@ def make_strategy(name: str, **options: Any) -> Strategy:
 
 
 __all__ = [
-    "ENTRY_POINT_GROUP",
-    "REGISTRY",
+    "STRATEGY_ENTRY_POINTS",
+    "STRATEGY_REGISTRY",
     "Kind",
     "RoundModel",
     "RoundState",
     "Strategy",
     "make_strategy",
-    "plugin_names",
     "strategy_class",
+    "strategy_plugin_names",
 ]

@@ -72,15 +72,15 @@ class Exact(Strategy[ExactOptions]):
 
     # ---------------------------------------------------------------- prepare
     def prepare(self, scenario: Scenario | OnlineView) -> None:
-        from rpbench.oracle.exact import build_model, extract_plan, lattice_view, solve_model
+        from rpbench.oracle.exact import build_exact_model, extract_plan, lattice_view, solve_exact_model
 
         if not isinstance(scenario, Scenario):
             raise LookaheadError(f"strategy {self.name!r} plans the whole day: its prepare needs the whole scenario")
         self.dt = scenario.params.dt_s
         view = lattice_view(scenario)
-        model = build_model(view, scenario)
+        model = build_exact_model(view, scenario)
         opts = self.options
-        sol = solve_model(model, solver=opts.solver, time_limit_s=opts.time_limit_s, threads=opts.threads)
+        sol = solve_exact_model(model, solver=opts.solver, time_limit_s=opts.time_limit_s, threads=opts.threads)
         if not sol.proven:
             raise SolverError(
                 f"exact: the {opts.solver} solve of the day's model ({model.n_arcs:,} arcs) ran out of time after "

@@ -29,8 +29,8 @@ from rpbench.version import __version__
 
 MODEL_JSON = "model.json"
 ARRAYS = ("values", "visits", "node_cell")
-FORMAT = "rpbench-value-model"
-FORMAT_VERSION = 1
+MODEL_FORMAT = "rpbench-value-model"
+MODEL_FORMAT_VERSION = 1
 
 
 @dataclass(frozen=True, eq=False)
@@ -57,8 +57,8 @@ class ValueModel:
 
     def description(self, digests: dict[str, str]) -> dict[str, Any]:
         return {
-            "format": FORMAT,
-            "format_version": FORMAT_VERSION,
+            "format": MODEL_FORMAT,
+            "format_version": MODEL_FORMAT_VERSION,
             "rpbench": __version__,
             "cell_m": self.cell_m,
             "bin_s": self.bin_s,
@@ -128,8 +128,10 @@ def load_model(folder: str | os.PathLike) -> tuple[ValueModel, str]:
     if not folder.is_dir():
         raise ParameterError(f"{where} is not a folder (train one with `rpbench train vf --out FOLDER`)")
     meta = load_json_object(folder / MODEL_JSON, f"{where}: {MODEL_JSON}", ParameterError)
-    if meta.get("format") != FORMAT or meta.get("format_version") != FORMAT_VERSION:
-        raise ParameterError(f"{where}: {MODEL_JSON} is not a {FORMAT} version {FORMAT_VERSION} description")
+    if meta.get("format") != MODEL_FORMAT or meta.get("format_version") != MODEL_FORMAT_VERSION:
+        raise ParameterError(
+            f"{where}: {MODEL_JSON} is not a {MODEL_FORMAT} version {MODEL_FORMAT_VERSION} description"
+        )
     digests = meta.get("arrays")
     if not isinstance(digests, dict):
         raise ParameterError(f"{where}: {MODEL_JSON} names no array digests")

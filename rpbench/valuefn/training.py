@@ -7,7 +7,7 @@ training scenarios are the test scenario's generator on other days (``train_date
 (``train_seeds``): :func:`training_scenarios` builds them and :func:`check_held_out` refuses to run a
 model on a scenario it was trained on.  The runs themselves are simulated by the harness
 (:mod:`rpbench.harness.training`), which caches ``auto`` models under ``<cache>/value-models/``, keyed by
-:func:`cache_key`.
+:func:`training_key`.
 """
 
 from __future__ import annotations
@@ -112,7 +112,7 @@ def _policy_text(iterations: int) -> str:
     return "mb" if more == 0 else f"mb, then vf ({more} policy iteration{'s' if more > 1 else ''})"
 
 
-def cache_key(scenarios: list[Scenario], settings: Settings) -> str:
+def training_key(scenarios: list[Scenario], settings: Settings) -> str:
     """A digest of what determines the trained model: the training scenarios' content and the settings."""
     h = hashlib.sha256()
     h.update(json.dumps({"version": TRAINING_VERSION, "settings": asdict(settings)}, sort_keys=True).encode())

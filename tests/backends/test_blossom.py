@@ -64,14 +64,14 @@ def test_oracle2_keeps_the_maximum_number_of_pairs_at_any_price():
 def test_doubled_graph_bonus_trades_weight_for_pairs():
     # triangle plus a pendant: one heavy pair (0, 1) or two light ones (0, 2), (1, 3)
     a, b, w = np.array([0, 0, 1, 1]), np.array([1, 2, 2, 3]), np.array([50, 10, 5, 10])
-    assert sorted(bv.max_weight_matching(4, a, b, w).tolist()) == [0]
-    assert sorted(bv.max_weight_matching(4, a, b, w, bonus=31).tolist()) == [1, 3]
+    assert sorted(bv.blossom_v_matching(4, a, b, w).tolist()) == [0]
+    assert sorted(bv.blossom_v_matching(4, a, b, w, bonus=31).tolist()) == [1, 3]
 
 
 def test_isolated_and_unused_orders_are_left_out():
-    sel = bv.max_weight_matching(10, np.array([3]), np.array([7]), np.array([5]))
+    sel = bv.blossom_v_matching(10, np.array([3]), np.array([7]), np.array([5]))
     assert sel.tolist() == [0]
-    assert bv.max_weight_matching(5, np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64)).size == 0
+    assert bv.blossom_v_matching(5, np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64)).size == 0
 
 
 def test_a_graph_without_a_perfect_matching_is_an_error():
@@ -81,7 +81,7 @@ def test_a_graph_without_a_perfect_matching_is_an_error():
 
 def test_costs_beyond_int64_are_refused():
     with pytest.raises(SolverError, match="overflow 64-bit"):
-        bv.max_weight_matching(2, np.array([0]), np.array([1]), np.array([2**59]))
+        bv.blossom_v_matching(2, np.array([0]), np.array([1]), np.array([2**59]))
 
 
 def test_time_limit_returns_edmonds_matching_for_oracle2(monkeypatch):

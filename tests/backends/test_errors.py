@@ -6,7 +6,7 @@ import importlib.util
 
 import pytest
 
-from rpbench.backends import REGISTRY, SolveOptions, backend_class, get_backend
+from rpbench.backends import BACKEND_REGISTRY, SolveOptions, backend_class, get_backend
 from rpbench.backends.highs import HighsBackend
 from rpbench.backends.presets import load_preset, parse_preset
 from rpbench.exceptions import PresetError, RpbenchError, SolverError, SolverNotInstalledError
@@ -52,7 +52,7 @@ def test_malformed_preset_file_on_disk(tmp_path):
         load_preset(str(tmp_path / "missing.toml"))
 
 
-@pytest.mark.parametrize("name", sorted(REGISTRY))
+@pytest.mark.parametrize("name", sorted(BACKEND_REGISTRY))
 def test_missing_solver_library_is_reported_by_name(name, monkeypatch):
     cls = backend_class(name)
     real = importlib.util.find_spec
@@ -106,6 +106,6 @@ def test_unknown_pyomo_solver_is_not_installed():
 
 
 def test_every_backend_declares_what_it_needs():
-    for name in REGISTRY:
+    for name in BACKEND_REGISTRY:
         cls = backend_class(name)
         assert cls.name == name and cls.requires and cls.exact and cls.description

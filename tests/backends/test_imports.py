@@ -35,8 +35,8 @@ def test_importing_rpbench_loads_no_solver():
     out = run_python(f"""
         import sys
         import rpbench, rpbench.backends, rpbench.model, rpbench.bench.synthetic, rpbench.bench.runner
-        from rpbench.backends import REGISTRY, backend_class
-        for name in REGISTRY:
+        from rpbench.backends import BACKEND_REGISTRY, backend_class
+        for name in BACKEND_REGISTRY:
             backend_class(name).is_installed()       # the adapter modules import, their solvers do not
         print(sorted(m for m in {SOLVER_LIBS + BLOSSOM_LIBS!r} if m in sys.modules))
     """)

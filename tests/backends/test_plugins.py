@@ -18,7 +18,7 @@ from rpbench import plugins
 from rpbench.backends import backend_class, load_preset, solve
 from rpbench.backends.highs import HighsBackend
 from rpbench.backends.presets import parse_preset
-from rpbench.backends.registry import plugin_names
+from rpbench.backends.registry import backend_plugin_names
 from rpbench.bench import synthetic
 from rpbench.check import check_folder
 from rpbench.cli import main
@@ -142,7 +142,7 @@ def test_cli_reports_a_bad_plugin_preset_on_one_line(example, tmp_path, capsys):
 def test_backend_entry_points_resolve_and_builtins_win(example):
     declare_entry_points(example, "lsa_dist", "rpbench.backends", {"LSA": SPEC, "highs": SPEC})
     assert backend_class("lsa").__name__ == "DenseLSABackend" and backend_class("highs") is HighsBackend
-    assert "lsa" in plugin_names() and "highs" not in plugin_names()
+    assert "lsa" in backend_plugin_names() and "highs" not in backend_plugin_names()
     preset = parse_preset("mine", 'backend = "lsa"\n', "mine.toml")
     assert preset.backend == "lsa" and type(preset.adapter()) is backend_class(SPEC)
     with pytest.raises(

@@ -12,7 +12,7 @@ import pytest
 from rpbench.backends import Backend
 from rpbench.backends.presets import Preset, SolveOptions
 from rpbench.bench import synthetic
-from rpbench.bench.runner import COLUMNS, BenchSpec, cross_check, format_table, run_benchmark
+from rpbench.bench.runner import RESULT_COLUMNS, BenchSpec, cross_check, format_table, run_benchmark
 from rpbench.cli import main
 from rpbench.exceptions import ParameterError, SolverError
 from rpbench.instances import save_instance
@@ -23,7 +23,7 @@ MODELS = synthetic.suite("tiny", objectives=("weight", "cardinality_then_weight"
 
 def test_table_has_one_row_per_model_and_preset():
     table = run_benchmark(MODELS, BenchSpec(["highs", "matching"], repeat=2))
-    assert list(table.columns) == COLUMNS and len(table) == 2 * len(MODELS)
+    assert list(table.columns) == RESULT_COLUMNS and len(table) == 2 * len(MODELS)
     assert (table["status"] == "optimal").all() and table["agrees"].all()
     assert (table["build_s"] >= 0).all() and (table["solve_s"] >= 0).all() and (table["repeats"] == 2).all()
     assert table["model"].tolist()[:2] == [MODELS[0].name] * 2  # grouped by model

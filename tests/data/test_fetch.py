@@ -22,7 +22,7 @@ import pytest
 
 from rpbench.cli import main
 from rpbench.data import fetch as fetch_mod
-from rpbench.data.fetch import load_registry, source_urls, verify
+from rpbench.data.fetch import load_registry, source_urls, verify_data
 from rpbench.data.hourly_counts import HOURLY_FILE
 from rpbench.data.od_rates import AUTHORS_PREDICTION_FILE, DAY_OD_FILE, MONTH_OD_FILE
 from rpbench.data.orders import GAIA_SAMPLE_FILE, PEAK_DIR, RAW_PEAK_FILE, TRACE_FILE
@@ -91,8 +91,8 @@ def private_data_home(tmp_path, monkeypatch) -> Path:
 
 @pytest.fixture(scope="module")
 def pristine(data_dir, tmp_path_factory) -> Path:
-    """A copy of the real data folder (the served side; tests damage copies of it, never /work/shared)."""
-    if verify(data_dir).missing:
+    """A copy of the real data folder (the served side; tests damage copies of it, never the folder itself)."""
+    if verify_data(data_dir).missing:
         pytest.skip(f"the data folder {data_dir} lacks registry files")
     copy = tmp_path_factory.mktemp("served") / "haikou"
     shutil.copytree(data_dir, copy)
@@ -213,7 +213,7 @@ def test_bad_registry_is_a_data_error():
 
 
 def test_registry_checksums_match_the_shared_data_folder(data_dir):
-    report = verify(data_dir)
+    report = verify_data(data_dir)
     assert report.bad == {}
     if report.missing:
         pytest.skip(f"the data folder {data_dir} lacks registry files")
@@ -231,7 +231,7 @@ def test_fetch_from_mirror_then_again_downloads_nothing(capsys, mirror, tmp_path
     assert sorted(requests) == sorted(f"/{n}" for n in NAMES)
     for name in NAMES:  # a mirror's files are stored as served
         assert (dest / name).read_bytes() == (served / name).read_bytes()
-    report = verify(dest)
+    report = verify_data(dest)
     assert report.ok == NAMES and not report.bad and not report.missing and not report.extra
     assert part_files(dest) == []
 
@@ -258,7 +258,7 @@ def test_fetch_without_mirror_gzips_the_upstream_content(monkeypatch, served_dir
     assert {e.transform for e in few} == {"gzip", "none"}
     report = fetch_mod.fetch(tmp_path / "dest", entries=few, progress=False)
     assert opened == [e.url for e in few] and report.downloaded == [e.name for e in few]
-    assert verify(tmp_path / "dest", entries=few).ok == [e.name for e in few]
+    assert verify_data(tmp_path / "dest", entries=few).ok == [e.name for e in few]
     head = (tmp_path / "dest" / "predecessor_trb2021_network" / "all_vertexes.csv.gz").read_bytes()[:10]
     assert head[:3] == b"\x1f\x8b\x08" and head[3] == 0 and head[4:8] == b"\0\0\0\0"  # `gzip -n`: no name, no time
 
@@ -314,19 +314,19 @@ def test_connection_cut_leaves_no_partial_file_and_a_rerun_resumes(monkeypatch, 
         fetch_mod.fetch(dest, pristine, progress=False)
     assert not (dest / victim).exists() and part_files(dest) == []
     before = {p for p in dest.rglob("*") if p.is_file()}
-    assert before and verify(dest).bad == {}
+    assert before and verify_data(dest).bad == {}
 
     monkeypatch.setattr(fetch_mod, "_open_url", real_open)
     report = fetch_mod.fetch(dest, pristine, progress=False)
     assert len(report.already_present) == len(before) and victim in report.downloaded
-    assert verify(dest).ok == NAMES
+    assert verify_data(dest).ok == NAMES
 
 
 def test_a_wrong_file_already_present_is_downloaded_again(pristine, fetched):
     change_content_byte(fetched / "network/links.csv.gz")
     report = fetch_mod.fetch(fetched, pristine, progress=False)
     assert report.replaced == report.downloaded == ["network/links.csv.gz"]
-    assert verify(fetched).ok == NAMES
+    assert verify_data(fetched).ok == NAMES
 
 
 # --------------------------------------------------------------------------- verify

@@ -21,7 +21,7 @@ from rpbench import paths
 from rpbench.cli import main
 from rpbench.data import fetch as fetch_mod
 from rpbench.data import first_run
-from rpbench.data.fetch import load_registry, verify
+from rpbench.data.fetch import load_registry, verify_data
 from rpbench.data.first_run import ensure_data_dir
 from rpbench.exceptions import DataNotFoundError, DownloadError
 from rpbench.paths import fetched_data_dir, find_data_dir
@@ -67,7 +67,7 @@ def fresh_machine(tmp_path, monkeypatch) -> Path:
 @pytest.fixture(scope="module")
 def mirror_folder(data_dir, tmp_path_factory) -> Path:
     """A copy of the real data folder, served as a mirror (a local folder, as ``--mirror`` takes)."""
-    if verify(data_dir).missing:
+    if verify_data(data_dir).missing:
         pytest.skip(f"the data folder {data_dir} lacks registry files")
     copy = tmp_path_factory.mktemp("mirror") / "haikou"
     shutil.copytree(data_dir, copy)
@@ -105,7 +105,7 @@ def test_the_first_run_fetches_from_the_mirror_and_later_commands_find_it(
     )
     assert done.startswith(f"rpbench: fetched {len(NAMES)} files ({CONTENT_MB} of content, checksums verified)")
     assert BANNER not in err
-    report = verify(dest)
+    report = verify_data(dest)
     assert report.ok == NAMES and not report.bad and not report.extra  # complete, no .part file left
     for name in NAMES:  # a mirror's files are stored as served
         assert (dest / name).read_bytes() == (mirror_folder / name).read_bytes()
@@ -141,7 +141,7 @@ def test_a_cut_fetch_is_resumed_by_the_next_command(capsys, monkeypatch, fresh_m
     assert code == 0, err
     assert f"resuming the fetch ({len(NAMES) - len(first)} files" in err
     assert f"rpbench: fetched {len(NAMES) - len(first)} files" in err
-    assert verify(dest).ok == NAMES
+    assert verify_data(dest).ok == NAMES
 
 
 def test_ensure_data_dir_fetches_for_commands_that_need_the_data(capsys, monkeypatch, fresh_machine, mirror_folder):
@@ -269,7 +269,7 @@ def test_rpbench_data_fetch_reads_the_mirror_variable(capsys, monkeypatch, fresh
     assert code == 0 and json.loads(stdout)["files"][NAMES[0]] == f"{mirror_folder.as_uri()}/{NAMES[0]}"
     code, stdout, _ = run_cli(capsys, "data", "fetch", "--json")
     assert code == 0 and json.loads(stdout)["source"] == mirror_folder.as_uri()
-    assert verify(fresh_machine / "haikou").ok == NAMES
+    assert verify_data(fresh_machine / "haikou").ok == NAMES
 
     monkeypatch.setenv(first_run.DATA_MIRROR_ENV, "no-such-folder")
     code, _, err = run_cli(capsys, "data", "fetch", "--dest", fresh_machine / "other")

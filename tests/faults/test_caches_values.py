@@ -303,7 +303,7 @@ def test_an_entry_of_the_previous_format_is_rebuilt_and_removed(cache, capsys):
     manifest = json.loads((entry / "manifest.json").read_text())
     old = cache / "predict-structure-oldformat"
     entry.rename(old)
-    manifest["version"] = str(int(list_cache.FORMAT_VERSION) - 1)
+    manifest["version"] = str(int(list_cache.LISTS_FORMAT_VERSION) - 1)
     for key in ("files", "digest"):
         manifest.pop(key)
     (old / "manifest.json").write_text(json.dumps(manifest))

@@ -21,7 +21,7 @@ from faults.test_runs_helpers import TOY, assert_nothing_written, assert_one_err
 from rpbench.cli import build_parser
 from rpbench.oracle.runs import ORACLE_RUNS
 from rpbench.spec import options_class
-from rpbench.strategies import REGISTRY as STRATEGY_REGISTRY
+from rpbench.strategies import STRATEGY_REGISTRY
 
 SWEEP = ("sweep", "--over", "dt=20,30", *TOY, "--workers", "1")
 

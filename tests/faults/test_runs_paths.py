@@ -172,7 +172,7 @@ def test_an_unforeseen_os_error_is_still_one_line_naming_the_path(capsys, monkey
     def handler(args):
         raise PermissionError(errno.EACCES, "Permission denied", "/some/where.csv")
 
-    monkeypatch.setattr("rpbench.commands.scenario.run", handler)
+    monkeypatch.setattr("rpbench.commands.scenario._run", handler)
     code, _, err = run_cli(capsys, "scenario", "toy")
     assert_one_error(code, err, "'/some/where.csv': permission denied")
 

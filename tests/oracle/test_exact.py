@@ -18,7 +18,7 @@ from rpbench.check import check_folder
 from rpbench.cli import main
 from rpbench.exceptions import ParameterError
 from rpbench.harness.comparison import run_comparison
-from rpbench.oracle.exact import PAIR, build_model, extract_plan, lattice_view, order_rounds, solve_model
+from rpbench.oracle.exact import PAIR, build_exact_model, extract_plan, lattice_view, order_rounds, solve_exact_model
 from rpbench.scenarios import ScenarioRequest, build_scenario
 from rpbench.spec import RunSpec
 
@@ -57,17 +57,17 @@ def test_a_solve_stopped_before_any_plan_is_one_error_line_and_writes_nothing(tm
 def test_two_exact_solvers_prove_the_same_optimum(seed):
     sc = _lattice(seed, sample=0.12)
     view = lattice_view(sc)
-    model = build_model(view, sc)
-    highs = solve_model(model, solver="highs")
-    cpsat = solve_model(model, solver="cp-sat")
+    model = build_exact_model(view, sc)
+    highs = solve_exact_model(model, solver="highs")
+    cpsat = solve_exact_model(model, solver="cp-sat")
     assert highs.proven and cpsat.proven and highs.objective == cpsat.objective > 0
 
 
 def test_the_plan_decomposes_into_one_walk_per_vehicle_and_its_pairs_sum_to_the_optimum():
     sc = _lattice(3, sample=0.2)
     view = lattice_view(sc)
-    model = build_model(view, sc)
-    sol = solve_model(model)
+    model = build_exact_model(view, sc)
+    sol = solve_exact_model(model)
     plan = extract_plan(model, sol)
     assert len(plan.vehicles) == len(sc.fleet)
     assert (

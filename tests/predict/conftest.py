@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from rpbench.predict import OdRates, PredictConfig, build_model, solve_model
+from rpbench.predict import OdRates, PredictConfig, build_prediction_model, solve_prediction_model
 from rpbench.scenarios.base import Params
 from rpbench.scenarios.toy import grid_network
 
@@ -29,11 +29,11 @@ class Instance:
 
     def model(self, **config_changes):
         cfg = self.config.replace(**config_changes) if config_changes else self.config
-        return build_model(self.network, self.rates, self.params, cfg)
+        return build_prediction_model(self.network, self.rates, self.params, cfg)
 
     def solve(self, **config_changes):
         model = self.model(**config_changes)
-        return model, solve_model(model)
+        return model, solve_prediction_model(model)
 
 
 def make_instance(

@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from rpbench.data.od_rates import AUTHORS_PREDICTION_COLUMNS as COLUMNS
 from rpbench.predict import day_table_rates, predict
-from rpbench.predict.compare import COLUMNS, compare
+from rpbench.predict.compare import compare
 from rpbench.scenarios.common import haikou_network
 
 

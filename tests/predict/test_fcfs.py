@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rpbench.predict import solve_model
+from rpbench.predict import solve_prediction_model
 from rpbench.predict.fcfs import simulate, validate
 
 from .conftest import make_instance
@@ -14,7 +14,7 @@ from .conftest import make_instance
 def test_fcfs_agrees_with_the_prediction_on_a_toy_grid():
     inst = make_instance(seed=3, size=6, n_od=20, rate_per_h=3, max_pickup_m=1500, max_detour_m=1500, grid_seed=3)
     model = inst.model()
-    pred = solve_model(model)
+    pred = solve_prediction_model(model)
     res = simulate(model, hours=150, seed=1)
     metrics, table = validate(pred, res, min_samples=100)
     assert metrics["ods_compared"] >= 10

@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 
 from rpbench.data.road import NetworkTables
 from rpbench.network import RoadNetwork
-from rpbench.predict import OdRates, PredictConfig, build_model, solve_model
+from rpbench.predict import OdRates, PredictConfig, build_prediction_model, solve_prediction_model
 from rpbench.predict.fixed_point import PairSums, _cut, evaluate
 from rpbench.scenarios.base import Params
 
@@ -185,9 +185,9 @@ def single_state_prediction(lam_tau: float, tau0: float = 120.0):
     """One OD on one link: only its origin state (k = 0) can pair with its own seekers (L3)."""
     net = line_network([800.0])
     rates = OdRates.from_arrays([0], [1], [lam_tau / tau0], n_nodes=2)
-    model = build_model(net, rates, Params(), PredictConfig(tau0_s=tau0))
+    model = build_prediction_model(net, rates, Params(), PredictConfig(tau0_s=tau0))
     assert model.matching.n_pairs == 1 and model.matching.seeker(0)[0].tolist() == [model.space.cls[0]]
-    return solve_model(model)
+    return solve_prediction_model(model)
 
 
 def test_l3_closed_form():
@@ -257,7 +257,7 @@ def test_l6_symmetry_and_relabelling():
     # image does not preserve; docs/algorithms.md L6 asks for an invariant tie key).
     net = line_network([250.0, 610.0, 430.0, 610.0, 250.0])
     rates = OdRates.from_arrays([0, 5, 1, 4], [3, 2, 5, 0], [2e-3] * 4, n_nodes=6)
-    pred = solve_model(build_model(net, rates, Params(), PredictConfig()))
+    pred = solve_prediction_model(build_prediction_model(net, rates, Params(), PredictConfig()))
     p = dict(
         zip(zip(rates.origin.tolist(), rates.destination.tolist(), strict=True), pred.od.pairing_prob, strict=True)
     )

@@ -88,7 +88,7 @@ def test_an_entry_holds_the_class_lists_and_the_states_only(cache):
     ]
     assert (lists.directory / "local.bin").stat().st_size == 2 * lists.matching.n_pairs
     manifest = json.loads((lists.directory / "manifest.json").read_text())
-    assert manifest["version"] == list_cache.FORMAT_VERSION and manifest["local"] == "<u2"
+    assert manifest["version"] == list_cache.LISTS_FORMAT_VERSION and manifest["local"] == "<u2"
     local = lists.directory / "local.bin"
     assert manifest["files"]["local.bin"] == [local.stat().st_size, hashlib.sha256(local.read_bytes()).hexdigest()]
 
@@ -143,7 +143,7 @@ def test_a_truncated_array_file_is_rebuilt_with_a_note(cache, capsys, name):
 
 def test_a_build_removes_entries_of_older_formats_only(cache, capsys):
     old, newer, odd = (cache / f"predict-structure-{name}" for name in ("old", "newer", "odd"))
-    for entry, version in ((old, "1"), (newer, str(int(list_cache.FORMAT_VERSION) + 1)), (odd, None)):
+    for entry, version in ((old, "1"), (newer, str(int(list_cache.LISTS_FORMAT_VERSION) + 1)), (odd, None)):
         entry.mkdir(parents=True)
         (entry / "cls.bin").write_bytes(b"x" * 10)
         if version is not None:

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 from rpbench.data.road import NetworkTables
 from rpbench.geometry import pool
 from rpbench.network import RoadNetwork
-from rpbench.predict import OdRates, PredictConfig, build_model
+from rpbench.predict import OdRates, PredictConfig, build_prediction_model
 from rpbench.predict.match_sets import GRID
 from rpbench.scenarios.base import Params
 
@@ -155,7 +155,7 @@ def test_pickup_threshold_is_inclusive(pickup, expected):
     # Taker 0 -> 3 waits at node 0 (k = 0); the seeker 1 -> 3 is exactly 1000 m away.
     net = line_network([1000.0, 1000.0, 1000.0])
     rates = OdRates.from_arrays([0, 1], [3, 3], [1e-3, 1e-3], n_nodes=4)
-    model = build_model(net, rates, Params(max_pickup_m=pickup, max_detour_m=3000), PredictConfig())
+    model = build_prediction_model(net, rates, Params(max_pickup_m=pickup, max_detour_m=3000), PredictConfig())
     w_seeker = 1  # canonical order: (0,3), (1,3)
     states, _ = model_list(model, w_seeker)
     origin_state_of_taker = model.space.od_state_off[0]
@@ -183,7 +183,7 @@ def test_lexsort_fallback_gives_the_same_lists(monkeypatch, priority):
     inst = make_instance(seed=4, size=5, n_od=25, max_pickup_m=2000, max_detour_m=2000)
     packed = inst.model(priority=priority).matching.arrays()
     monkeypatch.setattr("rpbench.predict.match_sets._Q_LIMIT", 1e-9)
-    model = build_model(
+    model = build_prediction_model(
         inst.network, inst.rates, inst.params, inst.config.replace(priority=priority), use_cache=False
     )  # a private build: the cached one is packed
     for got, want in zip(model.matching.arrays(), packed, strict=True):

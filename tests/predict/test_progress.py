@@ -10,7 +10,7 @@ import pytest
 
 import rpbench.predict.list_cache as list_cache
 import rpbench.predict.prediction as prediction
-from rpbench.predict import solve_model
+from rpbench.predict import solve_prediction_model
 
 from .conftest import make_instance
 
@@ -25,7 +25,7 @@ def solve_fresh(cache, monkeypatch, stderr) -> str:
     monkeypatch.setattr(sys, "stderr", stderr)
     list_cache._RECENT.clear()
     inst = make_instance(seed=2, size=6, n_od=40, max_pickup_m=3000, max_detour_m=3000)
-    solve_model(inst.model())
+    solve_prediction_model(inst.model())
     list_cache._RECENT.clear()
     return stderr.getvalue()
 
@@ -58,7 +58,7 @@ def test_a_progress_callback_gets_every_sweep_and_no_bar_is_shown(tmp_path, monk
         inst.model()  # the structure is built before stderr is a terminal
     monkeypatch.setattr(sys, "stderr", Terminal())
     seen: list[tuple[int, float]] = []
-    result = solve_model(inst.model(), progress=lambda it, res: seen.append((it, res)))
+    result = solve_prediction_model(inst.model(), progress=lambda it, res: seen.append((it, res)))
     assert [it for it, _ in seen] == list(range(1, result.info["iterations"] + 1))
     assert seen[-1][1] == result.info["residual"]
     assert "prediction fixed point" not in sys.stderr.getvalue()

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 from rpbench.oracle.runs import ORACLE_RUNS
 from rpbench.results.runs import CLAIRVOYANT_MARK, run_color, run_label
-from rpbench.strategies import REGISTRY, strategy_class
+from rpbench.strategies import STRATEGY_REGISTRY, strategy_class
 
 
 def test_labels_come_from_the_classes():
     assert run_label("fl-nd") == "FL-no_delay" and run_label("bound") == "Upper bound"
-    for name in REGISTRY:
+    for name in STRATEGY_REGISTRY:
         cls = strategy_class(name)
         mark = CLAIRVOYANT_MARK if getattr(cls, "clairvoyant", False) is True else ""
         assert run_label(name) == cls.label + mark and run_color(name) == cls.color

@@ -7,7 +7,7 @@ import pytest
 
 from rpbench.exceptions import ParameterError
 from rpbench.scenarios import build_scenario
-from rpbench.scenarios.lattice import BASE_ORDERS, HORIZON_S, lattice_network
+from rpbench.scenarios.lattice import HORIZON_S, LATTICE_BASE_ORDERS, lattice_network
 
 
 @pytest.mark.parametrize("dt_s", [10.0, 30.0])
@@ -24,7 +24,7 @@ def test_orders_and_fleet_follow_the_sample_and_the_seed():
     a = build_scenario("lattice", sample=0.8, seed=3)
     b = build_scenario("lattice", sample=0.8, seed=3)
     c = build_scenario("lattice", sample=0.8, seed=4)
-    assert len(a.orders) == round(0.8 * BASE_ORDERS) and len(a.fleet) == 20
+    assert len(a.orders) == round(0.8 * LATTICE_BASE_ORDERS) and len(a.fleet) == 20
     assert (a.orders.request_s < HORIZON_S).all() and a.horizon_s == HORIZON_S
     assert np.array_equal(a.orders.origin, b.orders.origin) and not np.array_equal(a.orders.origin, c.orders.origin)
     assert (a.orders.origin != a.orders.destination).all()

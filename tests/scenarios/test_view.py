@@ -10,7 +10,7 @@ import pytest
 from rpbench.exceptions import LookaheadError, ParameterError, RpbenchError
 from rpbench.scenarios import build_scenario
 from rpbench.scenarios.base import Demand, History, OnlineView
-from rpbench.scenarios.toy import BASE_ORDERS, HISTORY_DAYS, history_seeds
+from rpbench.scenarios.toy import HISTORY_DAYS, TOY_BASE_ORDERS, history_seeds
 
 HINT = (
     "online strategies see orders only as they are revealed in RoundState; declare `clairvoyant = True` to read "
@@ -60,7 +60,7 @@ def test_the_toy_history_is_other_seeds_of_its_generator(toy):
     history = toy.demand.history
     assert toy.demand.table == "history" and isinstance(history, History)
     assert history.days == HISTORY_DAYS == 10
-    assert len(history.origin) == HISTORY_DAYS * round(0.3 * BASE_ORDERS)
+    assert len(history.origin) == HISTORY_DAYS * round(0.3 * TOY_BASE_ORDERS)
     assert toy.seed not in history_seeds(toy.seed)
     assert not set(history_seeds(4)) & set(history_seeds(5))  # each scenario seed has its own past days
     # the past days are the generator's own draws at those seeds: day k is the toy city of seed history_seeds[k]

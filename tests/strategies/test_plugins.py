@@ -32,7 +32,7 @@ from rpbench.exceptions import ModelError, ParameterError
 from rpbench.model import Structure
 from rpbench.results.metrics import TIMING_KPIS
 from rpbench.spec import resolve_runs
-from rpbench.strategies import plugin_names, strategy_class
+from rpbench.strategies import strategy_class, strategy_plugin_names
 from rpbench.strategies.base import Kind, received
 from rpbench.strategies.myopic import MyopicBatch
 from rpbench.strategies.rtv import RTV
@@ -298,7 +298,7 @@ def test_entry_points_resolve_and_builtins_win(plugin_dir):
     assert strategy_class("myplug").__name__ == "MyStrategy"
     assert strategy_class("MYPLUG") is strategy_class("myplug")  # names compare case-insensitively
     assert strategy_class("mb") is MyopicBatch  # a shadowing entry point is ignored
-    assert "myplug" in plugin_names() and "mb" not in plugin_names()
+    assert "myplug" in strategy_plugin_names() and "mb" not in strategy_plugin_names()
     # oracles win too; the plug-in runs under its class's name
     assert names("mb,MyPlug,oracle1") == [("mb", "mb"), ("mine", "myplug"), ("oracle1", "oracle1")]
     with pytest.raises(
@@ -424,9 +424,9 @@ def test_example_package_runs_by_entry_point_and_preset(tmp_path, monkeypatch):
     monkeypatch.syspath_prepend(str(target))
     monkeypatch.setenv("PYTHONPATH", os.pathsep.join([str(target), os.environ.get("PYTHONPATH", "")]))
     try:
-        from rpbench.backends.registry import plugin_names as backend_plugins
+        from rpbench.backends.registry import backend_plugin_names as backend_plugins
 
-        assert "greedy" in plugin_names() and "dense-lsa" in backend_plugins()
+        assert "greedy" in strategy_plugin_names() and "dense-lsa" in backend_plugins()
         preset = str(target / "rpbench_greedy" / "dense-lsa.toml")
         out = tmp_path / "run"
         assert (

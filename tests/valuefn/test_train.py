@@ -22,9 +22,9 @@ from rpbench.valuefn.model import MODEL_JSON, load_model, save_model
 from rpbench.valuefn.training import (
     CACHE_FOLDER,
     Settings,
-    cache_key,
     check_held_out,
     held_out_problem,
+    training_key,
     training_record,
     training_scenarios,
 )
@@ -138,22 +138,22 @@ def test_train_refuses_no_scenarios_and_mixed_networks(toy):
 
 def test_cache_key_follows_the_training_inputs(toy):
     runs = training_scenarios(toy, "", (1,))
-    key = cache_key(runs, Settings())
-    assert key == cache_key(training_scenarios(toy, "", (1,)), Settings()) and len(key) == 24
-    assert key != cache_key(training_scenarios(toy, "", (2,)), Settings())
-    assert key != cache_key(runs, Settings(discount=0.95))
-    assert key != cache_key(runs + training_scenarios(toy, "", (2,)), Settings())
+    key = training_key(runs, Settings())
+    assert key == training_key(training_scenarios(toy, "", (1,)), Settings()) and len(key) == 24
+    assert key != training_key(training_scenarios(toy, "", (2,)), Settings())
+    assert key != training_key(runs, Settings(discount=0.95))
+    assert key != training_key(runs + training_scenarios(toy, "", (2,)), Settings())
     moved = dataclasses.replace(
         runs[0], orders=dataclasses.replace(runs[0].orders, request_s=runs[0].orders.request_s + 1)
     )
-    assert key != cache_key([moved], Settings())
+    assert key != training_key([moved], Settings())
 
 
 def test_cached_model_trains_once_and_retrains_a_damaged_entry(toy, tmp_path, monkeypatch, capsys):
     monkeypatch.setenv("RPBENCH_CACHE", str(tmp_path / "cache"))
     runs = training_scenarios(toy, "", (1,))
     model, digest, folder = cached_model(runs, Settings(), progress=False)
-    assert folder == tmp_path / "cache" / CACHE_FOLDER / cache_key(runs, Settings())
+    assert folder == tmp_path / "cache" / CACHE_FOLDER / training_key(runs, Settings())
     assert load_model(folder)[1] == digest
     entry = files_of(folder)
 

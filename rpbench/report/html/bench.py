@@ -68,7 +68,7 @@ def bench_page(
     page.heading("Performance profile", 2)
     page.figure(
         "fig-profile",
-        figures.profile_figure(profile_steps(performance_profile(table))),
+        figures.profile_lines(profile_steps(performance_profile(table))),
         "For each preset, the share of models it solved within τ times the fastest preset's time (Dolan and "
         "Moré); the value at τ = 1 is the share where it was fastest, the right end the share it solved.",
     )

@@ -184,7 +184,7 @@ def timeline(
     return _layout(fig, None, 640)
 
 
-def hourly(table: pd.DataFrame, styles: Styles | None = None) -> Any:
+def hourly_panels(table: pd.DataFrame, styles: Styles | None = None) -> Any:
     """The per-hour KPIs (``hourly.csv``): four panels, one line per run."""
     import plotly.graph_objects as go
 
@@ -390,7 +390,7 @@ def sweep_panels(table: pd.DataFrame, parameter: str, kpis: Sequence[str], style
     return _layout(fig, None, 330 * rows + 90)
 
 
-def profile_figure(profile: dict[str, tuple[np.ndarray, np.ndarray]]) -> Any:
+def profile_lines(profile: dict[str, tuple[np.ndarray, np.ndarray]]) -> Any:
     """Dolan-Moré performance profiles, one step line per preset (log2 of the ratio to the fastest)."""
     import plotly.graph_objects as go
 

@@ -32,11 +32,10 @@ from rpbench.report.html import figures
 from rpbench.report.html.mapdata import map_payload
 from rpbench.report.html.page import Cell, Page
 from rpbench.results import layout
+from rpbench.results.layout import REPORT_HTML
 from rpbench.results.metrics import KPI_LABELS
 from rpbench.results.read import load_kpis, unproven_runs
 from rpbench.results.runs import run_label, run_styles
-
-REPORT_HTML = layout.REPORT_HTML
 
 
 def write_html(folder: Path, name: str | None = None, dest: Path | None = None, *, published: bool = False) -> Path:
@@ -131,7 +130,7 @@ def comparison_page(folder: Path, name: str | None = None, *, published: bool = 
     if hourly_path.is_file() and meta["scenario"].get("horizon_s", 0) > 2 * 3600:
         page.figure(
             "fig-hourly",
-            figures.hourly(results.read_csv(hourly_path), styles),
+            figures.hourly_panels(results.read_csv(hourly_path), styles),
             "KPIs by request hour (a pair's saving counted in the hour of its earlier request); the upper "
             "bound's line splits its whole-period matching the same way and is not itself a bound per hour.",
         )
@@ -326,9 +325,9 @@ def _subfolders(folder: Path) -> list[Path]:
 
 
 def _synthetic_banner(page: Page, scenario: dict) -> None:
-    from rpbench.report.comparison import synthetic_banner
+    from rpbench.report.comparison import synthetic_lines
 
-    for line in synthetic_banner(scenario):
+    for line in synthetic_lines(scenario):
         if line.startswith("> "):
             page.markup(f'<p class="banner">{_inline(line[2:])}</p>')
 
