@@ -1,16 +1,18 @@
-"""Where rpbench finds its data folder, its cache and its checkout.
+"""Where rpbench finds its data folders, its cache and its checkout.
 
-Data folder precedence (DESIGN.md "Data"): ``--data DIR``, else the
-``RPBENCH_DATA`` environment variable, else ``../shared/data/haikou`` next to
-the checkout (tried beside the current directory first, then beside the
-source tree when rpbench runs from a checkout), else the folder
-``rpbench data fetch`` downloads into (``haikou`` in the user data directory,
-or in ``RPBENCH_DATA_HOME``), so a fresh machine without ``../shared`` runs
-the real data after one fetch.  Nothing here assumes which days exist in the
-folder.  When no folder is found,
-:func:`rpbench.data.first_run.ensure_data_dir` fetches the pinned registry into
-that last folder first, from ``$RPBENCH_DATA_MIRROR`` when set; this module
-only finds folders.
+rpbench knows the data folders of a few cities (:data:`CITY_LABELS`; Haikou is
+the default, :data:`DEFAULT_CITY`).  A city's folder is, in order of precedence
+(DESIGN.md "Data"): ``--data DIR`` (the folder of the city the command is
+about), else, for Haikou only, the ``RPBENCH_DATA`` environment variable, else
+``../shared/data/<city>`` next to the checkout (tried beside the current
+directory first, then beside the source tree when rpbench runs from a
+checkout), else the folder ``rpbench data fetch --city CITY`` downloads into
+(``<city>`` in the user data directory, or in ``RPBENCH_DATA_HOME``), so a
+fresh machine without ``../shared`` runs the real data after one fetch.
+Nothing here assumes which days exist in a folder.  When no folder is found,
+:func:`rpbench.data.first_run.ensure_data_dir` fetches the city's pinned
+registry into that last folder first, from ``$RPBENCH_DATA_MIRROR`` when set;
+this module only finds folders.
 
 The cache (all-pairs distances, predictions) lives in the user cache
 directory, never in the repository; ``RPBENCH_CACHE`` overrides it.  A
@@ -32,16 +34,18 @@ from pathlib import Path
 
 from platformdirs import user_cache_dir, user_data_dir
 
-from rpbench.exceptions import CacheError, DataNotFoundError, one_line
+from rpbench.exceptions import CacheError, DataNotFoundError, ParameterError, one_line
 
 DATA_ENV = "RPBENCH_DATA"
 CACHE_ENV = "RPBENCH_CACHE"
 DATA_HOME_ENV = "RPBENCH_DATA_HOME"
 DATA_MIRROR_ENV = "RPBENCH_DATA_MIRROR"
-_RELATIVE_DEFAULT = Path("..") / "shared" / "data" / "haikou"
-# The fetched folder gets the same name as the shared one, so the data home can
-# later hold other cities beside it.
-_FETCHED_NAME = "haikou"
+#: The cities whose data folders rpbench finds and fetches (``--city NAME``), with the name messages give them.
+CITY_LABELS = {"haikou": "Haikou", "manhattan": "Manhattan"}
+#: The city of a command that names none: every scenario of the paper is Haikou's.
+DEFAULT_CITY = "haikou"
+# ``../shared/data/<city>``: the shared folders sit beside the checkout.
+_SHARED_DATA = Path("..") / "shared" / "data"
 #: A dead writer's temporary is swept once untouched this long: a pid says nothing about a writer on
 #: another machine or in another pid namespace sharing the folder (which keeps writing while it builds),
 #: and a leftover costs only disk space meanwhile, so err on the late side.
@@ -63,66 +67,112 @@ def data_home() -> Path:
     return Path(root).expanduser()
 
 
-def fetched_data_dir() -> Path:
-    """The folder ``rpbench data fetch`` fills by default (it may not exist yet)."""
-    return data_home() / _FETCHED_NAME
+def city_label(city: str) -> str:
+    """The name messages give ``city`` (``"Haikou"``); an unknown city is a :class:`ParameterError`
+    naming the known ones (a city's name becomes a folder name: nothing else may pass)."""
+    try:
+        return CITY_LABELS[city]
+    except (KeyError, TypeError):
+        raise ParameterError(
+            f"unknown city {city!r}: rpbench knows the data folders of {', '.join(CITY_LABELS)}; name one of them"
+        ) from None
 
 
-def default_data_candidates() -> list[Path]:
-    """Folders tried, in order, when neither ``--data`` nor the env var is set."""
-    candidates = [Path.cwd() / _RELATIVE_DEFAULT, source_root() / _RELATIVE_DEFAULT, fetched_data_dir()]
+def fetch_command(city: str = DEFAULT_CITY) -> str:
+    """The command that fills :func:`fetched_data_dir` of ``city`` (``--city`` only when it is not the default)."""
+    city_label(city)
+    return "rpbench data fetch" if city == DEFAULT_CITY else f"rpbench data fetch --city {city}"
+
+
+def fetched_data_dir(city: str = DEFAULT_CITY) -> Path:
+    """The folder ``rpbench data fetch --city CITY`` fills by default: ``<data home>/<city>`` (it may not
+    exist yet).  It has the name of the shared folder, so one data home holds every city side by side."""
+    city_label(city)
+    return data_home() / city
+
+
+def shared_data_candidates(city: str = DEFAULT_CITY) -> list[Path]:
+    """``../shared/data/<city>`` beside the current directory, then beside the checkout (they may not exist)."""
+    city_label(city)
+    return [Path.cwd() / _SHARED_DATA / city, source_root() / _SHARED_DATA / city]
+
+
+def default_data_candidates(city: str = DEFAULT_CITY) -> list[Path]:
+    """Folders tried for ``city``, in order, when no folder is named (no ``--data``; for Haikou, no env var):
+    :func:`shared_data_candidates`, then :func:`fetched_data_dir`, resolved, each once."""
+    return _defaults(city)
+
+
+def candidate_data_dirs(city: str = DEFAULT_CITY) -> list[Path]:
+    """The folders :func:`locate_data_dir` tries for ``city``, in order (messages list them as tried).
+
+    They are :func:`default_data_candidates`.  Haikou's list is looked up through this module and asked
+    for without an argument, as before rpbench knew other cities, so that a test standing for another
+    machine can replace that function by one of no argument; that replacement leaves the other cities'
+    lists as they are.
+    """
+    if city == DEFAULT_CITY:
+        return default_data_candidates()
+    return _defaults(city)
+
+
+def _defaults(city: str) -> list[Path]:
     unique: list[Path] = []
-    for c in candidates:
+    for c in [*shared_data_candidates(city), fetched_data_dir(city)]:
         c = c.resolve()
         if c not in unique:
             unique.append(c)
     return unique
 
 
-def describe_candidate(path: Path) -> str:
-    """Say which default a candidate folder is (for ``rpbench list``)."""
+def describe_candidate(path: Path, city: str = DEFAULT_CITY) -> str:
+    """Say which default of ``city`` a candidate folder is (for ``rpbench list``)."""
     path = path.resolve()
-    if path == fetched_data_dir().resolve():
-        return f"downloaded by `rpbench data fetch` (${DATA_HOME_ENV} or the user data directory)"
-    if path == (Path.cwd() / _RELATIVE_DEFAULT).resolve():
-        return "../shared/data/haikou beside the current directory"
-    if path == (source_root() / _RELATIVE_DEFAULT).resolve():
-        return "../shared/data/haikou beside the checkout"
+    if path == fetched_data_dir(city).resolve():
+        return f"downloaded by `{fetch_command(city)}` (${DATA_HOME_ENV} or the user data directory)"
+    here, checkout = (c.resolve() for c in shared_data_candidates(city))
+    if path == here:
+        return f"../shared/data/{city} beside the current directory"
+    if path == checkout:
+        return f"../shared/data/{city} beside the checkout"
     return "a default candidate folder"
 
 
-def locate_data_dir(explicit: str | os.PathLike | None = None) -> tuple[Path | None, str]:
-    """The data folder to use and where it came from (``--data``, the env var, which default).
+def locate_data_dir(explicit: str | os.PathLike | None = None, city: str = DEFAULT_CITY) -> tuple[Path | None, str]:
+    """``city``'s data folder and where it came from (``--data``, the env var, which default).
 
-    An explicit folder (argument or env var) that does not exist is an
-    error, not a silent fall-back: the user asked for it by name.
+    ``explicit`` (``--data DIR``) is the folder of ``city``, the city the
+    command is about; ``$RPBENCH_DATA`` names Haikou's folder only.  A folder
+    named so (argument or env var) that does not exist is an error, not a
+    silent fall-back: the user asked for it by name.  ``(None, "none found")``
+    when no default exists; an unknown city is a :class:`ParameterError`.
     """
+    label = city_label(city)
     if explicit is not None:
         path = Path(explicit).expanduser()
         if not path.is_dir():
             raise DataNotFoundError(
-                f"data folder {str(path)!r} (from --data) does not exist; point --data at the Haikou data folder"
+                f"data folder {str(path)!r} (from --data) does not exist; point --data at the {label} data folder"
             )
         return path.resolve(), "--data"
-    env = os.environ.get(DATA_ENV)
+    env = os.environ.get(DATA_ENV) if city == DEFAULT_CITY else None
     if env:
         path = Path(env).expanduser()
         if not path.is_dir():
             raise DataNotFoundError(
                 f"data folder {env!r} (from ${DATA_ENV}) does not exist; "
-                f"unset {DATA_ENV} or point it at the Haikou data folder"
+                f"unset {DATA_ENV} or point it at the {label} data folder"
             )
         return path.resolve(), f"${DATA_ENV}"
-    # Looked up through the module so tests can replace the candidate list.
-    for candidate in default_data_candidates():
+    for candidate in candidate_data_dirs(city):
         if candidate.is_dir():
-            return candidate, describe_candidate(candidate)
+            return candidate, describe_candidate(candidate, city)
     return None, "none found"
 
 
-def find_data_dir(explicit: str | os.PathLike | None = None) -> Path | None:
-    """Return the data folder to use, or ``None`` when no folder exists (see :func:`locate_data_dir`)."""
-    return locate_data_dir(explicit)[0]
+def find_data_dir(explicit: str | os.PathLike | None = None, city: str = DEFAULT_CITY) -> Path | None:
+    """Return ``city``'s data folder, or ``None`` when no folder exists (see :func:`locate_data_dir`)."""
+    return locate_data_dir(explicit, city)[0]
 
 
 def cache_dir() -> Path:

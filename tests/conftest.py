@@ -1,4 +1,4 @@
-"""Shared fixtures: the real data folder (tests skip without it) and a tiny fake one in its format.
+"""Shared fixtures: the real data folders (tests skip without them) and a tiny fake Haikou one in its format.
 
 The tests never write into the user's cache: the session runs with ``$RPBENCH_CACHE`` pointed at a
 temporary folder (removed at the end), inherited by the worker processes and subprocesses tests start;
@@ -18,7 +18,7 @@ from pathlib import Path
 
 import pytest
 
-from rpbench.paths import find_data_dir
+from rpbench.paths import find_data_dir, shared_data_candidates
 
 # Let test modules in sub-folders import tests/helpers.py as `helpers`.
 sys.path.insert(0, str(Path(__file__).parent))
@@ -52,6 +52,17 @@ def data_dir() -> Path:
     if folder is None:
         pytest.skip("Haikou data folder not found (set RPBENCH_DATA)")
     return folder
+
+
+@pytest.fixture(scope="session")
+def manhattan_data_dir() -> Path:
+    """The Manhattan data folder, ``../shared/data/manhattan`` beside the current folder or the checkout; tests
+    needing it (marked ``manhattan``) are skipped when it is absent.  Only those two places are looked at: no
+    ``RPBENCH_*`` variable of the machine decides what the tests read."""
+    for folder in shared_data_candidates("manhattan"):
+        if folder.is_dir():
+            return folder.resolve()
+    pytest.skip("Manhattan data folder not found (../shared/data/manhattan beside the checkout)")
 
 
 @pytest.fixture

@@ -1,6 +1,9 @@
-"""``rpbench data fetch`` and ``rpbench data verify``: get the Haikou data folder on a fresh machine, check one.
+"""``rpbench data fetch`` and ``rpbench data verify``: get a city's data folder on a fresh machine, check one.
 
-The pinned file list and the download logic are :mod:`rpbench.data.fetch`.
+``--city NAME`` picks the city (default Haikou; the cities with a registry,
+:data:`rpbench.data.fetch.REGISTRY_FILES`); an unknown one is one line and
+exit 2, before anything is read or written.  The pinned file lists and the
+download logic are :mod:`rpbench.data.fetch`.
 Summaries go to stdout (one JSON object with ``--json``), the progress bar
 to stderr; a network error, a checksum mismatch, a body longer than the
 registry's size and a full disk are each one line and exit 2.
@@ -15,12 +18,24 @@ import sys
 
 from rpbench import paths
 from rpbench.commands.output import print_json
-from rpbench.data.fetch import check_verified, fetch, source_urls, verify_data
+from rpbench.data.fetch import (
+    MIRROR_CITY,
+    REGISTRY_FILES,
+    check_verified,
+    fetch,
+    registry_file,
+    source_urls,
+    verify_data,
+)
 from rpbench.exceptions import DataNotFoundError
 from rpbench.paths import (
     DATA_ENV,
     DATA_HOME_ENV,
     DATA_MIRROR_ENV,
+    DEFAULT_CITY,
+    city_label,
+    data_home,
+    fetch_command,
     fetched_data_dir,
     locate_data_dir,
 )
@@ -29,9 +44,10 @@ from rpbench.paths import (
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "data",
-        help="download (fetch) or check (verify) the Haikou data folder",
-        description="Download the Haikou data folder from its public sources at pinned commits "
-        "(fetch), or check a data folder against the pinned checksums (verify).",
+        help="download (fetch) or check (verify) a city's data folder (Haikou unless --city)",
+        description="Download a city's data folder from its public sources at pinned commits "
+        "(fetch), or check a data folder against the pinned checksums (verify).  "
+        f"Cities: {', '.join(REGISTRY_FILES)} (--city NAME; default {DEFAULT_CITY}).",
     )
     p.set_defaults(handler=lambda args: _usage(p))
     actions = p.add_subparsers(dest="data_action", metavar="ACTION")
@@ -46,20 +62,22 @@ def register(sub: argparse._SubParsersAction) -> None:
         "resumes.  Without --dest, rpbench then finds the folder by itself "
         "(see `rpbench list`).",
     )
+    _add_city_arg(f, "whose data folder to fetch")
     f.add_argument(
         "--dest",
         metavar="DIR",
         default=None,
-        help=f"folder to fill (default: {fetched_data_dir()}, i.e. haikou/ in ${DATA_HOME_ENV} "
-        "or the user data directory)",
+        help=f"folder to fill (default: the city's folder in the data home, {data_home()}/CITY, "
+        f"e.g. {fetched_data_dir()}; ${DATA_HOME_ENV} moves the data home)",
     )
     f.add_argument(
         "--mirror",
         metavar="URL",
         default=None,
-        help="fetch the stored file names from this copy of a data folder instead "
+        help="fetch the stored file names from this copy of the city's data folder instead "
         f"(http(s)://, file:// or a local folder; default: ${DATA_MIRROR_ENV}, else the pinned sources); "
-        "content is still checked",
+        f"{MIRROR_CITY} in it stands for the city's name, so one value serves every city "
+        f"(e.g. https://host/data/{MIRROR_CITY}); content is still checked",
     )
     f.add_argument("--dry-run", action="store_true", help="print each file and the URL it comes from; download nothing")
     f.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -73,14 +91,25 @@ def register(sub: argparse._SubParsersAction) -> None:
         "(exit 2 naming the bad files), report the missing ones and list files "
         "the registry does not pin (e.g. other days' orders) without failing.",
     )
+    _add_city_arg(v, "whose data folder to check")
     v.add_argument(
         "--data",
         metavar="DIR",
         default=None,
-        help="data folder to check (default: the folder rpbench uses, see `rpbench list`)",
+        help="the city's data folder to check (default: the folder rpbench uses, see `rpbench list`)",
     )
     v.add_argument("--json", action="store_true", help="print one JSON object")
     v.set_defaults(handler=_run_verify)
+
+
+def _add_city_arg(parser: argparse.ArgumentParser, what: str) -> None:
+    # Checked by the handler, not by argparse's choices: an unknown name is then one line, not a usage block.
+    parser.add_argument(
+        "--city",
+        metavar="NAME",
+        default=DEFAULT_CITY,
+        help=f"the city {what}: {', '.join(REGISTRY_FILES)} (default: {DEFAULT_CITY})",
+    )
 
 
 def _usage(parser: argparse.ArgumentParser) -> int:
@@ -88,16 +117,23 @@ def _usage(parser: argparse.ArgumentParser) -> int:
     return 2
 
 
+def _city(args: argparse.Namespace) -> str:
+    """``--city``, checked: a city without a registry is one line naming those with one."""
+    registry_file(args.city)
+    return args.city
+
+
 def _run_fetch(args: argparse.Namespace) -> int:
+    city = _city(args)
     if args.dry_run:
-        urls = source_urls(args.mirror)
+        urls = source_urls(args.mirror, city=city)
         if args.json:
-            print_json({"dest": str(args.dest or fetched_data_dir()), "files": dict(urls)})
+            print_json({"dest": str(args.dest or fetched_data_dir(city)), "files": dict(urls)})
         else:
             for name, url in urls:
                 print(f"{name}  <-  {url}")
         return 0
-    report = fetch(args.dest, args.mirror, progress=not (args.quiet or args.json))
+    report = fetch(args.dest, args.mirror, city=city, progress=not (args.quiet or args.json))
     if args.json:
         print_json(report.as_dict())
         return 0
@@ -118,14 +154,16 @@ def _run_fetch(args: argparse.Namespace) -> int:
 
 
 def _run_verify(args: argparse.Namespace) -> int:
-    folder, origin = locate_data_dir(args.data)
+    city = _city(args)
+    folder, origin = locate_data_dir(args.data, city)
     if folder is None:  # nothing to verify: no download either
-        tried = ", ".join(str(c) for c in paths.default_data_candidates())
+        tried = ", ".join(str(c) for c in paths.candidate_data_dirs(city))
+        named = f"pass --data DIR or set ${DATA_ENV}" if city == DEFAULT_CITY else "or pass --data DIR"
         raise DataNotFoundError(
-            f"no Haikou data folder found to verify (tried {tried}); fetch it with `rpbench data fetch`, "
-            f"pass --data DIR or set ${DATA_ENV}"
+            f"no {city_label(city)} data folder found to verify (tried {tried}); "
+            f"fetch it with `{fetch_command(city)}`, {named}"
         )
-    report = verify_data(folder)
+    report = verify_data(folder, city=city)
     if args.json:
         print_json({**report.as_dict(), "source": origin})
     else:

@@ -1,8 +1,14 @@
-"""``rpbench list``: scenarios, the data folder, solver presets and whether each is installed."""
+"""``rpbench list``: scenarios, the data folders, solver presets and whether each is installed.
+
+The data folder of each city rpbench knows (:data:`rpbench.paths.CITY_LABELS`): Haikou's under the keys
+``data_dir``, ``data_dir_source``, ``data_dir_candidates`` and ``data_fetch_pending`` (``--data`` names it),
+and every city's, Haikou's too, under ``data_folders[CITY]`` with the same keys and its ``label``.
+"""
 
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 from rpbench.backends.presets import load_preset, preset_names
 from rpbench.commands.args import add_data_arg
@@ -11,7 +17,15 @@ from rpbench.data import available_peak_dates
 from rpbench.data.first_run import fetch_plan
 from rpbench.exceptions import RpbenchError
 from rpbench.oracle.runs import ORACLE_RUNS
-from rpbench.paths import default_data_candidates, describe_candidate, fetched_data_dir, locate_data_dir
+from rpbench.paths import (
+    CITY_LABELS,
+    DEFAULT_CITY,
+    candidate_data_dirs,
+    describe_candidate,
+    fetch_command,
+    fetched_data_dir,
+    locate_data_dir,
+)
 from rpbench.scenarios import SCENARIOS
 from rpbench.scenarios.base import Params
 from rpbench.spec import options_class
@@ -21,8 +35,8 @@ from rpbench.strategies import STRATEGY_REGISTRY, strategy_class, strategy_plugi
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "list",
-        help="list scenarios, data folder and solver presets",
-        description="List scenarios, the data folder in use, and solver presets "
+        help="list scenarios, data folders and solver presets",
+        description="List scenarios, the data folder in use for each city, and solver presets "
         "with whether each preset's backend is installed.",
     )
     add_data_arg(p)
@@ -30,15 +44,31 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(handler=_run)
 
 
-def gather(data: str | None) -> dict:
-    folder, origin = locate_data_dir(data)
-    pending = None  # what the first command needing the data would fetch (nothing is downloaded here)
-    if folder is None or origin == describe_candidate(fetched_data_dir()):
+def data_folder_info(city: str, data: str | None = None) -> dict:
+    """Where ``city``'s data folder is (``data``: its ``--data``), and what the first command needing it
+    would fetch (nothing is downloaded here): the keys ``rpbench list --json`` gives each city."""
+    folder, origin = locate_data_dir(data, city)
+    pending = None
+    if folder is None or origin == describe_candidate(fetched_data_dir(city), city):
         try:
-            plan = fetch_plan()
+            plan = fetch_plan(city)
             pending = plan.as_dict() if plan.todo else None
         except RpbenchError as exc:  # a bad $RPBENCH_DATA_MIRROR: said here, raised by the fetch
             pending = {"error": str(exc)}
+    return {
+        "label": CITY_LABELS[city],
+        "data_dir": str(folder) if folder else None,
+        "data_dir_source": origin,
+        "data_dir_candidates": [str(c) for c in candidate_data_dirs(city)],
+        "data_fetch_pending": pending,
+    }
+
+
+def gather(data: str | None) -> dict:
+    """Everything ``rpbench list`` says; ``data`` (``--data``) is Haikou's folder, the scenarios' city."""
+    folders = {city: data_folder_info(city, data if city == DEFAULT_CITY else None) for city in CITY_LABELS}
+    haikou = folders[DEFAULT_CITY]
+    folder = Path(haikou["data_dir"]) if haikou["data_dir"] else None
     presets = []
     for name in preset_names():
         try:
@@ -57,10 +87,8 @@ def gather(data: str | None) -> dict:
         except RpbenchError as exc:
             presets.append({"name": name, "backend": None, "installed": False, "error": str(exc)})
     return {
-        "data_dir": str(folder) if folder else None,
-        "data_dir_source": origin,
-        "data_dir_candidates": [str(c) for c in default_data_candidates()],
-        "data_fetch_pending": pending,
+        **{key: value for key, value in haikou.items() if key != "label"},
+        "data_folders": folders,
         "peak_dates": available_peak_dates(folder) if folder else [],
         "scenarios": [
             {
@@ -75,6 +103,24 @@ def gather(data: str | None) -> dict:
         "strategies": [_run_entry(name) for name in [*STRATEGY_REGISTRY, *strategy_plugin_names(), *ORACLE_RUNS]],
         "parameters": Params().as_dict(),
     }
+
+
+def _print_data_folder(entry: dict, title: str, now: str) -> None:
+    """A city's data folder (``entry``: :func:`data_folder_info`'s keys), and what its first use fetches."""
+    folder, pending = entry["data_dir"], entry["data_fetch_pending"]
+    if folder:
+        print(f"{title}: {folder} (from {entry['data_dir_source']})")
+    else:
+        print(f"{title}: none found")
+    if pending and "error" in pending:
+        print(f"  the first command that needs the data cannot fetch it: {pending['error']}")
+    elif pending:
+        lacks = f"lacks {pending['files']} of its {pending['registry_files']} files: " if folder else ""
+        source = "the pinned GitHub sources" if pending["source"] == "registry" else f"the mirror {pending['source']}"
+        print(
+            f"  {lacks}the first command that needs the data fetches {pending['files']} files "
+            f"({pending['content_bytes'] / 1e6:.1f} MB of content) from {source} into {pending['dest']} {now}"
+        )
 
 
 def _run_entry(name: str) -> dict:
@@ -93,24 +139,13 @@ def _run(args: argparse.Namespace) -> int:
     if args.json:
         print_json(info)
         return 0
-    folder, pending = info["data_dir"], info["data_fetch_pending"]
-    if folder:
-        print(f"data folder: {folder} (from {info['data_dir_source']})")
-    else:
-        print("data folder: none found")
-    if pending and "error" in pending:
-        print(f"  the first command that needs the data cannot fetch it: {pending['error']}")
-    elif pending:
-        lacks = f"lacks {pending['files']} of its {pending['registry_files']} files: " if folder else ""
-        source = "the pinned GitHub sources" if pending["source"] == "registry" else f"the mirror {pending['source']}"
-        print(
-            f"  {lacks}the first command that needs the data fetches {pending['files']} files "
-            f"({pending['content_bytes'] / 1e6:.1f} MB of content) from {source} into {pending['dest']} "
-            "(now: `rpbench data fetch`; --offline runs the toy city instead)"
-        )
+    _print_data_folder(info, "data folder", "(now: `rpbench data fetch`; --offline runs the toy city instead)")
     if info["peak_dates"]:
         dates = info["peak_dates"]
         print(f"  peak-hour dates: {len(dates)} ({dates[0]} .. {dates[-1]})")
+    for city, entry in info["data_folders"].items():
+        if city != DEFAULT_CITY:
+            _print_data_folder(entry, f"{entry['label']} data folder", f"(now: `{fetch_command(city)}`)")
     print("\nscenarios:")
     for s in info["scenarios"]:
         mark = "" if s["available"] else "  [needs data]"

@@ -1,19 +1,24 @@
-"""Download the Haikou data folder from its public sources, and verify a folder against them.
+"""Download a city's data folder from its public sources, and verify a folder against them.
 
-``registry.toml`` (package data beside this module) pins every file: its name
-in the data folder, its raw.githubusercontent.com URL at a fixed commit (from
-the folder's SOURCE.md), the transform applied when storing it (``gzip``: the
+Each city with a pinned data folder has a registry, package data beside this
+module (:data:`REGISTRY_FILES`: ``registry.toml`` for Haikou,
+``registry-manhattan.toml`` for Manhattan), that pins every file: its name in
+the data folder, its raw.githubusercontent.com URL at a fixed commit (from the
+folder's SOURCE.md), the transform applied when storing it (``gzip``: the
 folder keeps ``gzip -9n`` of the upstream bytes; ``none``) and the SHA-256 and
 size of its *content*, i.e. the upstream bytes = the stored file decompressed.
 The content is hashed, not the stored ``.gz``, because gzip output differs
-between implementations and levels while the data does not.
+between implementations and levels while the data does not.  Every function
+here takes the city (default Haikou, :data:`rpbench.paths.DEFAULT_CITY`).
 
 * :func:`fetch` without a mirror downloads each upstream file, hashes it while
   it streams and gzips it on the fly where the transform says so.  With a
   mirror (another copy of the data folder, ``http(s)://``, ``file://`` or a
-  local folder; ``--mirror``, else ``$RPBENCH_DATA_MIRROR``) it downloads
-  the stored names as they are (already gzipped) and only checks their content.
-* :func:`verify` checks the registry files present in a folder, lists the
+  local folder; ``--mirror``, else ``$RPBENCH_DATA_MIRROR``; ``{city}`` in it
+  stands for the city's name, so one mirror serves several cities) it
+  downloads the stored names as they are (already gzipped) and only checks
+  their content.
+* :func:`verify_data` checks the registry files present in a folder, lists the
   missing ones and the files the registry does not know (another day's
   orders in the same format is normal: nothing in rpbench assumes the days).
 
@@ -22,7 +27,7 @@ destination folder and is renamed (``os.replace``, atomic on one file system)
 to its final name only once its content hash matches, so an interrupted or
 corrupt download never leaves a file under the final name.  Files already
 present with the right content are skipped, which makes a second run free and
-an interrupted one resumable (file by file; the largest file is 2.3 MB).
+an interrupted one resumable (file by file; the largest file is 4.2 MB).
 
 Sizes: a download is held to the registry.  Reading stops as soon as more
 bytes arrive than the entry's content (``size``) can take: the content itself
@@ -73,10 +78,13 @@ from tqdm import tqdm
 
 from rpbench.data.orders import PEAK_DIR
 from rpbench.exceptions import ChecksumError, DataError, DownloadError, ParameterError, RpbenchError
-from rpbench.paths import DATA_MIRROR_ENV, fetched_data_dir
+from rpbench.paths import DATA_MIRROR_ENV, DEFAULT_CITY, fetch_command, fetched_data_dir
 from rpbench.version import __version__
 
-REGISTRY_RESOURCE = "registry.toml"
+#: Each city's registry, a package resource beside this module: the cities `rpbench data fetch --city` knows.
+REGISTRY_FILES = {"haikou": "registry.toml", "manhattan": "registry-manhattan.toml"}
+#: What ``{city}`` in a mirror's URL or folder is replaced with: the name of the city being fetched.
+MIRROR_CITY = "{city}"
 TRANSFORMS = ("gzip", "none")
 PINNED_PREFIX = "https://raw.githubusercontent.com/"
 CHUNK = 1 << 16
@@ -111,6 +119,7 @@ class RegistryEntry:
 class FetchReport:
     dest: Path
     source: str  # "registry" or the mirror's base URL
+    city: str = DEFAULT_CITY
     downloaded: list[str] = field(default_factory=list)
     already_present: list[str] = field(default_factory=list)
     replaced: list[str] = field(default_factory=list)  # present with the wrong content, downloaded again
@@ -123,6 +132,7 @@ class FetchReport:
 @dataclass
 class VerifyReport:
     folder: Path
+    city: str = DEFAULT_CITY
     ok: list[str] = field(default_factory=list)
     bad: dict[str, str] = field(default_factory=dict)  # name -> what is wrong
     missing: list[str] = field(default_factory=list)
@@ -132,10 +142,23 @@ class VerifyReport:
         return {**asdict(self), "folder": str(self.folder)}
 
 
-def load_registry(text: str | None = None) -> list[RegistryEntry]:
-    """The pinned files (``registry.toml`` shipped with rpbench, or ``text`` in that format)."""
+def registry_file(city: str) -> str:
+    """The package resource holding ``city``'s registry; a city without one is a :class:`ParameterError`
+    naming the cities that have one."""
+    try:
+        return REGISTRY_FILES[city]
+    except (KeyError, TypeError):
+        raise ParameterError(
+            f"no data registry for the city {city!r}: rpbench fetches the data of {', '.join(REGISTRY_FILES)}; "
+            "pass --city with one of them"
+        ) from None
+
+
+def load_registry(text: str | None = None, *, city: str = DEFAULT_CITY) -> list[RegistryEntry]:
+    """The pinned files of ``city``'s data folder (its registry shipped with rpbench, :func:`registry_file`),
+    or of ``text`` in that format."""
     if text is None:
-        text = resources.files("rpbench.data").joinpath(REGISTRY_RESOURCE).read_text(encoding="utf-8")
+        text = resources.files("rpbench.data").joinpath(registry_file(city)).read_text(encoding="utf-8")
     try:
         rows = tomllib.loads(text).get("file", [])
     except tomllib.TOMLDecodeError as exc:
@@ -162,6 +185,12 @@ def load_registry(text: str | None = None) -> list[RegistryEntry]:
     return entries
 
 
+def _registry(city: str) -> list[RegistryEntry]:
+    # Haikou's registry is asked for without an argument, as before rpbench knew other cities, so that a
+    # replacement of load_registry that takes no city (tests serve made-up entries so) keeps serving it.
+    return load_registry() if city == DEFAULT_CITY else load_registry(city=city)
+
+
 def _check_entry(entry: RegistryEntry) -> None:
     path = PurePosixPath(entry.name)
     # The name becomes a path under --dest: never let it climb out of it.
@@ -179,11 +208,14 @@ def _check_entry(entry: RegistryEntry) -> None:
         raise DataError(f"data registry entry {entry.name!r}: url {entry.url!r} is not a {PINNED_PREFIX} URL")
 
 
-def mirror_base(mirror: str | os.PathLike | None) -> str | None:
-    """The mirror as a base URL: ``http(s)://`` and ``file://`` as given, a local folder as ``file://``.
+def mirror_base(mirror: str | os.PathLike | None, city: str = DEFAULT_CITY) -> str | None:
+    """The mirror of ``city``'s data folder as a base URL: ``http(s)://`` and ``file://`` as given, a local
+    folder as ``file://``.
 
     Without ``mirror``, ``$RPBENCH_DATA_MIRROR`` (unset or empty: ``None``, the
-    pinned upstream URLs).
+    pinned upstream URLs).  A mirror serves the folder of the city being
+    fetched; ``{city}`` in it is replaced with the city's name, so that one
+    value (``https://host/data/{city}``) serves every city.
     """
     option = "--mirror"
     if mirror is None:
@@ -191,14 +223,16 @@ def mirror_base(mirror: str | os.PathLike | None) -> str | None:
         option = f"${DATA_MIRROR_ENV}"
     if mirror is None:
         return None
-    text = os.fspath(mirror)
+    given = os.fspath(mirror)
+    text = given.replace(MIRROR_CITY, city)
     scheme = urllib.parse.urlsplit(text).scheme.lower()
     if scheme in ("http", "https", "file"):
         return text.rstrip("/")
     folder = Path(text).expanduser()
     if len(scheme) <= 1 and folder.is_dir():  # no scheme, or a Windows drive letter
         return folder.resolve().as_uri()
-    raise ParameterError(f"{option} {text!r} is neither an http(s):// or file:// URL nor an existing folder")
+    value = repr(text) if text == given else f"{given!r} ({text!r} for {city})"
+    raise ParameterError(f"{option} {value} is neither an http(s):// or file:// URL nor an existing folder")
 
 
 def source_url(entry: RegistryEntry, mirror: str | None = None) -> str:
@@ -209,11 +243,16 @@ def source_url(entry: RegistryEntry, mirror: str | None = None) -> str:
 
 
 def source_urls(
-    mirror: str | os.PathLike | None = None, entries: list[RegistryEntry] | None = None
+    mirror: str | os.PathLike | None = None,
+    entries: list[RegistryEntry] | None = None,
+    *,
+    city: str = DEFAULT_CITY,
 ) -> list[tuple[str, str]]:
-    """``(name, url)`` of every registry file, as :func:`fetch` would download them."""
-    base = mirror_base(mirror)
-    return [(e.name, source_url(e, base)) for e in (load_registry() if entries is None else entries)]
+    """``(name, url)`` of every file of ``city``'s registry (or of ``entries``), as :func:`fetch` would
+    download them."""
+    entries = _registry(city) if entries is None else entries
+    base = mirror_base(mirror, city)
+    return [(e.name, source_url(e, base)) for e in entries]
 
 
 def content_problem(path: Path, entry: RegistryEntry) -> str | None:
@@ -247,23 +286,26 @@ def fetch(
     mirror: str | os.PathLike | None = None,
     *,
     entries: list[RegistryEntry] | None = None,
+    city: str = DEFAULT_CITY,
     progress: bool = True,
 ) -> FetchReport:
-    """Download every registry file missing from ``dest`` (default: :func:`rpbench.paths.fetched_data_dir`).
+    """Download every file of ``city``'s registry (or of ``entries``) missing from ``dest`` (default:
+    :func:`rpbench.paths.fetched_data_dir` of ``city``), from ``mirror`` (see :func:`mirror_base`).
 
     Files already there with the right content are skipped; a file with the
     wrong content is downloaded again.  The first network error, checksum
     mismatch (or body longer than the registry allows) or full disk stops the
     run with a :class:`DownloadError`, :class:`ChecksumError` or
     :class:`DiskFullError` naming the file; the files stored before it are
-    kept, so rerunning resumes.
+    kept, so rerunning resumes.  A city without a registry is a
+    :class:`ParameterError` before anything is created.
     """
-    folder = Path(dest).expanduser() if dest is not None else fetched_data_dir()
+    entries = _registry(city) if entries is None else entries
+    folder = Path(dest).expanduser() if dest is not None else fetched_data_dir(city)
     if folder.exists() and not folder.is_dir():
         raise ParameterError(f"--dest {str(folder)!r} is a file, not a folder")
-    entries = load_registry() if entries is None else entries
-    base = mirror_base(mirror)
-    report = FetchReport(dest=folder.resolve(), source=base or "registry")
+    base = mirror_base(mirror, city)
+    report = FetchReport(dest=folder.resolve(), source=base or "registry", city=city)
     todo: list[RegistryEntry] = []
     for entry in entries:
         path = folder / entry.name
@@ -292,12 +334,15 @@ def fetch(
                 try:
                     _make_dirs(target.parent, created)
                     download(entry, source_url(entry, base), target, served_as_stored=base is not None, bar=bar)
+                except DownloadError as exc:
+                    # The network's error names the file; what to run again depends on the city.
+                    raise DownloadError(f"{exc}{rerun_hint(city)}") from None
                 except OSError as exc:
                     if exc.errno not in DISK_FULL_ERRNOS:
                         raise
                     raise DiskFullError(
                         f"no space left on the device holding {str(folder)!r} while storing {entry.name} "
-                        f"({_one_line(exc.strerror or exc)}); nothing half-written was kept{DISK_FULL_HINT}"
+                        f"({_one_line(exc.strerror or exc)}); nothing half-written was kept{disk_full_hint(city)}"
                     ) from None
                 report.downloaded.append(entry.name)
                 report.content_bytes += entry.size
@@ -331,7 +376,9 @@ def download(entry: RegistryEntry, url: str, target: Path, *, served_as_stored: 
     (a mirror: gzipped where the transform is gzip); otherwise it serves the
     upstream content and the transform is applied here.  A full device raises
     its ``OSError`` (``errno`` in :data:`DISK_FULL_ERRNOS`) as it is, the
-    partial file removed: :func:`fetch` names the folder.
+    partial file removed: :func:`fetch` names the folder.  A network error is a
+    :class:`DownloadError` naming the file and the URL; :func:`fetch` adds the
+    command to run again (:func:`rerun_hint`).
     """
     try:
         fd, tmp_name = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".part")
@@ -408,28 +455,30 @@ def _stream(
         ) from None
     except urllib.error.HTTPError as exc:
         raise DownloadError(
-            f"could not download {entry.name} from {url}: HTTP {exc.code} {_one_line(exc.reason)}{RERUN_HINT}"
+            f"could not download {entry.name} from {url}: HTTP {exc.code} {_one_line(exc.reason)}"
         ) from None
     except urllib.error.URLError as exc:
-        raise DownloadError(
-            f"could not download {entry.name} from {url}: {_one_line(exc.reason)}{RERUN_HINT}"
-        ) from None
+        raise DownloadError(f"could not download {entry.name} from {url}: {_one_line(exc.reason)}") from None
     except (http.client.HTTPException, OSError) as exc:
         if isinstance(exc, OSError) and exc.errno in DISK_FULL_ERRNOS:
             raise  # writing failed, not the network: fetch names the full device
         raise DownloadError(
-            f"could not download {entry.name} from {url}: {_one_line(exc) or type(exc).__name__}{RERUN_HINT}"
+            f"could not download {entry.name} from {url}: {_one_line(exc) or type(exc).__name__}"
         ) from None
     return digest.hexdigest(), size
 
 
-#: The end of a download error's message.
-RERUN_HINT = (
-    f"; check the network (or the mirror: --mirror, ${DATA_MIRROR_ENV}) and run `rpbench data fetch` again "
-    "(stored files are kept)"
-)
-#: The end of a full disk's message.
-DISK_FULL_HINT = "; free space there (or pass --dest DIR on another device) and run `rpbench data fetch` again"
+def rerun_hint(city: str = DEFAULT_CITY) -> str:
+    """The end of a download error's message: what to check, and the command that resumes the fetch."""
+    return (
+        f"; check the network (or the mirror: --mirror, ${DATA_MIRROR_ENV}) and run `{fetch_command(city)}` again "
+        "(stored files are kept)"
+    )
+
+
+def disk_full_hint(city: str = DEFAULT_CITY) -> str:
+    """The end of a full disk's message: where to make room, and the command that resumes the fetch."""
+    return f"; free space there (or pass --dest DIR on another device) and run `{fetch_command(city)}` again"
 
 
 def gzip_bound(size: int) -> int:
@@ -528,11 +577,14 @@ def _one_line(value: object) -> str:
     return " ".join(str(value).split())
 
 
-def verify_data(folder: str | os.PathLike, *, entries: list[RegistryEntry] | None = None) -> VerifyReport:
-    """Check every registry file present in ``folder``; list missing and unregistered files."""
+def verify_data(
+    folder: str | os.PathLike, *, entries: list[RegistryEntry] | None = None, city: str = DEFAULT_CITY
+) -> VerifyReport:
+    """Check every file of ``city``'s registry (or of ``entries``) present in ``folder``, a data folder of
+    ``city``; list missing and unregistered files."""
+    entries = _registry(city) if entries is None else entries
     root = Path(folder).expanduser().resolve()
-    entries = load_registry() if entries is None else entries
-    report = VerifyReport(folder=root)
+    report = VerifyReport(folder=root, city=city)
     for entry in entries:
         path = root / entry.name
         if not path.is_file():
@@ -565,5 +617,5 @@ def check_verified(report: VerifyReport) -> None:
     listed = "; ".join(f"{name}: {problem}" for name, problem in report.bad.items())
     raise ChecksumError(
         f"{len(report.bad)} file(s) in {str(report.folder)!r} fail verification: {listed}; "
-        f"run `rpbench data fetch --dest {report.folder}` to download them again"
+        f"run `{fetch_command(report.city)} --dest {report.folder}` to download them again"
     )

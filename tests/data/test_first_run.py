@@ -3,7 +3,8 @@
 Every test here is a fresh machine: no ``$RPBENCH_DATA``, no ``../shared``
 beside the current folder or the checkout, ``$RPBENCH_DATA_HOME`` in the
 test's tmp folder.  The success path reads a mirror (``$RPBENCH_DATA_MIRROR``,
-a copy of the real data folder); nothing touches the internet.
+a copy of the real data folder); nothing touches the internet.  The Manhattan
+tests also move the checkout away (its ../shared holds Manhattan's folder).
 """
 
 from __future__ import annotations
@@ -22,13 +23,16 @@ from rpbench.cli import main
 from rpbench.data import fetch as fetch_mod
 from rpbench.data import first_run
 from rpbench.data.fetch import load_registry, verify_data
-from rpbench.data.first_run import ensure_data_dir
+from rpbench.data.first_run import ensure_data_dir, fetch_plan, obtain_data_dir
 from rpbench.exceptions import DataNotFoundError, DownloadError
 from rpbench.paths import fetched_data_dir, find_data_dir
 
 REGISTRY = load_registry()
 NAMES = [e.name for e in REGISTRY]
 CONTENT_MB = f"{sum(e.size for e in REGISTRY) / 1e6:.1f} MB"
+MANHATTAN = load_registry(city="manhattan")
+MANHATTAN_NAMES = [e.name for e in MANHATTAN]
+MANHATTAN_MB = f"{sum(e.size for e in MANHATTAN) / 1e6:.1f} MB"
 REFUSED = "http://127.0.0.1:9/"  # the discard port: nothing listens, the connection is refused at once
 BANNER = "SYNTHETIC DATA: the numbers that follow are from the built-in toy city"
 
@@ -297,3 +301,114 @@ def test_list_says_what_the_first_command_will_fetch(capsys, no_network, monkeyp
     }
     code, _, err = run_cli(capsys, "data", "verify")
     assert code == 2 and "no Haikou data folder found to verify" in err and not fresh_machine.exists()
+
+
+# --------------------------------------------------------------------------- Manhattan
+
+
+@pytest.fixture
+def no_shared_manhattan(monkeypatch, tmp_path, fresh_machine) -> Path:
+    """No Manhattan folder either: the checkout (whose ../shared holds one) is elsewhere; returns its fetched
+    folder (not created)."""
+    monkeypatch.setattr("rpbench.paths.source_root", lambda: tmp_path / "x" / "checkout")
+    monkeypatch.setattr("rpbench.commands.list.preset_names", list)  # no presets: skip importing solver libraries
+    assert find_data_dir(city="manhattan") is None
+    return fresh_machine / "manhattan"
+
+
+@pytest.fixture
+def city_mirrors(manhattan_data_dir, tmp_path) -> Path:
+    """``mirrors/{city}``: a folder holding a copy of the Manhattan data folder as ``mirrors/manhattan``."""
+    shutil.copytree(manhattan_data_dir, tmp_path / "mirrors" / "manhattan")
+    return tmp_path / "mirrors" / "{city}"
+
+
+@pytest.mark.manhattan
+def test_the_first_use_of_manhattan_fetches_it_from_the_city_mirror(
+    capsys, monkeypatch, no_shared_manhattan, city_mirrors
+):
+    monkeypatch.setenv(first_run.DATA_MIRROR_ENV, str(city_mirrors))  # one value for every city: {city}
+    dest = no_shared_manhattan.resolve()
+    served = Path(str(city_mirrors).replace("{city}", "manhattan"))
+    assert ensure_data_dir(what="scenario 'manhattan-peak'", city="manhattan") == dest
+    announce, done = capsys.readouterr().err.splitlines()
+    assert announce == (
+        f"rpbench: no Manhattan data folder found: fetching it once ({len(MANHATTAN)} files, {MANHATTAN_MB} of "
+        f"content, served gzipped, SHA-256 checked) from the mirror {served.as_uri()} into {dest}"
+    )
+    assert done.startswith(f"rpbench: fetched {len(MANHATTAN)} files ({MANHATTAN_MB} of content, checksums verified)")
+    report = verify_data(dest, city="manhattan")
+    assert report.ok == MANHATTAN_NAMES and not report.bad and not report.extra  # complete, no .part file left
+    assert not (dest.parent / "haikou").exists()  # the other city's folder is not touched
+
+    # Found from now on, even with the mirror gone.
+    monkeypatch.setenv(first_run.DATA_MIRROR_ENV, REFUSED)
+    assert ensure_data_dir(what="scenario 'manhattan-peak'", city="manhattan") == dest
+    assert capsys.readouterr().err == ""
+
+
+@pytest.mark.manhattan
+def test_a_cut_manhattan_fetch_is_resumed(capsys, monkeypatch, no_shared_manhattan, city_mirrors):
+    served = Path(str(city_mirrors).replace("{city}", "manhattan"))
+    first = [e for e in MANHATTAN if e.name.startswith("network/")]
+    fetch_mod.fetch(no_shared_manhattan, served, entries=first, progress=False)  # what a cut fetch leaves
+    todo = len(MANHATTAN) - len(first)
+    lacks = f"the fetched Manhattan data folder {no_shared_manhattan} lacks {todo} of its {len(MANHATTAN)} files"
+    assert obtain_data_dir(offline=True, city="manhattan") == (None, f"{lacks} and --offline skips fetching them")
+    monkeypatch.setenv(first_run.DATA_MIRROR_ENV, str(city_mirrors))
+    folder, why = obtain_data_dir(city="manhattan")
+    assert folder == no_shared_manhattan.resolve() and why == ""
+    assert f"rpbench: {lacks}: resuming the fetch ({todo} files" in capsys.readouterr().err
+    assert verify_data(folder, city="manhattan").ok == MANHATTAN_NAMES
+
+
+def test_without_manhattan_data_the_errors_name_manhattan(capsys, monkeypatch, no_shared_manhattan, tmp_path):
+    # $RPBENCH_DATA names Haikou's folder: it is no Manhattan folder.
+    monkeypatch.setenv("RPBENCH_DATA", str(tmp_path))
+    tried = ", ".join(str(c) for c in paths.candidate_data_dirs("manhattan"))
+    assert tried.endswith(str(no_shared_manhattan.resolve()))
+    with pytest.raises(DataNotFoundError) as offline:
+        ensure_data_dir(what="scenario 'manhattan-peak'", offline=True, city="manhattan")
+    assert str(offline.value) == (
+        "no Manhattan data for scenario 'manhattan-peak': no Manhattan data folder found and --offline skips "
+        f"fetching it (folders tried: {tried}); get it with `rpbench data fetch --city manhattan` (it resumes a "
+        "cut fetch; $RPBENCH_DATA_MIRROR names a mirror), or pass --data DIR"
+    )
+    first = MANHATTAN_NAMES[0]
+    with pytest.raises(DataNotFoundError) as refused:  # the session's mirror refuses
+        ensure_data_dir(what="scenario 'manhattan-peak'", city="manhattan")
+    assert (
+        "no Manhattan data folder found and fetching it failed: could not download "
+        f"{first} from {REFUSED}{first}: [Errno 111] Connection refused (folders tried:"
+    ) in str(refused.value)
+    assert "check the network" not in str(refused.value)  # the error says what to run itself
+    assert capsys.readouterr().err.startswith("rpbench: no Manhattan data folder found: fetching it once")
+    assert files_under(no_shared_manhattan.parent) == []  # nothing half-written, not even an empty folder
+    with pytest.raises(DataNotFoundError, match="point --data at the Manhattan data folder"):
+        obtain_data_dir(tmp_path / "nothing", city="manhattan")
+
+
+def test_list_and_verify_say_where_each_city_is(capsys, no_network, monkeypatch, no_shared_manhattan):
+    monkeypatch.delenv(first_run.DATA_MIRROR_ENV)
+    code, stdout, _ = run_cli(capsys, "list")
+    assert code == 0 and "\ndata folder: none found\n" in f"\n{stdout}"
+    assert "\nManhattan data folder: none found\n" in stdout
+    assert (
+        f"the first command that needs the data fetches {len(MANHATTAN)} files ({MANHATTAN_MB} of content) from "
+        f"the pinned GitHub sources into {no_shared_manhattan} (now: `rpbench data fetch --city manhattan`)"
+    ) in stdout
+    code, stdout, _ = run_cli(capsys, "list", "--json")
+    info = json.loads(stdout)
+    assert list(info["data_folders"]) == ["haikou", "manhattan"]
+    assert info["data_folders"]["haikou"] == {
+        "label": "Haikou",
+        **{k: info[k] for k in ("data_dir", "data_dir_source", "data_dir_candidates", "data_fetch_pending")},
+    }
+    manhattan = info["data_folders"]["manhattan"]
+    assert manhattan["data_dir"] is None and manhattan["label"] == "Manhattan"
+    assert manhattan["data_dir_candidates"] == [str(c) for c in paths.candidate_data_dirs("manhattan")]
+    assert manhattan["data_fetch_pending"] == {**fetch_plan("manhattan").as_dict(), "files": len(MANHATTAN)}
+    code, _, err = run_cli(capsys, "data", "verify", "--city", "manhattan")
+    assert code == 2 and "no Manhattan data folder found to verify" in err
+    assert "fetch it with `rpbench data fetch --city manhattan`, or pass --data DIR\n" in err
+    assert not no_shared_manhattan.parent.exists()
