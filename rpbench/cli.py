@@ -38,6 +38,7 @@ COMMANDS = (
     "scenario",
     "list",
     "data",
+    "city",
     "replicate",
     "train",
     "instances",

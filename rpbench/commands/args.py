@@ -115,6 +115,19 @@ def add_scenario_args(parser: argparse.ArgumentParser, *, positional: bool = Fal
     if one_draw:
         add_number_arg(parser, "--seed", SEED, default=0, help="random seed (default 0)")
     parser.add_argument(
+        "--city",
+        default=None,
+        metavar="NAME",
+        help="the city of scenario city: one imported with `rpbench city import NAME`, or a city folder",
+    )
+    parser.add_argument(
+        "--window",
+        default=None,
+        metavar="HH:MM-HH:MM",
+        help="the time window of a city's day (scenarios city, manhattan-peak, manhattan-day; default: "
+        "the scenario's, e.g. 08:00-09:00)",
+    )
+    parser.add_argument(
         "--fleet-at",
         dest="fleet_placement",
         default="order_origins",
@@ -164,8 +177,9 @@ def scenario_request(args: argparse.Namespace) -> ScenarioRequest:
         name = default_scenario_name(args.data, offline=offline, progress=progress)
     else:
         name = args.scenario
-        if scenario_spec(name).needs_data:
-            ensure_data_dir(args.data, what=f"scenario {name!r}", offline=offline, progress=progress)
+        spec = scenario_spec(name)
+        if spec.needs_data:
+            ensure_data_dir(args.data, what=f"scenario {name!r}", offline=offline, progress=progress, city=spec.city)
     return ScenarioRequest(
         name=name,
         date=getattr(args, "date", None),
@@ -174,6 +188,8 @@ def scenario_request(args: argparse.Namespace) -> ScenarioRequest:
         params=params,
         fleet_placement=args.fleet_placement,
         data_dir=args.data,
+        city=getattr(args, "city", None),
+        window=getattr(args, "window", None),
     )
 
 

@@ -41,22 +41,28 @@ INFLATE_RATIO = 100
 INFLATE_FLOOR = 64 << 20
 
 
-def require_file(path: Path, what: str) -> Path:
+#: What to do about a missing or damaged file of a data folder (a user's own file names its own remedy).
+DATA_FOLDER_REMEDY = "check the data folder (--data) and its SOURCE.md layout"
+DAMAGED_REMEDY = "fetch it again (`rpbench data fetch` replaces damaged files)"
+
+
+def require_file(path: Path, what: str, remedy: str = DATA_FOLDER_REMEDY) -> Path:
     """Return ``path`` if it is a regular file; else a :class:`DataNotFoundError` when nothing is there, a
     :class:`DataError` naming what is there instead (a folder, a FIFO, a symbolic link loop)."""
     problem = file_problem(path)
     if problem is None:
         return path
     cls = DataNotFoundError if is_missing(problem) else DataError
-    raise cls(f"{what} file {str(path)!r} {problem}; check the data folder (--data) and its SOURCE.md layout")
+    raise cls(f"{what} file {str(path)!r} {problem}; {remedy}")
 
 
 class _BoundedReader(io.RawIOBase):
     """The inflated bytes of the gzip file ``gz`` (read from ``path``), refused with a :class:`DataError` past
     ``limit``."""
 
-    def __init__(self, gz: gzip.GzipFile, path: Path, what: str, limit: int) -> None:
+    def __init__(self, gz: gzip.GzipFile, path: Path, what: str, limit: int, remedy: str = DAMAGED_REMEDY) -> None:
         self._gz, self._path, self._what, self._limit, self._seen = gz, path, what, limit, 0
+        self._remedy = remedy
 
     def readable(self) -> bool:
         return True
@@ -68,21 +74,23 @@ class _BoundedReader(io.RawIOBase):
             raise DataError(
                 f"{self._what} file {str(self._path)!r} inflates to more than {self._limit:,} bytes (the bound: "
                 f"{INFLATE_RATIO} times its size, at least {INFLATE_FLOOR:,} bytes): refused as a gzip bomb; "
-                "fetch it again (`rpbench data fetch` replaces damaged files)"
+                f"{self._remedy}"
             )
         return n
 
 
 @contextlib.contextmanager
-def open_csv(path: Path, what: str) -> Iterator[io.BufferedIOBase | Path]:
+def open_csv(path: Path, what: str, remedy: str | None = None) -> Iterator[io.BufferedIOBase | Path]:
     """What to hand ``pd.read_csv``: ``path`` itself, or for a ``.gz`` a stream bounded as the module says.
-    Anything but a regular file at ``path`` is refused first (:func:`require_file`): a FIFO would block."""
-    require_file(path, what)
+    Anything but a regular file at ``path`` is refused first (:func:`require_file`): a FIFO would block.
+    ``remedy``: what the error lines tell the user to do (default: the data folder's)."""
+    require_file(path, what, remedy or DATA_FOLDER_REMEDY)
     if path.suffix != ".gz":
         yield path
         return
     limit = max(INFLATE_FLOOR, INFLATE_RATIO * path.stat().st_size)
-    with gzip.open(path, "rb") as gz, io.BufferedReader(_BoundedReader(gz, path, what, limit)) as stream:
+    remedy = remedy or DAMAGED_REMEDY
+    with gzip.open(path, "rb") as gz, io.BufferedReader(_BoundedReader(gz, path, what, limit, remedy)) as stream:
         yield stream
 
 
@@ -93,6 +101,7 @@ def read_table(
     *,
     rename: Mapping[str, str] | None = None,
     optional: Iterable[str] = (),
+    remedy: str | None = None,
 ) -> pd.DataFrame:
     """Read a CSV (plain or gzip) and validate the named columns.
 
@@ -100,17 +109,18 @@ def read_table(
     ``FLOAT``, ``TEXT``, ``DATETIME``).  Integers may be written as floats
     (``1078.0``) as long as they are whole.  Returns a frame holding only
     those columns, converted, renamed by ``rename``.  Columns listed in
-    ``optional`` may be absent.
+    ``optional`` may be absent.  ``remedy``: what an error line tells the user to do about a missing or
+    damaged file (default: the data folder's; a user's own file names its own).
     """
     try:
-        with open_csv(path, what) as source:
+        with open_csv(path, what, remedy) as source:
             frame = pd.read_csv(source, usecols=lambda c: c in columns, low_memory=False, compression=None)
     except RpbenchError:  # open_csv's own one line (a missing file is a FileNotFoundError too)
         raise
     except _GZIP_ERRORS as exc:
         raise DataError(
             f"{what} file {str(path)!r} is not a valid gzip stream (truncated or corrupt: "
-            f"{one_line(exc)}); fetch it again (`rpbench data fetch` replaces damaged files)"
+            f"{one_line(exc)}); {remedy or DAMAGED_REMEDY}"
         ) from None
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError, OSError) as exc:
         raise DataError(f"{what} file {str(path)!r} cannot be parsed as CSV: {one_line(exc)}") from None

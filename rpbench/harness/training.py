@@ -50,7 +50,7 @@ def supply_model(strategy: Strategy, scenario: Scenario, *, progress: bool | Non
     if type(strategy).trained_by is None or not isinstance(strategy, ValueFunction) or not strategy.needs_model:
         return
     options = strategy.options
-    scenarios = training_scenarios(scenario, options.train_dates, options.train_seeds)
+    scenarios = training_scenarios(scenario, options.train_dates, options.train_seeds, options.train_hours)
     check_held_out(scenario, training_record(scenarios, options.settings()))
     model, digest, folder = cached_model(
         scenarios, options.settings(), next_policy=strategy.next_policy, progress=progress

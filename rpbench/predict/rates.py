@@ -31,8 +31,8 @@ from rpbench.data import read_day_od_shares, read_month_od_rates, read_od_rates,
 from rpbench.exceptions import DataError, ParameterError
 from rpbench.network import RoadNetwork
 from rpbench.paper import PAPER_DATE
+from rpbench.units import HOUR_S
 
-HOUR_S = 3600.0
 #: Named rate sources of :func:`load_rates` (a path to an OD table CSV is accepted too).
 RATE_KINDS = ("month", "day", "day-table")
 

@@ -34,7 +34,8 @@ class Streams:
     another (the sampled orders) for the same seed.
     """
 
-    NAMES = ("sample", "times", "od", "patience", "fleet")
+    # New names go last: each stream is the seed's child at its position, so earlier ones keep their draws.
+    NAMES = ("sample", "times", "od", "patience", "fleet", "spread", "history")
 
     def __init__(self, seed: int):
         children = np.random.SeedSequence(int(seed)).spawn(len(self.NAMES))

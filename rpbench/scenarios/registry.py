@@ -15,10 +15,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from rpbench.cities.places import load_city
 from rpbench.data import available_peak_dates, read_hourly_counts
 from rpbench.data.first_run import ensure_data_dir, obtain_data_dir, warn_synthetic
 from rpbench.exceptions import ParameterError
 from rpbench.scenarios.base import Params, Scenario
+from rpbench.scenarios.city import build_city, parse_window
 from rpbench.scenarios.day import build_day
 from rpbench.scenarios.lattice import build_lattice
 from rpbench.scenarios.paper_input import build_paper_input
@@ -36,6 +38,13 @@ class ScenarioSpec:
     build: Callable[..., Scenario]
     #: The dates a data folder holds for this scenario (None: the scenario has no date choice).
     dates: Callable[[Path], list[str]] | None = None
+    #: The city whose data folder it reads (``--data DIR`` names that folder).
+    city: str = "haikou"
+    #: Parameters that differ from the paper's for this scenario, from its data folder and options (a city's
+    #: speed); ``--param`` overrides them.
+    default_params: Callable[..., dict[str, float]] | None = None
+    #: The time window a scenario of a city's day covers by default (None: the scenario takes no --window).
+    window: str | None = None
 
 
 def _hourly_count_dates(data_dir: Path) -> list[str]:
@@ -90,6 +99,78 @@ SCENARIOS: dict[str, ScenarioSpec] = {
     ]
 }
 
+
+def _city_scenario(name: str | None, city_name: str | None = None) -> Callable[..., Scenario]:
+    """The builder of a scenario over a city's day: a built-in city's own (``city_name``), or ``--city``'s."""
+
+    def build(data_dir: Path | None, *, city: str | None = None, **kw: Any) -> Scenario:
+        folder = None if data_dir is None else str(data_dir)
+        loaded = load_city(_city_of(city, city_name), data_dir)
+        return build_city(loaded, name=name or "city", source=city, data_dir=folder, **kw)
+
+    return build
+
+
+def _city_speed(city_name: str | None) -> Callable[..., dict[str, float]]:
+    """The speed of a city's vehicles over the scenario's window, when the city records one."""
+
+    def defaults(data_dir: Path | None, *, city: str | None = None, window: str, **_: Any) -> dict[str, float]:
+        speed = load_city(_city_of(city, city_name), data_dir).speed_mps(*parse_window(window))
+        return {} if speed is None else {"speed_mps": speed}
+
+    return defaults
+
+
+def _city_of(given: str | None, builtin: str | None) -> str:
+    if builtin is not None:
+        if given is not None and given != builtin:
+            raise ParameterError(
+                f"--city {given!r}: this scenario is {builtin}'s; for another city use --scenario city"
+            )
+        return builtin
+    if given is None:
+        raise ParameterError("scenario 'city' needs --city NAME (a city imported with `rpbench city import`)")
+    return given
+
+
+SCENARIOS.update(
+    {
+        spec.name: spec
+        for spec in [
+            ScenarioSpec(
+                "city",
+                "a window of a city's real trips: --city NAME (imported with `rpbench city import`) "
+                "--window HH:MM-HH:MM",
+                False,
+                1.0,
+                _city_scenario(None),
+                default_params=_city_speed(None),
+                window="08:00-09:00",
+            ),
+            ScenarioSpec(
+                "manhattan-peak",
+                "Manhattan's real 08:00-09:00 yellow-cab trips of one weekday on the OSMnx network (30 % sample)",
+                True,
+                0.3,
+                _city_scenario("manhattan-peak", "manhattan"),
+                city="manhattan",
+                default_params=_city_speed("manhattan"),
+                window="08:00-09:00",
+            ),
+            ScenarioSpec(
+                "manhattan-day",
+                "Manhattan's real day of 98,235 yellow-cab trips on the OSMnx network",
+                True,
+                1.0,
+                _city_scenario("manhattan-day", "manhattan"),
+                city="manhattan",
+                default_params=_city_speed("manhattan"),
+                window="00:00-24:00",
+            ),
+        ]
+    }
+)
+
 DEFAULT_SCENARIO = "haikou-peak"
 
 
@@ -106,15 +187,25 @@ def build_scenario(
 ) -> Scenario:
     """Build the named scenario (see :data:`SCENARIOS`)."""
     spec = scenario_spec(name)
-    params = params or Params()
+    options = {k: v for k, v in options.items() if v is not None}
+    if spec.window is not None:
+        options.setdefault("window", spec.window)
+    elif "window" in options or "city" in options:
+        flag = "--window" if "window" in options else "--city"
+        raise ParameterError(f"{flag}: scenario {name!r} is not a city's day; it applies to city, manhattan-peak, ...")
+    folder = ensure_data_dir(data_dir, what=f"scenario {name!r}", city=spec.city) if spec.needs_data else None
+    if params is None:
+        base = spec.default_params(folder, **options) if spec.default_params is not None else {}
+        params = Params().replace(**base)
     if param_overrides:
         params = params.replace(**param_overrides)
     kwargs: dict[str, Any] = dict(
         seed=seed, params=params, sample=spec.default_sample if sample is None else sample, **options
     )
     if date is not None:
+        if spec.window is not None:
+            raise ParameterError(f"--date: scenario {name!r} is a city's one day of trips; it has no date to choose")
         kwargs["date"] = date
-    folder = ensure_data_dir(data_dir, what=f"scenario {name!r}") if spec.needs_data else None
     return spec.build(folder, **kwargs)
 
 

@@ -23,7 +23,8 @@ from rpbench.scenarios.registry import build_scenario, scenario_spec
 
 @dataclass(frozen=True)
 class ScenarioRequest:
-    """Name, date, sample, seed, parameter overrides and fleet placement of one scenario."""
+    """Name, date, sample, seed, parameter overrides and fleet placement of one scenario; for a scenario of a
+    city's day, the city (``city``) and the time window (``window``)."""
 
     name: str
     date: str | None = None
@@ -32,6 +33,8 @@ class ScenarioRequest:
     params: tuple[tuple[str, float], ...] = ()  # overrides, sorted (frozen and hashable)
     fleet_placement: str = "order_origins"
     data_dir: str | None = None
+    city: str | None = None
+    window: str | None = None
 
     def __post_init__(self) -> None:
         scenario_spec(self.name)  # an unknown name fails here, before any work
@@ -57,7 +60,8 @@ class ScenarioRequest:
         scenario that needs no data is returned as it is."""
         if self.data_dir is not None or not scenario_spec(self.name).needs_data:
             return self
-        return self.replace(data_dir=str(ensure_data_dir(None, what=f"scenario {self.name!r}")))
+        spec = scenario_spec(self.name)
+        return self.replace(data_dir=str(ensure_data_dir(None, what=f"scenario {self.name!r}", city=spec.city)))
 
     def build(self) -> Scenario:
         return build_scenario(
@@ -68,16 +72,20 @@ class ScenarioRequest:
             seed=self.seed,
             param_overrides=self.overrides,
             fleet_placement=self.fleet_placement,
+            city=self.city,
+            window=self.window,
         )
 
     def meta(self) -> dict[str, Any]:
         """The request as recorded in a results folder (no machine path)."""
+        city = {k: v for k, v in (("city", self.city), ("window", self.window)) if v is not None}
         return {
             "date": self.date,
             "sample": self.sample,
             "seed": self.seed,
             "params": self.overrides,
             "fleet_placement": self.fleet_placement,
+            **city,  # only when given: a Haikou folder records what it recorded before cities existed
         }
 
     def dates(self, text: str) -> list[str]:
@@ -85,7 +93,7 @@ class ScenarioRequest:
         spec = scenario_spec(self.name)
         if spec.dates is None:
             raise ParameterError(f"--dates: scenario {self.name!r} has no dates to choose from")
-        folder = ensure_data_dir(self.data_dir, what="--dates")
+        folder = ensure_data_dir(self.data_dir, what="--dates", city=spec.city)
         return parse_dates(text, spec.dates(folder))
 
 

@@ -50,6 +50,11 @@ class ValueOptions(PoolingOptions):
         "sample seeds of the training runs (an undated scenario: its seeds)",
         range=Range(0, 2**32 - 1, integer=True),
     )
+    train_hours: int = option(
+        3,
+        "a city's one day (scenarios city, manhattan-*): the hours before the test window trained on, one run each",
+        range=Range(1, 23, integer=True),
+    )
     cell_m: float = option(1000.0, "side of a square cell of the value's grid", range=Range(50.0, 1e5, "m"))
     bin_s: float = option(600.0, "length of a time bin of the value", range=Range(30.0, 86400.0, "s"))
     discount: float = option(0.9, "discount γ per time bin", range=Range(0.0, 1.0, low_open=True))

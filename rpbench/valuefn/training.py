@@ -20,10 +20,12 @@ from typing import Any
 
 import numpy as np
 
-from rpbench.exceptions import ParameterError
+from rpbench.exceptions import NoOrdersError, ParameterError
 from rpbench.scenarios.base import OnlineView, Scenario
+from rpbench.scenarios.city import parse_window, window_text
 from rpbench.scenarios.registry import build_scenario, scenario_spec
 from rpbench.scenarios.request import parse_dates
+from rpbench.units import HOUR_S
 
 CACHE_FOLDER = "value-models"
 #: Bumped when training would give other values for the same inputs (the cache key holds it).
@@ -45,11 +47,16 @@ class Settings:
     solver: str = "highs"
 
 
-def training_scenarios(like: Scenario | OnlineView, dates: str, seeds: tuple[int, ...]) -> list[Scenario]:
+def training_scenarios(
+    like: Scenario | OnlineView, dates: str, seeds: tuple[int, ...], hours: int = 3
+) -> list[Scenario]:
     """The scenarios of ``like``'s generator, sample and parameters on ``dates`` (``A..B`` or ``A,B``; a
-    generator without dates ignores them) at each of ``seeds``."""
+    generator without dates ignores them) at each of ``seeds``; for a scenario of a city's one day, the
+    ``hours`` hours before its window instead of other days (each a run of one hour)."""
     spec = scenario_spec(like.name)
     data_dir = like.demand.data_dir
+    if "window" in like.provenance:
+        return _earlier_hours(like, seeds, hours)
     days: list[str | None] = [None]
     if spec.dates is not None:
         if data_dir is None:
@@ -64,12 +71,52 @@ def training_scenarios(like: Scenario | OnlineView, dates: str, seeds: tuple[int
     ]
 
 
+def _earlier_hours(like: Scenario | OnlineView, seeds: tuple[int, ...], hours: int) -> list[Scenario]:
+    """One-hour scenarios of the ``hours`` hours before ``like``'s window on the same day of its city."""
+    start, _ = parse_window(like.provenance["window"])
+    first = max(0.0, start - hours * HOUR_S)
+    windows = [window_text(s, s + HOUR_S) for s in np.arange(first, start, HOUR_S)]
+    city = {"city": like.provenance["city_source"]} if like.provenance.get("city_source") else {}
+    runs = []
+    for w in windows:
+        for seed in seeds:
+            try:
+                runs.append(
+                    build_scenario(
+                        like.name,
+                        data_dir=like.demand.data_dir,
+                        window=w,
+                        sample=like.provenance.get("sample"),
+                        seed=seed,
+                        params=like.params,
+                        fleet_placement=like.provenance.get("fleet_placement"),
+                        **city,
+                    )
+                )
+            except NoOrdersError:  # an hour without trips teaches nothing
+                continue
+    if not runs:
+        raise ParameterError(
+            f"vf: the {hours} hour(s) before the window {like.provenance['window']} hold no trips of the city's day "
+            "to train on; test a later window, train on more hours (--opt vf.train_hours=N) or give a trained "
+            "model (--opt vf.model=FOLDER)"
+        )
+    return runs
+
+
 def held_out_problem(scenario: Scenario | OnlineView, training: dict[str, Any]) -> str | None:
     """Why ``scenario`` is one a model with this ``training`` record was trained on (None: it is not)."""
     if training.get("scenario") != scenario.name:
         return None
     date = scenario.provenance.get("date")
     runs = training.get("runs", [])
+    window = scenario.provenance.get("window")
+    if window is not None:  # a city's day: no training hour may overlap the tested window
+        start, end = parse_window(window)
+        for r in runs:
+            if r.get("window") and _overlap(parse_window(r["window"]), (start, end)):
+                return f"its training hour {r['window']} overlaps the window {window}"
+        return None
     if date is not None:
         if date in {r.get("date") for r in runs}:
             return f"{date} is one of its training days"
@@ -79,13 +126,17 @@ def held_out_problem(scenario: Scenario | OnlineView, training: dict[str, Any]) 
     return None
 
 
+def _overlap(a: tuple[float, float], b: tuple[float, float]) -> bool:
+    return a[0] < b[1] and b[0] < a[1]
+
+
 def check_held_out(scenario: Scenario | OnlineView, training: dict[str, Any]) -> None:
     """One :class:`ParameterError` line when ``scenario`` is one a model with this ``training`` record saw."""
     problem = held_out_problem(scenario, training)
     if problem is not None:
         raise ParameterError(
-            f"vf: the value model was trained on this scenario ({problem}); test on held-out days or seeds, "
-            "or train on others (--opt vf.train_dates=..., vf.train_seeds=...)"
+            f"vf: the value model was trained on this scenario ({problem}); test on held-out days, seeds or "
+            "hours, or train on others (--opt vf.train_dates=..., vf.train_seeds=..., vf.train_hours=...)"
         )
 
 
@@ -99,6 +150,7 @@ def training_record(scenarios: list[Scenario], settings: Settings) -> dict[str, 
                 "seed": s.seed,
                 "sample": s.provenance.get("sample"),
                 "orders": len(s.orders),
+                **({"window": s.provenance["window"]} if "window" in s.provenance else {}),
             }
             for s in scenarios
         ],
