@@ -18,6 +18,7 @@ from rpbench.data.first_run import ensure_data_dir
 from rpbench.harness.evaluate import run_evaluation
 from rpbench.protocols import builtin_names, load_protocol
 from rpbench.results.layout import REPORT, REPORT_HTML
+from rpbench.scenarios import scenario_spec
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -46,8 +47,10 @@ def _run(args: argparse.Namespace) -> int:
     check_out_name(args.out)
     protocol = load_protocol(args.protocol)
     data = None
-    if protocol.scenario != "toy":
-        data = str(ensure_data_dir(args.data, what=f"protocol {protocol.name!r}", offline=args.offline))
+    spec = scenario_spec(protocol.scenario)
+    if spec.needs_data:
+        what = f"protocol {protocol.name!r}"
+        data = str(ensure_data_dir(args.data, what=what, offline=args.offline, city=spec.city))
     outcome = run_evaluation(
         protocol,
         args.out,

@@ -21,8 +21,10 @@ import numpy as np
 from rpbench.exceptions import LookaheadError, ParameterError
 from rpbench.predict.config import PredictConfig
 from rpbench.predict.prediction import Prediction, cached_prediction, predict
-from rpbench.predict.rates import HOUR_S, OdRates, month_rates, order_rates
+from rpbench.predict.rates import OdRates, month_rates, order_rates
+from rpbench.predict.zones import zone_representatives
 from rpbench.scenarios.base import LOOKAHEAD_HINT, Demand, OnlineView, Scenario
+from rpbench.units import HOUR_S
 
 #: Where λ_w comes from: the demand known before the day (the 21-day table or the demand history), the 21-day
 #: table, the demand history, or the scenario's own orders (the realisation: reading them is clairvoyant).
@@ -33,18 +35,23 @@ TAU0_RESOLUTION_S = 10.0
 
 
 def scenario_predictions(
-    scenario: Scenario | OnlineView, source: str, tau0_s: np.ndarray, config: PredictConfig
+    scenario: Scenario | OnlineView,
+    source: str,
+    tau0_s: np.ndarray,
+    config: PredictConfig,
+    zone_m: float | None = None,
 ) -> list[Prediction]:
     """One prediction per hour of ``scenario`` (``len(tau0_s)`` hours; hours with equal inputs share one).
 
     The dispatcher reads per-OD values only, so the hours come back slim
     (24 hours of per-state arrays would be 2.4 GB for the month table); an
     hour that must be solved is warm-started from the previous hour's ρ,
-    read back from the cache when that hour was cached.
+    read back from the cache when that hour was cached.  ``zone_m``: pool a demand history over zones of this
+    side (:func:`history_zone_m`).
     """
     hours = len(tau0_s)
     tau0_s = np.maximum(TAU0_RESOLUTION_S, np.round(np.asarray(tau0_s) / TAU0_RESOLUTION_S) * TAU0_RESOLUTION_S)
-    rates = hourly_rates(scenario, source, hours)
+    rates = hourly_rates(scenario, source, hours, zone_m)
     net, params = scenario.network, scenario.params
     out: list[Prediction] = []
     memo: dict[tuple, Prediction] = {}
@@ -87,8 +94,19 @@ def reads_realised_orders(source: str, demand: Demand) -> bool:
     return rate_source(source, demand) == "scenario"
 
 
-def hourly_rates(scenario: Scenario | OnlineView, source: str, hours: int) -> list[OdRates]:
-    """λ_w for each of the first ``hours`` hours of ``scenario`` (objects shared where equal)."""
+def history_zone_m(source: str, demand: Demand, zone_m: float | None = None) -> float | None:
+    """The side of the zones a rate ``source`` pools its demand history over: ``zone_m`` when given, else the
+    history's own (:attr:`~rpbench.scenarios.base.History.zone_m`); None: not pooled (or not a history)."""
+    if rate_source(source, demand) != "history" or demand.history is None:
+        return None
+    return zone_m if zone_m is not None else demand.history.zone_m
+
+
+def hourly_rates(
+    scenario: Scenario | OnlineView, source: str, hours: int, zone_m: float | None = None
+) -> list[OdRates]:
+    """λ_w for each of the first ``hours`` hours of ``scenario`` (objects shared where equal); a demand history
+    pooled over zones of ``zone_m`` (:func:`history_zone_m`)."""
     net, demand = scenario.network, scenario.demand
     source = rate_source(source, demand)
     if source == "month":
@@ -111,7 +129,14 @@ def hourly_rates(scenario: Scenario | OnlineView, source: str, hours: int) -> li
             )
         # the mean over its days: λ_w(h) = (orders of OD w in hour h of the past days) / (days · 3600 s)
         period_s = history.days * HOUR_S
-        return _per_hour(net, history.request_s, history.origin, history.destination, hours, period_s, history.source)
+        origin, destination, what = history.origin, history.destination, history.source
+        zone = history_zone_m(source, demand, zone_m)
+        if zone is not None:  # per pair of zones, each zone at its representative node
+            rep = zone_representatives(net, zone)
+            origin, destination, what = rep[origin], rep[destination], f"{what}, pooled over {zone:g} m zones"
+            moving = origin != destination  # a trip inside one zone pairs nothing at the zones' scale
+            return _per_hour(net, history.request_s[moving], origin[moving], destination[moving], hours, period_s, what)
+        return _per_hour(net, history.request_s, origin, destination, hours, period_s, what)
     if isinstance(scenario, OnlineView):  # a strategy that did not say it reads the future
         raise LookaheadError(
             f"{scenario.reader}: FL rates 'scenario' count the scenario's own orders; {LOOKAHEAD_HINT}"

@@ -224,6 +224,9 @@ class History:
     destination: np.ndarray  # int32 node index
     days: int
     source: str
+    #: Too sparse to count per pair of nodes: pool its rates over square zones of this side (m), each zone
+    #: standing for its nodes through one of them (:mod:`rpbench.predict.zones`); None: per pair of nodes.
+    zone_m: float | None = None
 
     def __post_init__(self) -> None:
         n = len(self.request_s)

@@ -36,6 +36,9 @@ from rpbench.scenarios.common import (
 )
 from rpbench.units import DAY_S, HOUR_S
 
+#: One hour of a city's trips is sparse per pair of nodes: its rates are pooled over zones of this side
+#: (:mod:`rpbench.predict.zones`), chosen on validation hours of Manhattan, never on a tested one (docs/cities.md).
+HISTORY_ZONE_M = 2000.0
 _WINDOW = re.compile(r"^(\d{1,2}):(\d{2})-(\d{1,2}):(\d{2})$")
 
 
@@ -110,7 +113,7 @@ def build_city(
         params=params,
         seed=seed,
         horizon_s=horizon_s,
-        start_time=f"{city.date or '1970-01-01'}T{span[:5]}:00",
+        start_time=f"{city.date}T{span[:5]}:00" if city.date else f"{span[:5]}:00",  # a day of unknown date: the clock
         synthetic=False,
         provenance={
             "city": city.name,
@@ -147,4 +150,5 @@ def _hour_before(city: City, start_s: float, end_s: float, sample: float, rng: n
         destination=city.destination[seen].astype(np.int32),
         days=1,
         source=f"{city.name} trips of the hour before each hour, same day",
+        zone_m=HISTORY_ZONE_M,
     )

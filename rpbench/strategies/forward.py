@@ -51,7 +51,8 @@ from rpbench.model import Structure
 from rpbench.options import Range, option
 from rpbench.predict import RATE_SOURCES, PredictConfig, Prediction, scenario_predictions
 from rpbench.predict.config import ACCELERATIONS, PRIORITIES, RHO_MODES
-from rpbench.predict.hourly import reads_realised_orders
+from rpbench.predict.hourly import history_zone_m, reads_realised_orders
+from rpbench.predict.zones import zone_representatives
 from rpbench.scenarios.base import OnlineView, Scenario
 from rpbench.strategies.base import RoundModel, RoundState, Strategy
 from rpbench.strategies.candidates import (
@@ -101,6 +102,12 @@ class ForwardOptions(CalibratedOptions):
     priority: str | None = option(None, "taker priority of the prediction (§2.4, A7)", choices=PRIORITIES)
     include_origin_state: bool | None = option(None, "taker state k = 0 at the origin (A4)")
     rho_mode: str | None = option(None, "how ρ is formed (A8)", choices=RHO_MODES)
+    zone_m: float | None = option(
+        None,
+        "pool a demand history over square zones of this side, each at one node (default: the history's own, "
+        "2000 m for a city's day; none per pair of nodes)",
+        range=Range(50.0, 20_000.0, "m"),
+    )
     accel: str = option(
         "anderson",
         "fixed-point acceleration (the same fixed point as the damped map, in about half the sweeps)",
@@ -166,6 +173,8 @@ class _ForwardBase(MBCalibrated, Strategy[ForwardOptions]):
         super().__init__(options, **raw)
         self.predictions: list[Prediction] = []
         self.mean_pickup_m: np.ndarray = np.array([FALLBACK_MEAN_PICKUP_M])
+        #: Each node's representative when the predictions are per pair of zones (None: per pair of nodes).
+        self.zone_node: np.ndarray | None = None
 
     # ----------------------------------------------------------- lookahead
     @property
@@ -182,7 +191,15 @@ class _ForwardBase(MBCalibrated, Strategy[ForwardOptions]):
         hours = max(1, int(np.ceil(scenario.horizon_s / 3600.0)))
         tau0 = _per_hour(self.options.tau0_s, hours, FALLBACK_TAU0_S, "tau0_s")
         self.mean_pickup_m = _per_hour(self.options.mean_pickup_m, hours, FALLBACK_MEAN_PICKUP_M, "mean_pickup_m")
-        self.predictions = scenario_predictions(scenario, self.options.rates, tau0, self.options.predict_config())
+        zone = history_zone_m(self.options.rates, scenario.demand, self.options.zone_m)
+        self.predictions = scenario_predictions(scenario, self.options.rates, tau0, self.options.predict_config(), zone)
+        self.zone_node = None if zone is None else zone_representatives(scenario.network, zone)
+
+    def predicted_od(self, state: RoundState) -> tuple[np.ndarray, np.ndarray]:
+        """The waiting passengers' ODs as the predictions know them: their own, or their zones' representatives."""
+        if self.zone_node is None:
+            return state.p_origin, state.p_destination
+        return self.zone_node[state.p_origin], self.zone_node[state.p_destination]
 
     def prediction_at(self, t_s: float) -> tuple[Prediction, int]:
         hour = min(int(t_s // 3600.0), len(self.predictions) - 1)
@@ -191,7 +208,7 @@ class _ForwardBase(MBCalibrated, Strategy[ForwardOptions]):
     def _options(self, state: RoundState) -> tuple[VacantOptions, JoinOptions, Prediction, int, np.ndarray]:
         vac, join = forward_options(state, self.options.order_rule)
         prediction, hour = self.prediction_at(state.t_s)
-        e_vac = prediction.lookup(state.p_origin, state.p_destination).e_vacant
+        e_vac = prediction.lookup(*self.predicted_od(state)).e_vacant
         return vac, join, prediction, hour, e_vac
 
 
@@ -203,7 +220,7 @@ class ForwardLooking(_ForwardBase):
 
     def build(self, state: RoundState) -> RoundModel:
         vac, join, prediction, hour, e_vac = self._options(state)
-        e_wait = prediction.e_wait(state.p_origin, state.p_destination, state.p_rounds_waited, state.params)
+        e_wait = prediction.e_wait(*self.predicted_od(state), state.p_rounds_waited, state.params)
         mean_pickup_m = float(self.mean_pickup_m[min(hour, len(self.mean_pickup_m) - 1)])
         return forward_round(state, vac, join, e_vac, e_wait, mean_pickup_m, name=self.name)
 
