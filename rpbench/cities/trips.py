@@ -49,7 +49,7 @@ class TripOptions:
     columns: Mapping[str, str] = field(default_factory=dict)
     time_unit: str = "s"
     node_ids: str = "ids"
-    snap_radius_m: float = 250.0
+    snap_radius_m: float = 500.0
     date: str | None = None
 
     def __post_init__(self) -> None:

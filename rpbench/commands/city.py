@@ -69,9 +69,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     imp.add_argument(
         "--snap-radius",
         type=float,
-        default=250.0,
+        default=500.0,
         metavar="M",
-        help="coordinates farther than M metres from every node are dropped (default 250)",
+        help="coordinates farther than M metres from every node are dropped (default 500)",
     )
     imp.add_argument("--date", default=None, help="the day to keep when ISO times span several (YYYY-MM-DD)")
     imp.add_argument("--label", default=None, help="how reports name the city (default: NAME)")

@@ -79,7 +79,7 @@ def test_trips_by_position_in_the_network_file(graphml, tmp_path):
 def test_coordinates_are_snapped_within_the_radius_and_iso_times_read(graphml, coordinate_table, tmp_path):
     city = import_city("grid", Sources(trips=coordinate_table, network=graphml), TripOptions(), tmp_path / "grid")
     trips = city.record["trips"]
-    assert trips["date"] == "2016-06-01" and trips["dropped"]["an end farther than 250 m from the network"] == 2
+    assert trips["date"] == "2016-06-01" and trips["dropped"]["an end farther than 500 m from the network"] == 2
     assert trips["placed"]["snap_distance_m"]["p95"] < 20
     assert trips["first_request_s"] >= 8 * 3600 and trips["last_request_s"] < 9 * 3600
 
