@@ -5,7 +5,8 @@ plus tagged synthetic models.  The recipes are the set's definition: ``rpbench i
 regenerates every file from the data, and the set's manifest (:mod:`.manifest`) pins what they hold.
 Tiers by the size of their largest models: **S** (committed: the toy city and the default peak hour),
 **M** (the 14 peak hours at the default 30 % sample), **L** (full peak hours, every order),
-**XL** (the synthetic full day) and **synthetic** (seeded hard models shaped like the real ones).
+**XL** (the synthetic full day) and **synthetic** (seeded hard models shaped like the real ones); Manhattan's
+peak hour in tiers M (``manhattan``, 30 %) and L (``manhattan-full``, every trip).
 """
 
 from __future__ import annotations
@@ -101,6 +102,24 @@ SETS: dict[str, InstanceSet] = {
             "extra large: the synthetic 24-hour stand-in of 2017-05-01 (52,124 orders): the largest round of MB, "
             "RTV and FL and the bound's pairing model (millions of pairs)",
             sources=(Source("haikou-day", "2017-05-01", 1.0, 0, (*ROUND_RUNS, "bound"), tags=("haikou", "full-day")),),
+        ),
+        InstanceSet(
+            "manhattan",
+            "M",
+            "Manhattan's real 08:00-09:00 peak hour at the 30 % sample (1,883 orders, 4,401 nodes): the largest round "
+            "of MB, RTV and FL and the bound's, Oracle-1's and Oracle-2's pairing models",
+            sources=(Source("manhattan-peak", None, 0.3, 0, ROUND_RUNS + PAIRING_RUNS, tags=("manhattan", "peak")),),
+        ),
+        InstanceSet(
+            "manhattan-full",
+            "L",
+            "Manhattan's real 08:00-09:00 peak hour with every trip (6,277 orders): the largest round of MB, RTV and "
+            "FL and the bound's, Oracle-1's and Oracle-2's pairing models",
+            sources=(
+                Source(
+                    "manhattan-peak", None, 1.0, 0, ROUND_RUNS + PAIRING_RUNS, tags=("manhattan", "peak", "full-sample")
+                ),
+            ),
         ),
         InstanceSet(
             "synthetic",
