@@ -113,7 +113,7 @@ SETS: dict[str, InstanceSet] = {
         InstanceSet(
             "manhattan-full",
             "L",
-            "Manhattan's real 08:00-09:00 peak hour with every trip (6,277 orders): the largest round of MB, RTV and "
+            "Manhattan's real 08:00-09:00 peak hour with every trip (6,278 orders): the largest round of MB, RTV and "
             "FL and the bound's, Oracle-1's and Oracle-2's pairing models",
             sources=(
                 Source(
