@@ -33,6 +33,7 @@ STRATEGY_REGISTRY: dict[str, str] = {
     "hindsight": "hindsight:Hindsight",
     "exact": "exact:Exact",
     "fl-perfect": "perfect:ForwardPerfect",
+    "msa": "msa:MultipleScenario",
 }
 
 #: Entry-point group of strategies installed by other distributions.
