@@ -78,3 +78,8 @@ def one_line(exc: BaseException) -> str:
     """
     text = " ".join(str(exc).split())
     return text or type(exc).__name__
+
+
+class DispatcherError(RpbenchError, RuntimeError):
+    """A dispatcher outside rpbench failed: a program of the round protocol crashed, hung past its time limit
+    or answered garbage, or an agent's answer is not a decision of the round."""

@@ -187,6 +187,14 @@ class Simulator:
 
     # ------------------------------------------------------------------ run
     def run(self) -> SimResult:
+        """Every round of the scenario, then the event log, round statistics and trajectories; the strategy's
+        :meth:`~rpbench.strategies.base.Strategy.finish` runs however the loop ends."""
+        try:
+            return self._run()
+        finally:
+            self.strategy.finish()
+
+    def _run(self) -> SimResult:
         t_prepare = time.perf_counter()
         # An online strategy knows the day's orders only as rounds reveal them; only one that says it reads
         # the future gets them all up front (and its run is marked so).

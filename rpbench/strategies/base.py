@@ -360,6 +360,10 @@ class Strategy(ABC, Generic[OptionsT]):
     def build(self, state: RoundState) -> RoundModel:
         """Build the model of the batch round the state describes."""
 
+    def finish(self) -> None:
+        """Called once when the run ends, after its last round or when it stops early (default: nothing):
+        where a strategy lets go of what it holds (a dispatcher program it started, say)."""
+
     def artefacts(self) -> dict[str, tuple[str, Path]]:
         """Files the run's decisions depend on, by name: ``(digest, folder)`` (default: none).
 

@@ -1,7 +1,8 @@
 """Feasible passenger-vehicle options of a round, and the assignment model built from them.
 
 Shared by every strategy of the paper's batch-matching family (NP, MB,
-FL-no_delay, FL): they differ only in the utility they put on the same
+FL-no_delay, FL) and by those built on it (VF, MSA, FL-perfect, Hindsight; a dispatcher outside
+Python through :mod:`.edges`): they differ only in the utility they put on the same
 feasible options (paper §2, Eqs. 1-4; pairing conditions of §2.1):
 
 * vacant option (p, v ∈ V0): pick-up ``pk = pre_v + l(node_v, o_p) <= R̄``;

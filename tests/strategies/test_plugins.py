@@ -30,9 +30,10 @@ from rpbench.cli import main
 from rpbench.commands._runs import parse_runs
 from rpbench.exceptions import ModelError, ParameterError
 from rpbench.model import Structure
+from rpbench.oracle.runs import ORACLE_RUNS
 from rpbench.results.metrics import TIMING_KPIS
 from rpbench.spec import resolve_runs
-from rpbench.strategies import strategy_class, strategy_plugin_names
+from rpbench.strategies import STRATEGY_REGISTRY, strategy_class, strategy_plugin_names
 from rpbench.strategies.base import Kind, received
 from rpbench.strategies.myopic import MyopicBatch
 from rpbench.strategies.rtv import RTV
@@ -193,8 +194,8 @@ def test_two_plugins_under_one_run_name_or_a_builtin_name_are_refused(plugin_dir
         ("mymod:", "strategy 'mymod:' is not MODULE:CLASS"),
         (
             "nosuch",
-            "unknown strategy 'nosuch'; choose from np, mb, rtv, fl-nd, fl, vf, hindsight, exact, fl-perfect, bound, "
-            "oracle1, oracle2, or give a strategy class as MODULE:CLASS",
+            f"unknown strategy 'nosuch'; choose from {', '.join([*STRATEGY_REGISTRY, *ORACLE_RUNS])}, "
+            "or give a strategy class as MODULE:CLASS",
         ),
     ],
 )
