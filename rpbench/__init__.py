@@ -1,7 +1,8 @@
 """rpbench: an optimisation-modelling benchmark suite for dynamic ride-pooling dispatch.
 
 Implements Wang, Yang, Feng, Hu, He, "A prediction-based forward-looking vehicle dispatching strategy for
-dynamic ride-pooling" on the real Haikou road network and DiDi orders.
+dynamic ride-pooling" on the real Haikou road network and DiDi orders, and on any other city's (Manhattan's
+yellow-cab trips are built in; docs/cities.md).
 
 The names a user needs are here, each from the module that defines it::
 

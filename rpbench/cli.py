@@ -47,7 +47,9 @@ COMMANDS = (
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
-        prog="rpbench", description="Benchmark suite for dynamic ride-pooling dispatch on the Haikou road network."
+        prog="rpbench",
+        description="Benchmark suite for dynamic ride-pooling dispatch on real road networks "
+        "(Haikou, Manhattan, any imported city).",
     )
     parser.add_argument("--version", action="version", version=f"rpbench {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")

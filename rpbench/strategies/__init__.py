@@ -34,6 +34,8 @@ STRATEGY_REGISTRY: dict[str, str] = {
     "exact": "exact:Exact",
     "fl-perfect": "perfect:ForwardPerfect",
     "msa": "msa:MultipleScenario",
+    "external": "external:External",
+    "agent": "agent:Agent",
 }
 
 #: Entry-point group of strategies installed by other distributions.
