@@ -57,14 +57,27 @@ class RunEntry:
     source: str  # what finds its class: a built-in name, an entry-point name or ``module:Class``
     options: RunOptions
     settings: tuple[tuple[str, str], ...] = ()  # a variant's options as typed (``fl@tau0_s=200``)
+    label: str | None = None  # a label its caller gave, instead of its class's (the Gymnasium environment's)
 
     @property
     def offline(self) -> bool:
         return self.name in ORACLE_RUNS
 
     def label_of(self, label: str) -> str:
-        """The run's label from its class's: a variant says its settings ("FL (tau0_s=200)")."""
+        """The run's label from its class's: a variant says its settings ("FL (tau0_s=200)"); a label given
+        to the run is its label."""
+        if self.label is not None:
+            return self.label
         return f"{label} ({', '.join(f'{k}={v}' for k, v in self.settings)})" if self.settings else label
+
+    def renamed(self, name: str, label: str | None = None) -> RunEntry:
+        """This run under another run name (its folder, its column), checked as a run name is."""
+        if not isinstance(name, str) or not _RUN_NAME.match(name):
+            raise ParameterError(
+                f"run name {name!r}: letters, digits, '.', '_' and '-', not starting with a dot (it names a folder)"
+            )
+        check_run_name_length(name)
+        return dataclasses.replace(self, name=name, label=label)
 
     def color_of(self, color: str | None) -> str | None:
         """The run's colour from its class's: a variant takes the next free colour (None), not its strategy's."""

@@ -19,7 +19,7 @@ from rpbench.harness.outcome import Outcome
 from rpbench.results.folder import StrategyRun
 from rpbench.scenarios.base import Scenario
 from rpbench.spec import RunSpec
-from rpbench.strategies.agent import Link, Round, Stopped, linked
+from rpbench.strategies.agent import Committed, Link, Round, Stopped, linked
 from rpbench.strategies.base import RoundModel
 
 #: How long closing an episode waits for its thread to unwind.
@@ -40,11 +40,11 @@ class _Failed:
 
 
 class Episode:
-    """The agent's run of ``scenario`` under ``spec`` (its run ``agent``), written to ``out`` if given."""
+    """The agent's run of ``scenario`` under ``spec`` (its run ``name``), written to ``out`` if given."""
 
-    def __init__(self, spec: RunSpec, scenario: Scenario, preset: Preset, out: Path | None):
+    def __init__(self, spec: RunSpec, name: str, scenario: Scenario, preset: Preset, out: Path | None):
         self.link = Link()
-        self._spec, self._scenario, self._preset, self._out = spec, scenario, preset, out
+        self._spec, self._name, self._scenario, self._preset, self._out = spec, name, scenario, preset, out
         self.finished: Finished | None = None
         self._thread = threading.Thread(target=self._play, name="rpbench-episode", daemon=True)
         self._thread.start()
@@ -56,7 +56,7 @@ class Episode:
                     outcome = run_comparison(self._spec, self._out, scenario=self._scenario, progress=False)
                     result = Finished(None, outcome)
                 else:
-                    entry = self._spec.entry("agent")
+                    entry = self._spec.entry(self._name)
                     result = Finished(simulate_strategy(self._scenario, entry, self._preset, progress=False), None)
         except Stopped:
             return
@@ -79,10 +79,10 @@ class Episode:
     def answer(self, model: RoundModel) -> None:
         self.link.models.put(model)
 
-    def take_saving_m(self) -> float:
-        """The planned saving of the joins committed since the last call (metres)."""
-        saving, self.link.saving_m = self.link.saving_m, 0.0
-        return saving
+    def take_committed(self) -> Committed:
+        """What the rounds committed since the last call."""
+        committed, self.link.committed = self.link.committed, Committed()
+        return committed
 
     def stop(self) -> None:
         """Let go of an unfinished episode: its thread unwinds (the agent strategy raises

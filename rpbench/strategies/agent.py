@@ -17,7 +17,7 @@ import contextlib
 import queue
 import threading
 from collections.abc import Iterator
-from dataclasses import dataclass, field
+from dataclasses import astuple, dataclass, field
 from typing import Any
 
 import numpy as np
@@ -28,6 +28,22 @@ from rpbench.scenarios.base import OnlineView, Scenario
 from rpbench.strategies.base import Kind, RoundModel, RoundState, Strategy
 from rpbench.strategies.edges import RoundEdges, model_from_decision, round_edges
 from rpbench.strategies.myopic import PoolingOptions
+
+
+@dataclass(frozen=True)
+class Committed:
+    """What rounds committed, as their plans say: passengers assigned, the solo distances of those who took a
+    vacant vehicle, of those who joined one and of the partners they joined, and the joins' planned saving e
+    (Eq. 5), in metres.  The environment's rewards are read off these (docs/gym.md)."""
+
+    assigned: int = 0
+    vacant_solo_m: float = 0.0
+    joined_solo_m: float = 0.0
+    partner_solo_m: float = 0.0
+    saving_m: float = 0.0
+
+    def __add__(self, other: Committed) -> Committed:
+        return Committed(*(a + b for a, b in zip(astuple(self), astuple(other), strict=True)))
 
 
 @dataclass(frozen=True)
@@ -53,8 +69,8 @@ class Link:
 
     rounds: queue.Queue[Any] = field(default_factory=lambda: queue.Queue(maxsize=1))
     models: queue.Queue[Any] = field(default_factory=lambda: queue.Queue(maxsize=1))
-    #: the planned saving e (Eq. 5) of the joins committed since the environment last looked, in metres
-    saving_m: float = 0.0
+    #: what the rounds committed since the environment last looked
+    committed: Committed = field(default_factory=lambda: Committed())
     #: what the model answers :meth:`Agent.build` with when the environment lets go
     STOP = object()
 
@@ -105,25 +121,39 @@ class Agent(Strategy[PoolingOptions]):
         return answer
 
     def reposition(self, state: RoundState, rm: RoundModel, chosen: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """No moves; the planned saving of the round's committed joins is added up for the reward."""
+        """No moves; what the round committed is added up for the environment's reward."""
         assert self.link is not None and self._edges is not None
-        self.link.saving_m += committed_saving_m(state, self._edges, rm, chosen)
+        self.link.committed = self.link.committed + round_commit(state, self._edges, rm, chosen)
         return super().reposition(state, rm, chosen)
 
 
-def committed_saving_m(state: RoundState, edges: RoundEdges, rm: RoundModel, chosen: np.ndarray) -> float:
-    """The planned saving e (Eq. 5) of the join columns among ``chosen``: each found among the edges by its
-    (passenger, vehicle), which names a join edge once."""
+def round_commit(state: RoundState, edges: RoundEdges, rm: RoundModel, chosen: np.ndarray) -> Committed:
+    """What a round's ``chosen`` columns commit: each vacant column's passenger, each join column's passenger
+    and the passenger already in its vehicle, and the join's planned saving e (Eq. 5) as its edge gives it
+    (a join edge is named once by its passenger and vehicle)."""
     chosen = np.asarray(chosen, np.int64)
-    joins = chosen[rm.kind[chosen] == Kind.JOIN]
+    kind = rm.kind[chosen]
+    vacant, joins = chosen[kind == Kind.VACANT], chosen[kind == Kind.JOIN]
+    solo_of = dict(zip(state.p_order.tolist(), state.p_solo_m.tolist(), strict=True))
+    out = Committed(
+        assigned=len(vacant) + len(joins), vacant_solo_m=float(sum(solo_of[o] for o in rm.first[vacant].tolist()))
+    )
     if not len(joins):
-        return 0.0
-    is_join = edges.kind == 1
-    saving = dict(
+        return out
+    is_join = np.flatnonzero(edges.kind == 1)
+    edge_of = dict(
         zip(
             zip(state.p_order[edges.passenger[is_join]].tolist(), edges.vehicle[is_join].tolist(), strict=True),
-            edges.saving_m[is_join].tolist(),
+            is_join.tolist(),
             strict=True,
         )
     )
-    return float(sum(saving[key] for key in zip(rm.first[joins].tolist(), rm.vehicle[joins].tolist(), strict=True)))
+    picked = np.array([edge_of[key] for key in zip(rm.first[joins].tolist(), rm.vehicle[joins].tolist(), strict=True)])
+    v1_solo = dict(zip(state.v1_vehicle.tolist(), state.v1_solo_m.tolist(), strict=True))
+    return Committed(
+        assigned=out.assigned,
+        vacant_solo_m=out.vacant_solo_m,
+        joined_solo_m=float(state.p_solo_m[edges.passenger[picked]].sum()),
+        partner_solo_m=float(sum(v1_solo[v] for v in edges.vehicle[picked].tolist())),
+        saving_m=float(edges.saving_m[picked].sum()),
+    )

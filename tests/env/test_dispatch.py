@@ -5,6 +5,7 @@ folder the checker passes, with the bracket; bad actions and parameters are one 
 from __future__ import annotations
 
 import threading
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -62,12 +63,36 @@ def test_mbs_scores_through_the_environment_are_mbs_run(tmp_path):
     pd.testing.assert_frame_equal(mb_events, agent)
     # the return is the measured total saving, and the per-round planned savings already add up to it
     assert sum(rewards) == pytest.approx(mb.kpis["total_saving_km"], abs=1e-9)
-    assert abs(info["final_correction_km"]) < 1e-6
+    assert abs(info["final_correction"]) < 1e-6
     # graded: the folder passes the checker and the agent sits inside the bracket
     assert info["check"] == "OK"
     assert all(c.ok for c in check_folder(info["folder"]))
     assert info["total_saving_km"] <= info["best_known_km"] + 1e-9 <= info["upper_bound_km"] + 1e-6
     assert info["competitive_ratio_bound"] == pytest.approx(info["total_saving_km"] / info["upper_bound_km"])
+
+
+@pytest.mark.parametrize(("reward", "kpi"), [("profit", "platform_profit_cny"), ("response", "response_rate")])
+def test_the_return_is_the_chosen_kpi_and_the_plans_already_add_up_to_it(reward, kpi):
+    env = DispatchEnv(**TOY, reward=reward)
+    rewards, info = play(env, mb_scores)
+    assert sum(rewards) == pytest.approx(info["kpis"][kpi], rel=1e-12)
+    assert abs(info["final_correction"]) < 1e-6 * max(1.0, abs(info["kpis"][kpi]))
+    assert info[kpi] == info["kpis"][kpi]
+
+
+def test_a_graded_episode_beside_other_strategies_under_the_agents_name(tmp_path):
+    env = DispatchEnv(**TOY, results_dir=tmp_path / "graded", name="cem", label="CEM agent", beside=["np", "mb"])
+    _, info = play(env, mb_scores)
+    folder = Path(info["folder"])
+    assert sorted(p.name for p in (folder / "runs").iterdir()) == ["bound", "cem", "hindsight", "mb", "np"]
+    assert info["check"] == "OK"
+    assert info["saving_km_by_run"]["cem"] == pytest.approx(info["saving_km_by_run"]["mb"])  # MB's scores
+    assert "CEM agent" in (folder / "report.md").read_text()
+    assert info["best_known_km"] == max(info["saving_km_by_run"][r] for r in ("cem", "np", "mb", "hindsight"))
+    with pytest.raises(ParameterError, match="run name 'a/b'"):
+        DispatchEnv(**TOY, results_dir=tmp_path / "x", name="a/b")
+    with pytest.raises(ParameterError, match="appears twice"):
+        DispatchEnv(**TOY, results_dir=tmp_path / "y", name="mb", beside=["mb"])
 
 
 def test_a_decision_agent_and_a_bad_decision(tmp_path):
@@ -146,6 +171,8 @@ def test_a_round_wider_than_max_edges_is_shown_passenger_by_passenger():
         ({"preset": "nope"}, "nope"),
         ({"scenario": "atlantis"}, "atlantis"),
         ({"params": {"dt_s": -3}}, "dt_s"),
+        ({"reward": "smiles"}, "reward 'smiles'"),
+        ({"beside": ["nosuch"], "results_dir": "unused"}, "unknown strategy 'nosuch'"),
     ],
 )
 def test_bad_parameters_are_one_line(kwargs, message):
@@ -185,3 +212,23 @@ def test_a_scenario_without_a_choice_is_an_episode_of_one_step():
     assert obs["mask"].sum() == 0 and info == {}
     _, reward, terminated, _, info = env.step(np.zeros(env.max_edges))
     assert terminated and reward == 0.0 and info["kpis"]["response_rate"] == 0.0
+
+
+def test_asynchronous_vector_environments_run_in_worker_processes():
+    envs = gym.make_vec(rpbench.env.ENV_ID, num_envs=2, vectorization_mode="async", scenario="toy", sample=0.3)
+    obs, _ = envs.reset(seed=0)
+    for _ in range(3):
+        obs, reward, *_ = envs.step(np.zeros((2, 1024)))
+    assert obs["mask"].shape == (2, 1024) and reward.shape == (2,)
+    envs.close()
+
+
+@pytest.mark.haikou
+@pytest.mark.filterwarnings("ignore:.*(recommend using a symmetric|infinity).*:UserWarning")
+def test_on_a_haikou_peak_hour_the_checker_passes_and_mbs_scores_give_mbs_saving(data_dir, tmp_path):
+    env = DispatchEnv(scenario="haikou-peak", sample=0.3, data_dir=str(data_dir), results_dir=tmp_path, beside=["mb"])
+    check_env(env, skip_render_check=True)
+    rewards, info = play(env, mb_scores)
+    assert info["check"] == "OK"
+    assert sum(rewards) == pytest.approx(info["saving_km_by_run"]["agent"], abs=1e-9)
+    assert info["saving_km_by_run"]["agent"] == pytest.approx(info["saving_km_by_run"]["mb"], abs=1e-9)

@@ -26,13 +26,31 @@ def run(capsys, *args) -> tuple[int, str]:
     return code, capsys.readouterr().err
 
 
-@pytest.mark.skipif(shutil.which("perl") is None, reason="no perl on this machine")
+PERL = pytest.mark.skipif(shutil.which("perl") is None, reason="no perl on this machine")
+
+
+@PERL
 def test_a_perl_mb_plays_the_rounds_as_mb_does(tmp_path, capsys):
     out = tmp_path / "run"
     code, err = run(
         capsys, "run", *TOY, "--strategies", "mb,external", "--opt", f"external.command=perl {PERL_MB}", "--out", out
     )
     assert code == 0, err
+    assert_same_decisions(out)
+
+
+@PERL
+@pytest.mark.haikou
+def test_the_perl_mb_plays_a_haikou_peak_hour_as_mb_does(data_dir, tmp_path, capsys):
+    out = tmp_path / "run"
+    args = ["--scenario", "haikou-peak", "--data", data_dir, "--no-progress", "--strategies", "mb,external,bound"]
+    code, err = run(capsys, "run", *args, "--opt", f"external.command=perl {PERL_MB}", "--out", out)
+    assert code == 0, err
+    assert_same_decisions(out)
+
+
+def assert_same_decisions(out: Path) -> None:
+    """MB's and the external run's event logs are the same, round by round, and the folder passes check."""
     mb, ext = (pd.read_csv(out / "runs" / r / "events.csv.gz") for r in ("mb", "external"))
     same = [c for c in mb.columns if c != "utility_m"]
     pd.testing.assert_frame_equal(mb[same], ext[same])  # the same decisions, round by round
