@@ -6,14 +6,35 @@ import pytest
 
 from rpbench.exceptions import ParameterError
 from rpbench.protocols import builtin_names, load_protocol
+from rpbench.scenarios.request import parse_dates
+from rpbench.strategies.value import ValueOptions
+
+HAIKOU_DAYS = [f"2017-05-{d:02d}" for d in range(1, 15)]
 
 
 def test_the_builtin_protocols():
-    assert {"peak-14", "peak-14-full", "toy-quick"} <= set(builtin_names())
+    assert {"peak-14", "peak-14-full", "peak-vf", "peak-msa", "manhattan-peak", "toy-quick"} <= set(builtin_names())
+    for name in builtin_names():
+        assert load_protocol(name).name == name
     peak = load_protocol("peak-14")
     assert peak.seeds == (0, 1, 2, 3, 4) and peak.dates == "2017-05-01..2017-05-14" and peak.sample == 0.3
     assert peak.metrics[0] == "total_saving_km" and "bound" in peak.strategies
     assert peak.record()["digest"] == load_protocol("peak-14").record()["digest"]
+
+
+@pytest.mark.parametrize("name", ["peak-vf", "peak-msa"])
+def test_vf_protocols_test_on_days_vf_was_not_trained_on(name):
+    protocol = load_protocol(name)
+    tested = set(parse_dates(protocol.dates, HAIKOU_DAYS))
+    trained = set(parse_dates(ValueOptions().train_dates, HAIKOU_DAYS))
+    assert "vf" in protocol.strategies and tested and not tested & trained
+
+
+def test_peak_msa_sets_msa_beside_the_forward_looking_and_clairvoyant_runs():
+    protocol = load_protocol("peak-msa")
+    assert protocol.strategies == ("mb", "fl", "vf", "msa", "fl-perfect", "hindsight", "bound")
+    assert protocol.seeds == (0, 1, 2, 3, 4) and protocol.sample == 0.3 and protocol.dates == "2017-05-08..2017-05-14"
+    assert protocol.metrics[:2] == ("total_saving_km", "competitive_ratio_bound")
 
 
 @pytest.mark.parametrize(
