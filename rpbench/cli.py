@@ -79,16 +79,20 @@ def _raise_terminated(signum, frame) -> None:
 
 @contextlib.contextmanager
 def sigterm_raises() -> Iterator[None]:
-    """Turn SIGTERM into :class:`Terminated` for the body (the previous handler is restored afterwards,
-    for callers that run :func:`main` in-process).  Only the main thread can install handlers."""
+    """Turn SIGTERM into :class:`Terminated` and SIGINT into KeyboardInterrupt for the body, whatever this
+    process inherited (a shell starts a background job with SIGINT ignored, and Python then leaves it
+    ignored: ``kill -INT`` would do nothing).  The previous handlers are restored afterwards, for callers
+    that run :func:`main` in-process.  Only the main thread can install handlers."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
     previous = signal.signal(signal.SIGTERM, _raise_terminated)
+    previous_int = signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
         yield
     finally:
         signal.signal(signal.SIGTERM, previous)
+        signal.signal(signal.SIGINT, previous_int)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -1,10 +1,12 @@
 """Shared fixtures: the real data folders (tests skip without them) and a tiny fake Haikou one in its format.
 
-The tests never write into the user's cache: the session runs with ``$RPBENCH_CACHE`` pointed at a
-temporary folder (removed at the end), inherited by the worker processes and subprocesses tests start;
-and they never download: ``$RPBENCH_DATA_MIRROR`` (unless set) is a local port that refuses.
-``RPBENCH_TEST_CACHE=DIR`` keeps one instead, so that repeated runs reuse its all-pairs tables and
-prediction structures.
+The tests never see the machine's settings, data or caches: the session starts with every ``RPBENCH_*``
+and ``XDG_*`` variable removed, its own empty data home (``$RPBENCH_DATA_HOME``), cache (``$RPBENCH_CACHE``)
+and XDG folders in a temporary folder (removed at the end), all inherited by the worker processes and
+subprocesses tests start; and they never download: ``$RPBENCH_DATA_MIRROR`` is a local port that refuses.
+So a test reads real data only from ``../shared/data/<city>`` beside the checkout, and passes the same
+after ``rpbench data fetch`` filled the user's data folder.  ``RPBENCH_TEST_CACHE=DIR`` keeps one cache
+instead, so that repeated runs reuse its all-pairs tables and prediction structures.
 """
 
 from __future__ import annotations
@@ -25,32 +27,38 @@ sys.path.insert(0, str(Path(__file__).parent))
 
 from helpers import write_fake_haikou, write_gz
 
-_SESSION_CACHE: str | None = None
+_SESSION_ROOT: str | None = None
+#: The machine's variables the tests must not see: rpbench's own and the XDG folders platformdirs reads.
+_MACHINE_PREFIXES = ("RPBENCH_", "XDG_")
 
 
 def pytest_configure(config: pytest.Config) -> None:
-    global _SESSION_CACHE
-    # A test that lets rpbench fetch the data (a first run) reaches no real server: a mirror that refuses.
-    os.environ.setdefault("RPBENCH_DATA_MIRROR", "http://127.0.0.1:9/")
+    global _SESSION_ROOT
     kept = os.environ.get("RPBENCH_TEST_CACHE")
-    if kept:
-        os.environ["RPBENCH_CACHE"] = kept
-    else:
-        _SESSION_CACHE = tempfile.mkdtemp(prefix="rpbench-test-cache-")
-        os.environ["RPBENCH_CACHE"] = _SESSION_CACHE
+    for name in [n for n in os.environ if n.startswith(_MACHINE_PREFIXES)]:
+        del os.environ[name]
+    _SESSION_ROOT = tempfile.mkdtemp(prefix="rpbench-test-")
+    root = Path(_SESSION_ROOT)
+    os.environ["RPBENCH_CACHE"] = kept or str(root / "cache")
+    os.environ["RPBENCH_DATA_HOME"] = str(root / "data-home")
+    # A test that lets rpbench fetch the data (a first run) reaches no real server: a mirror that refuses.
+    os.environ["RPBENCH_DATA_MIRROR"] = "http://127.0.0.1:9/"
+    for xdg in ("XDG_DATA_HOME", "XDG_CACHE_HOME", "XDG_CONFIG_HOME", "XDG_STATE_HOME"):
+        os.environ[xdg] = str(root / xdg.lower())
 
 
 def pytest_unconfigure(config: pytest.Config) -> None:
-    if _SESSION_CACHE is not None:
-        shutil.rmtree(_SESSION_CACHE, ignore_errors=True)
+    if _SESSION_ROOT is not None:
+        shutil.rmtree(_SESSION_ROOT, ignore_errors=True)
 
 
 @pytest.fixture(scope="session")
 def data_dir() -> Path:
-    """The Haikou data folder; tests needing it are skipped when it is absent."""
+    """The Haikou data folder, ``../shared/data/haikou`` beside the current folder or the checkout; tests
+    needing it (marked ``haikou``) are skipped when it is absent."""
     folder = find_data_dir()
     if folder is None:
-        pytest.skip("Haikou data folder not found (set RPBENCH_DATA)")
+        pytest.skip("Haikou data folder not found (../shared/data/haikou beside the checkout)")
     return folder
 
 

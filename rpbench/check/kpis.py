@@ -10,6 +10,7 @@ of the passengers' odometer intervals per vehicle, the shared distance the overl
 from __future__ import annotations
 
 import re
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -328,16 +329,17 @@ def _compare_hourly(rc: RunCheck, rows: pd.DataFrame, expected: pd.DataFrame) ->
 MetricTable = list[tuple[str, list[str]]]
 
 
-def check_report(fc: RunCheck, f: Folder) -> None:
+def check_report(fc: RunCheck, folder: Path) -> None:
     """The KPI tables of report.md (what most readers read) are the rendering of kpis.csv, which the runs'
-    ``kpi`` checks verify: a number edited in report.md alone fails here."""
-    path = f.path / REPORT
+    ``kpi`` checks verify (or, in a published light copy, the digest its parent records): a number edited in
+    report.md alone fails here."""
+    path = folder / REPORT
     if not path.is_file():
         fc.skip("report", f"the folder has no {REPORT}")
         return
     try:
-        rendered = report_markdown(f.path, f.path.name)
-        older = _older_by_label(f)
+        rendered = report_markdown(folder, folder.name)
+        older = _older_by_label(folder)
     except (RpbenchError, KeyError, ValueError, TypeError, IndexError) as exc:
         fc.skip(
             "report",
@@ -393,9 +395,9 @@ def older_cells(table: pd.DataFrame) -> dict[tuple[str, str], float]:
     return out
 
 
-def _older_by_label(f: Folder) -> dict[str, dict[int, str]]:
+def _older_by_label(folder: Path) -> dict[str, dict[int, str]]:
     """:func:`older_cells` as report.md shows them: per row label, column index -> cell text."""
-    table = load_kpis(f.path)
+    table = load_kpis(folder)
     columns = [str(c) for c in table.columns]
     out: dict[str, dict[int, str]] = {}
     for (kpi, run), value in older_cells(table).items():

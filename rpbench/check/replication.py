@@ -54,6 +54,11 @@ ENGINE_KPIS = (
     "avg_pickup_time_s",
 )
 REPLICATION_TOL_M = 1e-3
+#: The columns of an authors' run's records that the audit reads.
+RECORD_COLUMNS = (
+    "order_id", "vehicle", "assign_s", "request_s", "patience_s", "pooled", "partner",
+    "detour_m", "shared_m", "ride_m", "solo_m",
+)  # fmt: skip
 ROUND_S = 10.0
 
 SKIPPED = {
@@ -127,8 +132,10 @@ def audit_run(records: pd.DataFrame, row: dict) -> tuple[dict[str, list[str]], d
         "avg_detour_m": float(pooled["detour_m"].mean()) if len(pooled) else np.nan,
     }
     for key, value in recomputed.items():
-        reported = row.get(key)
-        reported = np.nan if reported is None else float(reported)
+        reported = np.nan if row.get(key) is None else as_number(row.get(key))
+        if reported is None:
+            fail("accounting", f"{key}: runs.csv shows the text {row.get(key)!r}, recomputed {value!r}")
+            continue
         both_nan = not np.isfinite(value) and not np.isfinite(reported)
         if not both_nan and not np.isclose(value, reported, rtol=1e-9, atol=1e-6):
             fail("accounting", f"{key}: reported {reported!r}, recomputed {value!r}")
@@ -190,6 +197,10 @@ def audit_row(folder: Path, root: Path, row: dict, manifest: dict | None, dates:
         records = pd.read_csv(path)
     except (OSError, ValueError) as exc:
         raise ResultsError(f"cannot read {str(path)!r}: {exc}") from None
+    missing = [c for c in RECORD_COLUMNS if c not in records.columns]
+    if missing:
+        rc.fail("records", f"{name} lacks the column(s) {', '.join(missing)}: its run cannot be audited")
+        return rc
     bad, checked = audit_run(records, row)
     rc.violations.update(bad)
     rc.checked.update(checked)

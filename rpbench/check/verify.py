@@ -95,7 +95,7 @@ def _check_comparison(folder: Path) -> tuple[RunCheck, list[RunCheck]]:
         or f.meta["runs"][name].get("rules", {}).get("window") == "bound"
     }
     check_hourly(fc, f, runs, hourly, per_hour)
-    check_report(fc, f)
+    check_report(fc, f.path)
     check_page(fc, f)
     return fc, runs
 

@@ -39,6 +39,15 @@ TIME_LIMIT = Range(0.0, MAX_TIME_LIMIT_S, "s", low_open=True)
 DECISION_BUDGET = Range(0.0, MAX_DECISION_BUDGET_S, "s", low_open=True)
 
 
+class GivenOnce(argparse.Action):
+    """An option that may be given once: a second one is an error, not a silent replacement of the first."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        if getattr(namespace, self.dest, None) is not None:
+            parser.error(f"{option_string} given twice; give it once")
+        setattr(namespace, self.dest, values)
+
+
 def add_number_arg(
     parser: argparse.ArgumentParser,
     flag: str,

@@ -62,7 +62,13 @@ def _run(args: argparse.Namespace) -> int:
     )
     folder, ran = outcome.folder, sum(unit.fresh for unit in outcome.children)
     note_outcome(outcome)
-    note(f"{ran} run(s) made now; the others were already in the folder" if ran else "every run was already there")
+    total = len(outcome.children)
+    if ran == total:
+        note(f"{total} unit(s) of the protocol run")
+    elif ran:
+        note(f"{ran} of {total} unit(s) run now; the others were already in the folder (resumed)")
+    else:
+        note(f"every one of the {total} unit(s) was already in the folder: nothing to run")
     print((folder / REPORT).read_text())
     print(f"results written to {folder}  (verify: rpbench check {folder}; in a browser: {folder / REPORT_HTML})")
     return 0

@@ -129,7 +129,10 @@ def _run_entry(name: str) -> dict:
         run = ORACLE_RUNS[name]
         label, description = run.label, run.description
     else:
-        cls = strategy_class(name)
+        try:
+            cls = strategy_class(name)
+        except RpbenchError as exc:  # one broken plug-in is listed as broken; the rest are still listed
+            return {"name": name, "label": "", "description": "", "options": {}, "error": str(exc)}
         label, description = cls.label, cls.description
     return {"name": name, "label": label, "description": description, "options": options_class(name).help()}
 
@@ -161,6 +164,9 @@ def _run(args: argparse.Namespace) -> int:
         print(f"  {p['name']:<14} {p['backend']:<9} {state:<10} exact: {', '.join(p['exact'])}")
     print("\nstrategies and oracles (--strategies; options: --opt NAME.OPTION=VALUE):")
     for s in info["strategies"]:
+        if s.get("error"):
+            print(f"  {s['name']:<16} BROKEN: {s['error']}")
+            continue
         print(f"  {s['name']:<16} {s['label']:<20} {s['description']}")
         for option, text in s["options"].items():
             print(f"      {option:<22} {text}")

@@ -6,6 +6,7 @@ import argparse
 
 from rpbench.commands._runs import add_run_args, check_presets, parse_runs, run_spec, split_list
 from rpbench.commands.args import (
+    GivenOnce,
     add_parallel_args,
     add_scenario_args,
     check_numbers,
@@ -33,6 +34,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--over",
         default=None,
+        action=GivenOnce,
         metavar="NAME=V1,V2,...",
         help="sweep any scenario parameter instead, or a run's option as RUN.OPTION=V1,V2,... "
         "(e.g. fl.tau0_s=60,120,240)",

@@ -54,12 +54,7 @@ def run_comparison(
     (:func:`with_decision_budget`).
     """
     check_new_folder(out)  # a bad --out must fail now, not after the whole simulation
-    preset = load_preset(spec.preset)
-    oracle_preset = load_preset(spec.oracle_preset) if spec.oracle_preset else preset
-    for entry in spec.simulated:
-        preset.require(entry.strategy_class().structure, needed_by=f"strategy {entry.name!r}")
-    if spec.offline:
-        oracle_preset.require(Structure.PAIRING, needed_by="the offline runs")
+    preset, oracle_preset = checked_presets(spec)
     scenario = scenario if scenario is not None else spec.request.build()
     runs = simulate_all(spec, scenario, preset, progress)
     offline = solve_offline(scenario, spec.offline, oracle_preset)
@@ -79,6 +74,18 @@ def run_comparison(
         unproven=unproven_in(rounds, meta["runs"], spec.names),
         over_budget=over_budget_in(rounds, spec.decision_budget_s),
     )
+
+
+def checked_presets(spec: RunSpec) -> tuple[Preset, Preset]:
+    """The comparison's solver presets, loaded, each able to solve the models its runs build (an unknown or
+    unable preset is one error line, before anything runs or is written)."""
+    preset = load_preset(spec.preset)
+    oracle_preset = load_preset(spec.oracle_preset) if spec.oracle_preset else preset
+    for entry in spec.simulated:
+        preset.require(entry.strategy_class().structure, needed_by=f"strategy {entry.name!r}")
+    if spec.offline:
+        oracle_preset.require(Structure.PAIRING, needed_by="the offline runs")
+    return preset, oracle_preset
 
 
 @dataclass(frozen=True)

@@ -16,7 +16,7 @@ from typing import Any
 
 from rpbench import results
 from rpbench.exceptions import ParameterError, ResultsError
-from rpbench.harness.comparison import ComparisonTask, run_task
+from rpbench.harness.comparison import ComparisonTask, checked_presets, run_task
 from rpbench.harness.outcome import Outcome
 from rpbench.harness.parallel import run_tasks
 from rpbench.protocols import Protocol
@@ -31,7 +31,10 @@ from rpbench.spec import RunSpec
 
 def units_of(protocol: Protocol, request: ScenarioRequest) -> list[tuple[str | None, int]]:
     """The protocol's (day, seed) units: its dates (a dated scenario) times its seeds."""
-    dates: list[str | None] = list(request.dates(protocol.dates)) if protocol.dates else [None]
+    try:
+        dates: list[str | None] = list(request.dates(protocol.dates)) if protocol.dates else [None]
+    except ParameterError as exc:
+        raise ParameterError(f"protocol {protocol.name!r}: {str(exc).removeprefix('--')}") from None
     return [(d, s) for d in dates for s in protocol.seeds]
 
 
@@ -54,12 +57,16 @@ def run_evaluation(
         request, list(protocol.strategies), preset=protocol.preset, oracle_preset=protocol.oracle_preset,
         command=command, decision_budget_s=decision_budget_s,
     )  # fmt: skip
+    checked_presets(spec)  # an unknown or unable preset fails before the folder exists
     units = units_of(protocol, request)
     names = [unit_name(d, s) for d, s in units]
     folder = Path(out) if out is not None else Path.cwd() / DEFAULT_PARENT / f"evaluate-{protocol.name}"
     record = protocol.record()
     if folder.exists():
         _check_resumable(folder, record, decision_budget_s)
+        # Units whose writer died (SIGKILL, power loss) left .UNIT.partial-PID folders: a dead PID's are swept
+        # however young, since only a process running this evaluation writes here.
+        remove_stale_partials(folder, older_than_s=0)
     else:
         try:
             folder.mkdir(parents=True)
@@ -69,13 +76,18 @@ def run_evaluation(
         if decision_budget_s is not None:
             fields["decision_budget_s"] = decision_budget_s
         write_parent_meta(folder, "evaluate", names, fields)
-    remove_stale_partials(folder)
     tasks = [
         ComparisonTask(spec.for_request(request.replace(date=d, seed=s)), str(folder / name))
         for (d, s), name in zip(units, names, strict=True)
     ]
     todo = [task for task in tasks if not (Path(task.out) / layout.KPIS).is_file()]
-    ran = run_tasks(run_task, todo, workers=workers, scheduler=scheduler, label=f"evaluate {protocol.name}")
+    try:
+        ran = run_tasks(run_task, todo, workers=workers, scheduler=scheduler, label=f"evaluate {protocol.name}")
+    except BaseException:
+        # Interrupted or failed: the units written stay (a rerun resumes); those the stopped workers were
+        # writing are removed, so the folder holds only whole units.
+        remove_stale_partials(folder, older_than_s=0)
+        raise
     fresh = {Path(o.folder).name: o for o in ran}
     children = tuple(fresh.get(name) or Outcome.read(folder / name) for name in names)
     board = write_evaluation_tables(folder)

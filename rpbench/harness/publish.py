@@ -9,6 +9,11 @@ passed: a failing run is never published.  Re-running the command in
 ``meta.json`` regenerates the full folder: it is recorded with the published
 folder's name as ``--out``, not the scratch folder it ran in.
 
+A parent's light copy (multi-day, sweep, evaluation) also records in its meta.json the SHA-256 of what each
+child keeps that the parent's tables are recomputed from (``light_copy``: kpis.csv, meta.json, check.txt), so
+that ``rpbench check`` of the copy recomputes the parent's tables from children it proves unedited; the copy
+is checked so before it is moved into place.
+
 What is published is what was checked: the source is first copied whole into a staging folder beside
 DEST (``.DEST.partial-PID-XXXX``, private to this process), the checker runs on that snapshot, and the
 light copy, its reports and its page are made from it, so a source changing meanwhile cannot slip in
@@ -32,6 +37,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from rpbench.check import check_tree, format_report
+from rpbench.check.light import VERDICT_HEADER
 from rpbench.exceptions import ResultsError
 from rpbench.harness.multiday import write_multiday_report
 from rpbench.harness.sweep import write_sweep_report
@@ -39,7 +45,8 @@ from rpbench.report.comparison import write_report
 from rpbench.report.evaluation import write_evaluation_report
 from rpbench.report.html import write_html
 from rpbench.results import layout
-from rpbench.results.layout import HEAVY
+from rpbench.results.digest import LIGHT_COPY, light_copy_record
+from rpbench.results.layout import HEAVY, PARENT_KINDS
 from rpbench.results.store import make_parents, read_meta, remove_empty, remove_stale_partials, write_json
 
 #: A published page larger than this (its map: a full day's trips) is published without its map, and one
@@ -199,10 +206,31 @@ def _stage(source: Path, root: Path, dest: Path, staging: Path) -> Path:
     if kind in ("multi-day", "sweep", "evaluate"):
         write_html(tmp, name=dest.name)
     for rel, text in verdicts:
-        (tmp / rel / layout.CHECK).write_text(
-            "rpbench check on the full results folder before publishing (all checks passed):\n\n" + text + "\n"
-        )
+        (tmp / rel / layout.CHECK).write_text(f"{VERDICT_HEADER}\n\n{text}\n")
+    if kind in PARENT_KINDS:
+        _record_light_children(tmp, [rel.as_posix() for rel, _ in verdicts if rel != Path(".")])
+        _check_light_copy(tmp, base)
     return tmp
+
+
+def _record_light_children(light: Path, children: list[str]) -> None:
+    """The parent's record of what its light children keep (:func:`~rpbench.results.digest.light_copy_record`),
+    made last, over the files as published."""
+    meta = read_meta(light)
+    meta[LIGHT_COPY] = light_copy_record(light, children)
+    write_json(light / layout.META, meta)
+
+
+def _check_light_copy(light: Path, source: Path) -> None:
+    """The light copy passes ``rpbench check`` as a light copy: its tables against the children it keeps, each
+    as its parent's record has it (``source``: the folder published, to name a failing one)."""
+    for result in check_tree(light):
+        bad = [c.run for c in result.checks if not c.ok]
+        if result.error is not None or bad:
+            where = str(source / Path(result.folder).relative_to(light))
+            raise ResultsError(
+                f"the light copy of {where!r} fails rpbench check ({result.error or ', '.join(bad)}); not published"
+            )
 
 
 def published_command(command: str, name: str) -> str:

@@ -187,10 +187,16 @@ def parse_over(text: str) -> tuple[str, list[float]]:
     name, sep, rest = text.partition("=")
     if not sep or not rest.strip():
         raise ParameterError(f"--over {text!r}: expected NAME=V1,V2,... e.g. dt=2,10,30")
+    items = [x.strip() for x in rest.split(",")]
+    if "" in items:
+        raise ParameterError(f"--over {text!r}: an empty value between commas; give NAME=V1,V2,...")
     try:
-        values = [float(x) for x in rest.split(",") if x.strip()]
+        values = [float(x) for x in items]
     except ValueError:
         raise ParameterError(f"--over {text!r}: values must be numbers") from None
+    twice = sorted({v for v in values if values.count(v) > 1})
+    if twice:
+        raise ParameterError(f"--over {text!r}: {twice[0]:g} appears twice; each point once")
     return name.strip(), values
 
 

@@ -11,6 +11,7 @@ digest is independent of the compressor and is what :func:`verify_folder` requir
 from __future__ import annotations
 
 import json
+import zipfile
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -63,7 +64,7 @@ def verify_folder(folder: Path, reference: dict[str, Any]) -> list[str]:
             continue
         try:
             digest = arrays_sha256(path)
-        except (OSError, ValueError, EOFError) as exc:
+        except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:  # a flipped byte, a truncated file
             problems.append(f"{name}: unreadable ({type(exc).__name__}: {exc})")
             continue
         if digest != entry["content_sha256"]:

@@ -18,9 +18,10 @@ from typing import Any
 
 from rpbench.exceptions import ParameterError
 from rpbench.files import parse_toml, read_text
+from rpbench.protocols.schema import SAFE_NAME, Fields
 from rpbench.report.leaderboard import Bootstrap
 from rpbench.results.metrics import DECISION_KPIS, KPI_ORDER
-from rpbench.results.ratios import RATIO_KPIS
+from rpbench.results.ratios import DENOMINATORS, RATIO_KPIS
 
 
 @dataclass(frozen=True)
@@ -49,6 +50,8 @@ class Protocol:
 #: What a protocol's metrics may name: the comparison table's KPIs, the ratios (the competitive ratio's two ends,
 #: saving / Oracle-1), decision times.
 PROTOCOL_METRICS = (*KPI_ORDER, *RATIO_KPIS, *DECISION_KPIS)
+#: A ratio metric and the offline run it divides by: a protocol naming one must run that run.
+RATIO_NEEDS = DENOMINATORS
 
 
 def builtin_names() -> list[str]:
@@ -69,6 +72,7 @@ def load_protocol(name_or_path: str) -> Protocol:
 
 
 def _parse(raw: dict[str, Any], where: str) -> Protocol:
+    """The protocol of a parsed TOML table, every field checked (:mod:`.schema`)."""
     known = {"name", "version", "description", "scenario", "dates", "sample", "seeds", "strategies", "preset"}
     known |= {"oracle_preset", "metrics", "bootstrap"}
     unknown = sorted(set(raw) - known)
@@ -77,41 +81,40 @@ def _parse(raw: dict[str, Any], where: str) -> Protocol:
     missing = sorted({"name", "version", "scenario", "seeds", "strategies", "metrics"} - set(raw))
     if missing:
         raise ParameterError(f"protocol {where!r}: missing field(s) {', '.join(missing)}")
-    try:
-        seeds = tuple(int(s) for s in raw["seeds"])
-        boot_raw = dict(raw.get("bootstrap", {}))
-        boot = Bootstrap(
-            resamples=int(boot_raw.pop("resamples", 2000)),
-            seed=int(boot_raw.pop("seed", 0)),
-            level=float(boot_raw.pop("level", 0.95)),
-        )
-        if boot_raw:
-            raise ParameterError(f"protocol {where!r}: unknown bootstrap field(s) {', '.join(sorted(boot_raw))}")
-        protocol = Protocol(
-            name=str(raw["name"]),
-            version=int(raw["version"]),
-            description=str(raw.get("description", "")),
-            scenario=str(raw["scenario"]),
-            seeds=seeds,
-            strategies=tuple(str(s) for s in raw["strategies"]),
-            metrics=tuple(str(m) for m in raw["metrics"]),
-            sample=None if raw.get("sample") is None else float(raw["sample"]),
-            dates=None if raw.get("dates") is None else str(raw["dates"]),
-            preset=str(raw.get("preset", "highs")),
-            oracle_preset=None if raw.get("oracle_preset") is None else str(raw["oracle_preset"]),
-            bootstrap=boot,
-        )
-    except (TypeError, ValueError) as exc:
-        raise ParameterError(f"protocol {where!r}: a field has the wrong type ({exc})") from None
-    if not seeds or len(set(seeds)) != len(seeds) or min(seeds) < 0:
-        raise ParameterError(f"protocol {where!r}: seeds must be distinct non-negative integers")
+    f = Fields(raw, where)
+    boot_raw = raw.get("bootstrap", {})
+    if not isinstance(boot_raw, dict):
+        raise f.fail("bootstrap", f"must be a table ([bootstrap]), not {boot_raw!r}")
+    unknown_boot = sorted(set(boot_raw) - {"resamples", "seed", "level"})
+    if unknown_boot:
+        raise ParameterError(f"protocol {where!r}: unknown bootstrap field(s) {', '.join(unknown_boot)}")
+    b = Fields(boot_raw, where, prefix="bootstrap.")
+    protocol = Protocol(
+        name=f.text("name", pattern=SAFE_NAME),
+        version=f.integer("version", lo=1),
+        description=f.text("description", ""),
+        scenario=f.text("scenario"),
+        seeds=f.integers("seeds", lo=0),
+        strategies=f.texts("strategies"),
+        metrics=f.texts("metrics"),
+        sample=f.optional_number("sample", lo=0.0, hi=1.0, lo_open=True, hi_open=False),
+        dates=f.optional_text("dates"),
+        preset=f.text("preset", "highs"),
+        oracle_preset=f.optional_text("oracle_preset"),
+        bootstrap=Bootstrap(
+            resamples=b.integer("resamples", 2000, lo=1, hi=100_000),
+            seed=b.integer("seed", 0, lo=0, hi=2**63 - 1),
+            level=b.number("level", 0.95, lo=0.5, hi=1.0, lo_open=False, hi_open=True),
+        ),
+    )
     bad = [m for m in protocol.metrics if m not in PROTOCOL_METRICS]
-    if bad or not protocol.metrics:
+    if bad:
         raise ParameterError(
             f"protocol {where!r}: unknown metric(s) {', '.join(bad)} (known: {', '.join(PROTOCOL_METRICS)})"
         )
-    if not 1 <= boot.resamples <= 100_000 or not 0.5 <= boot.level < 1.0:
-        raise ParameterError(f"protocol {where!r}: bootstrap resamples must be 1..100000 and level in [0.5, 1)")
-    if protocol.sample is not None and not 0.0 < protocol.sample <= 1.0:
-        raise ParameterError(f"protocol {where!r}: sample must be in (0, 1]")
+    for metric, needs in RATIO_NEEDS.items():
+        if metric in protocol.metrics and needs not in protocol.strategies:
+            raise ParameterError(
+                f"protocol {where!r}: metric {metric} divides by the run {needs!r}, which its strategies do not list"
+            )
     return protocol

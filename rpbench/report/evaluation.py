@@ -6,16 +6,25 @@ and ``paired.csv`` are :func:`rpbench.report.leaderboard.leaderboard` and
 with its ranking (:mod:`rpbench.results.ranking`), so the checker recomputes all three from the children.
 A protocol ranking by the competitive ratio against the bound gets its other end, saving / best known
 schedule, beside it (:func:`board_metrics`): the ratio is an interval.
+
+The tables rank the runs the units hold (:func:`evaluation_runs`), each protocol entry under the name its run
+has in the units: a ``module:Class`` plug-in runs under its class's name, which the protocol's text is not.
+report.md and table.tex are :func:`evaluation_report` of the tables, text only, so that the checker
+regenerates them and compares; :func:`write_evaluation_report` also draws the figures.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import pandas as pd
 
 from rpbench import files, results
 from rpbench.exceptions import ResultsError
+from rpbench.plugins import is_spec
 from rpbench.report.comparison import fmt
 from rpbench.report.leaderboard import RATIO_OF_MEANS, Bootstrap, leaderboard, paired
 from rpbench.report.plots import leaderboard_figure, seeds_by_day_figure
@@ -74,15 +83,42 @@ def unit_records(folder: Path) -> list[dict]:
     return [results.read_meta(folder / name).get("runs") or {} for name in meta.get("children", [])]
 
 
+def entry_run(entry: str, records: Mapping[str, Any]) -> str | None:
+    """The run a protocol's strategy ``entry`` ran as in one unit (``records``: the unit's meta.json ``runs``):
+    the run of that name (a built-in's name read case-insensitively, as the command line reads it), else the
+    run whose recorded ``source`` is the entry (a ``module:Class`` plug-in runs under its class's name); None
+    when the unit holds neither."""
+    base, sep, settings = entry.partition("@")
+    typed = entry if is_spec(base) else f"{base.strip().lower()}{sep}{settings}"
+    for name in (entry, typed):
+        if isinstance(records.get(name), Mapping):
+            return name
+    found = [n for n, r in records.items() if isinstance(r, Mapping) and r.get("source") == entry]
+    return found[0] if len(found) == 1 else None
+
+
+def evaluation_runs(strategies: Sequence[str], units: Sequence[Mapping[str, Any]]) -> list[str]:
+    """The runs of an evaluation, in the protocol's order: each of ``strategies`` under the name the units give
+    its run (:func:`entry_run`; the entry itself when no unit holds it), then any other run a unit holds
+    (``units``: each unit's meta.json ``runs``).  A run the units hold is never left out of the tables."""
+    runs = []
+    for entry in strategies:
+        found = (entry_run(entry, records) for records in units)
+        runs.append(next((name for name in found if name is not None), entry))
+    held = (str(name) for records in units for name in records)
+    return list(dict.fromkeys([*runs, *held]))
+
+
 def tables(folder: Path) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame]:
     """(units, leaderboard with its ranking, paired) recomputed from the children."""
     meta = results.read_meta(folder)
     units = units_table(folder)
     units["day"] = units["day"].fillna("").astype(str)
-    runs = list(meta["protocol"]["strategies"])
+    records = unit_records(folder)
+    runs = evaluation_runs(meta["protocol"]["strategies"], records)
     metrics = list(meta["protocol"]["metrics"])
     boot = bootstrap_of(meta)
-    groups = run_groups(unit_records(folder), runs)
+    groups = run_groups(records, runs)
     board = ranked(leaderboard(units, runs, board_metrics(metrics), boot), groups, metrics[0], runs)
     simulated = [r for r in runs if groups[r] != "offline"]
     return units, board, paired(units, simulated, metrics, boot)
@@ -95,8 +131,9 @@ def read_leaderboard(folder: Path) -> pd.DataFrame:
     if set(RANKING_COLUMNS) <= set(board.columns):
         return board
     protocol = results.read_meta(folder)["protocol"]
-    runs = list(protocol["strategies"])
-    return ranked(board, run_groups(unit_records(folder), runs), protocol["metrics"][0], runs)
+    records = unit_records(folder)
+    runs = evaluation_runs(protocol["strategies"], records)
+    return ranked(board, run_groups(records, runs), protocol["metrics"][0], runs)
 
 
 def write_evaluation_tables(folder: Path) -> pd.DataFrame:
@@ -109,15 +146,43 @@ def write_evaluation_tables(folder: Path) -> pd.DataFrame:
     return board
 
 
-def write_evaluation_report(folder: Path, name: str | None = None) -> Path:
-    """report.md: the protocol, the leaderboard (mean [interval]) ranked by its first metric, the paired
-    comparisons of that metric, and where each unit's folder is."""
+@dataclass(frozen=True)
+class EvaluationReport:
+    """An evaluation's report as text: report.md, and its leaderboard as LaTeX (table.tex)."""
+
+    markdown: str
+    tex: str
+
+
+def write_evaluation_report(folder: Path, name: str | None = None, *, figures: bool = True) -> Path:
+    """report.md (the protocol, the leaderboard ranked by its first metric, the paired comparisons of that
+    metric, where each unit's folder is), its figures and table.tex, from the folder's tables.  ``figures=False``
+    leaves the figures as they are (the text of the report does not depend on them)."""
     meta = results.read_meta(folder)
     protocol = meta["protocol"]
     board = read_leaderboard(folder)
-    pairs = results.read_csv(folder / layout.PAIRED)
-    child = results.read_meta(folder / meta["children"][0])
-    styles = run_styles(child)
+    units = results.read_csv(folder / layout.UNITS)
+    units["day"] = units["day"].astype(object).fillna("").astype(str)  # undated units have no day
+    runs = evaluation_runs(protocol["strategies"], unit_records(folder))
+    styles = run_styles(results.read_meta(folder / meta["children"][0]))
+    if figures:
+        _draw_figures(folder, board, units, protocol, runs, styles)
+    report = evaluation_report(folder, name, board, results.read_csv(folder / layout.PAIRED), units, runs)
+    files.write_text(folder / layout.TABLE_TEX, report.tex)
+    path = folder / layout.REPORT
+    files.write_text(path, report.markdown)
+    return path
+
+
+def evaluation_report(
+    folder: Path, name: str | None, board: pd.DataFrame, pairs: pd.DataFrame, units: pd.DataFrame, runs: Sequence[str]
+) -> EvaluationReport:
+    """report.md and table.tex of the evaluation in ``folder`` from its tables (``board``: the leaderboard with
+    its ranking, ``pairs``: the paired tests, ``units``: every unit's KPIs, day "" when undated) and its
+    ``runs`` (:func:`evaluation_runs`); reads only meta.json, draws nothing."""
+    meta = results.read_meta(folder)
+    protocol = meta["protocol"]
+    styles = run_styles(results.read_meta(folder / meta["children"][0]))
     metrics = list(protocol["metrics"])
     rank = metrics[0]
     level = f"{protocol['bootstrap']['level']:.0%}"
@@ -149,10 +214,10 @@ def write_evaluation_report(folder: Path, name: str | None = None) -> Path:
         "schedule (means of ratios); the last column is mean saving / mean bound saving (a ratio of means).",
         "",
     ]
-    head, body = leaderboard_rows(board, protocol, styles)
+    head, body = leaderboard_rows(board, protocol, styles, runs)
     lines += ["| " + " | ".join(map(markdown_cell, head)) + " |", "|---|" + "---:|" * (len(head) - 1)]
     lines += ["| " + " | ".join(map(markdown_cell, row)) + " |" for row in body]
-    lines += ["", *_figure_lines(folder, board, protocol, styles, level)]
+    lines += ["", *_figure_lines(units, protocol, runs, level)]
     sel = pairs[pairs["kpi"] == rank]
     if len(sel):
         lines += [
@@ -179,21 +244,21 @@ def write_evaluation_report(folder: Path, name: str | None = None) -> Path:
     ]
     caption = f"rpbench evaluation {protocol['name']} version {protocol['version']}: mean [{level} interval]"
     latex = [[latex_escape(cell) for cell in row] for row in [head, *body]]
-    files.write_text(folder / layout.TABLE_TEX, booktabs(latex[0], latex[1:], caption=caption, what="the leaderboard"))
-    path = folder / layout.REPORT
-    files.write_text(path, "\n".join(lines))
-    return path
+    tex = booktabs(latex[0], latex[1:], caption=caption, what="the leaderboard")
+    return EvaluationReport("\n".join(lines), tex)
 
 
-def leaderboard_rows(board: pd.DataFrame, protocol: dict, styles) -> tuple[list[str], list[list[str]]]:
+def leaderboard_rows(
+    board: pd.DataFrame, protocol: dict, styles, runs: Sequence[str] | None = None
+) -> tuple[list[str], list[list[str]]]:
     """The leaderboard as printed: a header (rank, strategy, each metric, the ratio of means) and a row per run
     in the order of its recorded ranking (:mod:`rpbench.results.ranking`), each cell "mean [low, high]" as the
-    report formats the KPI; a run without rows comes last."""
+    report formats the KPI; a run of ``runs`` (default: the protocol's strategies) without rows comes last."""
     cols = [*board_metrics(list(protocol["metrics"])), RATIO_OF_MEANS]
     head = ["Rank", "Strategy"] + [KPI_LABELS.get(k, "Saving: ratio of means") for k in cols]
     first = board.drop_duplicates("run").set_index("run")
     order = [str(r) for r in first.sort_values("rank", kind="stable").index]
-    order += [r for r in protocol["strategies"] if r not in order]
+    order += [r for r in (protocol["strategies"] if runs is None else runs) if r not in order]
     cell = board.set_index(["run", "kpi"])
     body = []
     for run in order:
@@ -222,28 +287,44 @@ def _rank_cell(run: str, first: pd.DataFrame) -> str:
     return f"{group} {int((peers < first.loc[run, 'rank']).sum()) + 1}"
 
 
-def _figure_lines(folder: Path, board: pd.DataFrame, protocol: dict, styles, level: str) -> list[str]:
-    """Draw the leaderboard and the first metric per day; return the report lines embedding them."""
-    title = f"rpbench evaluation {protocol['name']} version {protocol['version']}"
-    metrics = board_metrics(list(protocol["metrics"]))
-    leaderboard_figure(board, metrics, folder / LEADERBOARD_PNG, f"{title}: mean and {level} interval", styles)
+def _figure_lines(units: pd.DataFrame, protocol: dict, runs: Sequence[str], level: str) -> list[str]:
+    """The report lines embedding the figures :func:`_draw_figures` draws (the per-day one only when the units
+    hold a value of the ranking metric)."""
     lines = [
         f"![leaderboard: mean and {level} interval]({LEADERBOARD_PNG})",
         "",
     ]
     rank = protocol["metrics"][0]
-    units = results.read_csv(folder / layout.UNITS)
-    units["day"] = units["day"].astype(object).fillna("").astype(str)  # undated units have no day
-    name = f"by_day_{rank}.png"
     label = KPI_LABELS.get(rank, rank)
-    drawn = seeds_by_day_figure(units, rank, protocol["strategies"], folder / name,
-                                f"{title}: {label}, mean over the seeds of each day (bars: their range)",
-                                styles)  # fmt: skip
-    if drawn is not None:
-        lines += [f"![{label} per day]({name})", ""]
+    if not _by_day_values(units, rank, runs).empty:
+        lines += [f"![{label} per day]({by_day_png(rank)})", ""]
     lines += [
         f"Every figure is also beside its PNG as SVG and PDF; the leaderboard is `{layout.TABLE_TEX}` (LaTeX, "
         f"booktabs) and `{layout.LEADERBOARD}` (raw values).",
         "",
     ]
     return lines
+
+
+def by_day_png(metric: str) -> str:
+    """The figure of ``metric`` per day (each run's mean over the day's seeds, their range as a bar)."""
+    return f"by_day_{metric}.png"
+
+
+def _by_day_values(units: pd.DataFrame, metric: str, runs: Sequence[str]) -> pd.DataFrame:
+    return units[(units["kpi"] == metric) & units["run"].isin(list(runs)) & units["value"].notna()]
+
+
+def _draw_figures(
+    folder: Path, board: pd.DataFrame, units: pd.DataFrame, protocol: dict, runs: Sequence[str], styles
+) -> None:
+    """The leaderboard (one panel per metric) and the first metric per day, each as PNG, SVG and PDF."""
+    title = f"rpbench evaluation {protocol['name']} version {protocol['version']}"
+    level = f"{protocol['bootstrap']['level']:.0%}"
+    metrics = board_metrics(list(protocol["metrics"]))
+    leaderboard_figure(board, metrics, folder / LEADERBOARD_PNG, f"{title}: mean and {level} interval", styles)
+    rank = protocol["metrics"][0]
+    label = KPI_LABELS.get(rank, rank)
+    seeds_by_day_figure(units, rank, runs, folder / by_day_png(rank),
+                        f"{title}: {label}, mean over the seeds of each day (bars: their range)",
+                        styles)  # fmt: skip

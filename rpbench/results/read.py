@@ -29,7 +29,15 @@ def load_kpis(folder: Path) -> pd.DataFrame:
     missing = {"run", "kpi", "value"} - set(tidy.columns)
     if missing:
         raise ResultsError(f"{str(folder / 'kpis.csv')!r} lacks column(s) {', '.join(sorted(missing))}")
-    wide = current_names(tidy).pivot(index="kpi", columns="run", values="value")
+    values = pd.to_numeric(tidy["value"], errors="coerce")
+    bad = values.isna() & tidy["value"].notna()
+    if bad.any():
+        row = tidy[bad].iloc[0]
+        raise ResultsError(
+            f"{str(folder / 'kpis.csv')!r}: run {row['run']!r}, KPI {row['kpi']!r} holds {row['value']!r}, "
+            "which is not a number"
+        )
+    wide = current_names(tidy.assign(value=values)).pivot(index="kpi", columns="run", values="value")
     order = [r for r in meta.get("strategies", []) if r in wide.columns] + [
         r for r in wide.columns if r not in meta.get("strategies", [])
     ]

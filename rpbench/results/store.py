@@ -100,10 +100,14 @@ def check_new_folder(out: str | os.PathLike | None, *, what: str = "--out") -> N
     before simulating, so a bad ``--out`` costs nothing."""
     target = Path.cwd() / DEFAULT_PARENT / "new" if out is None else Path(out)
     if out is not None and os.path.lexists(target):
-        dangling = " (a dangling symbolic link)" if target.is_symlink() and not target.exists() else ""
+        if target.is_symlink() and not target.exists():
+            there = "a dangling symbolic link"
+        elif target.is_dir():
+            there = "a folder"
+        else:
+            there = "a file"
         raise ResultsError(
-            f"results folder {str(target)!r} already exists{dangling}; rpbench never overwrites "
-            f"results, choose another {what}"
+            f"{what} {str(target)!r} already exists ({there}); rpbench never overwrites results, choose another {what}"
         )
     label = f"{what} {str(out)!r}" if out is not None else f"the default results folder ./{DEFAULT_PARENT}"
     _check_can_create_in(_nearest_existing(target.parent), label)

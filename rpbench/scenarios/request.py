@@ -109,6 +109,9 @@ def parse_dates(text: str, have: list[str]) -> list[str]:
             raise ParameterError(f"--dates {text!r}: no data for a day in that range (available: {_span(have)})")
         return dates
     dates = [parse_date(d.strip()).isoformat() for d in text.split(",") if d.strip()]
+    twice = sorted({d for d in dates if dates.count(d) > 1})
+    if twice:
+        raise ParameterError(f"--dates {text!r}: {', '.join(twice)} given twice; each day once")
     missing = [d for d in dates if d not in have]
     if missing or not dates:
         raise ParameterError(

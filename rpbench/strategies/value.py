@@ -68,6 +68,13 @@ class ValueOptions(PoolingOptions):
     )
     value_weight: float = option(1.0, "weight of the value change in each option's utility", range=Range(0.0, 1e3))
 
+    def __post_init__(self) -> None:
+        twice = sorted({s for s in self.train_seeds if self.train_seeds.count(s) > 1})
+        if twice:
+            raise ParameterError(
+                f"vf: train_seeds {list(self.train_seeds)} names seed {twice[0]} twice; each training run once"
+            )
+
     def settings(self) -> Settings:
         return Settings(
             cell_m=self.cell_m,

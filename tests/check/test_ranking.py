@@ -62,7 +62,7 @@ def test_flags_edited_to_online_neither_move_the_run_nor_pass(ranked_copy):
     write_evaluation_tables(ranked_copy)
     assert ranking(ranked_copy)["hindsight"] == ("clairvoyant", 2)
     found = violations(ranked_copy)
-    assert set(found) <= {"clairvoyant", "report"} and len(found["clairvoyant"]) == 2, found
+    assert set(found) <= {"clairvoyant", "report", "report-html"} and len(found["clairvoyant"]) == 2, found
 
     def by_flags(t):  # what a ranking trusting the flags alone would write
         t.loc[t["run"] == "hindsight", ["group", "rank"]] = ["online", 1]

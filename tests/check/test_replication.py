@@ -143,6 +143,22 @@ def test_deleted_records_of_an_authors_run_fail_by_name(tmp_path):
     assert "records/2017-05-01_mb_authors.csv.gz is missing" in message
 
 
+def test_records_without_a_column_or_a_text_kpi_fail_by_name(tmp_path):
+    """Records lacking a column the audit reads fail ``records``; a text value in runs.csv fails ``accounting``
+    (no traceback for either)."""
+    authors = {"date": "2017-05-01", "strategy": "mb", "engine": "authors", **row()}
+    folder = replication_folder(
+        tmp_path / "no-partner", [authors], {("2017-05-01", "mb", "authors"): records().drop(columns="partner")}
+    )
+    (found,) = check_tree(folder)
+    (message,) = found.runs[0].violations["records"]
+    assert found.status == "failed" and "lacks the column(s) partner" in message
+    text = {**authors, "total_saving_km": "many"}
+    (found,) = check_tree(replication_folder(tmp_path / "text", [text], {("2017-05-01", "mb", "authors"): records()}))
+    assert found.status == "failed"
+    assert any("runs.csv shows the text 'many'" in m for m in found.runs[0].violations["accounting"])
+
+
 @pytest.mark.parametrize("date", ["../../outside", "/tmp/outside", "2017-05-01/../../x"])
 def test_a_date_leading_outside_the_folder_fails_paths(tmp_path, date):
     """A date (or strategy, engine) read from runs.csv never names a file outside the folder."""

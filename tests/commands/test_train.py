@@ -122,7 +122,7 @@ def test_an_existing_out_folder_is_left_as_it_was(tmp_path, capsys):
     out.mkdir()
     (out / "keep.txt").write_text("mine")
     code, stdout, err = run_cli(capsys, "train", "vf", *TOY, "--out", out, "--no-progress")
-    assert_one_error(code, err, f"results folder {str(out)!r} already exists")
+    assert_one_error(code, err, f"--out {str(out)!r} already exists (a folder)")
     assert stdout == "" and err.count("\n") == 1
     assert [p.name for p in out.iterdir()] == ["keep.txt"] and (out / "keep.txt").read_text() == "mine"
     assert_nothing_written(tmp_path)

@@ -87,14 +87,14 @@ def test_out_deep_under_a_file_fails(capsys, tmp_path, a_file, no_simulation):
 
 def test_out_an_existing_file_is_never_overwritten(capsys, tmp_path, a_file, no_simulation):
     code, _, err = run_cli(capsys, "run", *TOY, *MB, "--out", a_file)
-    assert_one_error(code, err, "already exists; rpbench never overwrites results")
+    assert_one_error(code, err, "already exists (a file); rpbench never overwrites results")
     assert a_file.read_text() == "not a folder\n"
 
 
 def test_out_an_existing_folder_is_never_overwritten(capsys, toy_run, no_simulation):
     before = sorted(p.name for p in toy_run.iterdir())
     code, _, err = run_cli(capsys, "run", *TOY, *MB, "--out", toy_run)
-    assert_one_error(code, err, "already exists; rpbench never overwrites results")
+    assert_one_error(code, err, "already exists (a folder); rpbench never overwrites results")
     assert sorted(p.name for p in toy_run.iterdir()) == before
 
 

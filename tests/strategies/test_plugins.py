@@ -315,6 +315,14 @@ def test_entry_points_resolve_and_builtins_win(plugin_dir):
     assert options("myplug", "mine.x=2")["mine"].x == 2
 
 
+def test_rpbench_list_names_a_broken_plugin_and_lists_the_rest(plugin_dir, capsys):
+    declare_entry_points(plugin_dir, "mine_dist", "rpbench.strategies", {"broken": "nomod_xyz:Thing"})
+    assert main(["list"]) == 0
+    out = capsys.readouterr().out
+    assert "broken           BROKEN: strategy 'broken' (entry point broken = nomod_xyz:Thing" in out
+    assert "\n  mb " in out and "\n  bound " in out  # the others are still listed
+
+
 def test_one_name_declared_by_two_distributions_is_ambiguous(plugin_dir):
     declare_entry_points(plugin_dir, "first_dist", "rpbench.strategies", {"twice": "mymod:MyStrategy"})
     declare_entry_points(plugin_dir, "second_dist", "rpbench.strategies", {"twice": "mymod:Abstract"})

@@ -120,7 +120,7 @@ def test_held_out_rule_of_an_undated_generator(toy):
         check_held_out(toy, record)
     assert str(info.value) == (
         "vf: the value model was trained on this scenario (seed 0 is one of its training seeds); test on held-out "
-        "days or seeds, or train on others (--opt vf.train_dates=..., vf.train_seeds=...)"
+        "days, seeds or hours, or train on others (--opt vf.train_dates=..., vf.train_seeds=..., vf.train_hours=...)"
     )
     assert held_out_problem(build_scenario("toy", sample=SAMPLE, seed=1), record) is None
     assert held_out_problem(build_scenario("toy", sample=0.5, seed=0), record) is None
