@@ -20,7 +20,7 @@ import sys
 import threading
 from collections.abc import Iterator
 
-from rpbench.exceptions import RpbenchError
+from rpbench.exceptions import RpbenchError, naming_out_as
 from rpbench.version import __version__
 
 #: Subcommand modules, in the order ``rpbench --help`` lists them.
@@ -103,7 +103,7 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help(sys.stderr)
         return 2
     try:
-        with sigterm_raises():
+        with sigterm_raises(), naming_out_as("--out"):
             return int(args.handler(args) or 0)
     except RpbenchError as exc:
         print(f"rpbench: error: {exc}", file=sys.stderr)

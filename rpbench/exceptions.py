@@ -9,6 +9,11 @@ is wrong, the offending value, and what to do.
 
 from __future__ import annotations
 
+import contextlib
+import os
+from collections.abc import Iterator
+from contextvars import ContextVar
+
 
 class RpbenchError(Exception):
     """Base class of every user-facing rpbench error."""
@@ -83,3 +88,29 @@ def one_line(exc: BaseException) -> str:
 class DispatcherError(RpbenchError, RuntimeError):
     """A dispatcher outside rpbench failed: a program of the round protocol crashed, hung past its time limit
     or answered garbage, or an agent's answer is not a decision of the round."""
+
+
+#: How the caller names the results folder of a harness call: ``out`` in Python; the command line sets
+#: ``--out`` (:func:`naming_out_as`), so that a message names the parameter its reader typed.
+_OUT_PARAMETER: ContextVar[str] = ContextVar("rpbench_out_parameter", default="out")
+
+
+@contextlib.contextmanager
+def naming_out_as(name: str) -> Iterator[None]:
+    """Within the block, messages about the results folder call its parameter ``name`` (the CLI: ``--out``)."""
+    token = _OUT_PARAMETER.set(name)
+    try:
+        yield
+    finally:
+        _OUT_PARAMETER.reset(token)
+
+
+def out_parameter() -> str:
+    """The results folder's parameter as the caller names it: ``out`` (Python) or ``--out`` (the CLI)."""
+    return _OUT_PARAMETER.get()
+
+
+def out_named(value: str | os.PathLike) -> str:
+    """The results folder's parameter with its value, as the caller wrote it: ``out='x'`` or ``--out 'x'``."""
+    name = out_parameter()
+    return f"{name} {str(value)!r}" if name.startswith("-") else f"{name}={str(value)!r}"

@@ -37,6 +37,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_decision_budget_arg(p)
     add_data_arg(p)
     add_offline_arg(p)
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(handler=_run)
 
 
@@ -59,6 +60,7 @@ def _run(args: argparse.Namespace) -> int:
         scheduler=args.scheduler,
         command=command_line(),
         decision_budget_s=budget,
+        progress=False if args.no_progress else None,
     )
     folder, ran = outcome.folder, sum(unit.fresh for unit in outcome.children)
     note_outcome(outcome)

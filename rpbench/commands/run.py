@@ -118,7 +118,14 @@ def _run_many_days(args: argparse.Namespace, spec: RunSpec) -> int:
     check_unique(f"--dates {args.dates!r}", dates)
     name = spec.request.name
     note(f"running {len(dates)} days of {name} ({dates[0]} .. {dates[-1]}) x {', '.join(spec.names)}")
-    outcome = run_days(spec, dates, args.out, workers=args.workers, scheduler=args.scheduler)
+    outcome = run_days(
+        spec,
+        dates,
+        args.out,
+        workers=args.workers,
+        scheduler=args.scheduler,
+        progress=False if args.no_progress else None,
+    )
     folder, mean = outcome.folder, outcome.table
     unproven = note_outcome(outcome)
     if args.json:

@@ -45,6 +45,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", default=None, help="sweep folder to create")
     add_parallel_args(p)
     p.add_argument("--json", action="store_true", help="print the sweep table as one JSON object")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(handler=_run)
 
 
@@ -104,7 +105,15 @@ def _run(args: argparse.Namespace) -> int:
     for point in points:  # a run option's values and a --param set by the sweep too are refused before any run
         point.spec_of(spec, spec.request)
     note(f"sweep {sweep.name}: {len(points)} points x {', '.join(spec.names)} on {spec.request.name}")
-    outcome = run_sweep(sweep, points, spec, args.out, workers=args.workers, scheduler=args.scheduler)
+    outcome = run_sweep(
+        sweep,
+        points,
+        spec,
+        args.out,
+        workers=args.workers,
+        scheduler=args.scheduler,
+        progress=False if args.no_progress else None,
+    )
     folder, table = outcome.folder, outcome.table
     unproven = note_outcome(outcome)
     if args.json:

@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from rpbench import results
-from rpbench.exceptions import ParameterError, ResultsError
+from rpbench.exceptions import ParameterError, ResultsError, out_named
 from rpbench.harness.comparison import ComparisonTask, checked_presets, run_task
 from rpbench.harness.outcome import Outcome
 from rpbench.harness.parallel import run_tasks
@@ -47,11 +47,13 @@ def run_evaluation(
     scheduler: str | None = None,
     command: str | None = None,
     decision_budget_s: float | None = None,
+    progress: bool | None = None,
 ) -> Outcome:
     """Run (or resume) ``protocol`` into ``out``; returns the folder's outcome (its table: the leaderboard; its
     children: the units, those found already written with ``fresh`` false).
 
-    ``decision_budget_s``: flag the rounds slower than it in every unit (the simulation is unchanged)."""
+    ``decision_budget_s``: flag the rounds slower than it in every unit (the simulation is unchanged);
+    ``progress``: a bar over the units (default: when stderr is a terminal)."""
     request = ScenarioRequest(protocol.scenario, sample=protocol.sample, data_dir=data_dir).resolved()
     spec = RunSpec.of(
         request, list(protocol.strategies), preset=protocol.preset, oracle_preset=protocol.oracle_preset,
@@ -82,7 +84,9 @@ def run_evaluation(
     ]
     todo = [task for task in tasks if not (Path(task.out) / layout.KPIS).is_file()]
     try:
-        ran = run_tasks(run_task, todo, workers=workers, scheduler=scheduler, label=f"evaluate {protocol.name}")
+        ran = run_tasks(
+            run_task, todo, workers=workers, scheduler=scheduler, label=f"evaluate {protocol.name}", progress=progress
+        )
     except BaseException:
         # Interrupted or failed: the units written stay (a rerun resumes); those the stopped workers were
         # writing are removed, so the folder holds only whole units.
@@ -98,21 +102,21 @@ def run_evaluation(
 
 def _check_resumable(folder: Path, record: dict, decision_budget_s: float | None) -> None:
     if not folder.is_dir() or not (folder / layout.META).is_file():
-        raise ParameterError(f"--out {str(folder)!r} exists and is not an evaluation folder to resume")
+        raise ParameterError(f"{out_named(folder)} exists and is not an evaluation folder to resume")
     meta = results.read_meta(folder)
     if meta.get("kind") != "evaluate" or not isinstance(meta.get("protocol"), dict):
-        raise ParameterError(f"--out {str(folder)!r} exists and is not an evaluation folder to resume")
+        raise ParameterError(f"{out_named(folder)} exists and is not an evaluation folder to resume")
     theirs = meta["protocol"]
     if theirs.get("digest") != record["digest"]:
         raise ParameterError(
-            f"--out {str(folder)!r} holds protocol {theirs.get('name')!r} version {theirs.get('version')} "
+            f"{out_named(folder)} holds protocol {theirs.get('name')!r} version {theirs.get('version')} "
             f"(digest {theirs.get('digest')}), not {record['name']!r} version {record['version']} "
             f"(digest {record['digest']}): choose another folder"
         )
     theirs_budget = meta.get("decision_budget_s")
     if theirs_budget != decision_budget_s:
         raise ParameterError(
-            f"--out {str(folder)!r} was evaluated with {_budget_text(theirs_budget)}, not "
+            f"{out_named(folder)} was evaluated with {_budget_text(theirs_budget)}, not "
             f"{_budget_text(decision_budget_s)}: resume it with the same --decision-budget, or choose another folder"
         )
 

@@ -33,20 +33,27 @@ from rpbench.spec import RunSpec
 
 
 def run_days(
-    spec: RunSpec, dates: list[str], out: str | None = None, *, workers: int | None = None, scheduler: str | None = None
+    spec: RunSpec,
+    dates: list[str],
+    out: str | None = None,
+    *,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    progress: bool | None = None,
 ) -> Outcome:
     """One comparison per date of ``spec``'s scenario, in parallel, then the per-day and mean tables; returns
     the folder's outcome (its table: each KPI's mean over the days; its children: the days).
 
     The data folder is resolved once, here (:meth:`~rpbench.scenarios.ScenarioRequest.resolved`): worker
-    processes look for none of their own.
+    processes look for none of their own.  ``progress``: a bar over the days (default: when stderr is a
+    terminal).
     """
     check_new_folder(out)
     request = spec.request.resolved()
     default = f"{results.timestamp()}_{request.name}_{dates[0]}..{dates[-1]}_{spec.preset}"
     with results.new_results_folder(out, default) as (tmp, final):
         tasks = [ComparisonTask(spec.for_request(request.replace(date=d)), str(tmp / d)) for d in dates]
-        days = run_tasks(run_task, tasks, workers=workers, scheduler=scheduler, label="days")
+        days = run_tasks(run_task, tasks, workers=workers, scheduler=scheduler, label="days", progress=progress)
         write_parent_meta(
             tmp,
             "multi-day",

@@ -208,16 +208,20 @@ def run_sweep(
     *,
     workers: int | None = None,
     scheduler: str | None = None,
+    progress: bool | None = None,
 ) -> Outcome:
     """One comparison of ``spec`` per point (its request with the point's overrides), in parallel, then the
     sweep table and report; returns the folder's outcome (its table: the sweep table, tidy point, run, kpi,
-    value; its children: the points).  The data folder is resolved once, here, for every worker."""
+    value; its children: the points).  The data folder is resolved once, here, for every worker.  ``progress``: a
+    bar over the points (default: when stderr is a terminal)."""
     check_new_folder(out)
     request = spec.request.resolved()
     default = f"{results.timestamp()}_sweep-{sweep.name}_{request.name}_{spec.preset}"
     with results.new_results_folder(out, default) as (tmp, final):
         tasks = [ComparisonTask(p.spec_of(spec, request), str(tmp / p.label)) for p in points]
-        done = run_tasks(run_task, tasks, workers=workers, scheduler=scheduler, label=f"sweep {sweep.name}")
+        done = run_tasks(
+            run_task, tasks, workers=workers, scheduler=scheduler, label=f"sweep {sweep.name}", progress=progress
+        )
         write_parent_meta(
             tmp,
             "sweep",

@@ -40,7 +40,7 @@ import pandas as pd
 
 from rpbench import files
 from rpbench.data.road import NetworkTables
-from rpbench.exceptions import ResultsError, RpbenchError, one_line
+from rpbench.exceptions import ResultsError, RpbenchError, one_line, out_named, out_parameter
 from rpbench.network import RoadNetwork
 from rpbench.paths import source_root
 from rpbench.version import __version__
@@ -57,6 +57,13 @@ STALE_PARTIAL_S = 60 * 60
 #: ``.NAME.partial-PID``, or ``.NAME.partial-PID-XXXX`` (a staging folder made with tempfile.mkdtemp, such as
 #: rpbench publish's).
 _PARTIAL = re.compile(r"^\.(?P<name>.+)\.partial-(?P<pid>\d+)(?:-\w+)?$")
+
+
+def _another_out() -> str:
+    name = out_parameter()
+    if name.startswith("-"):
+        return f"choose another {name}"
+    return f"pass another {name}= (or none: a new folder under ./{DEFAULT_PARENT})"
 
 
 @contextlib.contextmanager
@@ -93,11 +100,12 @@ def new_results_folder(out: str | os.PathLike | None, default_name: str) -> Iter
         raise
 
 
-def check_new_folder(out: str | os.PathLike | None, *, what: str = "--out") -> None:
+def check_new_folder(out: str | os.PathLike | None, *, what: str | None = None) -> None:
     """Raise one :class:`ResultsError` line unless a new results folder can be created at ``out``
     (``None``: the default place, ``./rpbench-runs/``): nothing may exist there (not even a dangling link)
     and its nearest existing parent must be a folder we can create folders in.  Commands call this
-    before simulating, so a bad ``--out`` costs nothing."""
+    before simulating, so a bad ``--out`` costs nothing.  ``what`` names the parameter in the message
+    (default: ``out=`` in Python, ``--out`` under the command line)."""
     target = Path.cwd() / DEFAULT_PARENT / "new" if out is None else Path(out)
     if out is not None and os.path.lexists(target):
         if target.is_symlink() and not target.exists():
@@ -106,10 +114,15 @@ def check_new_folder(out: str | os.PathLike | None, *, what: str = "--out") -> N
             there = "a folder"
         else:
             there = "a file"
-        raise ResultsError(
-            f"{what} {str(target)!r} already exists ({there}); rpbench never overwrites results, choose another {what}"
-        )
-    label = f"{what} {str(out)!r}" if out is not None else f"the default results folder ./{DEFAULT_PARENT}"
+        if what is None:
+            named, another = out_named(target), _another_out()
+        else:
+            named, another = f"{what} {str(target)!r}", f"choose another {what}"
+        raise ResultsError(f"{named} already exists ({there}); rpbench never overwrites results, {another}")
+    if out is None:
+        label = f"the default results folder ./{DEFAULT_PARENT}"
+    else:
+        label = out_named(out) if what is None else f"{what} {str(out)!r}"
     _check_can_create_in(_nearest_existing(target.parent), label)
 
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 import functools
 import importlib.util
 import os
+import re
 import subprocess
 import sys
 import threading
@@ -153,6 +154,10 @@ def test_the_api_reference_shows_runspec_with_its_signature(visit):
         "rpbench.strategies.candidates.NO_WAIT_UTILITY_M",
     ):
         assert page.locator(f'[id="{anchor}"]').count() == 1, anchor
+    # the docstrings' Sphinx cross-references read as code, not as ":class:" text
+    assert not re.search(r":(class|func|meth|mod|attr|data|exc):", text), re.search(
+        r".{40}:(class|func|meth):.{40}", text
+    )
 
 
 def test_the_search_finds_a_page(visit, served):
