@@ -21,7 +21,7 @@ import numpy as np
 from rpbench.exceptions import LookaheadError, ParameterError
 from rpbench.predict.config import PredictConfig
 from rpbench.predict.prediction import Prediction, cached_prediction, predict
-from rpbench.predict.rates import OdRates, month_rates, order_rates
+from rpbench.predict.rates import OdRates, month_rates, order_rates, rate_basis
 from rpbench.predict.zones import zone_representatives
 from rpbench.scenarios.base import LOOKAHEAD_HINT, Demand, OnlineView, Scenario
 from rpbench.units import HOUR_S
@@ -154,7 +154,7 @@ def _per_hour(net, request_s, origin, destination, hours: int, period_s: float, 
             origin[hour_of == h],
             destination[hour_of == h],
             period_s,
-            source=f"{what} of hour {h} (count/{period_s:g} s)",
+            source=f"{what}, hour {h:02d}:00 ({rate_basis(period_s)})",
         )
         for h in range(hours)
     ]

@@ -154,6 +154,12 @@ def month_rates(network: RoadNetwork, data_dir: Path) -> OdRates:
     return rates_from_frame(network, read_month_od_rates(data_dir), source="month_5_OD (21-day mean, 08:00-09:00)")
 
 
+def rate_basis(period_s: float) -> str:
+    """How a rate was counted, for a reader: "orders per hour" or "orders per hour, mean of 10 hours"."""
+    hours = period_s / HOUR_S
+    return "orders per hour" if hours == 1 else f"orders per hour, mean of {hours:g} hours"
+
+
 def order_rates(network: RoadNetwork, origin, destination, period_s: float, *, source: str) -> OdRates:
     """λ_w = (orders of OD w) / ``period_s`` from arrays of order origins and destinations (node indices)."""
     if not np.isfinite(period_s) or period_s <= 0:
@@ -169,7 +175,7 @@ def peak_order_rates(network: RoadNetwork, data_dir: Path, date: str) -> OdRates
     frame = read_peak_orders(data_dir, date)
     origin = network.index_of(frame["origin_id"], what=f"origin node id in the {date} orders")
     destination = network.index_of(frame["destination_id"], what=f"destination node id in the {date} orders")
-    return order_rates(network, origin, destination, HOUR_S, source=f"{date} 08:00-09:00 orders (count/3600 s)")
+    return order_rates(network, origin, destination, HOUR_S, source=f"{date} 08:00-09:00 orders ({rate_basis(HOUR_S)})")
 
 
 def day_table_rates(network: RoadNetwork, data_dir: Path) -> OdRates:
@@ -190,7 +196,7 @@ def day_table_rates(network: RoadNetwork, data_dir: Path) -> OdRates:
             "per-day OD table: shares are not whole multiples of the smallest share; cannot recover order counts"
         )
     frame = frame.assign(rate_per_s=np.rint(count) / HOUR_S)
-    return rates_from_frame(network, frame, source="OD_2017-05-01_0800-0900 (count/3600 s)")
+    return rates_from_frame(network, frame, source=f"OD_2017-05-01_0800-0900 ({rate_basis(HOUR_S)})")
 
 
 def scenario_rates(scenario) -> OdRates:
@@ -201,7 +207,7 @@ def scenario_rates(scenario) -> OdRates:
         o.origin,
         o.destination,
         scenario.horizon_s,
-        source=f"{scenario.name} orders (count/{scenario.horizon_s:g} s)",
+        source=f"{scenario.name} orders ({rate_basis(scenario.horizon_s)})",
     )
 
 
