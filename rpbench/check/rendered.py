@@ -24,8 +24,9 @@ _HTML_CELL = re.compile(r"<t[hd][^>]*>(.*?)</t[hd]>", re.S)
 _HTML_ITEM = re.compile(r"<li[^>]*>(.*?)</li>", re.S)
 _TAG = re.compile(r"<[^>]+>")
 _PAGE_DATA = re.compile(r'<script type="application/json" id="rpbench-data">(.*?)</script>', re.S)
-#: The headings after which a page shows its own links and figures, no longer its report.md.
-PAGE_OWN_HEADINGS = ("Folders inside", "Leaderboard (interactive)")
+#: The headings after which a page shows its own links and figures, no longer its report.md (the figures it
+#: draws in place of report.md's PNGs are no tables nor lists; the last heading is an older rpbench's).
+PAGE_OWN_HEADINGS = ("Folders inside", "Figures (interactive)", "Leaderboard (interactive)")
 
 Table = list[list[str]]
 

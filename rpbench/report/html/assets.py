@@ -2,9 +2,10 @@
 script and style sheet.
 
 Plotly's Python wheel ships one bundle, ``plotly.min.js`` (4.8 MB).  A page embeds it gzip-compressed and
-base64-encoded (2.0 MB) and the browser inflates it with its built-in ``DecompressionStream``: the page
-stays one self-contained file without a network, at under half the size.  The compressed text is
-deterministic (no time stamp in the gzip header), so the same folder gives the same page byte for byte.
+base64-encoded (2.0 MB) and ``page.js`` inflates it synchronously, so that the figures are drawn before the
+page's load event: the page stays one self-contained file without a network, at under half the size.  The
+compressed text is deterministic (no time stamp in the gzip header), so the same folder gives the same page
+byte for byte.
 """
 
 from __future__ import annotations

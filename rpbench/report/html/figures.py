@@ -7,6 +7,8 @@ group, so a click on a legend entry hides or shows that run in every panel.
 from __future__ import annotations
 
 import html
+import math
+import textwrap
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -64,77 +66,146 @@ def _subplots(rows: int, cols: int, titles: Sequence[str], **kw: Any) -> Any:
     return make_subplots(rows=rows, cols=cols, subplot_titles=list(titles), **kw)
 
 
+#: The competitive ratio's panel in the page: what its marks are (the PNG's title names them for matplotlib).
+RATIO_PANEL_TITLE = "Competitive ratio<br>bar: saving / U; ◆: saving / LB"
+#: Tick labels of the bar panels: this size, wrapped at this many characters, turned by this angle; the rows
+#: of panels are set apart by the height the turned labels take (:func:`tick_extent_px`), so that a row's
+#: labels never reach the titles of the row below.
+TICK_FONT_PX, TICK_WRAP, TICK_ANGLE = 11, 13, -45
+BAR_TEXT_PX = 10
+PANEL_PX = 250
+
+
+def tick_text(label: str) -> str:
+    """A run's label as a tick label: escaped, wrapped onto lines of at most :data:`TICK_WRAP` characters."""
+    return "<br>".join(plotly_text(line) for line in textwrap.wrap(label, TICK_WRAP, break_long_words=False))
+
+
+def tick_extent_px(labels: Sequence[str], angle: float = TICK_ANGLE, font_px: float = TICK_FONT_PX) -> float:
+    """A generous estimate of the height below an axis that its tick labels (``<br>``-separated lines)
+    take when turned by ``angle`` degrees: the longest line's run up, plus the lines' stacked height."""
+    lines = [line for label in labels for line in html.unescape(label).split("<br>")] or [""]
+    longest = max(len(line) for line in lines) * 0.62 * font_px
+    rows = max(label.count("<br>") + 1 for label in labels) if labels else 1
+    turn = math.radians(abs(angle))
+    return longest * math.sin(turn) + rows * 1.25 * font_px * math.cos(turn) + 8
+
+
 def kpi_bars(table: pd.DataFrame, text: Callable[[str, float], str], styles: Styles | None = None) -> Any:
-    """The headline KPIs (:data:`~rpbench.report.plots.KPI_PANELS`), one bar per run, value on hover; the
-    competitive ratio as its interval: a bar up to saving / U, an error bar up to saving / LB."""
+    """The headline KPIs (:data:`~rpbench.report.plots.KPI_PANELS`), one bar per run with its value; the
+    competitive ratio as its interval: a bar up to saving / U, a line from it up to a diamond at saving / LB."""
     import plotly.graph_objects as go
 
     ends = interval_ends(table)
     panels = [
-        (k, name)
+        (k, RATIO_PANEL_TITLE if k == RATIO_INTERVAL else name)
         for k, name in KPI_PANELS
         if (bool(ends[0]) if k == RATIO_INTERVAL else k in table.index and table.loc[k].notna().any())
     ]
     runs = [str(r) for r in table.columns]
     colors = css_colors(runs, styles)
+    labels = {r: plotly_text(run_label(r, styles)) for r in runs}
+    ticks = {r: tick_text(run_label(r, styles)) for r in runs}
     cols = 3
     rows = max(1, -(-len(panels) // cols))
-    fig = _subplots(rows, cols, [name for _, name in panels], vertical_spacing=0.16, horizontal_spacing=0.08)
+    below = tick_extent_px(list(ticks.values()))
+    title_px = 18 * max(name.count("<br>") + 1 for _, name in panels) if panels else 18
+    gap = below + title_px + 20  # px between rows: the turned tick labels, then the next row's titles
+    legend_px = 60
+    top, bottom = title_px + 20, below + legend_px
+    area = rows * PANEL_PX + (rows - 1) * gap
+    fig = _subplots(rows, cols, [name for _, name in panels], vertical_spacing=gap / area if rows > 1 else 0.1,
+                    horizontal_spacing=0.08)  # fmt: skip
     shown: set[str] = set()
     for i, (kpi, _) in enumerate(panels):
         r, c = divmod(i, cols)
+        name = plotly_text(KPI_LABELS.get(kpi, kpi))
         for run in runs:
-            bar = _ratio_bar(run, ends, text) if kpi == RATIO_INTERVAL else _kpi_bar(table, kpi, run, text)
-            if bar is None:
-                continue
-            label = plotly_text(run_label(run, styles))
-            fig.add_trace(
-                go.Bar(
-                    x=[label],
-                    name=label,
-                    legendgroup=run,
-                    showlegend=run not in shown,
-                    marker_color=colors[run],
-                    textposition="outside",
-                    cliponaxis=False,
-                    hovertemplate=f"{label}<br>{KPI_LABELS.get(kpi, kpi)}: %{{text}}<extra></extra>",
-                    **bar,
-                ),
-                row=r + 1,
-                col=c + 1,
-            )
-            shown.add(run)
-        fig.update_yaxes(title_text=axis_label(kpi), row=r + 1, col=c + 1)
-    fig.update_xaxes(tickangle=-35)
-    return _layout(fig, None, 340 * rows + 80)
+            traces = _ratio_traces(run, ends, text) if kpi == RATIO_INTERVAL else _kpi_bar(table, kpi, run, text)
+            for kind, trace in traces:
+                hover = trace.pop("hover", "%{text}")
+                if kind == "bar":
+                    trace["marker_color"] = colors[run]
+                fig.add_trace(
+                    (go.Bar if kind == "bar" else go.Scatter)(
+                        x=[labels[run]],
+                        name=labels[run],
+                        legendgroup=run,
+                        showlegend=run not in shown,
+                        hovertemplate=f"{labels[run]}<br>{name}: {hover}<extra></extra>",
+                        **trace,
+                    ),
+                    row=r + 1,
+                    col=c + 1,
+                )
+                shown.add(run)
+        if kpi == RATIO_INTERVAL:
+            top_value = float(np.nanmax(np.concatenate([ends[1], ends[2], [0.0]])))
+            fig.update_yaxes(range=[0, 1.35 * (top_value or 1.0)], row=r + 1, col=c + 1)  # room for the values
+        fig.update_yaxes(title_text=axis_label(kpi), rangemode="tozero", row=r + 1, col=c + 1)
+    fig.update_xaxes(tickangle=TICK_ANGLE, tickfont={"size": TICK_FONT_PX}, tickvals=[labels[r] for r in runs],
+                     ticktext=[ticks[r] for r in runs])  # fmt: skip
+    fig.update_layout(uniformtext={"minsize": BAR_TEXT_PX, "mode": "show"}, bargap=0.25)
+    _layout(fig, None, round(top + area + bottom))
+    fig.update_layout(
+        margin={"t": round(top), "b": round(bottom)},
+        legend={"y": -below / area, "yanchor": "top"},  # below the last row's tick labels
+    )
+    return fig
 
 
-def _kpi_bar(table: pd.DataFrame, kpi: str, run: str, text: Callable[[str, float], str]) -> dict | None:
+def _kpi_bar(table: pd.DataFrame, kpi: str, run: str, text: Callable[[str, float], str]) -> list[tuple[str, dict]]:
+    """A run's bar with its value written above (kind, trace properties); none without a value."""
     value = table.loc[kpi, run]
-    return None if pd.isna(value) else {"y": [float(value)], "text": [text(kpi, float(value))]}
+    if pd.isna(value):
+        return []
+    bar = {"y": [float(value)], "text": [text(kpi, float(value))], "textposition": "outside", "cliponaxis": False}
+    return [("bar", {**bar, "textfont": {"size": BAR_TEXT_PX + 1}})]
 
 
-def _ratio_bar(
+def _ratio_traces(
     run: str, ends: tuple[list[str], np.ndarray, np.ndarray], text: Callable[[str, float], str]
-) -> dict | None:
-    """A run's competitive ratio: the bar up to saving / U (0 without a bound), the error bar up to saving / LB."""
+) -> list[tuple[str, dict]]:
+    """A run's competitive ratio: the bar up to saving / U (none without a bound), a black diamond at
+    saving / LB joined to the bar's top by a line, both ends written above the diamond (saving / LB first)."""
     runs, low, high = ends
     if run not in runs:
-        return None
+        return []
     k = runs.index(run)
     lo, hi = float(low[k]), float(high[k])
-    base = 0.0 if np.isnan(lo) else lo
     shown = [text(RATIO_ENDS[0], lo) if not np.isnan(lo) else "/", text(RATIO_ENDS[1], hi) if not np.isnan(hi) else "/"]
-    return {
-        "y": [base],
-        "text": [f"[{shown[0]}, {shown[1]}]"],
-        "error_y": {
-            "type": "data",
-            "symmetric": False,
-            "array": [0.0 if np.isnan(hi) else hi - base],
-            "arrayminus": [0.0],
-        },
-    }
+    both = f"[{shown[0]}, {shown[1]}]"
+    out = []
+    if not np.isnan(lo):
+        out.append(("bar", {"y": [lo], "text": [both], "textposition": "none"}))
+    if not np.isnan(hi):
+        base = 0.0 if np.isnan(lo) else lo
+        out.append(
+            (
+                "scatter",
+                {
+                    "y": [hi],
+                    "text": [f"{shown[1]}<br>{shown[0]}"],
+                    "customdata": [both],
+                    "mode": "markers+text",
+                    "textposition": "top center",
+                    "textfont": {"size": BAR_TEXT_PX},
+                    "marker": {"symbol": "diamond", "color": "black", "size": 8},
+                    "error_y": {
+                        "type": "data",
+                        "symmetric": False,
+                        "array": [0.0],
+                        "arrayminus": [hi - base],
+                        "width": 0,
+                        "thickness": 1.2,
+                        "color": "black",
+                    },
+                    "cliponaxis": False,
+                    "hover": "%{customdata}",
+                },
+            )
+        )
+    return out
 
 
 def timeline(
@@ -444,6 +515,57 @@ def bench_times(table: pd.DataFrame) -> Any:
     return _layout(fig, None, 480)
 
 
+def seeds_by_day(
+    units: pd.DataFrame, kpis: Sequence[str], runs: Sequence[str], styles: Styles | None = None
+) -> Any | None:
+    """An evaluation's metrics per day, one chosen in a menu (``units.csv`` layout: day, seed, run, kpi, value):
+    each run's mean over the day's seeds as a marker, the seeds' range as an error bar, the runs side by side
+    within a day; None when the units hold none of ``kpis`` for ``runs``."""
+    import plotly.graph_objects as go
+
+    sel = units[units["kpi"].isin(list(kpis)) & units["run"].isin(list(runs)) & units["value"].notna()]
+    kpis = [k for k in kpis if (sel["kpi"] == k).any()]
+    if not kpis:
+        return None
+    stats = sel.groupby(["kpi", "run", "day"], sort=False)["value"].agg(["mean", "min", "max", "count"]).reset_index()
+    colors = css_colors([r for r in runs if (stats["run"] == r).any()], styles)
+    fig = go.Figure()
+    owner: list[str] = []
+    for k in kpis:
+        for run in runs:
+            g = stats[(stats["kpi"] == k) & (stats["run"] == run)].sort_values("day")
+            if g.empty:
+                continue
+            label = plotly_text(run_label(run, styles))
+            mean = g["mean"].to_numpy(dtype=float)
+            fig.add_trace(
+                go.Scatter(
+                    x=[d or "(undated)" for d in g["day"].astype(str)],
+                    y=mean,
+                    mode="markers",
+                    name=label,
+                    legendgroup=run,
+                    visible=k == kpis[0],
+                    marker={"color": colors[run], "size": 7},
+                    error_y={
+                        "type": "data",
+                        "symmetric": False,
+                        "array": g["max"].to_numpy(dtype=float) - mean,
+                        "arrayminus": mean - g["min"].to_numpy(dtype=float),
+                        "color": colors[run],
+                    },
+                    customdata=np.stack([g["min"], g["max"], g["count"]], axis=1),
+                    hovertemplate=f"{label}, %{{x}}: mean %{{y:.4~g}} over %{{customdata[2]}} seeds, "
+                    "range [%{customdata[0]:.4~g}, %{customdata[1]:.4~g}]<extra></extra>",
+                )
+            )
+            owner.append(k)
+    _kpi_menu(fig, kpis, owner)
+    fig.update_xaxes(title_text="day", type="category")  # each trace lists its days in order
+    fig.update_layout(scattermode="group", scattergap=0.5)  # the runs of a day side by side, not on top
+    return _layout(fig, None, 440)
+
+
 def leaderboard_bars(board: pd.DataFrame, metrics: Sequence[str], styles: Styles | None = None) -> Any:
     """Each run's mean of a metric (chosen in the menu) with its bootstrap interval as error bars; the competitive
     ratio's two ends as one entry: bars at the mean of saving / U, diamonds at the mean of saving / LB."""
@@ -481,6 +603,11 @@ def leaderboard_bars(board: pd.DataFrame, metrics: Sequence[str], styles: Styles
             )
             owner.append(k)
     _kpi_menu(fig, metrics, owner)
+    names = list(dict.fromkeys(str(r) for r in board["run"]))  # long names wrap instead of running together
+    fig.update_xaxes(
+        tickvals=[plotly_text(run_label(r, styles)) for r in names],
+        ticktext=[tick_text(run_label(r, styles)) for r in names],
+    )
     fig.update_layout(showlegend=False)
     if RATIO_INTERVAL in metrics:
         fig.add_annotation(

@@ -20,6 +20,8 @@ from rpbench import results
 from rpbench.exceptions import ResultsError
 from rpbench.report.html.figures import FONT, css_colors
 from rpbench.results import layout
+from rpbench.results.ranking import run_groups
+from rpbench.results.read import load_kpis
 from rpbench.results.runs import run_label, run_styles
 
 #: At most this many items of one layer are drawn at once (a window with more draws one in k).
@@ -64,16 +66,18 @@ def map_payload(folder: Path) -> dict[str, Any] | str:
     tail, head = np.asarray(network.arc_tail), np.asarray(network.arc_head)
     edges = np.unique(np.stack([np.minimum(tail, head), np.maximum(tail, head)], axis=1), axis=0)
     edges = edges[edges[:, 0] != edges[:, 1]]
-    busiest = max(range(len(runs)), key=lambda i: len(runs[i]["pooled"]["t"]))  # shown first
+    first = opening_run(folder, meta, runs)
+    end_s = max(horizon, window)
     return {
         "nodes": {"lon": np.round(lon, 5).tolist(), "lat": np.round(lat, 5).tolist()},
         "edges": edges.ravel().tolist(),
         "runs": runs,
-        "first_run": busiest,
+        "first_run": first,
+        "first_window": opening_window(runs[first], end_s, window),
         "offline": [run_label(r, run_styles(meta)) for r in order if r not in simulated],
         "period": {
             "begin_s": 0.0,
-            "end_s": max(horizon, window),
+            "end_s": end_s,
             "window_s": window,
             "start_clock_s": (clock - clock.normalize()).total_seconds() if clock is not None else 0.0,
             "seconds": horizon <= LONG_SCENARIO_S,
@@ -82,6 +86,36 @@ def map_payload(folder: Path) -> dict[str, Any] | str:
         "layer_names": LAYER_NAMES,
         "layout": _layout(lat, _extent(lon, lat, orders)),
     }
+
+
+def opening_run(folder: Path, meta: dict[str, Any], runs: list[dict[str, Any]]) -> int:
+    """The run the map opens on: of the online runs (simulated, not clairvoyant: what a platform could
+    deploy), the one saving the most distance; without a saving to compare, the run with the most pooled
+    pairs.  A clairvoyant run (Hindsight) pools nearly everyone and would open on a web of lines."""
+    names = [r["name"] for r in runs]
+    groups = run_groups([meta.get("runs") or {}], names)
+    online = [i for i, n in enumerate(names) if groups[n] == "online"] or list(range(len(runs)))
+    try:
+        saving = load_kpis(folder).loc["total_saving_km"]
+    except (ResultsError, KeyError, ValueError, OSError):
+        saving = pd.Series(dtype=float)
+
+    def key(i: int) -> tuple[float, int]:
+        value = float(saving.get(names[i], np.nan))
+        return (-np.inf if np.isnan(value) else value), len(runs[i]["pooled"]["t"])
+
+    return max(online, key=key)
+
+
+def opening_window(run: dict[str, Any], end_s: float, window_s: float) -> int:
+    """The time window the map opens on (1 is the first; 0 would be the whole period): the one holding the
+    median first pick-up of ``run``'s pooled pairs, a typical busy window, few enough lines to follow."""
+    times = run["pooled"]["t"] or run["solo"]["t"] or run["cancelled"]["t"]
+    count = max(1, math.ceil(end_s / window_s))
+    if not times:
+        return 1
+    middle = float(np.median(times))
+    return int(min(max(middle // window_s + 1, 1), count))
 
 
 def _origins(orders: pd.DataFrame) -> np.ndarray:

@@ -8,23 +8,132 @@
 
   function fail(err) {
     root.dataset.rpbench = "error";
+    if (!status.isConnected) document.querySelector("main").prepend(status);  // removed once the drawing began
     status.className = "error";
     status.textContent = "This page could not draw its figures: " + (err && err.message ? err.message : err);
     console.error(err);
   }
 
-  async function loadPlotly() {
-    if (typeof DecompressionStream === "undefined") {
-      throw new Error("this browser has no DecompressionStream (Chromium 80+, Firefox 113+, Safari 16.4+ have it)");
+  // ---- the plotting library -----------------------------------------------------------------------
+  // Inflated synchronously, while the page is parsed, so that every figure is drawn before the load event:
+  // a headless screenshot, a print or a slow machine sees the figures, not a "loading" line.  The browser's
+  // DecompressionStream is asynchronous, hence this small inflater (RFC 1951, after zlib's puff.c).
+  const LEN_BASE = [3, 4, 5, 6, 7, 8, 9, 10, 11, 13, 15, 17, 19, 23, 27, 31, 35, 43, 51, 59, 67, 83, 99, 115, 131,
+    163, 195, 227, 258];
+  const LEN_EXTRA = [0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2, 2, 3, 3, 3, 3, 4, 4, 4, 4, 5, 5, 5, 5, 0];
+  const DIST_BASE = [1, 2, 3, 4, 5, 7, 9, 13, 17, 25, 33, 49, 65, 97, 129, 193, 257, 385, 513, 769, 1025, 1537,
+    2049, 3073, 4097, 6145, 8193, 12289, 16385, 24577];
+  const DIST_EXTRA = [0, 0, 0, 0, 1, 1, 2, 2, 3, 3, 4, 4, 5, 5, 6, 6, 7, 7, 8, 8, 9, 9, 10, 10, 11, 11, 12, 12, 13, 13];
+  const CLEN_ORDER = [16, 17, 18, 0, 8, 7, 9, 6, 10, 5, 11, 4, 12, 3, 13, 2, 14, 1, 15];
+
+  // A canonical Huffman code as a lookup table: indexed by the next `max` bits of the stream (codes are
+  // packed from their first bit on, hence reversed), each entry holds symbol << 4 | code length.
+  function huffman(lengths) {
+    let max = 0;
+    for (const l of lengths) if (l > max) max = l;
+    const count = new Uint16Array(16), next = new Uint16Array(16), table = new Int32Array(1 << max);
+    for (const l of lengths) count[l]++;
+    count[0] = 0;
+    for (let l = 1, code = 0; l < 16; l++) { code = (code + count[l - 1]) << 1; next[l] = code; }
+    for (let s = 0; s < lengths.length; s++) {
+      const l = lengths[s];
+      if (!l) continue;
+      let code = next[l]++, rev = 0;
+      for (let i = 0; i < l; i++) { rev = (rev << 1) | (code & 1); code >>= 1; }
+      for (let i = rev; i < table.length; i += 1 << l) table[i] = (s << 4) | l;
     }
+    return { table, max };
+  }
+
+  function gunzip(src) {
+    const flags = src[3];
+    if (src[0] !== 0x1f || src[1] !== 0x8b || src[2] !== 8) throw new Error("the embedded library is not gzip");
+    let pos = 10;
+    if (flags & 4) pos += 2 + (src[pos] | (src[pos + 1] << 8));
+    for (const bit of [8, 16]) if (flags & bit) { while (src[pos++] !== 0); }
+    if (flags & 2) pos += 2;
+    const n = src.length, size = (src[n - 4] | (src[n - 3] << 8) | (src[n - 2] << 16) | (src[n - 1] << 24)) >>> 0;
+    const out = new Uint8Array(size);
+    let at = 0, buf = 0, cnt = 0;
+    function fill(k) {
+      while (cnt < k) {
+        if (pos >= n) throw new Error("the embedded library is truncated");
+        buf |= src[pos++] << cnt; cnt += 8;
+      }
+    }
+    function bits(k) {
+      fill(k);
+      const v = buf & ((1 << k) - 1);
+      buf >>>= k; cnt -= k;
+      return v;
+    }
+    function decode(h) {
+      if (cnt < h.max) fill(Math.min(h.max, cnt + 8 * (n - pos)));  // the stream's last code may be short
+      const e = h.table[buf & ((1 << h.max) - 1)], l = e & 15;
+      if (l === 0 || l > cnt) throw new Error("the embedded library is corrupt");
+      buf >>>= l; cnt -= l;
+      return e >> 4;
+    }
+    function codes(lit, dist) {
+      for (;;) {
+        let sym = decode(lit);
+        if (sym < 256) { out[at++] = sym; continue; }
+        if (sym === 256) return;
+        sym -= 257;
+        const len = LEN_BASE[sym] + bits(LEN_EXTRA[sym]);
+        const d = decode(dist), back = DIST_BASE[d] + bits(DIST_EXTRA[d]);
+        for (let i = 0; i < len; i++, at++) out[at] = out[at - back];
+      }
+    }
+    function dynamic() {
+      const nlen = bits(5) + 257, ndist = bits(5) + 1, ncode = bits(4) + 4;
+      const cl = new Uint8Array(19);
+      for (let i = 0; i < ncode; i++) cl[CLEN_ORDER[i]] = bits(3);
+      const clh = huffman(cl), lengths = new Uint8Array(nlen + ndist);
+      for (let i = 0; i < nlen + ndist; ) {
+        const sym = decode(clh);
+        if (sym < 16) { lengths[i++] = sym; continue; }
+        const [value, repeat] = sym === 16 ? [lengths[i - 1], 3 + bits(2)] : sym === 17 ? [0, 3 + bits(3)] : [0, 11 + bits(7)];
+        lengths.fill(value, i, i + repeat);
+        i += repeat;
+      }
+      codes(huffman(lengths.subarray(0, nlen)), huffman(lengths.subarray(nlen)));
+    }
+    let last;
+    do {
+      last = bits(1);
+      const type = bits(2);
+      if (type === 0) {  // stored: whole bytes from the next byte boundary (give back the bytes read ahead)
+        pos -= cnt >> 3; buf = 0; cnt = 0;
+        const len = src[pos] | (src[pos + 1] << 8);
+        out.set(src.subarray(pos + 4, pos + 4 + len), at);
+        pos += 4 + len; at += len;
+      } else if (type === 1) {
+        codes(FIXED.lit, FIXED.dist);
+      } else if (type === 2) {
+        dynamic();
+      } else {
+        throw new Error("the embedded library is corrupt");
+      }
+    } while (!last);
+    return out;
+  }
+
+  const FIXED = (function () {
+    const lit = new Uint8Array(288);
+    lit.fill(8, 0, 144); lit.fill(9, 144, 256); lit.fill(7, 256, 280); lit.fill(8, 280, 288);
+    return { lit: huffman(lit), dist: huffman(new Uint8Array(30).fill(5)) };
+  })();
+
+  function loadPlotly() {
     const text = atob(document.getElementById("rpbench-plotly").textContent.trim());
     const bytes = new Uint8Array(text.length);
     for (let i = 0; i < text.length; i++) bytes[i] = text.charCodeAt(i);
-    const stream = new Blob([bytes]).stream().pipeThrough(new DecompressionStream("gzip"));
-    const source = await new Response(stream).text();
     const script = document.createElement("script");
-    script.textContent = source;
-    document.head.appendChild(script);
+    const t0 = performance.now();
+    script.textContent = new TextDecoder().decode(gunzip(bytes));
+    root.dataset.inflateMs = String(Math.round(performance.now() - t0));
+    document.head.appendChild(script);  // an inline script runs as it is inserted
     if (typeof window.Plotly === "undefined") throw new Error("the plotting library did not load");
   }
 
@@ -58,6 +167,7 @@
     }
     const nWindows = Math.max(1, Math.ceil((m.period.end_s - m.period.begin_s) / m.period.window_s));
     slider.max = String(nWindows);
+    slider.value = String(m.first_window || 0);  // a short window: the whole period is a web of lines
 
     function windowOf() {
       const k = Number(slider.value);
@@ -168,19 +278,19 @@
   }
 
   // ---- boot ------------------------------------------------------------------------------------
-  (async function () {
-    try {
-      await loadPlotly();
-      const data = JSON.parse(document.getElementById("rpbench-data").textContent);
-      const jobs = Object.entries(data.figures).map(([id, fig]) =>
-        Plotly.newPlot(id, fig.data, fig.layout, data.config));
-      if (data.map) jobs.push(setupMap(data.map, data.config));
-      await Promise.all(jobs);
-      status.remove();
+  // Everything up to the drawing runs synchronously (see above); Plotly's promises only say when it is done.
+  try {
+    loadPlotly();
+    const data = JSON.parse(document.getElementById("rpbench-data").textContent);
+    const jobs = Object.entries(data.figures).map(([id, fig]) =>
+      Plotly.newPlot(id, fig.data, fig.layout, data.config));
+    if (data.map) jobs.push(setupMap(data.map, data.config));
+    status.remove();
+    Promise.all(jobs).then(() => {
       root.dataset.readyMs = String(Math.round(performance.now()));  // navigation start to every figure drawn
       root.dataset.rpbench = "ready";
-    } catch (err) {
-      fail(err);
-    }
-  })();
+    }, fail);
+  } catch (err) {
+    fail(err);
+  }
 })();

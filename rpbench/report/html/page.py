@@ -2,7 +2,7 @@
 
 A :class:`Page` collects blocks in order (headings, paragraphs, tables, figure slots, the map) and renders
 to one string: no ``http(s)`` source, link or font, so the file opens from anywhere, offline, alone.
-Figures are stored as Plotly JSON and drawn by ``page.js`` once the library is inflated; the page's root
+Figures are stored as Plotly JSON and drawn by ``page.js`` while the page loads; the page's root
 element says ``data-rpbench="ready"`` when every figure is drawn (``"error"`` and a message if not).
 """
 
@@ -111,7 +111,7 @@ class Page:
                 "</head>",
                 "<body>",
                 "<main>",
-                '<p id="rpbench-status" class="status">Loading the figures…</p>',
+                '<p id="rpbench-status" class="status">Drawing the figures (this page needs JavaScript)…</p>',
                 *self.blocks,
                 "</main>",
                 f'<script type="application/gzip+base64" id="rpbench-plotly">{assets.plotly_bundle()}</script>',

@@ -10,8 +10,9 @@ from __future__ import annotations
 
 import html
 import re
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 import pandas as pd
 
@@ -27,7 +28,7 @@ from rpbench.report.comparison import (
     unproven_notes,
     wall_lines,
 )
-from rpbench.report.evaluation import board_metrics, read_leaderboard
+from rpbench.report.evaluation import LEADERBOARD_PNG, board_metrics, read_leaderboard
 from rpbench.report.html import figures
 from rpbench.report.html.mapdata import map_payload
 from rpbench.report.html.page import Cell, Page
@@ -218,7 +219,7 @@ def _map_section(page: Page, payload: dict) -> None:
         '<div class="controls">'
         f'<label>strategy <select id="map-run">{options}</select></label>{checks}</div>'
         '<div class="controls"><label>time window '
-        '<input type="range" id="map-window" min="0" max="1" step="1" value="0"></label>'
+        f'<input type="range" id="map-window" min="0" max="1" step="1" value="{payload["first_window"]}"></label>'
         '<button type="button" id="map-play">Play</button>'
         f'<span class="muted">0 = the whole period; then {window_min:g}-minute windows</span></div>'
         '<p id="map-note" class="muted"></p>'
@@ -276,35 +277,87 @@ def sweep_page(parent: Path, name: str | None = None) -> Page:
 
 
 def evaluation_page(folder: Path, name: str | None = None) -> Page:
+    """An evaluation's report.md with its figures drawn in place, interactive: the leaderboard (a metric menu)
+    and the ranking metric per day (each run's mean over the day's seeds, their range as error bars)."""
+    from rpbench.report.evaluation import by_day_png, evaluation_runs, unit_records
+
     meta = results.read_meta(folder)
+    protocol = meta["protocol"]
     children = [folder / c for c in meta.get("children", [])]
     styles = run_styles(results.read_meta(children[0])) if children else {}
-    page = markdown_page(folder, "rpbench evaluation", name, children=children)
     board = read_leaderboard(folder)
-    page.heading("Leaderboard (interactive)", 2)
-    page.figure(
-        "fig-leaderboard",
-        figures.leaderboard_bars(board, board_metrics(list(meta["protocol"]["metrics"])), styles),
-        "Each strategy's mean over the (day, seed) runs with its bootstrap interval; choose the metric in the menu.",
-    )
-    return page
+    metrics = board_metrics(list(protocol["metrics"]))
+    slots = {
+        LEADERBOARD_PNG: (
+            "fig-leaderboard",
+            figures.leaderboard_bars(board, metrics, styles),
+            "Each strategy's mean over the (day, seed) runs with its bootstrap interval; choose the metric in the "
+            "menu.",
+        )
+    }
+    units_path = folder / layout.UNITS
+    if units_path.is_file():
+        units = results.read_csv(units_path)
+        units["day"] = units["day"].astype(object).fillna("").astype(str)  # undated units have no day
+        runs = evaluation_runs(protocol["strategies"], unit_records(folder))
+        by_day = figures.seeds_by_day(units, metrics, runs, styles)
+        if by_day is not None:
+            slots[by_day_png(protocol["metrics"][0])] = (
+                "fig-by-day",
+                by_day,
+                "Each strategy's mean over the seeds of each day, the seeds' range as an error bar; choose the "
+                "metric in the menu; click a legend entry to hide or show a run.",
+            )
+    return markdown_page(folder, "rpbench evaluation", name, children=children, interactive=slots)
+
+
+#: A figure's place in a report.md rendered to HTML, until the page puts the figure there.
+_SLOT = "RPBENCHFIGURESLOT{}"
 
 
 def markdown_page(
-    folder: Path, title: str, name: str | None = None, *, children: Sequence[Path] = (), drop_images: bool = False
+    folder: Path,
+    title: str,
+    name: str | None = None,
+    *,
+    children: Sequence[Path] = (),
+    drop_images: bool = False,
+    interactive: Mapping[str, tuple[str, Any, str]] | None = None,
 ) -> Page:
-    """A page showing ``folder``'s report.md (PNG figures left out when the page draws its own), with links
-    to the pages of ``children``; ``name``: the folder's final name (it may be written under a temporary one)."""
+    """A page showing ``folder``'s report.md with links to the pages of ``children``; ``name``: the folder's
+    final name (it may be written under a temporary one).  ``interactive``: an image of report.md (its file
+    name) -> the interactive figure drawn in its place (slot id, Plotly figure, caption); the other PNGs are left
+    out with ``drop_images`` (the page draws its own), else named (a PNG is a separate file: the page,
+    copied alone, would show a broken image).  Wide tables scroll in their own box."""
     from markdown_it import MarkdownIt
 
     text = (folder / layout.REPORT).read_text(encoding="utf-8") if (folder / layout.REPORT).is_file() else ""
-    if drop_images:
-        text = re.sub(r"^!\[[^\]]*\]\([^)]*\)\s*$", "", text, flags=re.MULTILINE)
-    else:  # a PNG is a separate file: the page, copied alone, names it instead of showing a broken image
+    interactive = interactive or {}
+    placed: list[str] = []
+
+    def own_line(found: re.Match) -> str:
+        if found.group(2) in interactive and found.group(2) not in placed:
+            placed.append(found.group(2))
+            return _SLOT.format(len(placed) - 1)
+        return "" if drop_images else found.group(0)
+
+    text = re.sub(r"^!\[([^\]]*)\]\(([^)]*)\)[ \t]*$", own_line, text, flags=re.MULTILINE)
+    if not drop_images:  # a PNG is a separate file: the page, copied alone, names it, never shows it broken
         text = re.sub(r"!\[([^\]]*)\]\(([^)]*)\)", r"(figure `\2` beside report.md: \1)", text)
     page = Page(f"{title}: {name or folder.name}")
     body = MarkdownIt("commonmark", {"html": False}).enable("table").render(text)
-    page.markup(body or f"<h1>{html.escape(title)}</h1>")
+    body = body.replace("<table>", '<div class="scroll"><table>').replace("</table>", "</table></div>")
+    parts = re.split(r"<p>" + _SLOT.format(r"(\d+)") + r"</p>", body)
+    page.markup(parts[0] or f"<h1>{html.escape(title)}</h1>")
+    for k, after in zip(parts[1::2], parts[2::2], strict=True):
+        page.figure(*interactive[placed[int(k)]])
+        if after:
+            page.markup(after)
+    unplaced = [f for f in interactive if f not in placed]  # a report.md that does not embed them (older)
+    if unplaced:
+        page.heading("Figures (interactive)", 2)
+        for f in unplaced:
+            page.figure(*interactive[f])
     if children:
         links = "".join(  # a published evaluation's units have a report.md but no page
             f'<li><a href="{html.escape(c.name)}/{REPORT_HTML if (c / REPORT_HTML).is_file() else layout.REPORT}">'
