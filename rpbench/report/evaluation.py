@@ -224,7 +224,8 @@ def evaluation_report(
             f"## Paired differences: {KPI_LABELS.get(rank, rank)}",
             "",
             f"A - B over the same (day, seed) runs, mean and {level} bootstrap interval; Wilcoxon signed-rank "
-            f"test (two-sided) of the per-{unit[:-1]} mean differences; {unit} where A is above / below B.",
+            f"test (two-sided) of the per-{unit[:-1]} mean differences; {unit} where A is above / below B. "
+            f"{smallest_p_text(_clusters(units, unit), unit)}",
             "",
             f"| A | B | mean A - B | interval | Wilcoxon p | {unit} A above / below / tied |",
             "|---|---|---:|---:|---:|---:|",
@@ -273,6 +274,23 @@ def leaderboard_rows(
                 row.append("/")
         body.append(row)
     return head, body
+
+
+def smallest_p_text(n: int, unit: str) -> str:
+    """What the paired test can say with ``n`` independent ``unit``: the exact two-sided signed-rank test's
+    smallest p, 2 / 2^n, reached when every one of them differs the same way."""
+    if n < 1:
+        return ""
+    return (
+        f"With {n} {unit} the exact test's smallest p is 2 / 2^{n} = {2.0 / 2.0**n:.3g} (A above B on every "
+        f"one of them): a p near it says as much as {n} {unit} can."
+    )
+
+
+def _clusters(units: pd.DataFrame, unit: str) -> int:
+    """The number of independent draws: the days of a dated protocol, else the seeds."""
+    column = "day" if unit == "days" else "seed"
+    return int(units[column].nunique()) if column in units.columns else 0
 
 
 def _rank_cell(run: str, first: pd.DataFrame) -> str:

@@ -80,3 +80,16 @@ def test_the_pairing_is_kept():
     b = [[v + 1.0 for v in row] for row in a]
     (row,) = paired(units({"a": a, "b": b}), ["a", "b"], ["total_saving_km"], Bootstrap(resamples=300)).itertuples()
     assert (row.mean_diff, row.ci_low, row.ci_high) == (-1.0, -1.0, -1.0)
+
+
+@pytest.mark.parametrize("n", [3, 5, 7])
+def test_the_paired_table_states_the_smallest_p_its_days_allow(n):
+    """The report's sentence gives the p SciPy's exact test returns when every day goes one way."""
+    from scipy.stats import wilcoxon
+
+    from rpbench.report.evaluation import smallest_p_text
+
+    smallest = float(wilcoxon(np.arange(1.0, n + 1.0)).pvalue)
+    assert smallest == pytest.approx(2.0 / 2.0**n)
+    assert f"With {n} days the exact test's smallest p is 2 / 2^{n} = {smallest:.3g}" in smallest_p_text(n, "days")
+    assert smallest_p_text(0, "days") == ""
