@@ -33,7 +33,7 @@ from rpbench.results.metrics import (
 )
 from rpbench.results.ratios import DERIVED_KPIS, RATIO_KPIS, bracket_line
 from rpbench.results.read import decision_budget_of, load_kpis, unproven_runs
-from rpbench.results.runs import Styles, markdown_cell, run_label, run_styles, simulated_runs
+from rpbench.results.runs import CLAIRVOYANT_MARK, Styles, markdown_cell, run_label, run_styles, simulated_runs
 
 #: One line under every table with an Oracle-1 column: why its ratio can exceed 1.
 ORACLE1_NOTE = (
@@ -95,6 +95,19 @@ def table_rows(table: pd.DataFrame) -> list[str]:
     return [k for k in KPI_ORDER if k in table.index] + [k for k in RATIO_KPIS if k in table.index]
 
 
+#: The best-known ratio's row label when no clairvoyant run is compared: LB is then the best of the runs
+#: shown, so that run's 1.000 says it was best here, not that it is optimal.
+BEST_RUN_HERE_LABEL = "Ratio to the best run here (saving / best saving of these runs)"
+
+
+def kpi_labels(runs: list[str], styles: Styles | None = None) -> dict[str, str]:
+    """The row labels of a comparison of ``runs``: :data:`KPI_LABELS`, the best-known ratio relabelled
+    (:data:`BEST_RUN_HERE_LABEL`) when none of the runs is clairvoyant."""
+    if any(run_label(r, styles).endswith(CLAIRVOYANT_MARK) for r in runs):
+        return KPI_LABELS
+    return {**KPI_LABELS, "competitive_ratio_best_known": BEST_RUN_HERE_LABEL}
+
+
 def text_table(
     table: pd.DataFrame,
     *,
@@ -108,7 +121,8 @@ def text_table(
     cols = list(table.columns)
     unproven = unproven or {}
     head = ["Metric"] + [run_label(c, styles) + (UNPROVEN_MARK if c in unproven else "") for c in cols]
-    body = [[KPI_LABELS.get(k, k)] + [fmt(k, table.loc[k, c]) for c in cols] for k in rows]
+    labels = kpi_labels([str(c) for c in cols], styles)
+    body = [[labels.get(k, k)] + [fmt(k, table.loc[k, c]) for c in cols] for k in rows]
     widths = [max(len(r[i]) for r in [head] + body) for i in range(len(head))]
     lines = []
     if title:
@@ -136,6 +150,7 @@ def markdown_table(
     rows = table_rows(table)
     cols = list(table.columns)
     unproven = unproven or {}
+    labels = kpi_labels([str(c) for c in cols], styles)
     out = [
         "| Metric | "
         + " | ".join(
@@ -156,7 +171,7 @@ def markdown_table(
                 )
                 cell += f" ({fmt(k, ref)})"
             cells.append(cell)
-        out.append(f"| {KPI_LABELS.get(k, k)} | " + " | ".join(cells) + " |")
+        out.append(f"| {labels.get(k, k)} | " + " | ".join(cells) + " |")
     return "\n".join(out)
 
 

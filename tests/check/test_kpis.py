@@ -267,6 +267,30 @@ def test_a_row_deleted_from_report_md_is_reported_as_not_compared(folder):
     )
 
 
+def test_the_best_known_ratio_row_under_its_older_label_is_still_compared(folder):
+    """Without a clairvoyant run the row says "best run here"; a report.md written when it said "best known
+    schedule" is compared on the same cells: unchanged it passes, an edited cell fails."""
+    path = folder / "report.md"
+    now, before = (
+        "| Ratio to the best run here (saving / best saving of these runs) |",
+        "| Competitive ratio (saving / best known schedule) |",
+    )
+    assert now in path.read_text()
+    path.write_text(path.read_text().replace(now, before))
+    assert "report" not in violations(folder)
+    (found,) = check_tree(folder)
+    assert "best" not in found.folder_check.skipped.get("report", "")
+    lines = path.read_text().splitlines()
+    k = next(i for i, line in enumerate(lines) if line.startswith(before))
+    cells = lines[k].split(" | ")
+    cells[1] = "0.999"
+    lines[k] = " | ".join(cells)
+    path.write_text("\n".join(lines) + "\n")
+    assert_fails(
+        folder, "report", "report.md shows Ratio to the best run here (saving / best saving of these runs): 0.999"
+    )
+
+
 # ------------------------------------------------------------------ decision time
 @pytest.mark.parametrize("kpi", ["decision_p50_s", "decision_p95_s", "decision_max_s", "rounds_over_dt"])
 def test_a_decision_time_kpi_edited_fails(folder, kpi):

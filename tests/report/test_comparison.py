@@ -12,7 +12,7 @@ import pytest
 
 from rpbench.exceptions import ResultsError
 from rpbench.harness.render import render
-from rpbench.report.comparison import check_metrics, fmt, text_table
+from rpbench.report.comparison import check_metrics, fmt, markdown_table, text_table
 from rpbench.results.read import load_kpis
 
 
@@ -82,7 +82,7 @@ def test_table_and_competitive_ratio(tmp_path):
     text = text_table(table)
     assert "Saving / Oracle-1 (paper's reference; not a bound)" in text and "0.632" in text
     assert "saving / proven upper bound" not in text  # no bound in this folder: no ratio against it
-    assert "Competitive ratio (saving / best known schedule)" in text
+    assert "Ratio to the best run here (saving / best saving of these runs)" in text  # no clairvoyant run here
     md, written = render([folder])
     assert "OPT >= LB = 158 km (best known schedule: FL; no upper bound run, so no U)." in md
     assert "reference, not a competitive ratio" in md  # why the Oracle-1 row can exceed 1
@@ -103,7 +103,7 @@ def test_the_competitive_ratio_divides_by_the_bound(tmp_path):
     rows = [line.split("  ")[0] for line in text.splitlines()]
     assert (
         rows.index("Competitive ratio (saving / proven upper bound)")
-        < rows.index("Competitive ratio (saving / best known schedule)")
+        < rows.index("Ratio to the best run here (saving / best saving of these runs)")
         < rows.index("Saving / Oracle-1 (paper's reference; not a bound)")
     )
     md, _ = render([folder])
@@ -313,3 +313,18 @@ def test_a_failed_report_out_leaves_no_plots_behind(tmp_path, capsys, monkeypatc
     assert main(["report", str(folder), "--out", str(out)]) == 2
     assert "No space left on device" in capsys.readouterr().err
     assert list(out.parent.iterdir()) == []
+
+
+def test_without_a_clairvoyant_run_the_best_known_ratio_says_it_is_relative_to_these_runs():
+    """LB is the best run shown: with only online runs that run's 1.000 means "best here", and the row says so;
+    with Hindsight (clairvoyant) it is the best known schedule."""
+    table = pd.DataFrame(
+        {"mb": [300.0, 0.6, 0.75], "fl": [400.0, 0.8, 1.0], "bound": [500.0, float("nan"), float("nan")]},
+        index=["total_saving_km", "competitive_ratio_bound", "competitive_ratio_best_known"],
+    )
+    online = text_table(table)
+    assert "Ratio to the best run here (saving / best saving of these runs)" in online
+    assert "Competitive ratio (saving / best known schedule)" not in online
+    with_hindsight = table.assign(hindsight=[450.0, 0.9, 1.0])
+    assert "Competitive ratio (saving / best known schedule)" in text_table(with_hindsight)
+    assert "best run here" not in markdown_table(with_hindsight) and "best run here" in markdown_table(table)

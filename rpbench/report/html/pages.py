@@ -21,6 +21,7 @@ from rpbench.report.comparison import (
     UNPROVEN_MARK,
     bracket_lines,
     fmt,
+    kpi_labels,
     offline_notes,
     solver_summary,
     table_rows,
@@ -180,8 +181,9 @@ def _comparison_table(page: Page, table: pd.DataFrame, unproven: dict[str, str],
     runs = [str(c) for c in table.columns]
     head = ["Metric"] + [run_label(r, styles) + (UNPROVEN_MARK if r in unproven else "") for r in runs]
     rows = []
+    labels = kpi_labels(runs, styles)
     for kpi in table_rows(table):
-        row: list[Cell | str] = [Cell(KPI_LABELS.get(kpi, kpi), {"kpi": kpi})]
+        row: list[Cell | str] = [Cell(labels.get(kpi, kpi), {"kpi": kpi})]
         for r in runs:
             value = table.loc[kpi, r]
             raw = "" if pd.isna(value) else repr(float(value))
