@@ -37,7 +37,7 @@ def test_scenario_text(capsys):
 @pytest.mark.parametrize(
     "argv, message",
     [
-        (["scenario", "toy", "--sample", "0"], "--sample 0 is out of range (0 < value <= 1)"),
+        (["scenario", "toy", "--sample", "0"], "--sample 0 is out of range (0 < value <= 1, or a demand multiplier"),
         (["scenario", "toy", "--param", "dt_s=0"], "dt_s = 0.0 must be > 0"),
         (["scenario", "toy", "--param", "speed_mps=-8"], "speed_mps = -8.0 must be > 0"),
         (["scenario", "toy", "--param", "foo=1"], "expected NAME=VALUE"),

@@ -11,14 +11,16 @@ from __future__ import annotations
 
 import argparse
 import shlex
+from dataclasses import dataclass
 from typing import Any
 
 from rpbench.backends.presets import MAX_TIME_LIMIT_S
 from rpbench.data.first_run import ensure_data_dir
 from rpbench.exceptions import ParameterError
 from rpbench.options import Range
-from rpbench.scenarios import ScenarioRequest, default_scenario_name, scenario_spec
+from rpbench.scenarios import SCENARIOS, ScenarioRequest, default_scenario_name, scenario_spec
 from rpbench.scenarios.base import Params
+from rpbench.scenarios.common import MAX_DEMAND_MULTIPLIER
 from rpbench.spec import MAX_DECISION_BUDGET_S
 
 # ---------------------------------------------------------------- numbers
@@ -30,7 +32,21 @@ SEED = Range(0, 2**32 - 1, integer=True)
 WORKERS = Range(1, 1024, integer=True)
 
 
-SAMPLE = Range(0.0, 1.0, low_open=True)
+@dataclass(frozen=True)
+class SampleRange(Range):
+    """``--sample``: a fraction of the orders, or above 1 a demand multiplier, which only a scenario that
+    generates its orders takes (the scenario checks: ``ScenarioSpec.check_sample``)."""
+
+    def describe(self) -> str:
+        return f"0 < value <= 1, or a demand multiplier up to {self.high:g} for the synthetic {multiplier_scenarios()}"
+
+
+def multiplier_scenarios() -> str:
+    """The scenarios that take ``--sample`` above 1 (those that generate their orders and say so)."""
+    return ", ".join(name for name, spec in SCENARIOS.items() if spec.max_sample > 1)
+
+
+SAMPLE = SampleRange(0.0, MAX_DEMAND_MULTIPLIER, low_open=True)
 
 
 TIME_LIMIT = Range(0.0, MAX_TIME_LIMIT_S, "s", low_open=True)
@@ -120,7 +136,13 @@ def add_scenario_args(parser: argparse.ArgumentParser, *, positional: bool = Fal
         )
     if one_draw:
         parser.add_argument("--date", default=None, help="date YYYY-MM-DD (default 2017-05-01)")
-    add_number_arg(parser, "--sample", SAMPLE, help="fraction of orders kept (haikou-peak default 0.3)")
+    add_number_arg(
+        parser,
+        "--sample",
+        SAMPLE,
+        help="fraction of the orders kept (haikou-peak default 0.3); k > 1: k times the volume drawn anew "
+        "from the same rates, the fleet scaled alike (a stress test; scenarios of real orders refuse it)",
+    )
     if one_draw:
         add_number_arg(parser, "--seed", SEED, default=0, help="random seed (default 0)")
     parser.add_argument(
@@ -187,6 +209,8 @@ def scenario_request(args: argparse.Namespace) -> ScenarioRequest:
     else:
         name = args.scenario
         spec = scenario_spec(name)
+        if args.sample is not None:
+            spec.check_sample(args.sample)  # --sample 4 of real orders: one line before any download
         if spec.needs_data:
             ensure_data_dir(args.data, what=f"scenario {name!r}", offline=offline, progress=progress, city=spec.city)
     return ScenarioRequest(

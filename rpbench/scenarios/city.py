@@ -80,7 +80,7 @@ def build_city(
     folder it was made from (both recorded, so that the scenario's other windows can be built, as VF's
     training does)."""
     params = params or Params()
-    sample, seed = check_sample(sample), check_seed(seed)
+    sample, seed = check_sample(sample, scenario=name), check_seed(seed)
     start_s, end_s = parse_window(window)
     horizon_s = end_s - start_s
     rng = Streams(seed)

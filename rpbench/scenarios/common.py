@@ -48,10 +48,39 @@ class Streams:
             raise AttributeError(name) from None
 
 
-def check_sample(sample: float) -> float:
-    if not isinstance(sample, (int, float, np.floating)) or not (0 < float(sample) <= 1):
-        raise ParameterError(f"--sample {sample!r} must lie in (0, 1] (1.0 = every order)")
-    return float(sample)
+#: The largest ``--sample`` of a scenario that generates its orders and takes a demand multiplier: k > 1 is
+#: k times the volume, drawn anew from the same rates (``haikou-day --sample 4``: about 208,000 orders).
+MAX_DEMAND_MULTIPLIER = 100.0
+
+
+def check_sample(
+    sample: float, *, scenario: str | None = None, most: float = 1.0, real: bool = True, multipliers: str = ""
+) -> float:
+    """``sample`` as a float: a fraction of the orders in (0, 1], or, for a scenario that generates its orders
+    and takes a demand multiplier (``most`` > 1), k times the volume up to ``most``.  Beyond the scenario's
+    ``most``, one line naming ``scenario`` and why: a sample of ``real`` orders cannot exceed them, a
+    generator without a multiplier (``real=False``) draws a fixed volume; ``multipliers`` names the scenarios
+    that take one."""
+    number = isinstance(sample, (int, float, np.floating))
+    if number and 0 < float(sample) <= max(most, 1.0):
+        return float(sample)
+    named = f" for scenario {scenario!r}" if scenario else ""
+    shown = f"{float(sample):g}" if number else repr(sample)
+    if not number or not float(sample) > 1:  # not a number, nan, or not positive
+        if most > 1:
+            raise ParameterError(
+                f"--sample {shown} must be > 0{named} (1.0 = the generated volume, k > 1 = k times it)"
+            )
+        raise ParameterError(f"--sample {shown} must lie in (0, 1] (1.0 = every order)")
+    if most > 1:
+        raise ParameterError(f"--sample {shown} is out of range (0 < value <= {most:g}){named}")
+    why = (
+        "its orders are real, and a sample of real orders cannot exceed them (1.0 = every order)"
+        if real
+        else "its generator draws a fixed volume (1.0 = all of it)"
+    )
+    also = f"; a demand multiplier k > 1 applies only to the synthetic {multipliers}" if multipliers else ""
+    raise ParameterError(f"--sample {shown} is out of range (0 < value <= 1){named}: {why}{also}")
 
 
 def check_seed(seed: int) -> int:

@@ -11,6 +11,14 @@ the ``round(sample * count)`` requests are placed uniformly at random, which
 is a Poisson process conditioned on the hour's count, so ``sample = 1.0``
 reproduces the day's real total exactly.  The on-duty fleet follows the
 hourly demand at the order-driver ratio.
+
+``sample = k > 1`` is a demand multiplier, a stress test: the same hourly
+rates and OD table, ``round(k * count)`` requests an hour drawn by the same
+process (a Poisson process of k times the volume, not copies of the day's
+orders), and the fleet following those counts by the same ratio.  It is as
+synthetic as the day itself, only larger (no city recorded such a day).  The
+draws are the same code as for ``sample <= 1``, so a fraction gives the
+orders it always gave.
 """
 
 from __future__ import annotations
@@ -26,6 +34,7 @@ from rpbench.exceptions import DataError
 from rpbench.paper import PAPER_DATE
 from rpbench.scenarios.base import Demand, Params, Scenario
 from rpbench.scenarios.common import (
+    MAX_DEMAND_MULTIPLIER,
     Streams,
     check_sample,
     check_seed,
@@ -47,7 +56,8 @@ def build_day(
     fleet_placement: str = "order_origins",
 ) -> Scenario:
     params = params or Params()
-    sample, seed = check_sample(sample), check_seed(seed)
+    sample = check_sample(sample, scenario="haikou-day", most=MAX_DEMAND_MULTIPLIER, real=False)
+    seed = check_seed(seed)
     day = parse_date(date).isoformat()
     network = haikou_network(data_dir)
     hourly = hourly_counts_for(data_dir, day)
@@ -71,7 +81,7 @@ def build_day(
         name="haikou-day",
         label=(
             f"SYNTHETIC full-day stand-in for Haikou {day}: real hourly volumes, OD pairs drawn from the "
-            f"21-day 08:00-09:00 OD rates ({sample * 100:g} % of {int(hourly.sum())} orders, seed {seed})"
+            f"21-day 08:00-09:00 OD rates ({_volume(sample, int(hourly.sum()))}, seed {seed})"
         ),
         network=network,
         orders=orders,
@@ -91,3 +101,10 @@ def build_day(
         },
         demand=Demand(table="month", data_dir=str(data_dir), orders_per_hour=tuple(float(n) for n in per_hour)),
     )
+
+
+def _volume(sample: float, total: int) -> str:
+    """The label's volume: a fraction of the day's orders, or a multiplier's k times them."""
+    if sample <= 1:
+        return f"{sample * 100:g} % of {total} orders"
+    return f"DEMAND x{sample:g}: {sample:g} times the {total} orders' volume, a stress test"

@@ -70,7 +70,7 @@ def build_lattice(
     date: str | None = None,
 ) -> Scenario:
     params = params or Params()
-    sample, seed = check_sample(sample), check_seed(seed)
+    sample, seed = check_sample(sample, scenario="lattice", real=False), check_seed(seed)
     block_m = params.speed_mps * params.dt_s
     network = lattice_network(size, block_m)
     rng = Streams(seed)

@@ -38,10 +38,9 @@ import pandas as pd
 
 from rpbench.data.orders import parse_date
 from rpbench.data.paper_orders import PREDICTION_COLUMNS, paper_order_source, read_paper_orders
-from rpbench.exceptions import ParameterError
 from rpbench.paper import PAPER_DATE
 from rpbench.scenarios.base import Demand, Fleet, Params, Scenario
-from rpbench.scenarios.common import haikou_network, make_orders, require_orders
+from rpbench.scenarios.common import check_sample, haikou_network, make_orders, require_orders
 
 #: The authors' ``demand_ratio`` and ``order_driver_ratio`` (100 / 25).
 PAPER_SAMPLE = 0.3
@@ -87,8 +86,7 @@ def load_paper_input(
 ) -> PaperInput:
     """Build the authors' input of ``date`` (see the module docstring)."""
     params = params or Params()
-    if not (0 < float(sample) <= 1):
-        raise ParameterError(f"--sample {sample!r} must lie in (0, 1]")
+    sample = check_sample(sample, scenario="haikou-paper-input")
     day = parse_date(date).isoformat()
     network = haikou_network(data_dir)
     frame = read_paper_orders(data_dir, day)

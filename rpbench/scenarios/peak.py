@@ -43,7 +43,7 @@ def build_peak(
     fleet_placement: str = "order_origins",
 ) -> Scenario:
     params = params or Params()
-    sample, seed = check_sample(sample), check_seed(seed)
+    sample, seed = check_sample(sample, scenario="haikou-peak"), check_seed(seed)
     day = parse_date(date).isoformat()
     network = haikou_network(data_dir)
     frame = read_peak_orders(data_dir, day)

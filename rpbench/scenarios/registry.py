@@ -21,6 +21,7 @@ from rpbench.data.first_run import ensure_data_dir, obtain_data_dir, warn_synthe
 from rpbench.exceptions import ParameterError
 from rpbench.scenarios.base import Params, Scenario
 from rpbench.scenarios.city import build_city, parse_window
+from rpbench.scenarios.common import MAX_DEMAND_MULTIPLIER, check_sample
 from rpbench.scenarios.day import build_day
 from rpbench.scenarios.lattice import build_lattice
 from rpbench.scenarios.paper_input import build_paper_input
@@ -45,6 +46,16 @@ class ScenarioSpec:
     default_params: Callable[..., dict[str, float]] | None = None
     #: The time window a scenario of a city's day covers by default (None: the scenario takes no --window).
     window: str | None = None
+    #: Whether its orders are real (a sample of them cannot exceed them) or generated in code.
+    real_orders: bool = True
+    #: The largest ``--sample``: 1 (every order), or above 1 for a generator that takes a demand multiplier
+    #: (k times the volume drawn anew from the same rates; :data:`~.common.MAX_DEMAND_MULTIPLIER`).
+    max_sample: float = 1.0
+
+    def check_sample(self, sample: float) -> float:
+        """``sample`` as a float when this scenario takes it, else one line naming the scenario and why."""
+        takes = ", ".join(name for name, spec in SCENARIOS.items() if spec.max_sample > 1)
+        return check_sample(sample, scenario=self.name, most=self.max_sample, real=self.real_orders, multipliers=takes)
 
 
 def _hourly_count_dates(data_dir: Path) -> list[str]:
@@ -73,11 +84,14 @@ SCENARIOS: dict[str, ScenarioSpec] = {
         ),
         ScenarioSpec(
             "haikou-day",
-            "SYNTHETIC 24-hour stand-in: a date's real hourly volumes, OD pairs from the 21-day OD rate table",
+            "SYNTHETIC 24-hour stand-in: a date's real hourly volumes, OD pairs from the 21-day OD rate table "
+            "(--sample k > 1: k times the volume, a stress test)",
             True,
             1.0,
             build_day,
             _hourly_count_dates,
+            real_orders=False,
+            max_sample=MAX_DEMAND_MULTIPLIER,
         ),
         ScenarioSpec(
             "haikou-trace", "the real 2017-07-01 00:00-13:06 trace on the TR-B 2021 network", True, 1.0, build_trace
@@ -88,6 +102,7 @@ SCENARIOS: dict[str, ScenarioSpec] = {
             False,
             1.0,
             lambda data_dir, **kw: build_toy(**kw),
+            real_orders=False,
         ),
         ScenarioSpec(
             "lattice",
@@ -95,6 +110,7 @@ SCENARIOS: dict[str, ScenarioSpec] = {
             False,
             0.3,
             lambda data_dir, **kw: build_lattice(**kw),
+            real_orders=False,
         ),
     ]
 }
@@ -187,6 +203,7 @@ def build_scenario(
 ) -> Scenario:
     """Build the named scenario (see :data:`SCENARIOS`)."""
     spec = scenario_spec(name)
+    sample = spec.default_sample if sample is None else spec.check_sample(sample)
     options = {k: v for k, v in options.items() if v is not None}
     if spec.window is not None:
         options.setdefault("window", spec.window)
@@ -199,9 +216,7 @@ def build_scenario(
         params = Params().replace(**base)
     if param_overrides:
         params = params.replace(**param_overrides)
-    kwargs: dict[str, Any] = dict(
-        seed=seed, params=params, sample=spec.default_sample if sample is None else sample, **options
-    )
+    kwargs: dict[str, Any] = dict(seed=seed, params=params, sample=sample, **options)
     if date is not None:
         if spec.window is not None:
             raise ParameterError(f"--date: scenario {name!r} is a city's one day of trips; it has no date to choose")

@@ -37,7 +37,9 @@ class ScenarioRequest:
     window: str | None = None
 
     def __post_init__(self) -> None:
-        scenario_spec(self.name)  # an unknown name fails here, before any work
+        spec = scenario_spec(self.name)  # an unknown name fails here, before any work
+        if self.sample is not None:  # so does a sample the scenario cannot take (above 1 for real orders)
+            spec.check_sample(self.sample)
         object.__setattr__(self, "params", tuple(sorted(dict(self.params).items())))
 
     @property

@@ -136,7 +136,7 @@ def build_toy(
     date: str | None = None,
 ) -> Scenario:
     params = params or Params()
-    sample, seed = check_sample(sample), check_seed(seed)
+    sample, seed = check_sample(sample, scenario="toy", real=False), check_seed(seed)
     network = grid_network(size, seed=0)  # the city stays the same across seeds; demand varies
     rng = Streams(seed)
     n = round(sample * TOY_BASE_ORDERS)

@@ -54,7 +54,7 @@ def build_trace(
     date: str | None = None,
 ) -> Scenario:
     params = params or Params()
-    sample, seed = check_sample(sample), check_seed(seed)
+    sample, seed = check_sample(sample, scenario="haikou-trace"), check_seed(seed)
     network = predecessor_network(data_dir)
     frame = read_trace_orders(data_dir)
     origin = network.index_of(frame["origin_id"], what="start_ver in the 2017-07-01 trace")

@@ -76,10 +76,16 @@ def test_patience_distribution():
     assert abs(k.mean() - 90) < 3 and k.min() >= 30
 
 
-@pytest.mark.parametrize("sample", [0.0, -0.1, 1.5])
+@pytest.mark.parametrize("sample", [0.0, -0.1])
 def test_sample_outside_unit_interval(sample):
     with pytest.raises(ParameterError, match="must lie in \\(0, 1\\]"):
         build_scenario("toy", sample=sample)
+
+
+def test_toy_takes_no_demand_multiplier():
+    """Only the synthetic day scales its volume (tests/scenarios/test_multiplier.py)."""
+    with pytest.raises(ParameterError, match="--sample 1.5 is out of range \\(0 < value <= 1\\) for scenario 'toy'"):
+        build_scenario("toy", sample=1.5)
 
 
 @pytest.mark.parametrize(
