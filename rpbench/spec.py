@@ -3,10 +3,10 @@
 A :class:`RunSpec` names the scenario (a :class:`~rpbench.scenarios.ScenarioRequest`),
 the runs in column order (:class:`RunEntry`: strategies and offline runs,
 each under its name with its typed options), the solver presets, the strict
-policy, the decision budget (rounds slower than it are flagged, never changed) and the command line to
-record.  ``rpbench run`` builds one from its
-arguments (:mod:`rpbench.commands._runs`); the multi-day runner and sweeps
-derive one per day or point (:meth:`RunSpec.for_request`) and hand it to worker
+policy, the decision budget (rounds slower than it are flagged, never changed), the command line to
+record and the formats its reports' figures are written in (:data:`FIGURE_FORMATS`; PNG alone by
+default).  ``rpbench run`` builds one from its arguments (:mod:`rpbench.commands._runs`); the multi-day
+runner and sweeps derive one per day or point (:meth:`RunSpec.for_request`) and hand it to worker
 processes as it is (it pickles); Python callers build one with
 :meth:`RunSpec.of`.
 
@@ -47,6 +47,25 @@ MAX_DECISION_BUDGET_S = 86400.0
 VARIANT_SEP = "@"
 #: A variant setting ``KEY=VALUE``: an option name, and a value that stays a plain folder-name part.
 _SETTING = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)=([A-Za-z0-9._+-]+)$")
+#: The formats a report's figures can be written in: PNG (the one report.md shows, always written) and the
+#: vector copies for papers, on request (``--figures png,svg,pdf``; :func:`figure_formats`).
+FIGURE_FORMATS = ("png", "svg", "pdf")
+#: What a report writes without ``--figures``: PNG only (the vector copies cost most of a report's time).
+DEFAULT_FIGURE_FORMATS = ("png",)
+
+
+def figure_formats(given: str | Sequence[str], flag: str = "--figures") -> tuple[str, ...]:
+    """``png,svg`` (text, or names) -> the formats figures are written in, in :data:`FIGURE_FORMATS` order,
+    PNG always among them (report.md shows it); an unknown or no format is one error line naming ``flag``."""
+    text = given if isinstance(given, str) else ",".join(map(str, given))
+    names = [item.strip().lower() for item in text.split(",") if item.strip()]
+    unknown = [n for n in names if n not in FIGURE_FORMATS]
+    if unknown or not names:
+        what = f"unknown figure format {unknown[0]!r}" if unknown else "no figure format"
+        raise ParameterError(
+            f"{flag} {text!r}: {what}; name one or more of {', '.join(FIGURE_FORMATS)} (e.g. {flag} png,svg,pdf)"
+        )
+    return tuple(f for f in FIGURE_FORMATS if f == "png" or f in names)
 
 
 @dataclass(frozen=True)
@@ -99,8 +118,10 @@ class RunSpec:
     strict: bool = False  # an answer the solver did not prove optimal is an error, not a note
     command: str | None = None  # the command line recorded in results folders
     decision_budget_s: float | None = None  # flag rounds deciding slower than this (None: no budget)
+    formats: tuple[str, ...] = DEFAULT_FIGURE_FORMATS  # the reports' figure formats (:func:`figure_formats`)
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "formats", figure_formats(self.formats, "formats"))  # checked, in order
         budget = self.decision_budget_s
         if budget is not None and not (
             isinstance(budget, (int, float))
@@ -132,6 +153,7 @@ class RunSpec:
         strict: bool = False,
         command: str | None = None,
         decision_budget_s: float | None = None,
+        formats: Sequence[str] = DEFAULT_FIGURE_FORMATS,
     ) -> RunSpec:
         """A spec from run names (or plug-in sources) and per-run options keyed by run name.
 
@@ -155,6 +177,7 @@ class RunSpec:
             strict=strict,
             command=command,
             decision_budget_s=decision_budget_s,
+            formats=tuple(formats),
         )
 
     @property

@@ -14,6 +14,7 @@ import dataclasses
 from collections.abc import Sequence
 
 from rpbench.backends.presets import load_preset
+from rpbench.commands._figures import formats_of
 from rpbench.commands.args import add_decision_budget_arg, add_strict_arg, decision_budget
 from rpbench.commands.output import command_line
 from rpbench.exceptions import ParameterError
@@ -117,4 +118,5 @@ def run_spec(args: argparse.Namespace, request: ScenarioRequest, *, runs: Sequen
         strict=bool(getattr(args, "strict", False)),
         command=command_line(),
         decision_budget_s=decision_budget(args),
+        formats=formats_of(args),
     )

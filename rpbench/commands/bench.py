@@ -30,7 +30,6 @@ import pandas as pd
 from rpbench.backends.presets import load_preset, preset_names
 from rpbench.bench.runner import BenchSpec, format_table, run_benchmark
 from rpbench.bench.synthetic import SUITES, suite
-from rpbench.check.bench import KNOWN_FILE
 from rpbench.commands.args import SEED, TIME_LIMIT, add_number_arg, check_numbers
 from rpbench.commands.checks import check_out_file, check_unique, write_out_file
 from rpbench.commands.output import command_line, note, print_json
@@ -300,6 +299,8 @@ def _run(args: argparse.Namespace) -> int:
             lambda tmp: write_bench_html(table, tmp, what, command_line(), shift=args.shift, env=env),
         )
     if args.out is not None:
+        from rpbench.check.bench import KNOWN_FILE  # the checker's package: only for a --out folder
+
         with new_results_folder(args.out, "bench") as (tmp, final):
             used = {name: known[name] for name in sorted(known)}
             if used:  # the folder carries the values it was judged against: rpbench check re-judges with them

@@ -6,10 +6,11 @@ from __future__ import annotations
 import argparse
 import sys
 
-from rpbench.check import EXIT_FAILED, EXIT_OK, EXIT_UNREADABLE, check_tree, exit_status, format_report
 from rpbench.commands.output import print_json
 
-CHECK_STATUS = {EXIT_OK: "ok", EXIT_FAILED: "failed", EXIT_UNREADABLE: "unreadable"}
+#: Each exit status of the checker as the word ``--json`` says (0 ok, 1 failed, 2 unreadable:
+#: :data:`rpbench.check.EXIT_OK` and the others).
+CHECK_STATUS = {0: "ok", 1: "failed", 2: "unreadable"}
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -43,6 +44,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
+    from rpbench.check import EXIT_OK, check_tree, exit_status, format_report  # the checker: only when checking
+
     found = [result for given in args.folders for result in check_tree(given)]
     for result in found:
         if len(found) > 1 and not args.json:

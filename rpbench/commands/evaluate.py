@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from rpbench.commands._figures import add_figures_arg, formats_of
 from rpbench.commands.args import (
     add_data_arg,
     add_decision_budget_arg,
@@ -38,11 +39,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_data_arg(p)
     add_offline_arg(p)
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_figures_arg(p)
     p.set_defaults(handler=_run)
 
 
 def _run(args: argparse.Namespace) -> int:
     check_numbers(args)  # before anything runs or downloads
+    formats = formats_of(args)
     check_parallel(args)
     budget = decision_budget(args)
     check_out_name(args.out)
@@ -61,6 +64,7 @@ def _run(args: argparse.Namespace) -> int:
         command=command_line(),
         decision_budget_s=budget,
         progress=False if args.no_progress else None,
+        formats=formats,
     )
     folder, ran = outcome.folder, sum(unit.fresh for unit in outcome.children)
     note_outcome(outcome)

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from rpbench.exceptions import ResultsError, RpbenchError
-from rpbench.harness.publish import HEAVY, publish
+from rpbench.results.layout import HEAVY
 from rpbench.results.store import check_new_folder
 
 
@@ -27,6 +27,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
+    from rpbench.harness.publish import publish  # with the checker: only when publishing
+
     dest = Path(args.dest)
     # before the (slow) checker: DEST must be free (a dangling link counts as taken) and its folder writable
     check_new_folder(dest, what="DEST")

@@ -15,12 +15,6 @@ from rpbench.commands.output import command_line, print_json
 from rpbench.data import available_peak_dates
 from rpbench.data.first_run import ensure_data_dir
 from rpbench.exceptions import ParameterError
-from rpbench.harness.replicate import parse_strategies, replicate
-from rpbench.replication.folder import file_manifest, write_engine_folder
-from rpbench.replication.reference import has_committed
-from rpbench.replication.report import criterion, markdown
-from rpbench.replication.switches import steps_for
-from rpbench.report.html import write_html
 from rpbench.results import layout
 from rpbench.results import store as results
 from rpbench.results.layout import engine_folder
@@ -70,6 +64,14 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
+    # the authors' engine and the replication's report: only when replicating
+    from rpbench.harness.replicate import parse_strategies, replicate
+    from rpbench.replication.folder import file_manifest, write_engine_folder
+    from rpbench.replication.reference import has_committed
+    from rpbench.replication.report import criterion, markdown
+    from rpbench.replication.switches import steps_for
+    from rpbench.report.html import write_html
+
     strategies = parse_strategies(args.strategies)
     check_unique(
         f"--strategies {args.strategies!r}", [s.strip().lower() for s in args.strategies.split(",") if s.strip()]

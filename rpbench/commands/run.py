@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from rpbench.commands._figures import add_figures_arg, formats_of
 from rpbench.commands._runs import add_run_args, check_presets, parse_runs, run_spec
 from rpbench.commands.args import (
     WORKERS,
@@ -40,6 +41,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", default=None, help="results folder to create (default ./rpbench-runs/<stamp>_...)")
     p.add_argument("--json", action="store_true", help="print the KPI table as one JSON object")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_figures_arg(p)
     p.add_argument(
         "--dates",
         default=None,
@@ -64,6 +66,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def _run(args: argparse.Namespace) -> int:
     check_numbers(args)  # before anything runs or downloads
+    formats_of(args)
     if args.dates and args.date:
         raise ParameterError("--dates and --date exclude each other; drop --date")
     if not args.dates and (args.workers is not None or args.scheduler is not None):

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from rpbench.commands._figures import add_figures_arg, formats_of
 from rpbench.commands._runs import add_run_args, check_presets, parse_runs, run_spec, split_list
 from rpbench.commands.args import (
     GivenOnce,
@@ -46,6 +47,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_parallel_args(p)
     p.add_argument("--json", action="store_true", help="print the sweep table as one JSON object")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_figures_arg(p)
     p.set_defaults(handler=_run)
 
 
@@ -87,6 +89,7 @@ def check_opt_conflict(parameter: str, runs: list[str], opts: list[str]) -> None
 
 def _run(args: argparse.Namespace) -> int:
     check_numbers(args)  # before anything runs or downloads
+    formats_of(args)
     check_parallel(args)
     decision_budget(args)
     sweep = build_spec(args)

@@ -65,7 +65,7 @@ def run_comparison(
     table = kpi_table(runs, offline, spec.names)
     with new_results_folder(out, f"{timestamp()}_{scenario.name}_{preset.name}") as (folder, final):
         meta = write_folder(folder, spec, scenario, runs, offline, preset)
-        write_report(folder, name=final.name)
+        write_report(folder, name=final.name, formats=spec.formats)
         write_html(folder, name=final.name)
     rounds = rounds_table(runs)
     return Outcome(

@@ -11,6 +11,7 @@ interrupted evaluation resumes), and refuses a folder of another protocol or of 
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -26,7 +27,7 @@ from rpbench.results import layout
 from rpbench.results.folder import write_parent_meta
 from rpbench.results.store import DEFAULT_PARENT, remove_stale_partials
 from rpbench.scenarios import ScenarioRequest
-from rpbench.spec import RunSpec
+from rpbench.spec import DEFAULT_FIGURE_FORMATS, RunSpec
 
 
 def units_of(protocol: Protocol, request: ScenarioRequest) -> list[tuple[str | None, int]]:
@@ -48,16 +49,18 @@ def run_evaluation(
     command: str | None = None,
     decision_budget_s: float | None = None,
     progress: bool | None = None,
+    formats: Sequence[str] = DEFAULT_FIGURE_FORMATS,
 ) -> Outcome:
     """Run (or resume) ``protocol`` into ``out``; returns the folder's outcome (its table: the leaderboard; its
     children: the units, those found already written with ``fresh`` false).
 
     ``decision_budget_s``: flag the rounds slower than it in every unit (the simulation is unchanged);
-    ``progress``: a bar over the units (default: when stderr is a terminal)."""
+    ``progress``: a bar over the units (default: when stderr is a terminal); ``formats``: the figures' formats
+    (:func:`rpbench.spec.figure_formats`)."""
     request = ScenarioRequest(protocol.scenario, sample=protocol.sample, data_dir=data_dir).resolved()
     spec = RunSpec.of(
         request, list(protocol.strategies), preset=protocol.preset, oracle_preset=protocol.oracle_preset,
-        command=command, decision_budget_s=decision_budget_s,
+        command=command, decision_budget_s=decision_budget_s, formats=formats,
     )  # fmt: skip
     checked_presets(spec)  # an unknown or unable preset fails before the folder exists
     units = units_of(protocol, request)
@@ -95,7 +98,7 @@ def run_evaluation(
     fresh = {Path(o.folder).name: o for o in ran}
     children = tuple(fresh.get(name) or Outcome.read(folder / name) for name in names)
     board = write_evaluation_tables(folder)
-    write_evaluation_report(folder, folder.name)
+    write_evaluation_report(folder, folder.name, formats=spec.formats)
     write_html(folder, folder.name)
     return Outcome(folder, board, children=children)
 

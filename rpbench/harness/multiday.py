@@ -8,6 +8,7 @@ per-day plot per metric.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 
 import pandas as pd
@@ -29,7 +30,7 @@ from rpbench.results.read import load_kpis
 from rpbench.results.runs import markdown_cell, run_label, run_styles
 from rpbench.results.store import check_new_folder
 from rpbench.scenarios import SCENARIOS
-from rpbench.spec import RunSpec
+from rpbench.spec import DEFAULT_FIGURE_FORMATS, RunSpec
 
 
 def run_days(
@@ -71,7 +72,7 @@ def run_days(
             },
         )
         stats = write_summary(tmp)
-        write_multiday_report(tmp, name=final.name)
+        write_multiday_report(tmp, name=final.name, formats=spec.formats)
         write_html(tmp, name=final.name)
     mean = stats["mean"].unstack("run")[spec.names]
     return Outcome(tmp, mean, children=tuple(days)).moved_to(final)
@@ -87,8 +88,11 @@ def write_summary(parent: Path) -> pd.DataFrame:
     return stats
 
 
-def write_multiday_report(parent: Path, name: str | None = None) -> Path:
-    """``report.md`` of a multi-day folder: mean KPIs, per-day key KPIs, findings per day, plots."""
+def write_multiday_report(
+    parent: Path, name: str | None = None, formats: Sequence[str] = DEFAULT_FIGURE_FORMATS
+) -> Path:
+    """``report.md`` of a multi-day folder: mean KPIs, per-day key KPIs, findings per day, plots (in
+    ``formats``)."""
     meta = results.read_meta(parent)
     table = by_day_table(parent)
     mean = table.groupby(["kpi", "run"], sort=False)["value"].mean().unstack("run")
@@ -144,7 +148,7 @@ def write_multiday_report(parent: Path, name: str | None = None) -> Path:
         lines += ["## Do the paper's findings hold?", "", "| claim | days where it holds |", "|---|---:|"]
         lines += [f"| {c} | {sum(v)} of {len(v)} |" for c, v in claims.items()]
         lines.append("")
-    plots = per_day_figures(table, parent, MULTIDAY_PLOT_KPIS, styles)
+    plots = per_day_figures(table, parent, MULTIDAY_PLOT_KPIS, styles, formats=formats)
     if plots:
         lines += ["## Per-day plots", ""] + [f"![{p.stem}]({p.name})" for p in plots] + [""]
     lines += [

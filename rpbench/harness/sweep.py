@@ -37,7 +37,7 @@ from rpbench.results.runs import markdown_cell, run_label, run_styles
 from rpbench.results.store import check_new_folder
 from rpbench.scenarios import ScenarioRequest
 from rpbench.scenarios.base import Params
-from rpbench.spec import RunSpec
+from rpbench.spec import DEFAULT_FIGURE_FORMATS, RunSpec
 
 ALIASES = {
     "K": ("patience_mean_s", "planner_patience_s"),
@@ -243,13 +243,13 @@ def run_sweep(
         )
         table = sweep_table(tmp)
         table.to_csv(tmp / layout.SWEEP, index=False)
-        write_sweep_report(tmp, name=final.name)
+        write_sweep_report(tmp, name=final.name, formats=spec.formats)
         write_html(tmp, name=final.name)
     return Outcome(tmp, table, children=tuple(done)).moved_to(final)
 
 
-def write_sweep_report(parent: Path, name: str | None = None) -> Path:
-    """``report.md`` of a sweep folder in the layout of the paper's Tables 3-6, with plots."""
+def write_sweep_report(parent: Path, name: str | None = None, formats: Sequence[str] = DEFAULT_FIGURE_FORMATS) -> Path:
+    """``report.md`` of a sweep folder in the layout of the paper's Tables 3-6, with plots (in ``formats``)."""
     meta = results.read_meta(parent)
     table = sweep_table(parent)
     spec = SWEEPS.get(meta["sweep"])
@@ -299,6 +299,7 @@ def write_sweep_report(parent: Path, name: str | None = None) -> Path:
         parent / "sweep.png",
         f"sweep {meta['sweep']}",
         styles,
+        formats=formats,
     )
     lines += [
         f"![sweep]({plot.name})",

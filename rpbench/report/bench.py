@@ -294,6 +294,7 @@ def write_outputs(
     recomputes the verdicts, the summary and the profile from these files
     (:mod:`rpbench.check.bench`)."""
     from rpbench.report.plots import profile_figure
+    from rpbench.spec import FIGURE_FORMATS
 
     env = dict(env if env is not None else solver_environment())
     summary = summarise(table, shift)
@@ -303,7 +304,9 @@ def write_outputs(
     summary.to_csv(paths["summary.csv"], index=False)
     profile.to_csv(paths["profile.csv"], index=False)
     store.write_json(paths["environment.json"], {**env, "bench": dict(settings)})
-    paths["profile.png"] = profile_figure(profile, folder / "profile.png", f"Performance profile: {title}")
+    paths["profile.png"] = profile_figure(
+        profile, folder / "profile.png", f"Performance profile: {title}", formats=FIGURE_FORMATS
+    )
     paths["profile.svg"] = folder / "profile.svg"
     paths["report.md"] = folder / "report.md"
     paths["report.md"].write_text(bench_markdown(table, summary, env, settings, title), encoding="utf-8")

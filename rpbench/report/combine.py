@@ -40,6 +40,7 @@ from rpbench.results.metrics import KPI_LABELS, TIMING_KPIS
 from rpbench.results.ratios import DENOMINATORS, DERIVED_KPIS, best_known, bracket_line, savings_of, with_ratios
 from rpbench.results.read import load_kpis, unproven_runs
 from rpbench.results.runs import run_color, run_label, run_styles, simulated_runs
+from rpbench.spec import DEFAULT_FIGURE_FORMATS
 
 #: How a folder of another kind is named in the message refusing it (only comparison folders combine).
 KIND_NAMES = {
@@ -455,7 +456,8 @@ def _figure_lines() -> list[str]:
         "## Figures",
         "",
         # links, so that they follow the files when `rpbench report --out FILE` renames them
-        f"The figure is also beside its PNG as SVG and PDF; the combined table is [`{layout.TABLE_TEX}`]"
+        f"The figure is PNG (`--figures png,svg,pdf` writes SVG and PDF beside it); the combined table is "
+        f"[`{layout.TABLE_TEX}`]"
         f"({layout.TABLE_TEX}) (LaTeX, booktabs) and [`{layout.TABLE_CSV}`]({layout.TABLE_CSV}) (raw values). Each "
         "folder's own report.md keeps its timeline, per-hour figures and solver statistics.",
         "",
@@ -479,9 +481,11 @@ def selected_rows(table: pd.DataFrame, metrics: list[str] | None) -> list[str]:
     return table_rows(table) if metrics is None else [m for m in metrics if m in table.index]
 
 
-def write_combined(c: Combined, dest: Path, metrics: list[str] | None = None) -> list[Path]:
+def write_combined(
+    c: Combined, dest: Path, metrics: list[str] | None = None, formats: Sequence[str] = DEFAULT_FIGURE_FORMATS
+) -> list[Path]:
     """Write the combined table as ``table.tex`` and ``table.csv`` (the rows the report shows) and the
-    headline-KPI figure ``kpis.png`` (with its SVG and PDF) into ``dest``; returns the files' paths."""
+    headline-KPI figure ``kpis.png`` (in ``formats``) into ``dest``; returns the files' paths."""
     rows = selected_rows(c.table, metrics)
     caption = f"{c.label}: the runs of {', '.join(s.name for s in c.sources)} combined"
     note = bracket_line(c.table, c.simulated, fmt, c.styles)
@@ -490,5 +494,5 @@ def write_combined(c: Combined, dest: Path, metrics: list[str] | None = None) ->
     )
     files.write_text(dest / layout.TABLE_TEX, tex)
     csv_table(c.table, rows, c.styles).to_csv(dest / layout.TABLE_CSV)
-    png = kpi_figure(c.table, dest / layout.KPIS_PNG, c.label, fmt, c.styles)
-    return [dest / layout.TABLE_TEX, dest / layout.TABLE_CSV, png]
+    png = kpi_figure(c.table, dest / layout.KPIS_PNG, c.label, fmt, c.styles, formats=formats)
+    return [dest / layout.TABLE_TEX, dest / layout.TABLE_CSV, *(png.with_suffix(f".{f}") for f in formats)]

@@ -8,6 +8,7 @@ writes ``report.md`` and its figures (:data:`FIGURES`) into the folder, or into 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -17,7 +18,7 @@ import pandas as pd
 
 from rpbench import files, paper, results
 from rpbench.exceptions import ResultsError
-from rpbench.report.plots import hourly_figure, kpi_figure, timeline_figure
+from rpbench.report.plots import FORMATS_NOTE, hourly_figure, kpi_figure, timeline_figure
 from rpbench.report.tables import csv_table, latex_table
 from rpbench.results import layout
 from rpbench.results.legacy import LEGACY_KPIS
@@ -34,6 +35,7 @@ from rpbench.results.metrics import (
 from rpbench.results.ratios import DERIVED_KPIS, RATIO_KPIS, bracket_line
 from rpbench.results.read import decision_budget_of, load_kpis, unproven_runs
 from rpbench.results.runs import CLAIRVOYANT_MARK, Styles, markdown_cell, run_label, run_styles, simulated_runs
+from rpbench.spec import DEFAULT_FIGURE_FORMATS
 
 #: One line under every table with an Oracle-1 column: why its ratio can exceed 1.
 ORACLE1_NOTE = (
@@ -399,13 +401,21 @@ def _has_tabulate() -> bool:
     return True
 
 
-def write_report(folder: Path, name: str | None = None, dest: Path | None = None, *, figures: bool = True) -> Path:
-    """Write ``report.md`` and its figures (:data:`FIGURES`) into ``folder``, or into ``dest`` (``folder``
-    is then only read); ``name``: the folder's final name, for the text.  ``figures=False``: a published
-    unit of an evaluation, whose figures (and any left in ``dest``) are left out.  Returns the report's path."""
+def write_report(
+    folder: Path,
+    name: str | None = None,
+    dest: Path | None = None,
+    *,
+    figures: bool = True,
+    formats: Sequence[str] = DEFAULT_FIGURE_FORMATS,
+) -> Path:
+    """Write ``report.md`` and its figures (:data:`FIGURES`, in ``formats``) into ``folder``, or into ``dest``
+    (``folder`` is then only read); ``name``: the folder's final name, for the text.  ``figures=False``: a
+    published unit of an evaluation, whose figures (and any left in ``dest``) are left out.  Returns the
+    report's path."""
     dest = folder if dest is None else dest
     if figures:
-        text = report_markdown(folder, name, figure_lines(folder, dest))
+        text = report_markdown(folder, name, figure_lines(folder, dest, formats))
     else:
         for figure in FIGURES:
             for suffix in (".png", *layout.VECTOR_SUFFIXES):
@@ -433,13 +443,14 @@ def write_paper_tables(folder: Path, dest: Path) -> None:
     csv_table(table, rows, styles).to_csv(dest / layout.TABLE_CSV)
 
 
-def figure_lines(folder: Path, dest: Path) -> list[str]:
-    """Draw the figures of ``folder`` into ``dest``; return the report's figure section embedding them."""
+def figure_lines(folder: Path, dest: Path, formats: Sequence[str] = DEFAULT_FIGURE_FORMATS) -> list[str]:
+    """Draw the figures of ``folder`` into ``dest`` in ``formats``; return the report's figure section embedding
+    them (the same whichever formats)."""
     meta = report_meta(folder)
     sc = meta["scenario"]
     table = load_kpis(folder)
     styles = run_styles(meta)
-    kpi_figure(table, dest / KPIS_PNG, sc["label"], fmt, styles)
+    kpi_figure(table, dest / KPIS_PNG, sc["label"], fmt, styles, formats=formats)
     no_ratio = (
         "; the competitive ratio is drawn as its interval, from saving / upper bound (bar) to saving / best known "
         "schedule (the segment above it)"
@@ -449,8 +460,8 @@ def figure_lines(folder: Path, dest: Path) -> list[str]:
     lines = [
         "## Figures",
         "",
-        f"Every figure is also beside its PNG as SVG and PDF; the comparison table is `{layout.TABLE_TEX}` (LaTeX, "
-        f"booktabs) and `{layout.TABLE_CSV}` (raw values).",
+        f"{FORMATS_NOTE}; the comparison table is `{layout.TABLE_TEX}` (LaTeX, booktabs) and `{layout.TABLE_CSV}` "
+        "(raw values).",
         "",
         f"![headline KPIs per run]({KPIS_PNG})",
         "",
@@ -473,6 +484,7 @@ def figure_lines(folder: Path, dest: Path) -> list[str]:
             bin_s=timeline.bin_s,
             horizon_s=timeline.horizon_s,
             styles=styles,
+            formats=formats,
         )
         unit = "hours" if timeline.hours else "minutes"
         left_out = (
@@ -491,7 +503,7 @@ def figure_lines(folder: Path, dest: Path) -> list[str]:
             f"requests stop.{left_out}",
             "",
         ]
-    hourly_png = hourly_plot(folder, dest)
+    hourly_png = hourly_plot(folder, dest, formats)
     if hourly_png is not None:
         lines += [
             "### Per hour",
@@ -565,9 +577,9 @@ def timeline_of(folder: Path) -> Timeline | str:
     )
 
 
-def hourly_plot(folder: Path, dest: Path | None = None) -> Path | None:
-    """``hourly.png`` (into ``dest``, default ``folder``) when the folder covers more than two hours
-    (full-day and trace scenarios)."""
+def hourly_plot(folder: Path, dest: Path | None = None, formats: Sequence[str] = DEFAULT_FIGURE_FORMATS) -> Path | None:
+    """``hourly.png`` (into ``dest``, default ``folder``; in ``formats``) when the folder covers more than two
+    hours (full-day and trace scenarios)."""
     path = folder / "hourly.csv"
     if not path.is_file():
         return None
@@ -576,7 +588,7 @@ def hourly_plot(folder: Path, dest: Path | None = None) -> Path | None:
         return None
     meta = report_meta(folder)
     path = (folder if dest is None else dest) / HOURLY_PNG
-    return hourly_figure(hourly, path, meta["scenario"]["label"], run_styles(meta))
+    return hourly_figure(hourly, path, meta["scenario"]["label"], run_styles(meta), formats=formats)
 
 
 def findings(table: pd.DataFrame) -> dict[str, bool] | None:

@@ -27,7 +27,7 @@ from rpbench.exceptions import ResultsError
 from rpbench.plugins import is_spec
 from rpbench.report.comparison import fmt
 from rpbench.report.leaderboard import RATIO_OF_MEANS, Bootstrap, leaderboard, paired
-from rpbench.report.plots import leaderboard_figure, seeds_by_day_figure
+from rpbench.report.plots import FORMATS_NOTE, leaderboard_figure, seeds_by_day_figure
 from rpbench.report.tables import booktabs, latex_escape
 from rpbench.results import layout
 from rpbench.results.legacy import current_names
@@ -36,8 +36,9 @@ from rpbench.results.ranking import RANKING_COLUMNS, ranked, run_groups
 from rpbench.results.ratios import RATIO_KPIS
 from rpbench.results.read import load_kpis
 from rpbench.results.runs import markdown_cell, run_label, run_styles
+from rpbench.spec import DEFAULT_FIGURE_FORMATS
 
-#: The leaderboard's figure (and its SVG and PDF beside it).
+#: The leaderboard's figure (and on request its SVG and PDF beside it).
 LEADERBOARD_PNG = "leaderboard.png"
 
 
@@ -154,10 +155,12 @@ class EvaluationReport:
     tex: str
 
 
-def write_evaluation_report(folder: Path, name: str | None = None, *, figures: bool = True) -> Path:
+def write_evaluation_report(
+    folder: Path, name: str | None = None, *, figures: bool = True, formats: Sequence[str] = DEFAULT_FIGURE_FORMATS
+) -> Path:
     """report.md (the protocol, the leaderboard ranked by its first metric, the paired comparisons of that
-    metric, where each unit's folder is), its figures and table.tex, from the folder's tables.  ``figures=False``
-    leaves the figures as they are (the text of the report does not depend on them)."""
+    metric, where each unit's folder is), its figures (in ``formats``) and table.tex, from the folder's tables.
+    ``figures=False`` leaves the figures as they are (the text of the report does not depend on them)."""
     meta = results.read_meta(folder)
     protocol = meta["protocol"]
     board = read_leaderboard(folder)
@@ -166,7 +169,7 @@ def write_evaluation_report(folder: Path, name: str | None = None, *, figures: b
     runs = evaluation_runs(protocol["strategies"], unit_records(folder))
     styles = run_styles(results.read_meta(folder / meta["children"][0]))
     if figures:
-        _draw_figures(folder, board, units, protocol, runs, styles)
+        _draw_figures(folder, board, units, protocol, runs, styles, formats)
     report = evaluation_report(folder, name, board, results.read_csv(folder / layout.PAIRED), units, runs)
     files.write_text(folder / layout.TABLE_TEX, report.tex)
     path = folder / layout.REPORT
@@ -317,8 +320,8 @@ def _figure_lines(units: pd.DataFrame, protocol: dict, runs: Sequence[str], leve
     if not _by_day_values(units, rank, runs).empty:
         lines += [f"![{label} per day]({by_day_png(rank)})", ""]
     lines += [
-        f"Every figure is also beside its PNG as SVG and PDF; the leaderboard is `{layout.TABLE_TEX}` (LaTeX, "
-        f"booktabs) and `{layout.LEADERBOARD}` (raw values).",
+        f"{FORMATS_NOTE}; the leaderboard is `{layout.TABLE_TEX}` (LaTeX, booktabs) and `{layout.LEADERBOARD}` "
+        "(raw values).",
         "",
     ]
     return lines
@@ -334,15 +337,23 @@ def _by_day_values(units: pd.DataFrame, metric: str, runs: Sequence[str]) -> pd.
 
 
 def _draw_figures(
-    folder: Path, board: pd.DataFrame, units: pd.DataFrame, protocol: dict, runs: Sequence[str], styles
+    folder: Path,
+    board: pd.DataFrame,
+    units: pd.DataFrame,
+    protocol: dict,
+    runs: Sequence[str],
+    styles,
+    formats: Sequence[str],
 ) -> None:
-    """The leaderboard (one panel per metric) and the first metric per day, each as PNG, SVG and PDF."""
+    """The leaderboard (one panel per metric) and the first metric per day, each in ``formats``."""
     title = f"rpbench evaluation {protocol['name']} version {protocol['version']}"
     level = f"{protocol['bootstrap']['level']:.0%}"
     metrics = board_metrics(list(protocol["metrics"]))
-    leaderboard_figure(board, metrics, folder / LEADERBOARD_PNG, f"{title}: mean and {level} interval", styles)
+    leaderboard_figure(
+        board, metrics, folder / LEADERBOARD_PNG, f"{title}: mean and {level} interval", styles, formats=formats
+    )
     rank = protocol["metrics"][0]
     label = KPI_LABELS.get(rank, rank)
     seeds_by_day_figure(units, rank, runs, folder / by_day_png(rank),
                         f"{title}: {label}, mean over the seeds of each day (bars: their range)",
-                        styles)  # fmt: skip
+                        styles, formats=formats)  # fmt: skip

@@ -1,4 +1,5 @@
-"""PNG plots for reports (matplotlib, headless), each a pure function of tables read from result files.
+"""Figures for reports (matplotlib, headless), each a pure function of tables read from result files, written
+as PNG and, on request, as SVG and PDF beside it (``formats``: :func:`rpbench.spec.figure_formats`).
 
 Every axis says what it measures and in which unit; a legend lists only the runs drawn in its panel, and a
 run keeps its colour (:func:`rpbench.results.runs.run_color`) across the panels of a figure.
@@ -16,6 +17,7 @@ import pandas as pd
 
 from rpbench.results.metrics import KPI_LABELS, KPI_ORDER
 from rpbench.results.runs import Styles, run_color, run_label
+from rpbench.spec import DEFAULT_FIGURE_FORMATS
 
 #: The competitive ratio drawn as its interval [saving / U, saving / LB] (docs/simulator.md): the pseudo-KPI of
 #: the panels and menus that draw it, from its two ends.
@@ -25,6 +27,12 @@ RATIO_ENDS = ("competitive_ratio_bound", "competitive_ratio_best_known")
 MULTIDAY_PLOT_KPIS = [k for k in KPI_ORDER if k != "platform_profit_cny"] + [RATIO_INTERVAL, "saving_over_oracle1"]
 #: What the interval's marks mean, in a title or caption.
 INTERVAL_MARKS = "low end: saving / upper bound U; ◆ saving / best known schedule LB"
+#: What a report says of its figures' formats (the same words whichever were written: a report is a function
+#: of the folder's tables alone).
+FORMATS_NOTE = (
+    "Figures are PNG; SVG and PDF copies are written beside them on request (`--figures png,svg,pdf` on the "
+    "command that writes the folder, or later `rpbench report PATH --figures svg,pdf`)"
+)
 HOURLY_PANELS = [
     ("avg_shared_m", "(a) Average shared distance (m)"),
     ("avg_detour_m", "(b) Average detour (m)"),
@@ -104,22 +112,36 @@ def _pyplot() -> Any:
     return plt
 
 
-def _savefig(fig: Any, path: Path) -> None:
-    """The PNG, and the same figure as SVG and PDF beside it (:data:`~rpbench.results.layout.VECTOR_SUFFIXES`),
-    written without a date, so that the same tables give the same files."""
+def _savefig(fig: Any, path: Path, formats: Sequence[str]) -> None:
+    """The figure in each of ``formats`` (``path``, a ``.png`` name, with the format's suffix), the vector
+    copies written without a date, so that the same tables give the same files."""
     import matplotlib
 
-    fig.savefig(path, dpi=110)
-    with matplotlib.rc_context({"svg.hashsalt": "rpbench"}):
-        fig.savefig(path.with_suffix(".svg"), metadata={"Date": None})
-    fig.savefig(path.with_suffix(".pdf"), metadata={"CreationDate": None, "ModDate": None})
+    for form in formats:
+        target = path.with_suffix(f".{form}")
+        if form == "png":
+            fig.savefig(target, dpi=110)
+        elif form == "svg":
+            with matplotlib.rc_context({"svg.hashsalt": "rpbench"}):
+                fig.savefig(target, metadata={"Date": None})
+        elif form == "pdf":
+            fig.savefig(target, metadata={"CreationDate": None, "ModDate": None})
+        else:
+            raise ValueError(f"unknown figure format {form!r}")
 
 
-def _save(plt: Any, fig: Any, path: Path, title: str, rect: tuple[float, float, float, float] | None = None) -> Path:
-    """Title (wrapped: scenario labels are long), lay out, write the PNG, free the figure."""
+def _save(
+    plt: Any,
+    fig: Any,
+    path: Path,
+    title: str,
+    rect: tuple[float, float, float, float] | None = None,
+    formats: Sequence[str] = DEFAULT_FIGURE_FORMATS,
+) -> Path:
+    """Title (wrapped: scenario labels are long), lay out, write the figure in ``formats``, free it."""
     fig.suptitle("\n".join(textwrap.wrap(title, 110)), fontsize=10)
     fig.tight_layout(rect=rect)
-    _savefig(fig, path)
+    _savefig(fig, path, formats)
     plt.close(fig)
     return path
 
@@ -192,7 +214,14 @@ def _legends(fig: Any, axes: Sequence[Any], *, below: bool = True) -> bool:
     return False
 
 
-def hourly_figure(hourly: pd.DataFrame, path: Path, title: str, styles: Styles | None = None) -> Path:
+def hourly_figure(
+    hourly: pd.DataFrame,
+    path: Path,
+    title: str,
+    styles: Styles | None = None,
+    *,
+    formats: Sequence[str] = DEFAULT_FIGURE_FORMATS,
+) -> Path:
     """The paper's 24-hour comparison: four panels, one line per run (``hourly.csv`` layout)."""
     plt = _pyplot()
     fig, axes = plt.subplots(2, 2, figsize=(11, 7.4), sharex=True)
@@ -208,10 +237,17 @@ def hourly_figure(hourly: pd.DataFrame, path: Path, title: str, styles: Styles |
     for ax in axes[1]:
         ax.set_xlabel("hour of day (request time)", fontsize=9)
     below = _legends(fig, list(axes.ravel()))
-    return _save(plt, fig, path, title, rect=(0, 0.05, 1, 1) if below else None)
+    return _save(plt, fig, path, title, rect=(0, 0.05, 1, 1) if below else None, formats=formats)
 
 
-def per_day_figures(by_day: pd.DataFrame, folder: Path, kpis: list[str], styles: Styles | None = None) -> list[Path]:
+def per_day_figures(
+    by_day: pd.DataFrame,
+    folder: Path,
+    kpis: list[str],
+    styles: Styles | None = None,
+    *,
+    formats: Sequence[str] = DEFAULT_FIGURE_FORMATS,
+) -> list[Path]:
     """One figure per KPI: value per day, one series per run (``by_day`` columns date, run, kpi, value);
     :data:`RATIO_INTERVAL` draws each run's competitive ratio per day as its interval.
 
@@ -253,7 +289,7 @@ def per_day_figures(by_day: pd.DataFrame, folder: Path, kpis: list[str], styles:
         ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.01, 0.5))  # beside: markers fill the plot
         fig.tight_layout()
         path = folder / f"by_day_{kpi}.png"
-        _savefig(fig, path)
+        _savefig(fig, path, formats)
         plt.close(fig)
         paths.append(path)
     return paths
@@ -270,7 +306,13 @@ def interval_rows(tidy: pd.DataFrame, x: str = "date") -> pd.DataFrame:
 
 
 def leaderboard_figure(
-    board: pd.DataFrame, metrics: Sequence[str], path: Path, title: str, styles: Styles | None = None
+    board: pd.DataFrame,
+    metrics: Sequence[str],
+    path: Path,
+    title: str,
+    styles: Styles | None = None,
+    *,
+    formats: Sequence[str] = DEFAULT_FIGURE_FORMATS,
 ) -> Path:
     """An evaluation's leaderboard (``leaderboard.csv`` layout): one panel per metric, each run's mean as a bar
     with its bootstrap interval as an error bar; a panel shows only the runs with a value.  The competitive
@@ -300,7 +342,7 @@ def leaderboard_figure(
         ax.set_title(KPI_LABELS.get(kpi, kpi).split(" (")[0], fontsize=10)
     for ax in axes.ravel()[len(metrics) :]:
         ax.set_visible(False)
-    return _save(plt, fig, path, title)
+    return _save(plt, fig, path, title, formats=formats)
 
 
 def interval_metrics(metrics: Sequence[str]) -> list[str]:
@@ -338,7 +380,14 @@ def _leaderboard_interval(ax: Any, board: pd.DataFrame, colors: dict[str, str], 
 
 
 def seeds_by_day_figure(
-    units: pd.DataFrame, kpi: str, runs: Sequence[str], path: Path, title: str, styles: Styles | None = None
+    units: pd.DataFrame,
+    kpi: str,
+    runs: Sequence[str],
+    path: Path,
+    title: str,
+    styles: Styles | None = None,
+    *,
+    formats: Sequence[str] = DEFAULT_FIGURE_FORMATS,
 ) -> Path | None:
     """One metric of an evaluation per day (``units.csv`` layout: day, seed, run, kpi, value): each run's mean
     over the day's seeds as a marker, the seeds' range as an error bar; days on a categorical axis."""
@@ -366,11 +415,18 @@ def seeds_by_day_figure(
     ax.set_ylabel(axis_label(kpi), fontsize=9)
     ax.grid(alpha=0.3, axis="y")
     ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.01, 0.5))
-    return _save(plt, fig, path, title)
+    return _save(plt, fig, path, title, formats=formats)
 
 
 def sweep_figure(
-    table: pd.DataFrame, parameter: str, kpis: list[str], path: Path, title: str, styles: Styles | None = None
+    table: pd.DataFrame,
+    parameter: str,
+    kpis: list[str],
+    path: Path,
+    title: str,
+    styles: Styles | None = None,
+    *,
+    formats: Sequence[str] = DEFAULT_FIGURE_FORMATS,
 ) -> Path:
     """KPIs against a swept parameter (``table`` columns value, run, kpi, value_kpi)."""
     plt = _pyplot()
@@ -386,7 +442,7 @@ def sweep_figure(
         ax.set_title(KPI_LABELS.get(kpi, kpi).split(" (")[0], fontsize=9)
         ax.grid(alpha=0.3)
     below = _legends(fig, list(axes[0]))
-    return _save(plt, fig, path, title, rect=(0, 0.08, 1, 1) if below else None)
+    return _save(plt, fig, path, title, rect=(0, 0.08, 1, 1) if below else None, formats=formats)
 
 
 def interval_ends(table: pd.DataFrame) -> tuple[list[str], np.ndarray, np.ndarray]:
@@ -426,7 +482,13 @@ def _interval_panel(ax: Any, table: pd.DataFrame, colors: dict[str, str], text: 
 
 
 def kpi_figure(
-    table: pd.DataFrame, path: Path, title: str, text: Callable[[str, float], str], styles: Styles | None = None
+    table: pd.DataFrame,
+    path: Path,
+    title: str,
+    text: Callable[[str, float], str],
+    styles: Styles | None = None,
+    *,
+    formats: Sequence[str] = DEFAULT_FIGURE_FORMATS,
 ) -> Path:
     """The headline KPIs of a comparison (:data:`KPI_PANELS`), one bar per run with its value on top.
 
@@ -470,7 +532,7 @@ def kpi_figure(
         ax.axhline(0, color="black", lw=0.6)
     for ax in axes.ravel()[len(panels) :]:
         ax.set_visible(False)
-    return _save(plt, fig, path, title)
+    return _save(plt, fig, path, title, formats=formats)
 
 
 def timeline_figure(
@@ -483,6 +545,7 @@ def timeline_figure(
     bin_s: float,
     horizon_s: float,
     styles: Styles | None = None,
+    formats: Sequence[str] = DEFAULT_FIGURE_FORMATS,
 ) -> Path:
     """The period's timeline: four panels (:data:`TIMELINE_PANELS`), one line per run.
 
@@ -510,10 +573,12 @@ def timeline_figure(
     for ax in axes[1]:
         ax.set_xlabel(f"{'hours' if hours else 'minutes'} since the scenario start{since}", fontsize=9)
     below = _legends(fig, list(axes.ravel()))
-    return _save(plt, fig, path, title, rect=(0, 0.05, 1, 1) if below else None)
+    return _save(plt, fig, path, title, rect=(0, 0.05, 1, 1) if below else None, formats=formats)
 
 
-def bench_figure(table: pd.DataFrame, path: Path, title: str) -> Path:
+def bench_figure(
+    table: pd.DataFrame, path: Path, title: str, *, formats: Sequence[str] = DEFAULT_FIGURE_FORMATS
+) -> Path:
     """Solver time (build + solve + extract) against model size, one panel per structure, one line per preset.
 
     ``table`` is a :func:`rpbench.bench.runner.run_benchmark` table; rows without a
@@ -540,10 +605,12 @@ def bench_figure(table: pd.DataFrame, path: Path, title: str) -> Path:
         ax.set_title(structure, fontsize=10)
         ax.grid(alpha=0.3, which="both")
     _legends(fig, list(axes[0]), below=False)
-    return _save(plt, fig, path, title)
+    return _save(plt, fig, path, title, formats=formats)
 
 
-def profile_figure(profile: pd.DataFrame, path: Path, title: str) -> Path:
+def profile_figure(
+    profile: pd.DataFrame, path: Path, title: str, *, formats: Sequence[str] = DEFAULT_FIGURE_FORMATS
+) -> Path:
     """The Dolan-Moré performance profile: one step line per preset, tau on a log axis.
 
     ``profile`` is a :func:`rpbench.report.bench.performance_profile` table (``preset``, ``tau``,
@@ -567,4 +634,4 @@ def profile_figure(profile: pd.DataFrame, path: Path, title: str) -> Path:
     ax.grid(alpha=0.3, which="both")
     if presets:
         ax.legend(fontsize=8, loc="lower right")
-    return _save(plt, fig, path, title)
+    return _save(plt, fig, path, title, formats=formats)

@@ -63,7 +63,11 @@ def test_sweep_runs_end_to_end_on_the_toy_city(tmp_path):
     spec = SweepSpec("dt", "dt", (10, 30), ("mb",), ("total_saving_km", "response_rate"))
     request = ScenarioRequest("toy", sample=0.1, seed=1)
     folder = run_sweep(
-        spec, expand("dt", spec.values), RunSpec.of(request, ["mb"], command="test"), str(tmp_path / "sw"), workers=1
+        spec,
+        expand("dt", spec.values),
+        RunSpec.of(request, ["mb"], command="test", formats=("svg", "pdf")),  # the vector copies asked for
+        str(tmp_path / "sw"),
+        workers=1,
     ).folder
     assert (folder / "dt=10").is_dir() and (folder / "dt=30").is_dir()
     assert all((folder / f"sweep{suffix}").is_file() for suffix in (".png", ".svg", ".pdf"))

@@ -241,7 +241,7 @@ def test_out_writes_the_markdown_with_its_tables_and_figure_beside_it(runs, tmp_
     out.parent.mkdir()
     assert main(["report", str(runs["one"]), str(runs["two"]), "--out", str(out)]) == 0
     assert "report written to" in capsys.readouterr().out
-    beside = ["both-kpis.png", "both-kpis.svg", "both-kpis.pdf", "both-table.tex", "both-table.csv"]
+    beside = ["both-kpis.png", "both-table.tex", "both-table.csv"]  # PNG only: vector copies on request
     assert sorted(p.name for p in out.parent.iterdir()) == sorted(["both.md", *beside])
     text = out.read_text()
     assert "![headline KPIs per run](both-kpis.png)" in text and "](both-table.tex)" in text

@@ -129,7 +129,8 @@ def test_leaderboard_bars_carry_their_intervals(tmp_path, figures):
             {"run": "bound", "kpi": "response_rate", "mean": np.nan, "ci_low": np.nan, "ci_high": np.nan},
         ]
     )
-    leaderboard_figure(board, ["total_saving_km", "response_rate"], tmp_path / "lb.png", "leaderboard")
+    formats = ("png", "svg", "pdf")
+    leaderboard_figure(board, ["total_saving_km", "response_rate"], tmp_path / "lb.png", "leaderboard", formats=formats)
     (fig,) = figures
     assert_labelled(fig, categorical_x=True)
     saving, rate = panels(fig)

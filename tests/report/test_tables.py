@@ -21,7 +21,7 @@ def test_latex_escapes_what_latex_would_read():
 
 @pytest.fixture(scope="module")
 def folder(tmp_path_factory):
-    spec = RunSpec.of(ScenarioRequest("toy", sample=0.1, seed=4), ["mb", "fl-nd", "bound"])
+    spec = RunSpec.of(ScenarioRequest("toy", sample=0.1, seed=4), ["mb", "fl-nd", "bound"], formats=("svg", "pdf"))
     return run_comparison(spec, tmp_path_factory.mktemp("tables") / "toy", progress=False).folder
 
 
@@ -44,7 +44,7 @@ def test_the_csv_table_holds_the_raw_values(folder):
     assert pd.isna(csv.loc["response_rate", "bound"])
 
 
-def test_every_figure_has_its_vector_copies(folder):
+def test_every_figure_has_the_vector_copies_asked_for(folder):
     for stem in ("kpis", "timeline"):
         assert (folder / f"{stem}.svg").read_text().lstrip().startswith("<?xml")
         assert (folder / f"{stem}.pdf").read_bytes()[:5] == b"%PDF-"
