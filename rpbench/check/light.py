@@ -26,7 +26,7 @@ from pathlib import Path
 from rpbench import results
 from rpbench.check.core import FOLDER, FolderResult, RunCheck
 from rpbench.check.kpis import check_report
-from rpbench.check.unit_runs import run_names
+from rpbench.check.unit_runs import recorded_runs
 from rpbench.digests import file_sha256
 from rpbench.exceptions import RpbenchError, one_line
 from rpbench.results.digest import LIGHT_CHILD_FILES, LIGHT_COPY, LIGHT_COPY_FORMAT
@@ -100,7 +100,7 @@ def check_light_child(child: Path, name: str, record: LightRecord | None, among_
     except RpbenchError as exc:
         fc.fail(LIGHT_CHECK, one_line(exc))
         return FolderResult(str(child), folder_check=fc)
-    runs = run_names(meta)
+    runs = recorded_runs(meta)
     _check_verdict(fc, child, runs)
     stray = sorted(set(map(str, reported.get("run", []))) ^ set(runs))
     if stray:

@@ -25,7 +25,7 @@ from rpbench.spec import VARIANT_SEP, options_class
 from rpbench.strategies import STRATEGY_REGISTRY
 
 #: The pair rules that are flags of the offline run (the others are the scenario's thresholds).
-RULE_FLAGS = ("both_pickup_orders", "pickup_check", "allow_enroute", "order_rule", "window")
+OFFLINE_RULE_FLAGS = ("both_pickup_orders", "pickup_check", "allow_enroute", "order_rule", "window")
 
 
 def preset_name(given: str) -> str:
@@ -33,7 +33,7 @@ def preset_name(given: str) -> str:
     return given.rsplit("/", 1)[-1].removesuffix(".toml") if given.endswith(".toml") else given
 
 
-def run_names(meta: Mapping[str, Any]) -> list[str]:
+def recorded_runs(meta: Mapping[str, Any]) -> list[str]:
     """A unit's runs: its manifest (``manifest.runs``), else the runs it records."""
     manifest = meta.get("manifest")
     if isinstance(manifest, Mapping) and isinstance(manifest.get("runs"), list):
@@ -51,7 +51,9 @@ def matched_runs(strategies: Sequence[str], meta: Mapping[str, Any]) -> tuple[di
     matched = {entry: run for entry, run in found.items() if run is not None}
     problems = [f"holds no run of the protocol's {entry!r}" for entry, run in found.items() if run is None]
     named = set(matched.values())
-    problems += [f"holds run {run!r}, which the protocol does not list" for run in run_names(meta) if run not in named]
+    problems += [
+        f"holds run {run!r}, which the protocol does not list" for run in recorded_runs(meta) if run not in named
+    ]
     return matched, problems
 
 
@@ -104,7 +106,7 @@ def _rule_problems(run: str, record: Mapping[str, Any]) -> list[str]:
     if spec is None or not isinstance(rules, Mapping):
         return [f"offline run {run!r} is not one rpbench knows, or records no pair rules"]
     defaults = {f.name: f.default for f in dataclasses.fields(PairRules)}
-    want = {k: spec.defaults.get(k, defaults[k]) for k in RULE_FLAGS}
+    want = {k: spec.defaults.get(k, defaults[k]) for k in OFFLINE_RULE_FLAGS}
     return [
         f"offline run {run!r} ran with {k}={rules[k]!r}; the protocol gives it {v!r}"
         for k, v in want.items()

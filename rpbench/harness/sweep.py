@@ -172,7 +172,10 @@ def expand(parameter: str, values: list[float] | tuple[float, ...], runs: Sequen
     for v in values:
         label = f"{parameter}={v:g}"
         if target:
-            points.append(SweepPoint(label=label, value=float(v), options={target[0]: {target[1]: float(v)}}))
+            # a whole number stays an int, so an integer option (msa.samples) can be swept; a float option
+            # takes the int as its float
+            option_value = int(v) if float(v).is_integer() else float(v)
+            points.append(SweepPoint(label=label, value=float(v), options={target[0]: {target[1]: option_value}}))
             continue
         overrides = {f: float(v) for f in fields}
         Params().replace(**overrides)  # fail early on out-of-range values

@@ -56,7 +56,7 @@ SWEEP = ("sweep", "--over", "dt=20,30", *TOY, "--workers", "1")
             "--opt 'fl.tau0_s=30' conflicts with the sweep over fl.tau0_s",
         ),
         ((*SWEEP, "--strategies", "mb", "--values", "3,4"), "--values changes a predefined sweep's values"),
-        (("sweep", "--over", "dt=20,20", *TOY, "--strategies", "mb"), "repeats a value"),
+        (("sweep", "--over", "dt=20,20", *TOY, "--strategies", "mb"), "20 appears twice; each point once"),
         ((*SWEEP[:-2], "--strategies", "mb", "--scheduler", "not a url"), "is not a Dask scheduler address"),
         ((*SWEEP[:-2], "--strategies", "mb", "--scheduler", "tcp://host:99999"), "its port must be a number"),
         ((*SWEEP[:-2], "--strategies", "mb", "--scheduler", "http://host:8786"), "is not a Dask scheduler address"),

@@ -96,3 +96,19 @@ def test_a_sweep_over_a_strategy_option(tmp_path, capsys):
     assert main([*argv, "--over", "fl.nope=1,2", "--out", str(tmp_path / "bad")]) == 2
     assert "unknown option 'nope'" in capsys.readouterr().err and not (tmp_path / "bad").exists()
     assert main([*argv, "--over", "fl.tau0_s=-5,10", "--out", str(tmp_path / "bad")]) == 2
+
+
+def test_an_integer_option_can_be_swept_and_a_fraction_of_it_is_refused():
+    """``msa.samples=2,4``: whole numbers reach the option as ints (an int option refuses 2.0); ``2.5`` is
+    refused when the point's specification is built, as any bad option value."""
+    from rpbench.scenarios import ScenarioRequest
+    from rpbench.spec import RunSpec
+
+    spec = RunSpec.of(ScenarioRequest("toy", sample=0.1), ["mb", "msa"])
+    points = expand("msa.samples", [2.0, 4.0], ["mb", "msa"])
+    assert [p.options for p in points] == [{"msa": {"samples": 2}}, {"msa": {"samples": 4}}]
+    built = [p.spec_of(spec, spec.request) for p in points]
+    assert [b.entry("msa").options.samples for b in built] == [2, 4]
+    (half,) = expand("msa.samples", [2.5], ["mb", "msa"])
+    with pytest.raises(ParameterError, match="samples"):
+        half.spec_of(spec, spec.request)
