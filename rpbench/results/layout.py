@@ -15,7 +15,7 @@ A comparison folder (one scenario, several runs)::
     report.md                      the report, rendered from the files above, with its figures:
     kpis.png, timeline.png         the headline KPIs per run; waiting, served and pooled passengers over time
     hourly.png                     the KPIs per hour (scenarios of more than two hours)
-    *.svg, *.pdf                   every figure again as vector graphics
+    *.svg, *.pdf                   every figure again as vector graphics (only with --figures png,svg,pdf)
     table.tex, table.csv           the comparison table as LaTeX (booktabs) and with raw values
     report.html                    the report as one self-contained interactive page, with a map
 
@@ -56,7 +56,7 @@ TIMELINE_PNG = "timeline.png"
 HOURLY_PNG = "hourly.png"
 TABLE_TEX = "table.tex"
 TABLE_CSV = "table.csv"
-#: Every figure is also written as SVG and PDF beside its PNG (vector copies for papers).
+#: The vector copies of a figure, written beside its PNG on request (``--figures``; for papers).
 VECTOR_SUFFIXES = (".svg", ".pdf")
 
 #: The kinds of folder that hold other results folders (their children), not runs of their own.
