@@ -82,11 +82,18 @@ def is_light(child: Path) -> bool:
     return not (child / RUNS).is_dir() and (child / CHECK).is_file()
 
 
-def check_light_child(child: Path, name: str, record: LightRecord | None, among_full: bool = False) -> FolderResult:
-    """The checks a light child supports (see the module docstring); never raises."""
+def check_light_child(
+    child: Path, name: str, record: LightRecord | None, among_full: bool = False, lone: bool = False
+) -> FolderResult:
+    """The checks a light child supports (see the module docstring); never raises.  ``lone``: the published
+    copy of a single run, which no parent holds a record of."""
     fc = RunCheck(FOLDER)
     if record is not None:
         _check_digests(fc, child, name, record)
+    elif lone:
+        fc.skip(LIGHT_CHECK, f"the published copy of one run: no parent records the SHA-256 of its files, so its "
+                             f"{KPIS} edited together with its report and {CHECK} is not caught (rerun the command "
+                             f"in its {META} to check the runs again)")  # fmt: skip
     elif among_full:
         fc.fail(LIGHT_CHECK, "a light copy among full folders, and its parent records no digest of it: its runs "
                              "were removed after it was written")  # fmt: skip

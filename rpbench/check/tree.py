@@ -1,7 +1,7 @@
-"""``rpbench check`` of any folder: a comparison, a parent (multi-day, sweep, evaluation: its own tables,
-then each child, in full or as a published light copy), a replication or a ``rpbench bench`` folder; the
-dispatch sits above the checkers it calls, so that a replication's check can check its engines' folders as
-comparisons (:func:`.verify.check_results`)."""
+"""``rpbench check`` of any folder: a comparison (or its published light copy), a parent (multi-day, sweep,
+evaluation: its own tables, then each child, in full or as a published light copy), a replication or a
+``rpbench bench`` folder; the dispatch sits above the checkers it calls, so that a replication's check can
+check its engines' folders as comparisons (:func:`.verify.check_results`)."""
 
 from __future__ import annotations
 
@@ -40,7 +40,14 @@ def check_tree(path: str | Path) -> list[FolderResult]:
         assert parent.folder_check is not None
         record = read_light_record(parent.folder_check, meta, listed_children(meta) or [])
         return [parent] + _check_children(path, children, record)
-    return [check_results(folder) for folder in results.run_folders(path)]
+    return [_check_run_folder(folder) for folder in results.run_folders(path)]
+
+
+def _check_run_folder(folder: Path) -> FolderResult:
+    """A comparison folder in full, or, published alone as a light copy, for what the copy keeps."""
+    if is_light(folder):
+        return check_light_child(folder, folder.name, None, lone=True)
+    return check_results(folder)
 
 
 def _check_children(parent: Path, children: list[Path], record) -> list[FolderResult]:

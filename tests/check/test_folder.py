@@ -140,13 +140,32 @@ def test_an_unreadable_folder_exits_2_with_one_line(folder, case, capsys):
     assert_unreadable(folder, fragment, capsys)
 
 
-def test_a_published_light_copy_says_where_its_verdict_is(base, tmp_path, capsys):
-    """A published copy (no event logs, no inputs) is unreadable, and the line points to its check.txt."""
+def test_a_published_light_copy_is_checked_for_what_it_keeps(base, tmp_path):
+    """A published copy of one run (no event logs, no inputs) is checked as a light copy: its verdict, its
+    manifest and its report against its kpis.csv; the runs' checks and the digests are skipped, saying why.
+    An edit of its kpis.csv alone fails (the report no longer shows it); a verdict edited to FAILED fails."""
+    from rpbench.check import check_tree
+    from rpbench.check.folder import read_folder
+    from rpbench.exceptions import ResultsError
     from rpbench.harness.publish import publish
 
     dest = publish(base, tmp_path / "published")
-    line = assert_unreadable(dest, "is a published light copy without event logs or inputs", capsys)
-    assert "check.txt holds the verdict" in line
+    with pytest.raises(ResultsError, match="is a published light copy without event logs or inputs"):
+        read_folder(dest)  # the full checker's reader still refuses it, pointing to check.txt
+    (found,) = check_tree(dest)
+    assert found.status == "ok" and found.folder_check.checked["verdicts"] >= 2
+    assert "no parent records the SHA-256" in found.folder_check.skipped["light-copy"]
+    assert "keeps no event logs" in found.folder_check.skipped["runs"]
+    kpis = pd.read_csv(dest / "kpis.csv")
+    row = (kpis["run"] == "mb") & (kpis["kpi"] == "total_saving_km")
+    kpis.loc[row, "value"] = kpis.loc[row, "value"] + 100.0
+    kpis.to_csv(dest / "kpis.csv", index=False)
+    (found,) = check_tree(dest)
+    assert found.status == "failed" and "report" in found.folder_check.violations
+    verdict = dest / "check.txt"
+    verdict.write_text(verdict.read_text().replace("mb: OK", "mb: FAILED"))
+    (found,) = check_tree(dest)
+    assert "check-verdict" in found.folder_check.violations
 
 
 # ------------------------------------------------------------ edited inputs
