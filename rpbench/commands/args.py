@@ -196,6 +196,11 @@ def parse_param_overrides(items: list[str]) -> dict[str, float]:
     return out
 
 
+def progress_of(args: argparse.Namespace) -> bool | None:
+    """``--no-progress`` as the harness takes it: False to hide the bars, None to show them on a terminal."""
+    return False if getattr(args, "no_progress", False) else None
+
+
 def scenario_request(args: argparse.Namespace) -> ScenarioRequest:
     """The scenario the arguments name, its data folder fetched first when it needs one and none is found
     (:mod:`rpbench.data.first_run`; not with ``--offline``).  Without ``--scenario``: haikou-peak, or the
@@ -203,7 +208,7 @@ def scenario_request(args: argparse.Namespace) -> ScenarioRequest:
     check_numbers(args)  # idempotent: a command that forgot still fails before any download
     params = tuple(parse_param_overrides(args.param).items())  # a bad --param fails before any download
     offline = bool(getattr(args, "offline", False))
-    progress = False if getattr(args, "no_progress", False) else None
+    progress = progress_of(args)
     if args.scenario is None:
         name = default_scenario_name(args.data, offline=offline, progress=progress)
     else:

@@ -30,7 +30,7 @@ import pandas as pd
 from rpbench.backends.presets import load_preset, preset_names
 from rpbench.bench.runner import BenchSpec, format_table, run_benchmark
 from rpbench.bench.synthetic import SUITES, suite
-from rpbench.commands.args import SEED, TIME_LIMIT, add_number_arg, check_numbers
+from rpbench.commands.args import SEED, TIME_LIMIT, add_number_arg, check_numbers, progress_of
 from rpbench.commands.checks import check_out_file, check_unique, write_out_file
 from rpbench.commands.output import command_line, note, print_json
 from rpbench.exceptions import ParameterError
@@ -282,7 +282,7 @@ def _run(args: argparse.Namespace) -> int:
         known=known,
         tiers=tiers,
     )
-    table = run_benchmark(models, spec, progress=False if args.no_progress else None)
+    table = run_benchmark(models, spec, progress=progress_of(args))
     what = f"{len(models)} models x {table['preset'].nunique()} presets"
     settings = _settings(args, table, solu_files)
     env = solver_environment() if csv_out is not None or html_out is not None or args.out is not None else None

@@ -12,6 +12,7 @@ from rpbench.commands.args import (
     add_parallel_args,
     check_numbers,
     decision_budget,
+    progress_of,
 )
 from rpbench.commands.checks import check_out_name, check_parallel
 from rpbench.commands.output import command_line, note, note_outcome
@@ -63,7 +64,7 @@ def _run(args: argparse.Namespace) -> int:
         scheduler=args.scheduler,
         command=command_line(),
         decision_budget_s=budget,
-        progress=False if args.no_progress else None,
+        progress=progress_of(args),
         formats=formats,
     )
     folder, ran = outcome.folder, sum(unit.fresh for unit in outcome.children)

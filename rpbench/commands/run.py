@@ -12,6 +12,7 @@ from rpbench.commands.args import (
     add_scenario_args,
     check_numbers,
     decision_budget,
+    progress_of,
     scenario_request,
 )
 from rpbench.commands.checks import check_date_list, check_out_name, check_parallel, check_unique
@@ -90,7 +91,7 @@ def _run(args: argparse.Namespace) -> int:
 def _run_one(args: argparse.Namespace, spec: RunSpec) -> int:
     scenario = spec.request.build()
     note(scenario.label)
-    outcome = run_comparison(spec, args.out, scenario=scenario, progress=False if args.no_progress else None)
+    outcome = run_comparison(spec, args.out, scenario=scenario, progress=progress_of(args))
     folder, table = outcome.folder, outcome.table
     unproven = note_outcome(outcome)
     simulated = [e.name for e in spec.simulated]
@@ -127,7 +128,7 @@ def _run_many_days(args: argparse.Namespace, spec: RunSpec) -> int:
         args.out,
         workers=args.workers,
         scheduler=args.scheduler,
-        progress=False if args.no_progress else None,
+        progress=progress_of(args),
     )
     folder, mean = outcome.folder, outcome.table
     unproven = note_outcome(outcome)

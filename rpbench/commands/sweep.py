@@ -13,6 +13,7 @@ from rpbench.commands.args import (
     check_numbers,
     decision_budget,
     parse_param_overrides,
+    progress_of,
     scenario_request,
 )
 from rpbench.commands.checks import check_out_name, check_parallel
@@ -115,7 +116,7 @@ def _run(args: argparse.Namespace) -> int:
         args.out,
         workers=args.workers,
         scheduler=args.scheduler,
-        progress=False if args.no_progress else None,
+        progress=progress_of(args),
     )
     folder, table = outcome.folder, outcome.table
     unproven = note_outcome(outcome)

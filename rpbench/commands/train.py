@@ -10,7 +10,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from rpbench.commands.args import add_scenario_args, check_numbers, scenario_request
+from rpbench.commands.args import add_scenario_args, check_numbers, progress_of, scenario_request
 from rpbench.commands.checks import check_date_list
 from rpbench.commands.output import note, print_json
 from rpbench.exceptions import ParameterError
@@ -82,7 +82,7 @@ def _run(args: argparse.Namespace) -> int:
         scenarios,
         options.settings(),
         next_policy=ValueFunction(options).next_policy,
-        progress=False if args.no_progress else None,
+        progress=progress_of(args),
     )
     seconds = time.perf_counter() - started
     with store.new_results_folder(args.out, f"vf-model_{store.timestamp()}") as (tmp, final):
