@@ -14,7 +14,7 @@ wait edges) are shown padded to ``max_edges`` rows:
   passengers, vacant vehicles and vehicles with one passenger.
 
 A round with more edges than ``max_edges`` is shown passenger by passenger (they come in request order)
-until the next passenger's edges would not fit; the passengers not shown wait this round (``held`` in the
+until the next passenger's edges would not fit; the passengers not shown wait in the current round (``held`` in the
 step's info).  A passenger whose edges alone do not fit is an error naming ``max_edges``.
 
 The action is one row per edge, padding ignored: a score (mode ``scores``, the utility in metres the

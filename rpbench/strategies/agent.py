@@ -112,7 +112,7 @@ class Agent(Strategy[PoolingOptions]):
     def build(self, state: RoundState) -> RoundModel:
         assert self.link is not None  # prepare() found it
         edges = self._edges = round_edges(state, self.options.order_rule)
-        if not (edges.kind != 2).any():  # nobody can be served this round: no choice to hand over
+        if not (edges.kind != 2).any():  # nobody can be served in the current round: no choice to hand over
             return model_from_decision(state, edges, np.zeros(len(edges)), name=self.name)
         self.link.rounds.put(Round(state, edges))
         answer = self.link.models.get()

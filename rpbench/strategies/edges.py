@@ -4,7 +4,7 @@ and how its answer becomes the round's model.
 Every waiting passenger p has, in this order, its **vacant** edges (p, a vacant vehicle within R̄: the
 pick-up distance), its **join** edges (p, a vehicle with one unpaired passenger A, when POOL accepts the
 pair: pick-up distance, the pair's saving e (Eq. 5), whether A is dropped first, the pooled route's
-remaining length) and one **wait** edge (keep p waiting this round).  These are exactly the options MB and
+remaining length) and one **wait** edge (keep p waiting in the current round).  These are exactly the options MB and
 FL weigh (:mod:`.candidates`), so an answer in either form below is a decision the simulator can commit:
 
 * **scores**: one number per edge, the utility (in metres) the round's assignment model maximises, as a

@@ -3,7 +3,7 @@
 Bent & Van Hentenryck's multiple scenario approach (Operations Research 52(6), 2004) decides online by
 sampling: each round, draw S possible futures from what is known of the demand, solve each as an offline
 problem, and act on what most of them agree on.  The decision here is, for every waiting passenger p,
-whether to offer p a vacant vehicle in this round (``now``) or to keep p for a partner's vehicle
+whether to offer p a vacant vehicle in the current round (``now``) or to keep p for a partner's vehicle
 (``wait``); the round itself is MB's assignment (Eqs. 1-4, utilities of Eq. 7), so the simulator, the
 checker and every backend treat MSA like any strategy.
 
@@ -30,7 +30,7 @@ its nearest vacant vehicle (a waiting A) or the run's mean of those drives (a sa
 shortest path; B joins in a round of ``[A's dispatch + Δt, B's last round]`` (patience K̄, A10) at the
 first node where ``pk <= R̄`` and both detours ``<= D̄`` (before A's pick-up at h = o_A, A14), its saving
 ``e = l_A + l_B - L`` (Eq. 5, §1.1).  Pairs with ``e <= 0`` are left out (A11).  A V1 passenger is an A
-dispatched already; it pairs with a waiting B at the saving of this round's join option.  An unordered
+dispatched already; it pairs with a waiting B at the saving of the current round's join option.  An unordered
 pair weighs its better orientation.
 
 **The vote of a future** for a waiting p, from its matching M_s: ``now`` when p is unmatched or is the A of
@@ -497,7 +497,7 @@ class _FutureGraph:
 
 
 def _rider_edges(n: int, join: JoinOptions) -> _Edges:
-    """V1 passengers (node ``n + v``: an A dispatched already) with the waiting B of this round's join options
+    """V1 passengers (node ``n + v``: an A dispatched already) with the waiting B of the current round's join options
     that save distance, at the join's saving."""
     good = np.flatnonzero(join.saving_m > 0)
     return _Edges(join.p[good], n + join.v[good], np.full(len(good), np.nan), join.saving_m[good])

@@ -148,7 +148,7 @@ def futures_with_partner(t: float, present: list[bool], od=J, after_s: float = 2
 
 
 def decide(s, state, futures):
-    s.sample = lambda t_s: futures  # the futures of this round, fixed
+    s.sample = lambda t_s: futures  # the futures of the current round, fixed
     return s.build(state), s.votes
 
 
