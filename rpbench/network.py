@@ -29,7 +29,7 @@ from scipy.spatial import cKDTree
 
 from rpbench.data.road import NetworkTables
 from rpbench.exceptions import DataError, ParameterError, one_line
-from rpbench.paths import cache_dir, cache_write_error, temporary_file
+from rpbench.files.paths import cache_dir, cache_write_error, temporary_file
 
 EARTH_RADIUS_M = 6_371_008.8
 _NO_PRED = -9999  # scipy's marker for "no predecessor"
@@ -351,7 +351,7 @@ class _ApspFiles:
 
 def _atomic_write(path: Path, write) -> None:
     """Write through ``write(file)`` into a temporary file renamed over ``path``; no leftover on failure."""
-    tmp = temporary_file(path)  # carries the pid: a dead writer's leftover is swept (rpbench.paths)
+    tmp = temporary_file(path)  # carries the pid: a dead writer's leftover is swept (rpbench.files.paths)
     try:
         with open(tmp, "wb") as fh:
             write(fh)

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import pytest
 
-from rpbench.paths import find_data_dir, shared_data_candidates
+from rpbench.files.paths import find_data_dir, shared_data_candidates
 
 # Let test modules in sub-folders import tests/helpers.py as `helpers`.
 sys.path.insert(0, str(Path(__file__).parent))

@@ -10,8 +10,8 @@ import pytest
 from rpbench.backends.presets import load_preset, preset_names
 from rpbench.bench.snapshot import take_snapshots
 from rpbench.exceptions import ResultsError
-from rpbench.instances import find_instances, load_instance, save_instance
 from rpbench.model import AssignmentModel, PairingModel, TripPackingModel
+from rpbench.model.instances import find_instances, load_instance, save_instance
 from rpbench.scenarios import ScenarioRequest
 from rpbench.spec import RunSpec
 

@@ -42,8 +42,8 @@ from rpbench.backends.base import Backend, SolveOptions
 from rpbench.backends.registry import BACKEND_REGISTRY, backend_class, backend_plugin_names, honoured_options
 from rpbench.exceptions import PresetError, one_line
 from rpbench.files import parse_toml, require_regular
+from rpbench.files.paths import source_root
 from rpbench.model import Structure
-from rpbench.paths import source_root
 from rpbench.plugins import is_spec
 
 _TOP_KEYS = {"backend", "description", "options"}

@@ -21,7 +21,7 @@ from pathlib import Path
 
 from rpbench.bench import synthetic
 from rpbench.bench.snapshot import take_snapshots
-from rpbench.instances import save_instance
+from rpbench.model.instances import save_instance
 from rpbench.scenarios import ScenarioRequest
 from rpbench.spec import RunSpec
 

@@ -2,7 +2,7 @@
 
 :func:`run_benchmark` takes any models (synthetic ones from
 :mod:`rpbench.bench.synthetic`, or snapshot instance files read by
-:func:`rpbench.instances.load_instances`) and returns a tidy
+:func:`rpbench.model.instances.load_instances`) and returns a tidy
 :class:`pandas.DataFrame`, one row per (model, preset):
 
 * ``build_s`` / ``solve_s`` / ``extract_s`` as the backend measured them,

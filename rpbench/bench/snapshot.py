@@ -1,5 +1,5 @@
 """Freeze chosen rounds of simulation runs, and offline pairing models, into instance files
-(:mod:`rpbench.instances`).
+(:mod:`rpbench.model.instances`).
 
 Each strategy is simulated on the scenario with the preset; the models of
 the chosen rounds (round indices, or the largest rounds by columns) are
@@ -17,8 +17,8 @@ from pathlib import Path
 from rpbench import results
 from rpbench.backends import load_preset
 from rpbench.harness.comparison import calibrated, simulate_strategy
-from rpbench.instances import save_instance
 from rpbench.model import Model, Solution
+from rpbench.model.instances import save_instance
 from rpbench.options import RunOptions
 from rpbench.oracle.pairs import find_candidates
 from rpbench.oracle.runs import ORACLE_RUNS

@@ -18,7 +18,7 @@ import numpy as np
 from rpbench.check.core import RunCheck
 from rpbench.check.exact import EXACT_PLAN
 from rpbench.check.folder import Folder
-from rpbench.digests import file_sha256
+from rpbench.files.digests import file_sha256
 from rpbench.strategies.value import VALUE_MODEL
 
 #: Strategies whose runs must name a value model.

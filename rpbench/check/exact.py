@@ -20,7 +20,7 @@ import pandas as pd
 
 from rpbench.check.core import CERT_TOL_M, RunCheck
 from rpbench.check.folder import Folder
-from rpbench.digests import file_sha256
+from rpbench.files.digests import file_sha256
 from rpbench.strategies.exact import EXACT_PLAN, PLAN_FILE
 
 

@@ -27,8 +27,8 @@ from rpbench import results
 from rpbench.check.core import FOLDER, FolderResult, RunCheck
 from rpbench.check.kpis import check_report
 from rpbench.check.unit_runs import recorded_runs
-from rpbench.digests import file_sha256
 from rpbench.exceptions import RpbenchError, one_line
+from rpbench.files.digests import file_sha256
 from rpbench.results.digest import LIGHT_CHILD_FILES, LIGHT_COPY, LIGHT_COPY_FORMAT
 from rpbench.results.layout import CHECK, KPIS, META, RUNS
 

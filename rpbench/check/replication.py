@@ -34,8 +34,8 @@ import pandas as pd
 from rpbench.check.core import FOLDER, KPI_COLUMNS, FolderResult, RunCheck, as_number, same
 from rpbench.check.folder import read_results_table
 from rpbench.check.verify import check_results
-from rpbench.digests import file_sha256
 from rpbench.exceptions import ResultsError, RpbenchError, one_line
+from rpbench.files.digests import file_sha256
 from rpbench.results import store as results
 from rpbench.results.layout import ENGINES_DIR, FLEET, KPIS, META, RECORDS_DIR, engine_folder, records_file
 

@@ -27,10 +27,10 @@ import pandas as pd
 
 from rpbench.cities.importer import IMPORTER_VERSION, Sources, import_city
 from rpbench.cities.trips import TripOptions
-from rpbench.digests import content_sha256
 from rpbench.exceptions import DataError, ParameterError, one_line
+from rpbench.files.digests import content_sha256
+from rpbench.files.paths import cache_dir, sweep_stale_temporaries
 from rpbench.network import great_circle_m
-from rpbench.paths import cache_dir, sweep_stale_temporaries
 
 #: Where built-in cities are kept, under the cache.
 CITIES_CACHE = "cities"

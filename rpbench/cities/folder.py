@@ -28,9 +28,9 @@ from rpbench.cities.roads import Reduction
 from rpbench.cities.trips import Trips
 from rpbench.data._table import FLOAT, INT, read_table
 from rpbench.data.road import NetworkTables
-from rpbench.digests import file_sha256
 from rpbench.exceptions import DataError
 from rpbench.files import load_json_object
+from rpbench.files.digests import file_sha256
 from rpbench.network import RoadNetwork
 
 CITY_FORMAT = "rpbench-city-1"

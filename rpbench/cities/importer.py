@@ -19,10 +19,10 @@ from typing import Any
 from rpbench.cities.folder import write_city
 from rpbench.cities.roads import RawRoads, read_graphml, read_node_arc_tables, reduce_roads
 from rpbench.cities.trips import TripOptions, read_and_place
-from rpbench.digests import content_sha256
 from rpbench.exceptions import ParameterError
+from rpbench.files.digests import content_sha256
+from rpbench.files.paths import temporary_folder
 from rpbench.network import RoadNetwork
-from rpbench.paths import temporary_folder
 
 #: A city's name: it names its folder and ``--city NAME``.
 CITY_NAME = re.compile(r"^[a-z0-9][a-z0-9_-]{0,63}$")

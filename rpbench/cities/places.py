@@ -13,7 +13,7 @@ from rpbench.cities.builtin import RECIPES, builtin_city
 from rpbench.cities.folder import CITY_JSON, City, read_city
 from rpbench.data.first_run import ensure_data_dir
 from rpbench.exceptions import DataNotFoundError
-from rpbench.paths import data_home
+from rpbench.files.paths import data_home
 
 #: The data home's folder of imported cities.
 CITIES_FOLDER = "cities"

@@ -34,9 +34,9 @@ from rpbench.commands.args import SEED, TIME_LIMIT, add_number_arg, check_number
 from rpbench.commands.checks import check_out_file, check_unique, write_out_file
 from rpbench.commands.output import command_line, note, print_json
 from rpbench.exceptions import ParameterError
-from rpbench.instances import find_instances, load_instances
 from rpbench.library.manifest import library_names
 from rpbench.model import OBJECTIVES, Structure
+from rpbench.model.instances import find_instances, load_instances
 from rpbench.options import Range
 from rpbench.report.bench import NO_TIER, SHIFT_S, SHIFTS, format_summary, solver_environment, summarise, write_outputs
 from rpbench.report.html.bench import write_bench_html

@@ -16,7 +16,6 @@ from __future__ import annotations
 import argparse
 import sys
 
-from rpbench import paths
 from rpbench.commands.output import print_json
 from rpbench.data.fetch import (
     MIRROR_CITY,
@@ -28,7 +27,8 @@ from rpbench.data.fetch import (
     verify_data,
 )
 from rpbench.exceptions import DataNotFoundError
-from rpbench.paths import (
+from rpbench.files import paths
+from rpbench.files.paths import (
     DATA_ENV,
     DATA_HOME_ENV,
     DATA_MIRROR_ENV,

@@ -19,9 +19,8 @@ from rpbench.bench.runner import IsolatedWorker
 from rpbench.commands.args import TIME_LIMIT, add_data_arg, add_number_arg, check_numbers
 from rpbench.commands.checks import check_out_file, check_unique, write_out_file
 from rpbench.commands.output import note, print_json
-from rpbench.digests import arrays_sha256
 from rpbench.exceptions import ParameterError
-from rpbench.instances import find_instances, load_instances
+from rpbench.files.digests import arrays_sha256
 from rpbench.library.build import build_set
 from rpbench.library.export import FORMATS, export_formats, write_model
 from rpbench.library.manifest import (
@@ -35,6 +34,7 @@ from rpbench.library.manifest import (
 from rpbench.library.prove import prove, with_time_limit
 from rpbench.library.sets import SETS, instance_set
 from rpbench.model import Model
+from rpbench.model.instances import find_instances, load_instances
 from rpbench.results import store
 from rpbench.results.solu import write_solu
 from rpbench.version import __version__

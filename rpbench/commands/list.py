@@ -1,6 +1,6 @@
 """``rpbench list``: scenarios, the data folders, solver presets and whether each is installed.
 
-The data folder of each city rpbench knows (:data:`rpbench.paths.CITY_LABELS`): Haikou's under the keys
+The data folder of each city rpbench knows (:data:`rpbench.files.paths.CITY_LABELS`): Haikou's under the keys
 ``data_dir``, ``data_dir_source``, ``data_dir_candidates`` and ``data_fetch_pending`` (``--data`` names it),
 and every city's, Haikou's too, under ``data_folders[CITY]`` with the same keys and its ``label``.
 """
@@ -16,8 +16,7 @@ from rpbench.commands.output import print_json
 from rpbench.data import available_peak_dates
 from rpbench.data.first_run import fetch_plan
 from rpbench.exceptions import RpbenchError
-from rpbench.oracle.runs import ORACLE_RUNS
-from rpbench.paths import (
+from rpbench.files.paths import (
     CITY_LABELS,
     DEFAULT_CITY,
     candidate_data_dirs,
@@ -26,6 +25,7 @@ from rpbench.paths import (
     fetched_data_dir,
     locate_data_dir,
 )
+from rpbench.oracle.runs import ORACLE_RUNS
 from rpbench.scenarios import SCENARIOS
 from rpbench.scenarios.base import Params
 from rpbench.spec import options_class

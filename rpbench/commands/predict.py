@@ -26,9 +26,9 @@ from rpbench.commands.args import (
 from rpbench.commands.checks import check_out_file, write_out_file
 from rpbench.commands.output import note, print_json
 from rpbench.data.first_run import ensure_data_dir
+from rpbench.data.paper import PAPER_DATE
 from rpbench.exceptions import ParameterError
 from rpbench.options import Range
-from rpbench.paper import PAPER_DATE
 from rpbench.predict import PredictConfig, build_prediction_model, predict, solve_prediction_model
 from rpbench.predict.compare import compare
 from rpbench.predict.config import ACCELERATIONS, PRIORITIES

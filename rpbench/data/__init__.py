@@ -1,4 +1,5 @@
-"""Readers for the Haikou data folder (one module per source, see its SOURCE.md).
+"""Readers for the Haikou data folder (one module per source, see its SOURCE.md), and the paper's own
+printed values (:mod:`.paper`).
 
 Readers return plain numpy arrays or pandas frames with validated columns;
 they never build graphs or scenarios (that is :mod:`rpbench.network` and

@@ -9,7 +9,7 @@ folder keeps ``gzip -9n`` of the upstream bytes; ``none``) and the SHA-256 and
 size of its *content*, i.e. the upstream bytes = the stored file decompressed.
 The content is hashed, not the stored ``.gz``, because gzip output differs
 between implementations and levels while the data does not.  Every function
-here takes the city (default Haikou, :data:`rpbench.paths.DEFAULT_CITY`).
+here takes the city (default Haikou, :data:`rpbench.files.paths.DEFAULT_CITY`).
 
 * :func:`fetch` without a mirror downloads each upstream file, hashes it while
   it streams and gzips it on the fly where the transform says so.  With a
@@ -78,7 +78,7 @@ from tqdm import tqdm
 
 from rpbench.data.orders import PEAK_DIR
 from rpbench.exceptions import ChecksumError, DataError, DownloadError, ParameterError, RpbenchError
-from rpbench.paths import DATA_MIRROR_ENV, DEFAULT_CITY, fetch_command, fetched_data_dir
+from rpbench.files.paths import DATA_MIRROR_ENV, DEFAULT_CITY, fetch_command, fetched_data_dir
 from rpbench.version import __version__
 
 #: Each city's registry, a package resource beside this module: the cities `rpbench data fetch --city` knows.
@@ -290,7 +290,7 @@ def fetch(
     progress: bool = True,
 ) -> FetchReport:
     """Download every file of ``city``'s registry (or of ``entries``) missing from ``dest`` (default:
-    :func:`rpbench.paths.fetched_data_dir` of ``city``), from ``mirror`` (see :func:`mirror_base`).
+    :func:`rpbench.files.paths.fetched_data_dir` of ``city``), from ``mirror`` (see :func:`mirror_base`).
 
     Files already there with the right content are skipped; a file with the
     wrong content is downloaded again.  The first network error, checksum

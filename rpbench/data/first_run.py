@@ -3,13 +3,13 @@
 A command that needs a city's data (Haikou unless it says otherwise), or
 defaults to it, asks :func:`obtain_data_dir` for the folder.  When none of the
 city's default folders exists (no ``--data``, for Haikou no ``$RPBENCH_DATA``,
-see :mod:`rpbench.paths`), or the fetched folder lacks registry files (a fetch
+see :mod:`rpbench.files.paths`), or the fetched folder lacks registry files (a fetch
 that was cut), it says so in one line on stderr and fetches the city's pinned
-registry into :func:`~rpbench.paths.fetched_data_dir` exactly as
+registry into :func:`~rpbench.files.paths.fetched_data_dir` exactly as
 ``rpbench data fetch --city CITY`` does (:func:`rpbench.data.fetch.fetch`:
 checksums, atomic writes, ``$RPBENCH_DATA_MIRROR``), so the next command finds
 it.  ``offline`` skips the fetch.  Messages name the city
-(:data:`~rpbench.paths.CITY_LABELS`).
+(:data:`~rpbench.files.paths.CITY_LABELS`).
 
 Without a folder, :func:`ensure_data_dir` raises a one-line error saying why,
 and a command whose default scenario is the Haikou one runs the toy city
@@ -26,10 +26,10 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from rpbench import paths
 from rpbench.data.fetch import RegistryEntry, disk_full_hint, fetch, load_registry, mirror_base, rerun_hint
 from rpbench.exceptions import DataNotFoundError, RpbenchError
-from rpbench.paths import (
+from rpbench.files import paths
+from rpbench.files.paths import (
     DATA_ENV,
     DATA_MIRROR_ENV,
     DEFAULT_CITY,
@@ -40,7 +40,7 @@ from rpbench.paths import (
     locate_data_dir,
 )
 
-#: The command that fetches Haikou's data (:func:`rpbench.paths.fetch_command` names any city's).
+#: The command that fetches Haikou's data (:func:`rpbench.files.paths.fetch_command` names any city's).
 FETCH_COMMAND = fetch_command()
 
 
@@ -124,7 +124,7 @@ def obtain_data_dir(
     --offline skips fetching it"``, ``"... and fetching it failed: ERROR"``).
     A folder the user provides (``explicit``, for Haikou ``$RPBENCH_DATA``,
     ``../shared``) is used as it is; an explicit one that does not exist, or
-    an unknown city, raises, as in :func:`rpbench.paths.locate_data_dir`.
+    an unknown city, raises, as in :func:`rpbench.files.paths.locate_data_dir`.
     ``progress``: the download's progress bar (default: when stderr is a
     terminal); ``say`` prints the announcement and the closing line (default:
     stderr).

@@ -20,7 +20,8 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from rpbench import files, paper, results
+from rpbench import files, results
+from rpbench.data import paper
 from rpbench.exceptions import ParameterError
 from rpbench.harness.comparison import ComparisonTask, run_task
 from rpbench.harness.outcome import Outcome

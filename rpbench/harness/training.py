@@ -18,7 +18,7 @@ import numpy as np
 
 from rpbench.backends import Preset, load_preset
 from rpbench.exceptions import ParameterError
-from rpbench.paths import cache_dir
+from rpbench.files.paths import cache_dir
 from rpbench.results import metrics
 from rpbench.scenarios.base import Scenario
 from rpbench.sim.simulator import Simulator

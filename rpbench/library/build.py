@@ -17,11 +17,11 @@ from typing import Any
 
 from rpbench.bench import synthetic
 from rpbench.bench.snapshot import take_snapshots
-from rpbench.digests import arrays_sha256, file_sha256
-from rpbench.instances import load_instance, save_instance
+from rpbench.files.digests import arrays_sha256, file_sha256
 from rpbench.library.manifest import SET_FORMAT
 from rpbench.library.sets import LIBRARY_VERSION, InstanceSet, Source, Synthetic
 from rpbench.model import Model
+from rpbench.model.instances import load_instance, save_instance
 from rpbench.scenarios import ScenarioRequest
 from rpbench.spec import RunSpec
 

@@ -16,9 +16,9 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from rpbench.digests import arrays_sha256, file_sha256
 from rpbench.exceptions import ParameterError
 from rpbench.files import load_json_object
+from rpbench.files.digests import arrays_sha256, file_sha256
 
 SET_FORMAT = "rpbench-instance-set-1"
 MANIFEST = "manifest.json"

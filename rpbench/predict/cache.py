@@ -1,4 +1,4 @@
-"""On-disk cache of solved predictions (in :func:`rpbench.paths.cache_dir`, never in the repository).
+"""On-disk cache of solved predictions (in :func:`rpbench.files.paths.cache_dir`, never in the repository).
 
 The key hashes everything the result depends on: the network's content hash
 (which covers scipy's version, hence the shortest paths), the canonical OD
@@ -31,8 +31,8 @@ from typing import Any
 import numpy as np
 
 from rpbench.exceptions import one_line
+from rpbench.files.paths import cache_dir, cache_write_error, temporary_file
 from rpbench.network import RoadNetwork
-from rpbench.paths import cache_dir, cache_write_error, temporary_file
 from rpbench.predict.config import PredictConfig
 from rpbench.predict.rates import OdRates
 from rpbench.scenarios.base import Params

@@ -19,7 +19,7 @@ from the distance matrix, see :mod:`.match_sets`), ``manifest.json``
 and the manifest's own SHA-256) and ``verified.json`` (the stamp: the size,
 mtime, ctime and inode of each file when its digest last matched).  An entry
 is built in a temporary folder beside it (its name carries the builder's pid,
-so :func:`rpbench.paths.sweep_stale_temporaries` removes a killed build's)
+so :func:`rpbench.files.paths.sweep_stale_temporaries` removes a killed build's)
 and renamed into place, so it is complete or absent; concurrent builders
 take an exclusive lock on ``predict-structure-<key>.lock``, and the losers
 wait and then reuse the winner's entry.
@@ -55,8 +55,8 @@ from pathlib import Path
 import numpy as np
 
 from rpbench.exceptions import one_line
+from rpbench.files.paths import cache_dir, cache_write_error, temporary_folder
 from rpbench.network import RoadNetwork
-from rpbench.paths import cache_dir, cache_write_error, temporary_folder
 from rpbench.predict.config import PredictConfig
 from rpbench.predict.match_sets import ListGeometry, Matching, build_matching
 from rpbench.predict.rates import OdRates

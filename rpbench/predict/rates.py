@@ -28,9 +28,9 @@ import numpy as np
 import pandas as pd
 
 from rpbench.data import read_day_od_shares, read_month_od_rates, read_od_rates, read_peak_orders
+from rpbench.data.paper import PAPER_DATE
 from rpbench.exceptions import DataError, ParameterError
 from rpbench.network import RoadNetwork
-from rpbench.paper import PAPER_DATE
 from rpbench.units import HOUR_S
 
 #: Named rate sources of :func:`load_rates` (a path to an OD table CSV is accepted too).

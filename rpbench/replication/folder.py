@@ -7,7 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from rpbench.backends.presets import Preset
-from rpbench.digests import file_sha256
+from rpbench.files.digests import file_sha256
 from rpbench.report.comparison import write_report
 from rpbench.results.folder import StrategyRun, write_folder
 from rpbench.scenarios.base import Scenario

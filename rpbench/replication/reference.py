@@ -2,7 +2,7 @@
 
 The committed outputs are ``reference/authors_committed_outputs_2017-05-01_14.csv`` of
 the data folder (decoded ``system_metric.pkl`` files, see its SOURCE.md).  The
-paper's Table 2 is :data:`rpbench.paper.TABLE2`; the authors' ``Analysis.py``
+paper's Table 2 is :data:`rpbench.data.paper.TABLE2`; the authors' ``Analysis.py``
 (read in their repository) shows that several of its values were typed in
 rather than produced by a run: it swaps the MB and RTV saving series, then
 overwrites day 1 and whole per-day series with typed lists.  :data:`TABLE2_ORIGIN`
@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from rpbench import paper
+from rpbench.data import paper
 
 REFERENCE_FILE = Path("reference") / "authors_committed_outputs_2017-05-01_14.csv"
 

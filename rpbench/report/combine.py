@@ -19,8 +19,8 @@ import numpy as np
 import pandas as pd
 
 from rpbench import files, results
-from rpbench.digests import content_sha256
 from rpbench.exceptions import ResultsError
+from rpbench.files.digests import content_sha256
 from rpbench.oracle.runs import ORACLE_RUNS
 from rpbench.report.comparison import (
     UNPROVEN_MARK,

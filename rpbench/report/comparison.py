@@ -16,7 +16,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from rpbench import files, paper, results
+from rpbench import files, results
+from rpbench.data import paper
 from rpbench.exceptions import ResultsError
 from rpbench.report.plots import FORMATS_NOTE, hourly_figure, kpi_figure, timeline_figure
 from rpbench.report.tables import csv_table, latex_table

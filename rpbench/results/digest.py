@@ -14,7 +14,7 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
-from rpbench.digests import file_sha256
+from rpbench.files.digests import file_sha256
 from rpbench.results.layout import CHECK, FLEET, KPIS, META, NETWORK, ORDERS
 from rpbench.results.store import to_jsonable
 

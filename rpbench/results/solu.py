@@ -10,7 +10,7 @@ One instance a line, fields separated by white space::
     =unkn=  NAME          nothing known
 
 ``NAME`` is the instance's name as a benchmark table shows it (the file stem, see
-:func:`rpbench.instances.load_instances`); ``VALUE`` is in model units, the instance's integral
+:func:`rpbench.model.instances.load_instances`); ``VALUE`` is in model units, the instance's integral
 objective (``values`` summed), a finite decimal number.  Each name appears once.  ``rpbench bench
 --solu FILE`` checks every answer against these values (:func:`rpbench.bench.runner.cross_check`).
 """

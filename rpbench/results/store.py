@@ -41,8 +41,8 @@ import pandas as pd
 from rpbench import files
 from rpbench.data.road import NetworkTables
 from rpbench.exceptions import ResultsError, RpbenchError, one_line, out_named, out_parameter
+from rpbench.files.paths import source_root
 from rpbench.network import RoadNetwork
-from rpbench.paths import source_root
 from rpbench.version import __version__
 
 VERSIONED_PACKAGES = ("numpy", "scipy", "pandas", "numba", "highspy", "ortools", "pyomo", "cvxpy", "pymatching", "lap")

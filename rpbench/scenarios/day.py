@@ -30,8 +30,8 @@ import pandas as pd
 
 from rpbench.data import hourly_counts_for, read_month_od_rates
 from rpbench.data.orders import parse_date
+from rpbench.data.paper import PAPER_DATE
 from rpbench.exceptions import DataError
-from rpbench.paper import PAPER_DATE
 from rpbench.scenarios.base import Demand, Params, Scenario
 from rpbench.scenarios.common import (
     MAX_DEMAND_MULTIPLIER,

@@ -37,8 +37,8 @@ import numpy as np
 import pandas as pd
 
 from rpbench.data.orders import parse_date
+from rpbench.data.paper import PAPER_DATE
 from rpbench.data.paper_orders import PREDICTION_COLUMNS, paper_order_source, read_paper_orders
-from rpbench.paper import PAPER_DATE
 from rpbench.scenarios.base import Demand, Fleet, Params, Scenario
 from rpbench.scenarios.common import check_sample, haikou_network, make_orders, require_orders
 

@@ -16,7 +16,7 @@ import pandas as pd
 
 from rpbench.data import read_peak_orders
 from rpbench.data.orders import parse_date, peak_order_path
-from rpbench.paper import PAPER_DATE
+from rpbench.data.paper import PAPER_DATE
 from rpbench.scenarios.base import Demand, Fleet, Params, Scenario
 from rpbench.scenarios.common import (
     Streams,

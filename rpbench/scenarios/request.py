@@ -58,7 +58,7 @@ class ScenarioRequest:
 
     def resolved(self) -> ScenarioRequest:
         """This request with its data folder found now (``--data``, ``$RPBENCH_DATA``, the defaults: see
-        :mod:`rpbench.paths`), so that every later build, in any worker process, reads the same folder; a
+        :mod:`rpbench.files.paths`), so that every later build, in any worker process, reads the same folder; a
         scenario that needs no data is returned as it is."""
         if self.data_dir is not None or not scenario_spec(self.name).needs_data:
             return self

@@ -45,9 +45,9 @@ import pandas as pd
 
 from rpbench.backends import Preset, solve
 from rpbench.exceptions import ModelError, SolverError
-from rpbench.instances import save_instance
+from rpbench.files.paths import cache_dir
 from rpbench.model import Solution, Status
-from rpbench.paths import cache_dir
+from rpbench.model.instances import save_instance
 from rpbench.scenarios.base import Scenario
 from rpbench.sim.fleet import DROPOFF, PICKUP, FleetState, Stop
 from rpbench.sim.ties import canonicalize

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from rpbench.bench.examples import write_examples
-from rpbench.instances import load_instance
+from rpbench.model.instances import load_instance
 
 COMMITTED = Path(__file__).resolve().parents[2] / "instances" / "examples"
 

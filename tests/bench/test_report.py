@@ -12,7 +12,7 @@ import pandas as pd
 import pytest
 
 from rpbench.cli import main
-from rpbench.instances import save_instance
+from rpbench.model.instances import save_instance
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "instances" / "examples"
 FAST = ["--solver", "matching", "--solver", "highs", "--repeat", "2", "--no-isolate"]
@@ -21,7 +21,7 @@ FAST = ["--solver", "matching", "--solver", "highs", "--repeat", "2", "--no-isol
 @pytest.fixture(scope="module")
 def tiered(tmp_path_factory):
     """The committed toy rounds, copied with tiers S (two of them) and M (one)."""
-    from rpbench.instances import load_instance
+    from rpbench.model.instances import load_instance
 
     folder = tmp_path_factory.mktemp("tiered")
     for path, tier in zip(sorted(EXAMPLES.glob("toy_*.npz")), ("S", "S", "M"), strict=True):

@@ -15,8 +15,8 @@ from rpbench.bench import synthetic
 from rpbench.bench.runner import RESULT_COLUMNS, BenchSpec, cross_check, format_table, run_benchmark
 from rpbench.cli import main
 from rpbench.exceptions import ParameterError, SolverError
-from rpbench.instances import save_instance
 from rpbench.model import Status, Structure, make_solution
+from rpbench.model.instances import save_instance
 
 MODELS = synthetic.suite("tiny", objectives=("weight", "cardinality_then_weight"))
 

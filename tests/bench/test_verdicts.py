@@ -13,7 +13,7 @@ from rpbench.backends.presets import Preset
 from rpbench.bench import synthetic
 from rpbench.bench.runner import BenchSpec, cross_check, run_benchmark, verdict
 from rpbench.cli import main
-from rpbench.instances import save_instance
+from rpbench.model.instances import save_instance
 from rpbench.report.bench import summarise
 from rpbench.results.solu import Known, write_solu
 

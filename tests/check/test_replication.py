@@ -12,7 +12,7 @@ import pytest
 from rpbench.check import check_tree
 from rpbench.check.replication import SKIPPED, audit_run
 from rpbench.cli import main
-from rpbench.paths import find_data_dir
+from rpbench.files.paths import find_data_dir
 from rpbench.replication.folder import file_manifest
 from rpbench.results.layout import engine_folder, records_file
 

@@ -32,7 +32,7 @@ from rpbench.data.od_rates import AUTHORS_PREDICTION_FILE, DAY_OD_FILE, MONTH_OD
 from rpbench.data.orders import GAIA_SAMPLE_FILE, PEAK_DIR, RAW_PEAK_FILE, TRACE_FILE
 from rpbench.data.road import LINK_FILE, NODE_FILE, PRED_EDGE_FILE, PRED_VERTEX_FILE
 from rpbench.exceptions import DataError, DataNotFoundError, ParameterError
-from rpbench.paths import CITY_LABELS, default_data_candidates, describe_candidate, find_data_dir, locate_data_dir
+from rpbench.files.paths import CITY_LABELS, default_data_candidates, describe_candidate, find_data_dir, locate_data_dir
 
 REGISTRY = load_registry()
 NAMES = [e.name for e in REGISTRY]
@@ -383,7 +383,7 @@ def test_default_data_location_picks_up_the_fetch_destination(
     # A fresh machine: no $RPBENCH_DATA, no ../shared beside the current folder or the checkout.
     monkeypatch.delenv("RPBENCH_DATA", raising=False)
     monkeypatch.chdir(tmp_path)
-    monkeypatch.setattr("rpbench.paths.source_root", lambda: tmp_path / "checkout")
+    monkeypatch.setattr("rpbench.files.paths.source_root", lambda: tmp_path / "checkout")
     monkeypatch.setattr("rpbench.commands.list.preset_names", list)  # no presets: skip importing solver libraries
     assert find_data_dir() is None
 
@@ -409,7 +409,7 @@ def test_a_fresh_machine_fetches_from_a_local_mirror_and_runs_the_paper_scenario
     monkeypatch.delenv("RPBENCH_DATA", raising=False)
     monkeypatch.chdir(tmp_path)
     monkeypatch.setattr(
-        "rpbench.paths.default_data_candidates", lambda: [tmp_path / "no-shared", (private_data_home / "haikou")]
+        "rpbench.files.paths.default_data_candidates", lambda: [tmp_path / "no-shared", (private_data_home / "haikou")]
     )
     url, _, _ = mirror
     code, _, _ = run_cli(capsys, "data", "fetch", "--mirror", url, "--quiet")
@@ -457,7 +457,7 @@ def fresh_manhattan(monkeypatch, tmp_path) -> None:
     work = tmp_path / "work"
     work.mkdir()
     monkeypatch.chdir(work)
-    monkeypatch.setattr("rpbench.paths.source_root", lambda: tmp_path / "checkout")
+    monkeypatch.setattr("rpbench.files.paths.source_root", lambda: tmp_path / "checkout")
     monkeypatch.setattr("rpbench.commands.list.preset_names", list)  # no presets: skip importing solver libraries
 
 
@@ -615,7 +615,7 @@ def test_each_city_has_its_own_default_folders(monkeypatch, tmp_path, private_da
     work = tmp_path / "work"
     work.mkdir()
     monkeypatch.chdir(work)
-    monkeypatch.setattr("rpbench.paths.source_root", lambda: tmp_path / "checkout")
+    monkeypatch.setattr("rpbench.files.paths.source_root", lambda: tmp_path / "checkout")
     shared, home = (tmp_path / "shared" / "data").resolve(), private_data_home.resolve()
     # ../shared/data/<city> beside the current folder and beside the checkout (here the same), then the data home
     assert default_data_candidates("manhattan") == [shared / "manhattan", home / "manhattan"]

@@ -18,14 +18,14 @@ from pathlib import Path
 
 import pytest
 
-from rpbench import paths
 from rpbench.cli import main
 from rpbench.data import fetch as fetch_mod
 from rpbench.data import first_run
 from rpbench.data.fetch import load_registry, verify_data
 from rpbench.data.first_run import ensure_data_dir, fetch_plan, obtain_data_dir
 from rpbench.exceptions import DataNotFoundError, DownloadError
-from rpbench.paths import fetched_data_dir, find_data_dir
+from rpbench.files import paths
+from rpbench.files.paths import fetched_data_dir, find_data_dir
 
 REGISTRY = load_registry()
 NAMES = [e.name for e in REGISTRY]
@@ -61,7 +61,7 @@ def fresh_machine(tmp_path, monkeypatch) -> Path:
     monkeypatch.chdir(work)
     # ../shared beside the current folder and beside a checkout elsewhere (the real checkout holds the presets)
     shared = [(tmp_path / "shared" / "data" / "haikou").resolve(), (tmp_path / "x" / "shared").resolve()]
-    monkeypatch.setattr("rpbench.paths.default_data_candidates", lambda: [*shared, fetched_data_dir().resolve()])
+    monkeypatch.setattr("rpbench.files.paths.default_data_candidates", lambda: [*shared, fetched_data_dir().resolve()])
     home = tmp_path / "data-home"
     monkeypatch.setenv("RPBENCH_DATA_HOME", str(home))
     assert all(not c.exists() for c in paths.default_data_candidates()) and find_data_dir() is None
@@ -310,7 +310,7 @@ def test_list_says_what_the_first_command_will_fetch(capsys, no_network, monkeyp
 def no_shared_manhattan(monkeypatch, tmp_path, fresh_machine) -> Path:
     """No Manhattan folder either: the checkout (whose ../shared holds one) is elsewhere; returns its fetched
     folder (not created)."""
-    monkeypatch.setattr("rpbench.paths.source_root", lambda: tmp_path / "x" / "checkout")
+    monkeypatch.setattr("rpbench.files.paths.source_root", lambda: tmp_path / "x" / "checkout")
     monkeypatch.setattr("rpbench.commands.list.preset_names", list)  # no presets: skip importing solver libraries
     assert find_data_dir(city="manhattan") is None
     return fresh_machine / "manhattan"

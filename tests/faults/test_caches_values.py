@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import rpbench.paths as paths
+import rpbench.files.paths as paths
 import rpbench.predict.cache as predict_cache
 import rpbench.predict.list_cache as list_cache
 from rpbench.predict import OdRates, PredictConfig, predict

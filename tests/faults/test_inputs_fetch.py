@@ -336,7 +336,7 @@ def test_the_first_run_fetch_names_a_full_disk(capsys, monkeypatch, tmp_path, se
     monkeypatch.delenv("RPBENCH_DATA", raising=False)
     monkeypatch.setenv("RPBENCH_DATA_MIRROR", url)
     home = tmp_path / "data-home"
-    monkeypatch.setattr("rpbench.paths.default_data_candidates", lambda: [home / "haikou"])
+    monkeypatch.setattr("rpbench.files.paths.default_data_candidates", lambda: [home / "haikou"])
     fill_disk(monkeypatch)
     code = main(["scenario", "haikou-peak", "--json"])
     out, err = capsys.readouterr()

@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rpbench.instances import save_instance
 from rpbench.model import PairingModel
+from rpbench.model.instances import save_instance
 
 from .test_inputs_helpers import PEAK, TOY_RUN, cli_error, cli_ok
 

@@ -11,9 +11,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import rpbench.instances as instances
-from rpbench.instances import load_instance, save_instance
+import rpbench.model.instances as instances
 from rpbench.model import AssignmentModel, PairingModel, TripPackingModel
+from rpbench.model.instances import load_instance, save_instance
 
 from .test_inputs_helpers import cli_error, cli_ok, flip_byte, truncate
 

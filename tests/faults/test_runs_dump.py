@@ -22,7 +22,7 @@ from rpbench.backends import load_preset
 from rpbench.backends.highs import HighsBackend
 from rpbench.exceptions import SolverError
 from rpbench.harness.comparison import simulate_strategy
-from rpbench.instances import load_instance
+from rpbench.model.instances import load_instance
 
 
 @pytest.fixture

@@ -15,9 +15,9 @@ from scipy.optimize import linear_sum_assignment
 from rpbench.backends import load_preset, solve
 from rpbench.bench import synthetic
 from rpbench.exceptions import ParameterError, SolverError
-from rpbench.instances import load_instance
 from rpbench.library.export import FORMATS, export_formats, read_mps_optimum, write_model
 from rpbench.model import AssignmentModel, Model, PairingModel, Status, TripPackingModel
+from rpbench.model.instances import load_instance
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "instances" / "examples"
 EXAMPLE_FILES = sorted(EXAMPLES.glob("*.npz"))

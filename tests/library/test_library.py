@@ -10,14 +10,14 @@ import pytest
 from faults.test_runs_helpers import assert_one_error, run_cli
 
 from rpbench.backends import load_preset, solve
-from rpbench.digests import arrays_sha256
 from rpbench.exceptions import ResultsError
-from rpbench.instances import load_instance, load_instances, save_instance
+from rpbench.files.digests import arrays_sha256
 from rpbench.library.build import build_set
 from rpbench.library.export import read_mps_optimum, write_model
 from rpbench.library.manifest import MANIFEST, packaged_manifest, verify_folder
 from rpbench.library.prove import prove
 from rpbench.library.sets import SETS, InstanceSet, instance_set
+from rpbench.model.instances import load_instance, load_instances, save_instance
 from rpbench.results.solu import read_solu
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -24,9 +24,9 @@ from rpbench.backends.base import Backend
 from rpbench.backends.presets import load_preset
 from rpbench.cli import main
 from rpbench.exceptions import ParameterError, PresetError, SolverError
+from rpbench.files.paths import find_data_dir
 from rpbench.model import PairingModel, Status, Structure, make_solution
 from rpbench.oracle.solve import KPI_KEYS, UNIT_M, OracleResult, PairRules, find_candidates, oracle_model, solve_oracle
-from rpbench.paths import find_data_dir
 from rpbench.scenarios import build_scenario
 from rpbench.scenarios.base import Orders
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rpbench.paths import cache_dir
+from rpbench.files.paths import cache_dir
 from rpbench.predict import predict
 from rpbench.predict.cache import cache_key
 

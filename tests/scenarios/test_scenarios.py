@@ -106,7 +106,7 @@ def test_unknown_parameter_and_scenario():
 
 def test_missing_data_folder(monkeypatch, tmp_path):
     monkeypatch.delenv("RPBENCH_DATA", raising=False)
-    monkeypatch.setattr("rpbench.paths.default_data_candidates", lambda: [tmp_path / "nothing"])
+    monkeypatch.setattr("rpbench.files.paths.default_data_candidates", lambda: [tmp_path / "nothing"])
     with pytest.raises(DataNotFoundError, match="no Haikou data folder found"):
         build_scenario("haikou-peak")
 

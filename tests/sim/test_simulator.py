@@ -114,7 +114,7 @@ def test_vehicles_respect_capacity_and_thresholds(preset):
 def test_a_solver_failure_names_the_round_and_saves_its_model(monkeypatch, tmp_path):
     from rpbench.backends.highs import HighsBackend
     from rpbench.exceptions import SolverError
-    from rpbench.instances import load_instance
+    from rpbench.model.instances import load_instance
 
     def broken(self, model, options, **kw):
         raise SolverError("HiGHS failed with model status kUnknown")

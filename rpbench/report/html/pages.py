@@ -16,7 +16,8 @@ from typing import Any
 
 import pandas as pd
 
-from rpbench import files, paper, results
+from rpbench import files, results
+from rpbench.data import paper
 from rpbench.report.comparison import (
     UNPROVEN_MARK,
     bracket_lines,

@@ -1,4 +1,5 @@
-"""Solver-agnostic decision models: 0/1 set packing over a sparse incidence matrix.
+"""Solver-agnostic decision models: 0/1 set packing over a sparse incidence matrix (frozen to instance
+files by :mod:`.instances`).
 
 Every decision rpbench makes is one of three models, each
 

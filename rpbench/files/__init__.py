@@ -1,5 +1,8 @@
 """Reading the files a user hands rpbench (JSON, TOML, data files) and writing text that may hold their paths.
 
+Beside it: :mod:`.digests` (SHA-256 of files, contents and arrays) and :mod:`.paths` (the data folder, the
+cache and their temporaries).
+
 Every fault is one line naming the file, raised as the caller's
 :class:`~rpbench.exceptions.RpbenchError` subclass: a path that is a folder,
 a FIFO or a symbolic link loop is named as such (not as "missing"); a JSON

@@ -58,7 +58,7 @@ _SWEPT: set[Path] = set()  # cache folders this process has swept
 
 def source_root() -> Path:
     """The folder holding the ``rpbench`` package (the checkout, when run from one)."""
-    return Path(__file__).resolve().parent.parent
+    return Path(__file__).resolve().parents[2]  # rpbench/files/paths.py -> the checkout
 
 
 def data_home() -> Path:
