@@ -82,15 +82,13 @@ from rpbench.scenarios.base import OnlineView, Scenario
 from rpbench.scenarios.common import make_orders
 from rpbench.strategies.base import RoundModel, RoundState, Strategy
 from rpbench.strategies.candidates import (
-    NO_WAIT_UTILITY_M,
     JoinOptions,
     VacantOptions,
-    assignment_round,
     join_options,
     vacant_options,
 )
 from rpbench.strategies.foresight import Foresight
-from rpbench.strategies.myopic import PoolingOptions
+from rpbench.strategies.myopic import PoolingOptions, mb_round
 from rpbench.units import HOUR_S
 
 #: How the futures' votes become a decision.
@@ -294,15 +292,7 @@ def msa_round(state: RoundState, vac: VacantOptions, join: JoinOptions, wait: np
     keep_v = np.flatnonzero(~wait[vac.p])
     vac = VacantOptions(vac.p[keep_v], vac.v[keep_v], vac.pickup_m[keep_v])
     join = join.take(~wait[join.p] | (join.saving_m > 0))
-    return assignment_round(
-        state,
-        vac,
-        -vac.pickup_m,
-        join,
-        join.saving_m - join.pickup_m,
-        np.full(state.n_passengers, NO_WAIT_UTILITY_M),
-        name=name,
-    )
+    return mb_round(state, vac, join, name=name)
 
 
 # --------------------------------------------------------------------------- the futures' pairing

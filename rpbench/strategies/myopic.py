@@ -19,7 +19,14 @@ from rpbench.geometry import ORDER_RULES
 from rpbench.model import Structure
 from rpbench.options import RunOptions, option
 from rpbench.strategies.base import RoundModel, RoundState, Strategy
-from rpbench.strategies.candidates import NO_WAIT_UTILITY_M, JoinOptions, assignment_round, join_options, vacant_options
+from rpbench.strategies.candidates import (
+    NO_WAIT_UTILITY_M,
+    JoinOptions,
+    VacantOptions,
+    assignment_round,
+    join_options,
+    vacant_options,
+)
 
 
 @dataclass(frozen=True)
@@ -60,14 +67,18 @@ class MyopicBatch(Strategy[PoolingOptions]):
     description = "myopic batch matching, paper Eq. (7)"
 
     def build(self, state: RoundState) -> RoundModel:
-        vac = vacant_options(state)
-        join = join_options(state, self.options.order_rule)
-        return assignment_round(
-            state,
-            vac,
-            -vac.pickup_m,
-            join,
-            join.saving_m - join.pickup_m,
-            np.full(state.n_passengers, NO_WAIT_UTILITY_M),
-            name="mb",
-        )
+        return mb_round(state, vacant_options(state), join_options(state, self.options.order_rule), name="mb")
+
+
+def mb_round(state: RoundState, vac: VacantOptions, join: JoinOptions, *, name: str) -> RoundModel:
+    """MB's round over the given options (Eq. 7): a vacant vehicle at ``-pickup``, a join at ``e - pickup``,
+    keeping a passenger waiting at ``NO_WAIT_UTILITY_M`` (A13)."""
+    return assignment_round(
+        state,
+        vac,
+        -vac.pickup_m,
+        join,
+        join.saving_m - join.pickup_m,
+        np.full(state.n_passengers, NO_WAIT_UTILITY_M),
+        name=name,
+    )
