@@ -19,12 +19,13 @@ verifies (consecutive nodes joined by arcs, driven at the set speed).
 from __future__ import annotations
 
 import heapq
-import itertools
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from rpbench.exceptions import ParameterError
 from rpbench.network import Distances, RoadNetwork
+from rpbench.sim import routes
 from rpbench.sim.lookahead import PlanWindows
 
 PICKUP, DROPOFF = 0, 1
@@ -81,10 +82,12 @@ class FleetState:
         self._next_odo = np.zeros(n)
         self._idle = np.zeros(n, dtype=bool)
         self._windows = PlanWindows(n)  # plan nodes ahead, for vectorised lookups
-        # Out-neighbours per node as plain lists: the random walk steps one node at a time.
-        heads = network.arc_head[network.out_arcs]
-        off = network.out_offsets
-        self._successors = [heads[off[u] : off[u + 1]].tolist() for u in range(network.n_nodes)]
+        # Outgoing arcs as CSR arrays (heads and lengths in out_arcs order) for the compiled route kernels.
+        self._offsets = np.ascontiguousarray(network.out_offsets, dtype=np.int64)
+        self._heads = np.ascontiguousarray(network.arc_head[network.out_arcs], dtype=np.int64)
+        self._lengths = np.ascontiguousarray(network.arc_length_m[network.out_arcs], dtype=np.float64)
+        self._pred = distances.pred
+        routes.load()  # the kernels' one-off load, before the first round rather than inside it
 
     # --------------------------------------------------------------- plans
     def _still(self, node: int, t: float, odo: float) -> Plan:
@@ -92,14 +95,16 @@ class FleetState:
 
     def _plan_from(self, start_node: int, t: float, odo: float, nodes_tail: np.ndarray) -> Plan:
         """A plan driving ``start_node`` then ``nodes_tail`` (consecutive nodes joined by arcs)."""
-        nodes = np.empty(len(nodes_tail) + 1, dtype=np.int32)
-        nodes[0] = start_node
-        nodes[1:] = nodes_tail
-        cum = np.zeros(len(nodes))
-        if len(nodes) > 1:
-            arcs = self.network.arc_index(nodes[:-1], nodes[1:])
-            np.cumsum(self.network.arc_length_m[arcs], out=cum[1:])
-        return Plan(nodes, t + cum / self.speed, odo + cum)
+        n = len(nodes_tail) + 1
+        nodes, tt, od = np.empty(n, np.int32), np.empty(n), np.empty(n)
+        tail = np.asarray(nodes_tail, dtype=np.int64)
+        bad = routes.plan_arrays(
+            self._offsets, self._heads, self._lengths, start_node, tail, t, odo, self.speed, nodes, tt, od
+        )
+        if bad >= 0:
+            before = start_node if bad == 0 else int(tail[bad - 1])
+            raise ValueError(f"no arc from node {before} to node {int(tail[bad])} in a vehicle's plan")
+        return Plan(nodes, tt, od)
 
     def route_through(self, waypoints: list[int]) -> tuple[np.ndarray, list[int]]:
         """Shortest-path node sequence visiting ``waypoints`` (the first is the start node).
@@ -107,15 +112,15 @@ class FleetState:
         Returns the tail (without the start node) and the tail index (1-based
         plan index) at which each later waypoint is reached.
         """
-        tail: list[np.ndarray] = []
-        reach: list[int] = []
-        length = 0
-        for a, b in itertools.pairwise(waypoints):
-            path = self.distances.path_nodes(a, b)[1:]
-            tail.append(path)
-            length += len(path)
-            reach.append(length)
-        return (np.concatenate(tail) if tail else np.zeros(0, np.int32)), reach
+        points = np.asarray(waypoints, dtype=np.int64)
+        reach = np.zeros(max(len(points) - 1, 0), np.int64)
+        if len(reach) == 0:
+            return np.zeros(0, np.int32), []
+        tail = routes.route_through(self._pred, points, reach)
+        if reach[0] < 0:
+            s = -1 - int(reach[0])
+            raise ParameterError(f"no path from node {int(points[s])} to node {int(points[s + 1])}")
+        return tail, reach.tolist()
 
     def position(self, v: int, t: float) -> tuple[int, int, float]:
         """(plan index of the next node, that node, metres before reaching it) at time ``t``."""
@@ -237,16 +242,8 @@ class FleetState:
         return self._random_walk(node, prev)
 
     def _random_walk(self, node: int, prev: int) -> np.ndarray:
-        succ = self._successors
-        out = []
-        for u in self.rng.random(CRUISE_ARCS).tolist():
-            heads = succ[node]
-            if len(heads) > 1 and prev >= 0:
-                heads = [h for h in heads if h != prev] or heads  # no U-turn unless at a dead end
-            nxt = heads[int(u * len(heads))]
-            out.append(nxt)
-            prev, node = node, nxt
-        return np.asarray(out, dtype=np.int32)
+        """``CRUISE_ARCS`` random arcs from ``node`` (uniformly among outgoing arcs, no U-turn unless at a dead end)."""
+        return routes.random_walk(self._offsets, self._heads, node, prev, self.rng.random(CRUISE_ARCS))
 
     # ---------------------------------------------------------------- stops
     def due_stops(self, t: float):

@@ -1,0 +1,136 @@
+"""Compiled kernels (numba) of the fleet's routes: random cruises, shortest-path node sequences, plan times.
+
+A round replans a few vehicles (assignments, drop-offs, cruises running out), and each replan walked
+its route one node at a time in Python: a cruise's random arcs, the predecessor chain of each
+shortest path, the arc of each consecutive node pair.  These kernels do the same walks over flat
+arrays and give the same results bit for bit: a cruise consumes the same random numbers and picks
+the same arc (:meth:`FleetState._random_walk` documents the rule); times and odometers are summed
+arc by arc in plan order, as ``np.cumsum`` sums them.
+
+The network's outgoing arcs are passed as CSR arrays (``offsets``, and per arc its head and
+length in ``out_arcs`` order); a node sequence whose consecutive nodes are not joined by an arc,
+or a pair of nodes without a path, is reported to the caller (a negative count), which raises.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True, nogil=True)
+def random_walk(offsets: np.ndarray, heads: np.ndarray, node: int, prev: int, u: np.ndarray) -> np.ndarray:
+    """``len(u)`` arcs of a random cruise from ``node`` (reached from ``prev``, -1: none).
+
+    At each node the next is ``candidates[int(u_i · len(candidates))]``, the candidates being the
+    heads of its outgoing arcs in CSR order without ``prev`` (no U-turn), or all of them at a dead
+    end, when only one arc leaves, or at the start without ``prev``.
+    """
+    out = np.empty(len(u), np.int32)
+    for i in range(len(u)):
+        lo = offsets[node]
+        deg = offsets[node + 1] - lo
+        keep = 0
+        if deg > 1 and prev >= 0:
+            for j in range(lo, lo + deg):
+                if heads[j] != prev:
+                    keep += 1
+        if keep > 0:
+            pick = int(u[i] * keep)
+            nxt = -1
+            for j in range(lo, lo + deg):
+                if heads[j] != prev:
+                    if pick == 0:
+                        nxt = heads[j]
+                        break
+                    pick -= 1
+        else:
+            nxt = heads[lo + int(u[i] * deg)]
+        out[i] = nxt
+        prev = node
+        node = nxt
+    return out
+
+
+@njit(cache=True, nogil=True)
+def route_through(pred: np.ndarray, waypoints: np.ndarray, reach: np.ndarray) -> np.ndarray:
+    """The shortest-path nodes visiting ``waypoints`` after the first (the start node left out).
+
+    ``reach[i]`` receives the 1-based position in the result at which waypoint ``i + 1`` is reached.
+    Paths are read off the predecessor matrix ``pred`` (``pred[o, v]``: the node before ``v`` on the
+    shortest path from ``o``); a missing path gives an empty result and ``reach[0] = -1 - i`` for
+    the first segment ``i`` without one.
+    """
+    n_seg = len(waypoints) - 1
+    total = 0
+    for s in range(n_seg):
+        a, cur = waypoints[s], waypoints[s + 1]
+        hops = 0
+        while cur != a:
+            cur = pred[a, cur]
+            if cur < 0:
+                reach[0] = -1 - s
+                return np.empty(0, np.int32)
+            hops += 1
+        total += hops
+        reach[s] = total
+    tail = np.empty(total, np.int32)
+    for s in range(n_seg):
+        a, cur = waypoints[s], waypoints[s + 1]
+        pos = reach[s] - 1
+        while cur != a:  # backwards from the segment's end
+            tail[pos] = cur
+            pos -= 1
+            cur = pred[a, cur]
+    return tail
+
+
+@njit(cache=True, nogil=True)
+def plan_arrays(
+    offsets: np.ndarray,
+    heads: np.ndarray,
+    lengths: np.ndarray,
+    start: int,
+    tail: np.ndarray,
+    t0: float,
+    odo0: float,
+    speed: float,
+    nodes: np.ndarray,
+    tt: np.ndarray,
+    odo: np.ndarray,
+) -> int:
+    """Fill a plan driving ``start`` then ``tail``: its ``nodes``, the time ``tt`` and odometer ``odo`` at each.
+
+    Distances are summed arc by arc from the start (``cum``), ``tt = t0 + cum / speed`` and
+    ``odo = odo0 + cum``.  Returns -1, or the position in ``tail`` of the first node not joined to its
+    predecessor by an arc.
+    """
+    nodes[0] = start
+    tt[0] = t0 + 0.0 / speed
+    odo[0] = odo0 + 0.0
+    cum = 0.0
+    u = start
+    for i in range(len(tail)):
+        v = tail[i]
+        found = False
+        for j in range(offsets[u], offsets[u + 1]):
+            if heads[j] == v:
+                cum += lengths[j]
+                found = True
+                break
+        if not found:
+            return i
+        nodes[i + 1] = v
+        tt[i + 1] = t0 + cum / speed
+        odo[i + 1] = odo0 + cum
+        u = v
+    return -1
+
+
+def load() -> None:
+    """Load (or compile) every kernel now: the first call of each costs a one-off load of its machine code."""
+    offsets, heads = np.array([0, 1, 2], np.int64), np.array([1, 0], np.int64)
+    random_walk(offsets, heads, 0, -1, np.zeros(1))
+    route_through(np.zeros((2, 2), np.int32), np.zeros(2, np.int64), np.zeros(1, np.int64))
+    one = np.zeros(1)
+    plan_arrays(offsets, heads, one, 0, np.zeros(0, np.int64), 0.0, 0.0, 1.0, np.zeros(1, np.int32), one, one.copy())
