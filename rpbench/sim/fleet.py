@@ -25,8 +25,8 @@ import numpy as np
 
 from rpbench.exceptions import ParameterError
 from rpbench.network import Distances, RoadNetwork
-from rpbench.sim import routes
-from rpbench.sim.lookahead import PlanWindows
+from rpbench.sim import lookahead, routes
+from rpbench.sim.lookahead import PlanWindows, advance, gather
 
 PICKUP, DROPOFF = 0, 1
 CRUISE_ARCS = 24  # random-walk arcs added per extension (~11 km on Haikou)
@@ -82,12 +82,14 @@ class FleetState:
         self._next_odo = np.zeros(n)
         self._idle = np.zeros(n, dtype=bool)
         self._windows = PlanWindows(n)  # plan nodes ahead, for vectorised lookups
+        self._missed = np.empty(n, dtype=np.int64)  # vehicles whose window could not answer (:func:`advance`)
         # Outgoing arcs as CSR arrays (heads and lengths in out_arcs order) for the compiled route kernels.
         self._offsets = np.ascontiguousarray(network.out_offsets, dtype=np.int64)
         self._heads = np.ascontiguousarray(network.arc_head[network.out_arcs], dtype=np.int64)
         self._lengths = np.ascontiguousarray(network.arc_length_m[network.out_arcs], dtype=np.float64)
         self._pred = distances.pred
         routes.load()  # the kernels' one-off load, before the first round rather than inside it
+        lookahead.load()
 
     # --------------------------------------------------------------- plans
     def _still(self, node: int, t: float, odo: float) -> Plan:
@@ -143,18 +145,13 @@ class FleetState:
         so a round costs O(vehicles that crossed a node) Python work.
         """
         vehicles = np.asarray(vehicles, dtype=np.int64)
-        stale = vehicles[(self._next_tt[vehicles] < t - _EPS_S) & ~self._idle[vehicles]]
         before = t - _EPS_S
-        if len(stale):
-            found = self._windows.find(stale, before)
-            hit = found.vehicles
-            self._next_k[hit] = found.k
-            self._next_node[hit] = found.node
-            self._idle[hit] = found.at_end & (found.tt <= t)
-            self._next_tt[hit] = found.tt
-            self._next_odo[hit] = found.odo
-            stale = found.missed
-        for v in stale.tolist():  # past the window: look up the plan, then refill
+        w = self._windows
+        n_missed = advance(
+            vehicles, before, t, w.tt, w.node, w.odo, w.base, w.length, w.tt_before, w.last, w.cruising,
+            self._next_k, self._next_node, self._next_tt, self._next_odo, self._idle, self._missed,
+        )  # fmt: skip
+        for v in self._missed[:n_missed].tolist():  # past the window: look up the plan, then refill
             plan = self.plans[v]
             k = int(plan.tt.searchsorted(before))  # :meth:`position`, inlined for the common case
             if k >= len(plan.nodes):
@@ -166,8 +163,7 @@ class FleetState:
             self._next_tt[v] = tt_k
             self._next_odo[v] = plan.odo[k]
             self._windows.fill(v, plan.nodes, plan.tt, plan.odo, plan.cruising, k)
-        pre = np.where(self._idle[vehicles], 0.0, np.maximum(0.0, (self._next_tt[vehicles] - t) * self.speed))
-        return self._next_k[vehicles].copy(), self._next_node[vehicles].copy(), pre
+        return gather(vehicles, t, self.speed, self._next_k, self._next_node, self._next_tt, self._idle)
 
     def next_odometers(self, vehicles: np.ndarray) -> np.ndarray:
         """Odometer at the plan node each vehicle reaches next, as found by the last :meth:`positions` call.

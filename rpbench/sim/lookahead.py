@@ -14,6 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 #: Plan nodes per window: a vehicle crosses about one node per 10 s round.
 WIDTH = 16
@@ -84,3 +85,99 @@ class PlanWindows:
             at_end=(k == self.last[hit]) & ~self.cruising[hit],
             missed=vehicles[~ok],
         )
+
+
+@njit(cache=True, nogil=True)
+def advance(
+    vehicles: np.ndarray,
+    before: float,
+    t: float,
+    w_tt: np.ndarray,
+    w_node: np.ndarray,
+    w_odo: np.ndarray,
+    base: np.ndarray,
+    length: np.ndarray,
+    tt_before: np.ndarray,
+    last: np.ndarray,
+    cruising: np.ndarray,
+    next_k: np.ndarray,
+    next_node: np.ndarray,
+    next_tt: np.ndarray,
+    next_odo: np.ndarray,
+    idle: np.ndarray,
+    missed: np.ndarray,
+) -> int:
+    """Move each stale vehicle's cached next node (``next_*``, ``idle``) on to its first plan node at or after
+    ``before``, as :meth:`PlanWindows.find` finds it; a vehicle is stale when it is not idle and its cached node
+    lies before ``before``.  Stale vehicles whose window cannot answer are written to ``missed`` in the order
+    given; returns their number.  One compiled pass instead of a numpy pass per field: a round asks this for
+    every vacant and every partly occupied vehicle.
+    """
+    n_missed = 0
+    for i in range(len(vehicles)):
+        v = vehicles[i]
+        if not next_tt[v] < before or idle[v]:
+            continue
+        m = length[v]
+        j = 0
+        while j < m and w_tt[v, j] < before:
+            j += 1
+        if j >= m or not tt_before[v] < before:
+            missed[n_missed] = v
+            n_missed += 1
+            continue
+        k = base[v] + j
+        tt = w_tt[v, j]
+        next_k[v] = k
+        next_node[v] = w_node[v, j]
+        idle[v] = k == last[v] and not cruising[v] and tt <= t
+        next_tt[v] = tt
+        next_odo[v] = w_odo[v, j]
+    return n_missed
+
+
+@njit(cache=True, nogil=True)
+def gather(
+    vehicles: np.ndarray,
+    t: float,
+    speed: float,
+    next_k: np.ndarray,
+    next_node: np.ndarray,
+    next_tt: np.ndarray,
+    idle: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per vehicle: the plan index of its cached next node, the node, and the metres before it at time ``t``."""
+    n = len(vehicles)
+    k, node, pre = np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n)
+    for i in range(n):
+        v = vehicles[i]
+        k[i] = next_k[v]
+        node[i] = next_node[v]
+        pre[i] = 0.0 if idle[v] else max(0.0, (next_tt[v] - t) * speed)
+    return k, node, pre
+
+
+def load() -> None:
+    """Load (or compile) the kernels now: the first call of each costs a one-off load of its machine code."""
+    w = PlanWindows(1)
+    one = np.zeros(1, np.int64)
+    advance(
+        one,
+        0.0,
+        0.0,
+        w.tt,
+        w.node,
+        w.odo,
+        w.base,
+        w.length,
+        w.tt_before,
+        w.last,
+        w.cruising,
+        one.copy(),
+        one.copy(),
+        np.zeros(1),
+        np.zeros(1),
+        np.zeros(1, bool),
+        one.copy(),
+    )
+    gather(one, 0.0, 1.0, one, one, np.zeros(1), np.zeros(1, bool))

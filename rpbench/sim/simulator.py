@@ -404,15 +404,15 @@ class Simulator:
     def _commit(self, rm: RoundModel, chosen: np.ndarray, t: float) -> int:
         fl = self.fleet
         served = 0
-        for c in chosen:
+        # Every chosen vehicle's position at once: each vehicle is chosen once, and replanning one
+        # leaves the others' positions as they were.
+        moving = chosen[rm.kind[chosen] != Kind.WAIT]
+        ks, hs, _ = fl.positions(rm.vehicle[moving], t)
+        for c, k, h in zip(moving.tolist(), ks.tolist(), hs.tolist(), strict=True):
             kind = int(rm.kind[c])
-            if kind == Kind.WAIT:
-                continue
             v = int(rm.vehicle[c])
             a, b = int(rm.first[c]), int(rm.second[c])
             fofo = bool(rm.fofo[c])
-            ks, hs, _ = fl.positions(np.array([v]), t)
-            k, h = int(ks[0]), int(hs[0])
             if kind == Kind.VACANT:
                 tail, reach = fl.route_through([h, self.origin[a], self.destination[a]])
                 stops = [Stop(reach[0], PICKUP, a), Stop(reach[1], DROPOFF, a)]
