@@ -25,7 +25,7 @@ import numpy as np
 
 from rpbench.exceptions import ParameterError
 from rpbench.network import Distances, RoadNetwork
-from rpbench.sim import lookahead, routes
+from rpbench.sim import routes
 from rpbench.sim.lookahead import PlanWindows, advance, gather
 
 PICKUP, DROPOFF = 0, 1
@@ -88,8 +88,6 @@ class FleetState:
         self._heads = np.ascontiguousarray(network.arc_head[network.out_arcs], dtype=np.int64)
         self._lengths = np.ascontiguousarray(network.arc_length_m[network.out_arcs], dtype=np.float64)
         self._pred = distances.pred
-        routes.load()  # the kernels' one-off load, before the first round rather than inside it
-        lookahead.load()
 
     # --------------------------------------------------------------- plans
     def _still(self, node: int, t: float, odo: float) -> Plan:

@@ -49,6 +49,7 @@ from rpbench.files.paths import cache_dir
 from rpbench.model import Solution, Status
 from rpbench.model.instances import save_instance
 from rpbench.scenarios.base import Scenario
+from rpbench.sim import lookahead, routes, ties
 from rpbench.sim.fleet import DROPOFF, PICKUP, FleetState, Stop
 from rpbench.sim.ties import canonicalize
 from rpbench.strategies.base import Kind, RoundModel, RoundState, Strategy, received, received_moves
@@ -184,6 +185,8 @@ class Simulator:
         self.events: list[tuple] = []
         self.rounds: list[tuple] = []
         self.waiting: list[int] = []
+        for kernels in (routes, lookahead, ties):  # their one-off load, before the first round rather than in it
+            kernels.load()
 
     # ------------------------------------------------------------------ run
     def run(self) -> SimResult:

@@ -26,9 +26,8 @@ Solutions that are not proven optimal are left untouched.
 
 from __future__ import annotations
 
-import functools
-
 import numpy as np
+from numba import njit
 
 from rpbench.model import AssignmentModel, Model, Solution, Status, TripPackingModel, make_solution
 
@@ -68,94 +67,149 @@ def canonicalize(model: Model, solution: Solution) -> tuple[Solution, int]:
 
 
 def _repair(model, chosen: np.ndarray, resource: np.ndarray, items: tuple[np.ndarray, ...]):
-    values = model.values
+    """The moves of the module docstring until none applies: the chosen columns (sorted) and the moves made."""
     start, rows = model.column_rows()
-    exact = model.row_exact()
-    n = model.n_cols
+    out = np.sort(chosen)
+    moves = _repair_kernel(
+        np.ascontiguousarray(model.values, dtype=np.float64),
+        start.astype(np.int64, copy=False),
+        rows.astype(np.int64, copy=False),
+        model.row_exact(),
+        resource,
+        np.stack(items),
+        out,
+    )
+    return out, moves
 
-    def rows_of(c: int) -> np.ndarray:
-        return rows[start[c] : start[c + 1]]
 
-    # Replacement candidates share the value and the "exactly one" rows of the column they replace
-    # (for an assignment: the same passenger), so waiting options of other passengers never qualify.
-    exact_key = np.full(n, -1, dtype=np.int64)
-    if exact.any():
-        col_of_entry = np.repeat(np.arange(n), np.diff(start))
-        is_exact = exact[rows]
-        exact_key[col_of_entry[is_exact][::-1]] = rows[is_exact][::-1]
-    # Smallest column index with the same (exact rows, value): a column can only be replaced by an
-    # earlier peer, so most rounds are settled by one vectorised test.
-    order = np.lexsort((np.arange(n), values, exact_key))
-    new_group = np.r_[True, (np.diff(exact_key[order]) != 0) | (np.diff(values[order]) != 0)]
-    first_of_group = np.empty(n, dtype=np.int64)
-    first_of_group[order] = order[np.flatnonzero(new_group)[np.cumsum(new_group) - 1]]
+@njit(cache=True, nogil=True)
+def _repair_kernel(values, start, rows, exact, resource, items, chosen) -> int:  # pragma: no cover - compiled
+    """Apply value-neutral moves to ``chosen`` (sorted, changed in place) until none applies; the number made.
 
-    # Integer key of (items, resource) per column, for "does the exchanged column exist?"
-    key = np.zeros(n, dtype=np.int64)
-    for a in items + (resource,):
-        key = key * (int(a.max(initial=0)) + 2) + (a + 1)
-    key_order = np.argsort(key, kind="stable")
+    Each pass tries, in order: (1) the first *replace*: over the chosen columns in index order, the
+    earliest column with the same value and the same first "exactly one" row (its group), covering no
+    row another chosen column covers and every "exactly one" row of the column it replaces; (2) the
+    first *swap* of two chosen columns' resources, over their pairs i < j in row-major order, whose
+    exchanged columns exist, keep the total value and lower the smaller index.  A column's items and
+    resource form an integer key (mixed radix) found by binary search among the sorted keys.
+    """
+    n = len(values)
+    n_rows = len(exact)
+    # the group of each column: its first exact row (-1: none), listed by group in index order
+    group = np.full(n, -1, np.int64)
+    for c in range(n):
+        for e in range(start[c], start[c + 1]):
+            if exact[rows[e]]:
+                group[c] = rows[e]
+                break
+    g_start = np.zeros(n_rows + 2, np.int64)
+    for c in range(n):
+        g_start[group[c] + 2] += 1
+    for g in range(1, n_rows + 2):
+        g_start[g] += g_start[g - 1]
+    members = np.empty(n, np.int64)
+    fill = g_start[:-1].copy()
+    for c in range(n):
+        members[fill[group[c] + 1]] = c
+        fill[group[c] + 1] += 1
+    # key of (items, resource) per column, and the key with the resource zeroed
+    key = np.zeros(n, np.int64)
+    for a in range(items.shape[0] + 1):
+        col = items[a] if a < items.shape[0] else resource
+        top = 0
+        for c in range(n):
+            top = max(top, col[c])
+        for c in range(n):
+            key[c] = key[c] * (top + 2) + (col[c] + 1)
+    key_order = np.argsort(key, kind="mergesort")
     sorted_keys = key[key_order]
-    item_key = key - (resource + 1)  # the same key with the resource zeroed
-
-    def columns_with(item_part: np.ndarray, res: np.ndarray) -> np.ndarray:
-        q = item_part + res + 1
-        pos = np.minimum(np.searchsorted(sorted_keys, q), n - 1)
-        return np.where(sorted_keys[pos] == q, key_order[pos], -1)
-
+    used = np.zeros(n_rows, np.bool_)
+    m = len(chosen)
     moves = 0
     while True:
-        chosen = np.sort(chosen)
-        if (first_of_group[chosen] < chosen).any() and _replace_once(
-            chosen, values, exact_key, exact, rows_of, model.n_rows
-        ):
+        chosen.sort()
+        # (1) replace
+        used[:] = False
+        for i in range(m):
+            for e in range(start[chosen[i]], start[chosen[i] + 1]):
+                used[rows[e]] = True
+        replaced = False
+        for i in range(m):
+            c = chosen[i]
+            g = group[c] + 1
+            for e in range(start[c], start[c + 1]):
+                used[rows[e]] = False
+            for q in range(g_start[g], g_start[g + 1]):
+                c2 = members[q]
+                if c2 >= c:
+                    break
+                if values[c2] != values[c]:
+                    continue
+                ok = True
+                for e in range(start[c2], start[c2 + 1]):
+                    if used[rows[e]]:
+                        ok = False
+                        break
+                if ok:  # every exact row of c is a row of c2
+                    for e in range(start[c], start[c + 1]):
+                        r = rows[e]
+                        if exact[r]:
+                            found = False
+                            for f in range(start[c2], start[c2 + 1]):
+                                if rows[f] == r:
+                                    found = True
+                                    break
+                            if not found:
+                                ok = False
+                                break
+                if ok:
+                    chosen[i] = c2
+                    replaced = True
+                    break
+            if replaced:
+                break
+            for e in range(start[c], start[c + 1]):
+                used[rows[e]] = True
+        if replaced:
             moves += 1
             continue
-        # Only columns holding a resource can swap it: pairs among them, in the same (row-major) order.
-        movable = np.flatnonzero(resource[chosen] >= 0)
-        x, y = _pairs_of(len(movable))
-        x, y = movable[x], movable[y]
-        cx, cy = chosen[x], chosen[y]
-        rx, ry = resource[cx], resource[cy]
-        ok = (rx >= 0) & (ry >= 0) & (rx != ry)
-        nx = columns_with(item_key[cx], ry)  # item set of x on y's resource
-        ny = columns_with(item_key[cy], rx)
-        ok &= (nx >= 0) & (ny >= 0)
-        ok &= values[np.maximum(nx, 0)] + values[np.maximum(ny, 0)] == values[cx] + values[cy]
-        ok &= np.minimum(nx, ny) < np.minimum(cx, cy)
-        if not ok.any():
+        # (2) swap resources
+        swapped = False
+        for i in range(m):
+            cx = chosen[i]
+            rx = resource[cx]
+            if rx < 0:
+                continue
+            for j in range(i + 1, m):
+                cy = chosen[j]
+                ry = resource[cy]
+                if ry < 0 or rx == ry:
+                    continue
+                nx = _column_with(sorted_keys, key_order, key[cx] - (rx + 1) + ry + 1)
+                ny = _column_with(sorted_keys, key_order, key[cy] - (ry + 1) + rx + 1)
+                if nx < 0 or ny < 0 or values[nx] + values[ny] != values[cx] + values[cy]:
+                    continue
+                if min(nx, ny) < min(cx, cy):
+                    chosen[i], chosen[j] = nx, ny
+                    swapped = True
+                    break
+            if swapped:
+                break
+        if not swapped:
             break
-        i = int(np.flatnonzero(ok)[0])
-        chosen[x[i]], chosen[y[i]] = nx[i], ny[i]
         moves += 1
-    return np.sort(chosen), moves
+    chosen.sort()
+    return moves
 
 
-@functools.lru_cache(maxsize=512)
-def _pairs_of(m: int) -> tuple[np.ndarray, np.ndarray]:
-    """``np.triu_indices(m, k=1)`` (every pair i < j, row-major), read-only and kept: each round asks for it."""
-    x, y = np.triu_indices(m, k=1)
-    x.setflags(write=False)
-    y.setflags(write=False)
-    return x, y
+@njit(cache=True, nogil=True, inline="always")
+def _column_with(sorted_keys, key_order, q) -> int:  # pragma: no cover - compiled
+    """The column whose key is ``q``, or -1."""
+    pos = min(np.searchsorted(sorted_keys, q), len(sorted_keys) - 1)
+    return key_order[pos] if sorted_keys[pos] == q else -1
 
 
-def _replace_once(chosen, values, exact_key, exact, rows_of, n_rows) -> bool:
-    """Apply the first value-neutral replacement by an earlier column; False when there is none."""
-    used = np.zeros(n_rows, dtype=bool)
-    for c in chosen:
-        used[rows_of(c)] = True
-    for pos, c in enumerate(chosen):
-        peers = np.flatnonzero((values[:c] == values[c]) & (exact_key[:c] == exact_key[c]))
-        if len(peers) == 0:
-            continue
-        mine = rows_of(c)
-        used[mine] = False
-        need = mine[exact[mine]]
-        for c2 in peers:
-            r2 = rows_of(c2)
-            if not used[r2].any() and np.isin(need, r2).all():
-                chosen[pos] = c2
-                return True
-        used[mine] = True
-    return False
+def load() -> None:
+    """Load (or compile) the kernel now: its first call costs a one-off load of its machine code."""
+    model = AssignmentModel(1, 1, [0, 0], [0, -1], [0.0, 0.0])
+    _repair(model, np.zeros(1, np.int64), model.col_vehicle.astype(np.int64), (model.col_passenger.astype(np.int64),))

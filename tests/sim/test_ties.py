@@ -7,7 +7,7 @@ import itertools
 import numpy as np
 
 from rpbench.model import AssignmentModel, Status, TripPackingModel, make_solution
-from rpbench.sim.ties import canonicalize
+from rpbench.sim.ties import _repair, canonicalize
 
 
 def optimal(model, chosen):
@@ -83,15 +83,6 @@ def test_canonical_choice_is_independent_of_the_start_on_symmetric_models():
         assert len(outcomes) == 1
 
 
-def test_pairs_of_equals_triu_indices_and_is_read_only():
-    from rpbench.sim.ties import _pairs_of
-
-    for m in range(8):
-        x, y = _pairs_of(m)
-        ex, ey = np.triu_indices(m, k=1)
-        assert np.array_equal(x, ex) and np.array_equal(y, ey) and not x.flags.writeable
-
-
 def _reference_swaps(model, chosen):
     """The resource swaps of the canonicalisation, over every pair of chosen columns in row-major order."""
     by_key = {(int(p), int(v)): c for c, (p, v) in enumerate(zip(model.col_passenger, model.col_vehicle, strict=True))}
@@ -134,3 +125,116 @@ def test_swaps_match_a_pairwise_reference_with_waiting_columns_among_the_chosen(
         assert got == _reference_swaps(m, start)
         moved += got != sorted(start)
     assert moved > 0
+
+
+def _numpy_repair(model, chosen, resource, items):
+    """The repair as numpy passes (the compiled kernel's reference): replace moves, then row-major swaps."""
+    values = model.values
+    start, rows = model.column_rows()
+    exact = model.row_exact()
+    n = model.n_cols
+    exact_key = np.full(n, -1, dtype=np.int64)
+    for c in range(n):
+        mine = rows[start[c] : start[c + 1]]
+        if exact[mine].any():
+            exact_key[c] = mine[exact[mine]][0]
+    key = np.zeros(n, dtype=np.int64)
+    for a in items + (resource,):
+        key = key * (int(a.max(initial=0)) + 2) + (a + 1)
+    by_key = {int(k): c for c, k in enumerate(key)}
+    chosen = sorted(int(c) for c in chosen)
+    moves = 0
+    while True:
+        used = np.zeros(model.n_rows, dtype=bool)
+        for c in chosen:
+            used[rows[start[c] : start[c + 1]]] = True
+        replaced = False
+        for pos, c in enumerate(chosen):
+            mine = rows[start[c] : start[c + 1]]
+            used[mine] = False
+            for c2 in np.flatnonzero((values[:c] == values[c]) & (exact_key[:c] == exact_key[c])):
+                r2 = rows[start[c2] : start[c2 + 1]]
+                if not used[r2].any() and np.isin(mine[exact[mine]], r2).all():
+                    chosen[pos], replaced = int(c2), True
+                    break
+            if replaced:
+                break
+            used[mine] = True
+        if replaced:
+            moves += 1
+            chosen.sort()
+            continue
+        for i, j in itertools.combinations(range(len(chosen)), 2):
+            cx, cy = chosen[i], chosen[j]
+            rx, ry = int(resource[cx]), int(resource[cy])
+            if rx < 0 or ry < 0 or rx == ry:
+                continue
+            nx = by_key.get(int(key[cx] - (rx + 1) + ry + 1))
+            ny = by_key.get(int(key[cy] - (ry + 1) + rx + 1))
+            if nx is None or ny is None or values[nx] + values[ny] != values[cx] + values[cy]:
+                continue
+            if min(nx, ny) < min(cx, cy):
+                chosen[i], chosen[j] = nx, ny
+                break
+        else:
+            return chosen, moves
+        moves += 1
+        chosen.sort()
+
+
+def _random_tied_assignment(rng):
+    """Passengers valuing vehicles from a few levels (many ties), a wait column each; a feasible start."""
+    n_p, n_v = int(rng.integers(1, 7)), int(rng.integers(1, 7))
+    cp, cv, vals = [], [], []
+    for p in range(n_p):
+        for v in range(n_v):
+            if rng.random() < 0.7:
+                cp.append(p), cv.append(v), vals.append(-int(rng.integers(1, 3)))
+        cp.append(p), cv.append(-1), vals.append(-int(rng.integers(1, 4)))
+    m = AssignmentModel(n_p, n_v, cp, cv, vals)
+    free, start = set(range(n_v)), []
+    for p in rng.permutation(n_p):
+        cols = [c for c in np.flatnonzero(m.col_passenger == p) if m.col_vehicle[c] < 0 or m.col_vehicle[c] in free]
+        c = int(rng.choice(cols))
+        free.discard(int(m.col_vehicle[c]))
+        start.append(c)
+    return m, start
+
+
+def test_the_compiled_repair_matches_the_numpy_passes_on_tied_assignments():
+    rng = np.random.default_rng(11)
+    moved = 0
+    for _ in range(300):
+        m, start = _random_tied_assignment(rng)
+        resource, items = m.col_vehicle.astype(np.int64), (m.col_passenger.astype(np.int64),)
+        got, moves = _repair(m, np.array(start, np.int64), resource, items)
+        want, want_moves = _numpy_repair(m, start, resource, items)
+        assert got.tolist() == want and moves == want_moves
+        moved += moves > 0
+    assert moved > 50
+
+
+def test_the_compiled_repair_matches_the_numpy_passes_on_trip_packing():
+    rng = np.random.default_rng(12)
+    for _ in range(200):
+        n_r, n_v = int(rng.integers(2, 6)), int(rng.integers(1, 4))
+        trips = [(a, -1) for a in range(n_r)] + [(a, b) for a in range(n_r) for b in range(a + 1, n_r)]
+        cv, r1, r2, vals = [], [], [], []
+        for v in range(n_v):
+            for a, b in trips:
+                if rng.random() < 0.6:
+                    cv.append(v), r1.append(a), r2.append(b), vals.append(int(rng.integers(1, 3)))
+        if not cv:
+            continue
+        m = TripPackingModel(n_r, n_v, cv, r1, r2, vals)
+        used, start = set(), []
+        for c in rng.permutation(m.n_cols):
+            rows = set(m.column_rows()[1][m.column_rows()[0][c] : m.column_rows()[0][c + 1]].tolist())
+            if not rows & used:
+                used |= rows
+                start.append(int(c))
+        resource = m.col_vehicle.astype(np.int64)
+        items = (m.col_request1.astype(np.int64), m.col_request2.astype(np.int64))
+        got, moves = _repair(m, np.array(start, np.int64), resource, items)
+        want, want_moves = _numpy_repair(m, start, resource, items)
+        assert got.tolist() == want and moves == want_moves
