@@ -43,3 +43,24 @@ def test_nothing_is_fetched_and_text_is_escaped():
 def test_a_page_is_deterministic():
     assert built_page() == built_page()
     assert assets.plotly_bundle() == assets.plotly_bundle()
+
+
+def test_the_compressed_library_is_kept_and_checked(tmp_path, monkeypatch):
+    monkeypatch.setenv("RPBENCH_CACHE", str(tmp_path))
+    raw = b"var plotly = 1;" * 1000
+    first = assets.compressed(raw)
+    (kept,) = tmp_path.glob("plotly-*.js.gz")
+    assert kept.read_bytes() == first and gzip.decompress(first) == raw
+    assert assets.compressed(raw) == first
+    kept.write_bytes(gzip.compress(b"another script", mtime=0))  # a copy that no longer inflates to the script
+    assert assets.compressed(raw) == first and kept.read_bytes() == first
+    kept.write_bytes(b"not gzip")
+    assert assets.compressed(raw) == first and kept.read_bytes() == first
+
+
+def test_the_library_compresses_without_a_cache_folder(tmp_path, monkeypatch):
+    blocker = tmp_path / "a-file"
+    blocker.write_text("")
+    monkeypatch.setenv("RPBENCH_CACHE", str(blocker))
+    raw = b"var plotly = 2;" * 100
+    assert gzip.decompress(assets.compressed(raw)) == raw
