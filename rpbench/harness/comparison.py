@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 
 from rpbench.backends import Preset, load_preset
+from rpbench.harness import sidecar
 from rpbench.harness.outcome import Outcome
 from rpbench.harness.strict import require_proven
 from rpbench.harness.training import supply_model
@@ -27,6 +28,7 @@ from rpbench.model import Structure
 from rpbench.oracle import find_candidates, solve_oracle
 from rpbench.oracle.runs import ORACLE_RUNS
 from rpbench.oracle.solve import OracleResult
+from rpbench.report import plots
 from rpbench.report.comparison import write_report
 from rpbench.report.html import write_html
 from rpbench.results import metrics
@@ -56,17 +58,28 @@ def run_comparison(
     check_new_folder(out)  # a bad --out must fail now, not after the whole simulation
     preset, oracle_preset = checked_presets(spec)
     scenario = scenario if scenario is not None else spec.request.build()
-    runs = simulate_all(spec, scenario, preset, progress)
-    offline = solve_offline(scenario, spec.offline, oracle_preset)
-    for name, result in offline.items():
-        require_proven(
-            f"{run_label(name)} (solver preset {result.solver!r})", result.solution.status.value, strict=spec.strict
-        )
-    table = kpi_table(runs, offline, spec.names)
-    with new_results_folder(out, f"{timestamp()}_{scenario.name}_{preset.name}") as (folder, final):
-        meta = write_folder(folder, spec, scenario, runs, offline, preset)
-        write_report(folder, name=final.name, formats=spec.formats)
-        write_html(folder, name=final.name)
+    built = scenario
+    # The offline runs and report.md in a second process, beside the simulations and report.html.
+    side = sidecar.start(
+        lambda: solve_offline(built, spec.offline, oracle_preset),
+        lambda folder, name: write_report(folder, name=name, formats=spec.formats),
+        warm_up=plots.warm_up,
+    )
+    try:
+        runs = simulate_all(spec, scenario, preset, progress)
+        offline = side.offline()
+        for name, result in offline.items():
+            require_proven(
+                f"{run_label(name)} (solver preset {result.solver!r})", result.solution.status.value, strict=spec.strict
+            )
+        table = kpi_table(runs, offline, spec.names)
+        with new_results_folder(out, f"{timestamp()}_{scenario.name}_{preset.name}") as (folder, final):
+            meta = write_folder(folder, spec, scenario, runs, offline, preset)
+            side.report(folder, final.name)
+            write_html(folder, name=final.name)
+            side.wait()
+    finally:
+        side.close()
     rounds = rounds_table(runs)
     return Outcome(
         final,

@@ -112,6 +112,12 @@ def _pyplot() -> Any:
     return plt
 
 
+def warm_up() -> None:
+    """Import matplotlib (headless) ahead of the first figure: a process that draws later can pay for the
+    import while it would otherwise wait."""
+    _pyplot()
+
+
 def _savefig(fig: Any, path: Path, formats: Sequence[str]) -> None:
     """The figure in each of ``formats`` (``path``, a ``.png`` name, with the format's suffix), the vector
     copies written without a date, so that the same tables give the same files."""

@@ -1,0 +1,148 @@
+"""A comparison's second process: the work that need not wait for the simulations, done on the other core.
+
+A comparison's simulations run one after another on one core.  Two parts of its other work do not depend on
+them: the offline runs (bound, oracles) need only the scenario, and report.md's figures need only the
+written folder while report.html is rendered from the same files.  :func:`start` forks a child when the
+comparison starts (nothing is pickled in: it inherits the scenario and the spec); the child solves the
+offline runs and sends them back while the parent simulates, imports the plotting library, then waits until
+the parent has written the folder and writes report.md and its figures into it while the parent writes
+report.html.  The results are those of the serial path, the same functions on the same inputs: the offline
+runs are deterministic and come back as pickles, the reports are functions of the folder's files.
+
+The child is forked only from a top-level process, before the comparison's first solve: a worker of a
+multi-day pool has siblings on the other cores already, and daemonic workers may not have children.
+Elsewhere (``fork`` unavailable, or it fails) :class:`Serial` does the same steps in-process, in the same
+order.  An exception of the child is raised again in the parent, and a parent that stops (an error,
+Ctrl-C, SIGKILL) ends the child: it kills it, or the child finds the pipe closed and exits.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import signal
+from collections.abc import Callable
+from multiprocessing.connection import Connection
+from pathlib import Path
+from typing import Any
+
+from rpbench.exceptions import RpbenchError
+
+OfflineFn = Callable[[], Any]
+ReportFn = Callable[[Path, str], object]
+
+
+class Serial:
+    """The steps in-process: the offline runs when they are asked for, report.md when the folder is ready."""
+
+    def __init__(self, offline: OfflineFn, report: ReportFn) -> None:
+        self._offline, self._report = offline, report
+
+    def offline(self) -> Any:
+        return self._offline()
+
+    def report(self, folder: Path, name: str) -> None:
+        self._report(folder, name)
+
+    def wait(self) -> None:
+        """Return once report.md is written (in-process: it is)."""
+
+    def close(self) -> None:
+        """Nothing to end."""
+
+
+class Forked(Serial):
+    """The steps in a forked child; the same calls, each answered from the child."""
+
+    def __init__(self, offline: OfflineFn, report: ReportFn, *, warm_up: Callable[[], None]) -> None:
+        super().__init__(offline, report)
+        ctx = multiprocessing.get_context("fork")
+        self._conn, child_end = ctx.Pipe(duplex=True)
+        self._child = ctx.Process(target=_child_main, args=(child_end, self._conn, offline, report, warm_up))
+        self._child.start()
+        child_end.close()
+        self._asked_report = False
+
+    def offline(self) -> Any:
+        return self._answer("the offline runs")
+
+    def report(self, folder: Path, name: str) -> None:
+        self._conn.send((folder, name))
+        self._asked_report = True
+
+    def wait(self) -> None:
+        if self._asked_report:
+            self._asked_report = False
+            self._answer("report.md")
+
+    def close(self) -> None:
+        if self._child.is_alive():
+            self._child.kill()
+        self._child.join()
+        self._conn.close()
+
+    def _answer(self, what: str) -> Any:
+        try:
+            ok, value = self._conn.recv()
+        except EOFError:
+            raise RpbenchError(f"the process writing {what} died (exit status {self._exit_status()})") from None
+        if not ok:
+            raise value
+        return value
+
+    def _exit_status(self) -> int | None:
+        self._child.join(timeout=1.0)
+        return self._child.exitcode
+
+
+def start(offline: OfflineFn, report: ReportFn, *, warm_up: Callable[[], None]) -> Serial:
+    """The comparison's second process (:class:`Forked`) where it can run, else :class:`Serial`.
+
+    ``offline()`` returns the offline runs; ``report(folder, name)`` writes report.md into ``folder``;
+    ``warm_up()`` (in the child, between the two) imports what ``report`` needs.
+    """
+    if not _may_fork():
+        return Serial(offline, report)
+    try:
+        return Forked(offline, report, warm_up=warm_up)
+    except OSError:  # no process or memory to fork: the same work in-process
+        return Serial(offline, report)
+
+
+def _may_fork() -> bool:
+    return (
+        "fork" in multiprocessing.get_all_start_methods()
+        and multiprocessing.parent_process() is None
+        and not multiprocessing.current_process().daemon
+    )
+
+
+def _child_main(
+    conn: Connection, parent_end: Connection, offline: OfflineFn, report: ReportFn, warm_up: Callable[[], None]
+) -> None:
+    parent_end.close()  # so that the parent's exit closes the pipe: recv() then ends this process
+    # Ctrl-C and SIGTERM reach the whole process group: the parent stops, then ends this child itself.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    try:
+        _send(conn, offline)
+        warm_up()
+        job = conn.recv()
+        _send(conn, lambda: report(*job))
+    except (EOFError, BrokenPipeError):  # the parent is gone or stopped listening
+        pass
+    finally:
+        conn.close()
+
+
+def _send(conn: Connection, fn: Callable[[], Any]) -> None:
+    """``fn()``'s value, or the exception it raised, to the parent (one that cannot be pickled as a line)."""
+    try:
+        answer: tuple[bool, Any] = (True, fn())
+    except BaseException as exc:
+        answer = (False, exc)
+    try:
+        conn.send(answer)
+    except (BrokenPipeError, EOFError):
+        raise
+    except Exception as exc:  # an unpicklable value or exception
+        conn.send((False, RpbenchError(f"{type(answer[1]).__name__}: {answer[1]} (not passed on: {exc})")))
