@@ -195,3 +195,83 @@ def test_frozen_is_a_read_only_copy_validated_again():
     with pytest.raises(ModelError, match="columns 0 and 1 are duplicates"):
         model.frozen()
     assert twin.column_rows()[1].tolist() == [0, 2, 0, 1]  # the copy keeps what was checked
+
+
+def _perturbed_assignments(seed: int, count: int):
+    """Random assignment models, valid and broken in every way its validation checks."""
+    rng = np.random.default_rng(seed)
+    for _ in range(count):
+        n_p, n_v = int(rng.integers(0, 5)), int(rng.integers(0, 5))
+        cols = [(p, v) for p in range(n_p) for v in range(-1, n_v) if v < 0 or rng.random() < 0.6]
+        cp = np.array([c[0] for c in cols], np.int64)
+        cv = np.array([c[1] for c in cols], np.int64)
+        values = rng.integers(-50, 50, len(cols)).astype(np.float64)
+        fault = int(rng.integers(0, 9))
+        if len(cols):
+            c = int(rng.integers(0, len(cols)))
+            if fault == 1:
+                values[c] = [np.nan, np.inf, 0.5][int(rng.integers(0, 3))]
+            elif fault == 2:
+                cp[c] = [n_p, -1][int(rng.integers(0, 2))]
+            elif fault == 3:
+                cv[c] = [n_v, -2][int(rng.integers(0, 2))]
+            elif fault == 4 and len(cols) > 1:
+                cp[c], cv[c] = cp[c - 1], cv[c - 1]  # a duplicate
+            elif fault == 5:
+                keep = cp != cp[c]  # a passenger without any column
+                cp, cv, values = cp[keep], cv[keep], values[keep]
+            elif fault == 6:
+                values[c] = 2.0**53
+        if fault == 7:
+            n_p = -1
+        yield n_p, n_v, cp.astype(np.int32), cv.astype(np.int32), values
+
+
+def test_the_compiled_assignment_check_agrees_with_the_python_checks():
+    from rpbench.model import kernels
+
+    verdicts = set()
+    for n_p, n_v, cp, cv, values in _perturbed_assignments(3, 2000):
+        fast = kernels.assignment_valid(n_p, n_v, cp, cv, values)
+        model = object.__new__(AssignmentModel)
+        for name, value in [("name", "m"), ("n_passengers", n_p), ("n_vehicles", n_v), ("col_passenger", cp),
+                            ("col_vehicle", cv), ("values", values), ("unit_m", 1e-3)]:  # fmt: skip
+            object.__setattr__(model, name, value)
+        try:
+            model._checks()
+            slow = True
+        except ModelError:
+            slow = False
+        # near the float64 limit the kernel leaves the verdict to the Python checks
+        assert fast == slow or (slow and np.abs(values).sum() > 2.0**52), (n_p, n_v, cp, cv, values)
+        verdicts.add(fast)
+    assert verdicts == {True, False}
+
+
+def test_the_compiled_cover_check_words_violations_as_before():
+    rng = np.random.default_rng(4)
+    for n_p, n_v, cp, cv, values in _perturbed_assignments(5, 400):
+        try:
+            model = AssignmentModel(n_p, n_v, cp, cv, values)
+        except ModelError:
+            continue
+        start, rows = model.column_rows()
+        for _ in range(5):
+            chosen = rng.integers(-1, model.n_cols + 1, int(rng.integers(0, 4))) if model.n_cols else []
+            chosen = np.asarray(chosen, dtype=np.int64)
+            want = []
+            if len(chosen) and (chosen.min() < 0 or chosen.max() >= model.n_cols):
+                want = [f"chosen column index outside 0..{model.n_cols - 1}"]
+            else:
+                if len(np.unique(chosen)) != len(chosen):
+                    want.append("a column is chosen twice")
+                counts = np.zeros(model.n_rows, np.int64)
+                for c in chosen:
+                    counts[rows[start[c] : start[c + 1]]] += 1
+                over = np.flatnonzero(counts > 1)
+                if len(over):
+                    want.append(f"row {int(over[0])} is covered {int(counts[over[0]])} times")
+                under = np.flatnonzero(model.row_exact() & (counts == 0))
+                if len(under):
+                    want.append(f"row {int(under[0])} must be covered exactly once but is not covered")
+            assert model.violations(chosen) == want

@@ -28,7 +28,16 @@ import numpy as np
 import scipy.sparse as sp
 
 from rpbench.exceptions import SolverError
-from rpbench.model import Model, Solution, Status, Structure, make_solution
+from rpbench.model import (
+    AssignmentModel,
+    Model,
+    PairingModel,
+    Solution,
+    Status,
+    Structure,
+    TripPackingModel,
+    make_solution,
+)
 
 #: Raw solver outcomes: proven optimal, stopped by a limit, or proven infeasible.
 OPTIMAL, LIMIT, INFEASIBLE = "optimal", "limit", "infeasible"
@@ -89,13 +98,18 @@ class Program:
         return sp.csc_matrix((data, self.indices, self.indptr), shape=(self.n_rows, self.n))
 
 
+_ROWS_SORTED = (AssignmentModel, TripPackingModel, PairingModel)
+
+
 def program(model: Model, c: np.ndarray | None = None, min_count: int | None = None) -> Program:
     """The model as a 0/1 program; ``c`` defaults to its values."""
     exact = model.row_exact()
     lo = np.where(exact, 1.0, -np.inf)
     hi = np.ones(model.n_rows)
     start, rows = model.column_rows()
-    if min_count is not None or not _sorted_within_columns(start, rows):
+    # The built-in models' validation orders each column's rows (passenger < vehicle rows, a < b):
+    # only another class's need checking.
+    if min_count is not None or (type(model) not in _ROWS_SORTED and not _sorted_within_columns(start, rows)):
         A = model.incidence()
         if min_count is not None:
             A = sp.vstack([A, sp.csr_matrix(np.ones((1, model.n_cols)))], format="csc")

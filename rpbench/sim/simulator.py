@@ -47,6 +47,7 @@ from rpbench.backends import Preset, solve
 from rpbench.exceptions import ModelError, SolverError
 from rpbench.files.paths import cache_dir
 from rpbench.model import Solution, Status
+from rpbench.model import kernels as model_kernels
 from rpbench.model.instances import save_instance
 from rpbench.scenarios.base import Scenario
 from rpbench.sim import lookahead, routes, ties
@@ -185,7 +186,7 @@ class Simulator:
         self.events: list[tuple] = []
         self.rounds: list[tuple] = []
         self.waiting: list[int] = []
-        for kernels in (routes, lookahead, ties):  # their one-off load, before the first round rather than in it
+        for kernels in (routes, lookahead, ties, model_kernels):  # their one-off load, before the first round
             kernels.load()
 
     # ------------------------------------------------------------------ run
