@@ -200,7 +200,9 @@ class FleetState:
         new.stops = sorted(stops, key=lambda s: (s.index, s.kind))
         new.cruising = cruising
         self.plans[v] = new
-        self._invalidate(v)
+        self._next_tt[v] = -np.inf  # stale: found again in the new plan's window, filled now
+        self._idle[v] = False
+        self._windows.fill(v, new.nodes, new.tt, new.odo, cruising, 0)
         self._version[v] += 1
         if new.stops:
             heapq.heappush(self._heap, (float(new.tt[new.stops[0].index]), v, int(self._version[v])))

@@ -48,17 +48,10 @@ class PlanWindows:
 
     def fill(self, v: int, nodes: np.ndarray, tt: np.ndarray, odo: np.ndarray, cruising: bool, k: int) -> None:
         """Window of vehicle ``v`` over its plan (``nodes``, ``tt``, ``odo``) from plan index ``k``."""
-        end = min(len(tt), k + WIDTH)
-        m = end - k
-        self.tt[v, :m] = tt[k:end]
-        self.tt[v, m:] = np.inf
-        self.node[v, :m] = nodes[k:end]
-        self.odo[v, :m] = odo[k:end]
-        self.base[v] = k
-        self.length[v] = m
-        self.tt_before[v] = tt[k - 1] if k > 0 else -np.inf
-        self.last[v] = len(tt) - 1
-        self.cruising[v] = cruising
+        fill_row(
+            self.tt, self.node, self.odo, self.base, self.length, self.tt_before, self.last, self.cruising,
+            v, nodes, tt, odo, cruising, k,
+        )  # fmt: skip
 
     def drop(self, v: int) -> None:
         self.length[v] = 0
@@ -85,6 +78,39 @@ class PlanWindows:
             at_end=(k == self.last[hit]) & ~self.cruising[hit],
             missed=vehicles[~ok],
         )
+
+
+@njit(cache=True, nogil=True)
+def fill_row(
+    w_tt: np.ndarray,
+    w_node: np.ndarray,
+    w_odo: np.ndarray,
+    base: np.ndarray,
+    length: np.ndarray,
+    tt_before: np.ndarray,
+    last: np.ndarray,
+    w_cruising: np.ndarray,
+    v: int,
+    nodes: np.ndarray,
+    tt: np.ndarray,
+    odo: np.ndarray,
+    cruising: bool,
+    k: int,
+) -> None:  # pragma: no cover - compiled
+    """:meth:`PlanWindows.fill` in one compiled call (a round fills a window for every vehicle it replans)."""
+    m = min(len(tt), k + WIDTH) - k
+    for j in range(WIDTH):
+        if j < m:
+            w_tt[v, j] = tt[k + j]
+            w_node[v, j] = nodes[k + j]
+            w_odo[v, j] = odo[k + j]
+        else:
+            w_tt[v, j] = np.inf
+    base[v] = k
+    length[v] = m
+    tt_before[v] = tt[k - 1] if k > 0 else -np.inf
+    last[v] = len(tt) - 1
+    w_cruising[v] = cruising
 
 
 @njit(cache=True, nogil=True)
@@ -181,3 +207,4 @@ def load() -> None:
         one.copy(),
     )
     gather(one, 0.0, 1.0, one, one, np.zeros(1), np.zeros(1, bool))
+    w.fill(0, np.zeros(1, np.int32), np.zeros(1), np.zeros(1), False, 0)
