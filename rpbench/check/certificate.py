@@ -118,43 +118,96 @@ def first_true(mask: np.ndarray, offsets: np.ndarray) -> np.ndarray:
     return np.where((pos < len(hits)) & (cand < offsets[1:]), cand, -1)
 
 
-def bound_geometry(f: Folder, params: Params, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, Geometry]:
-    """docs/bound.md's orientation "x first, y joins": (allowed, geometry with the vehicle at h*).
+def all_paths(f: Folder) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Every order's shortest path, once (:func:`order_paths` of every order): order ``i``'s nodes are
+    ``nodes[offsets[i]:offsets[i + 1]]``."""
+    return order_paths(f, np.arange(f.n))
+
+
+def turning_points(
+    f: Folder, params: Params, x: np.ndarray, y: np.ndarray, paths: tuple | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """docs/bound.md's orientation "x first, y joins": (allowed, h*, δ = l(o_x, h*)); ``paths`` from
+    :func:`all_paths` (None: the paths of the orders ``x`` alone are found).
 
     Allowed: ``t_y - t_x`` in ``[-K_y, K_x + (R̄ + l_x)/v]``, and h*, the first node of x's shortest path
     within R̄ of o_y at or beyond the least distance x's vehicle has driven when y is revealed,
     ``v (t_y - t_x - K_x) - R̄`` (x picked up by ``t_x + K_x + R̄/v``), exists with its predecessor within
-    ``v (t_y + K_y - t_x)`` of o_x.
+    ``v (t_y + K_y - t_x)`` of o_x.  The arc lengths along a path only grow, so both limits are found by
+    binary search and only the nodes between them are tested, one vectorised step per node, each pair
+    leaving at its first node within R̄: O(log ℓ + the nodes tested) a pair.
     """
-    t, k = f.col("request_s"), f.col("patience_s")
+    t, k, origin = f.col("request_s"), f.col("patience_s"), f.col("origin")
     v, r_max = params.speed_mps, params.max_pickup_m
+    if paths is None:
+        unique = np.unique(x)
+        offsets, nodes, cum = order_paths(f, unique)
+        slot = np.searchsorted(unique, x)
+    else:
+        (offsets, nodes, cum), slot = paths, x
     gap = t[y] - t[x]
     allowed = (-k[y] - TOL_S <= gap) & (gap <= k[x] + (r_max + TOL_M + f.solo[x]) / v + TOL_S)
-    h = f.col("origin")[x].astype(np.int64)
+    h = origin[x].astype(np.int64)
     delta = np.zeros(len(x))
-    for block in np.array_split(np.flatnonzero(allowed), max(1, int(allowed.sum()) // 20000)):
-        if not len(block):
-            continue
-        off, nodes, cum = order_paths(f, x[block])
-        lengths = np.diff(off)
-        near = f.distances.dist[nodes, np.repeat(f.col("origin")[y[block]], lengths)] <= r_max + TOL_M
-        driven = v * (gap[block] - k[x[block]] - TOL_S) - (r_max + TOL_M)  # at least, once y is revealed
-        first = first_true(near & (cum >= np.repeat(driven, lengths)), off)
-        reach = v * (t[y[block]] + k[y[block]] - t[x[block]]) + TOL_M
-        turned_late = (first > off[:-1]) & (cum[np.maximum(first - 1, 0)] > reach)
-        found = (first >= 0) & ~turned_late
-        allowed[block[~found]] = False
-        h[block[found]] = nodes[first[found]]
-        delta[block[found]] = cum[first[found]]
+    rows = np.flatnonzero(allowed)
+    xs, oy, start, end = x[rows], origin[y[rows]], offsets[slot[rows]], offsets[slot[rows] + 1]
+    driven = v * (gap[rows] - k[xs] - TOL_S) - (r_max + TOL_M)  # at least, once y is revealed
+    reach = v * (t[y[rows]] + k[y[rows]] - t[xs]) + TOL_M
+    # nodes p >= lo (cum >= driven) whose predecessor is within reach (p == start, or cum[p - 1] <= reach)
+    pos = _search(cum, start, end, driven, right=False)
+    last = np.minimum(_search(cum, start, end, reach, right=True), end - 1)
+    found = np.full(len(rows), -1, np.int64)
+    active = np.flatnonzero(pos <= last)
+    while len(active):
+        p = pos[active]
+        hit = f.distances.dist[nodes[p], oy[active]] <= r_max + TOL_M
+        found[active[hit]] = p[hit]
+        go = ~hit & (p < last[active])
+        pos[active[go]] += 1
+        active = active[go]
+    ok = found >= 0
+    allowed[rows[~ok]] = False
+    h[rows[ok]] = nodes[found[ok]]
+    delta[rows[ok]] = cum[found[ok]]
+    return allowed, h, delta
+
+
+def _search(cum: np.ndarray, lo: np.ndarray, hi: np.ndarray, value: np.ndarray, right: bool) -> np.ndarray:
+    """Per segment ``[lo, hi)`` of the non-decreasing ``cum``: the first index with ``cum >= value`` (``cum >
+    value`` when ``right``), ``hi`` where there is none.  A vectorised binary search."""
+    lo, hi = lo.copy(), hi.copy()
+    top = max(len(cum) - 1, 0)
+    while True:
+        active = lo < hi
+        if not active.any():
+            return lo
+        mid = (lo + hi) // 2
+        c = cum[np.minimum(mid, top)]
+        below = active & ((c <= value) if right else (c < value))
+        lo = np.where(below, mid + 1, lo)
+        hi = np.where(active & ~below, mid, hi)
+
+
+def bound_geometry(
+    f: Folder, params: Params, x: np.ndarray, y: np.ndarray, paths: tuple | None = None
+) -> tuple[np.ndarray, Geometry]:
+    """docs/bound.md's orientation "x first, y joins": (allowed, geometry with the vehicle at h*), h* as
+    :func:`turning_points` finds it."""
+    allowed, h, delta = turning_points(f, params, x, y, paths)
     return allowed, Geometry.of(f, x, y, h, delta, np.zeros(len(x)), params.max_detour_m)
 
 
-def _orientation_weight(f: Folder, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+def _orientation_weight(f: Folder, x: np.ndarray, y: np.ndarray, paths: tuple | None = None) -> np.ndarray:
     """Per pair, the saving with x first and y joining under the bound's rule (the feasible service order
-    with the smaller route), or -inf where that orientation is not allowed."""
-    allowed, g = bound_geometry(f, f.params, x, y)
+    with the smaller route), or -inf where that orientation is not allowed.  The routes are valued only
+    for the allowed pairs."""
+    allowed, h, delta = turning_points(f, f.params, x, y, paths)
+    out = np.full(len(x), -np.inf)
+    k = np.flatnonzero(allowed)
+    g = Geometry.of(f, x[k], y[k], h[k], delta[k], np.zeros(len(k)), f.params.max_detour_m)
     r = g.served(g.rule_order("min_feasible"))
-    return np.where(allowed & r["ok"], r["saving"], -np.inf)
+    out[k] = np.where(r["ok"], r["saving"], -np.inf)
+    return out
 
 
 def edge_weights(f: Folder, a: np.ndarray, b: np.ndarray, a_first_only: bool = False) -> tuple[np.ndarray, np.ndarray]:

@@ -24,7 +24,7 @@ import scipy.sparse as sp
 from scipy.optimize import Bounds, LinearConstraint, milp
 from scipy.sparse.csgraph import connected_components
 
-from rpbench.check.certificate import _orientation_weight
+from rpbench.check.certificate import _orientation_weight, all_paths
 from rpbench.check.core import TOL_M, TOL_S
 from rpbench.check.folder import Folder
 
@@ -35,7 +35,12 @@ CHECK_BLOCK_PAIRS = 1 << 20
 ROUND_SLACK = 1e-6
 #: Cutting-plane rounds before the exact fallback.
 MAX_ROUNDS = 100
+#: The loop has stalled when this many rounds of odd sets in a row lowered the dual bound by less than one
+#: unit of weight (the weights are integral): reduced-cost fixing and the MIP then decide.
+STALL_ROUNDS = 5
 FRACTIONAL = 1e-6
+#: An edge enters the LP when its reduced cost exceeds this, relative to its weight (the solver's tolerance).
+PRICING_TOL = 1e-9
 
 
 def bound_graph(f: Folder) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -52,6 +57,7 @@ def bound_graph(f: Folder) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     hi = np.searchsorted(ts, ts + reach + 1e-9 * (1.0 + np.abs(ts)), side="right")
     count = np.maximum(hi - np.arange(len(ts)) - 1, 0)
     parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+    paths = all_paths(f)
     cum = np.cumsum(count)
     i0 = 0
     while i0 < len(ts):
@@ -64,7 +70,7 @@ def bound_graph(f: Folder) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             w = np.full(len(a), -np.inf)
             for x, y in ((a, b), (b, a)):
                 m = np.flatnonzero(_may_turn_at_origin(f, x, y))
-                w[m] = np.fmax(w[m], _orientation_weight(f, x[m], y[m]))
+                w[m] = np.fmax(w[m], _orientation_weight(f, x[m], y[m], paths))
             edge = np.isfinite(w)
             parts.append((a[edge], b[edge], w[edge]))
         i0 = i1
@@ -111,6 +117,7 @@ def prove_maximum(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, target: f
     beat = np.floor(target + 1e-9) + 1  # a matching worth this much would beat the target
     slack: np.ndarray | None = None
     upper = float("inf")
+    history: list[float] = []
     for _ in range(MAX_ROUNDS):
         solved = lp.solve()
         if solved is None:
@@ -120,9 +127,15 @@ def prove_maximum(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, target: f
         upper, slack = _dual_value(n, a, b, w, sets, dual)
         if best > target or upper < beat - 1e-6:
             return MatchingProof(best, upper, "dual certificate", len(sets))
+        enter = lp.price(sets, dual)
+        if not len(enter):  # an optimum of the LP over every edge: did the last odd sets lower it?
+            history.append(upper)
+            if len(history) > STALL_ROUNDS and history[-1 - STALL_ROUNDS] - upper < 1.0:
+                break
+        lp.add_columns(enter)  # before the new sets: their rows are added over every column
         frac = (x > FRACTIONAL) & (x < 1 - FRACTIONAL)
         first = len(sets)
-        if not sets.add(_odd_components(n, a[frac], b[frac])):
+        if not sets.add(_odd_components(n, a[frac], b[frac])) and not len(enter):
             break
         lp.add_rows(sets, first)
     if slack is None:
@@ -145,43 +158,86 @@ def prove_maximum(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, target: f
 
 
 class _CuttingPlaneLP:
-    """The matching LP ``max w·x, degree <= 1, x >= 0`` in one HiGHS instance that the loop's odd-set rows are
-    added to: each re-solve starts from the last basis (dual simplex), where solving afresh took minutes a round
-    on the full day's 1.4 M pairs.  HiGHS only searches: its duals are made feasible and summed by
-    :func:`_dual_value`."""
+    """The matching LP ``max w·x, degree <= 1, x >= 0`` plus the loop's odd-set rows, in one HiGHS instance
+    over a growing subset of the edges (column generation): an edge enters when its reduced cost under the
+    last dual is positive, so each solve is a small LP, re-solved by the dual simplex from its last basis,
+    and only the pricing, a numpy pass, touches every edge.  An LP over every edge of the full day took
+    minutes a round afresh and 20 s warm.  HiGHS only searches: its duals are made feasible over every edge
+    and summed by :func:`_dual_value`."""
 
     def __init__(self, n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray):
         import highspy
 
+        self.n, self.a, self.b, self.w = n, a, b, w
         self.h = h = highspy.Highs()
         h.setOptionValue("output_flag", False)
         h.setOptionValue("threads", 1)
-        degree = _degree(n, a, b).tocsc()
-        m = len(w)
+        self.column = np.full(len(w), -1, np.int64)  # each edge's column in the LP (-1: not in it yet)
+        self.edges = np.zeros(0, np.int64)  # the LP's columns, as edges
+        self.sets: OddSets | None = None
+        empty = np.zeros(0, np.int32)
         status = h.passModel(
-            m,
+            0,
             n,
-            degree.nnz,
+            0,
             int(highspy.MatrixFormat.kColwise),
             int(highspy.ObjSense.kMinimize),
             0.0,
-            -w,
-            np.zeros(m),
-            np.full(m, highspy.kHighsInf),
+            np.zeros(0),
+            np.zeros(0),
+            np.zeros(0),
             np.full(n, -highspy.kHighsInf),
             np.ones(n),
-            degree.indptr.astype(np.int32),
-            degree.indices.astype(np.int32),
-            degree.data.astype(np.float64),
-            np.zeros(m, np.int32),  # continuous: the LP relaxation
+            np.zeros(1, np.int32),
+            empty,
+            np.zeros(0),
+            empty,
         )
         self.ok = status.name != "kError"
+        self.add_columns(_initial_edges(n, a, b, w))
 
-    def add_rows(self, sets: OddSets, first: int) -> None:
-        """The rows of the odd sets from index ``first`` on."""
+    def add_columns(self, edges: np.ndarray) -> None:
+        """Edges ``edges`` (not yet in the LP) as columns: their degree rows and the rows of the odd sets
+        holding them."""
         import highspy
 
-        rows = sets.rows()[first:].tocsr()
+        if not len(edges):
+            return
+        rows = [self.a[edges], self.b[edges]]
+        cols = [np.arange(len(edges)), np.arange(len(edges))]
+        if self.sets is not None and len(self.sets):
+            local = np.full(len(self.w), -1, np.int64)
+            local[edges] = np.arange(len(edges))
+            inside = np.flatnonzero(local[self.sets.edge] >= 0)
+            rows.append(self.n + self.sets.set_of[inside])
+            cols.append(local[self.sets.edge[inside]])
+        block = sp.csc_matrix(
+            (np.ones(sum(len(r) for r in rows)), (np.concatenate(rows), np.concatenate(cols))),
+            shape=(self.n + (len(self.sets) if self.sets is not None else 0), len(edges)),
+        )
+        self.h.addCols(
+            len(edges),
+            -self.w[edges],
+            np.zeros(len(edges)),
+            np.full(len(edges), highspy.kHighsInf),
+            block.nnz,
+            block.indptr[:-1].astype(np.int32),
+            block.indices.astype(np.int32),
+            block.data,
+        )
+        self.column[edges] = len(self.edges) + np.arange(len(edges))
+        self.edges = np.r_[self.edges, edges]
+
+    def add_rows(self, sets: OddSets, first: int) -> None:
+        """The rows of the odd sets from index ``first`` on, over the edges in the LP."""
+        import highspy
+
+        self.sets = sets
+        entry = np.flatnonzero((sets.set_of >= first) & (self.column[sets.edge] >= 0))
+        rows = sp.csr_matrix(
+            (np.ones(len(entry)), (sets.set_of[entry] - first, self.column[sets.edge[entry]])),
+            shape=(len(sets) - first, len(self.edges)),
+        )
         self.h.addRows(
             rows.shape[0],
             np.full(rows.shape[0], -highspy.kHighsInf),
@@ -193,14 +249,53 @@ class _CuttingPlaneLP:
         )
 
     def solve(self) -> tuple[np.ndarray, np.ndarray] | None:
-        """(x, dual of every row, for ``max w·x``) or None when HiGHS reached no optimum."""
+        """(x of every edge, 0 outside the LP; dual of every row, for ``max w·x``), or None when HiGHS reached
+        no optimum."""
         if not self.ok:
             return None
         self.h.run()
         if self.h.getModelStatus().name != "kOptimal":
             return None
         sol = self.h.getSolution()
-        return np.asarray(sol.col_value, np.float64), -np.asarray(sol.row_dual, np.float64)
+        x = np.zeros(len(self.w))
+        x[self.edges] = np.asarray(sol.col_value, np.float64)
+        return x, -np.asarray(sol.row_dual, np.float64)
+
+    def price(self, sets: OddSets, dual: np.ndarray) -> np.ndarray:
+        """The edges to add: outside the LP, of positive reduced cost under ``dual`` (each vertex's largest).
+        None left: ``dual`` is an optimal dual of the LP over every edge."""
+        reduced = self.w - _cover(self.n, self.a, self.b, sets, dual)
+        return _most_violated(self.a, self.b, reduced, (reduced > PRICING_TOL * (1.0 + self.w)) & (self.column < 0))
+
+
+def _initial_edges(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """The LP's first columns: each vertex's heaviest edge (most of them are in the optimum's support; the
+    pricing adds the rest)."""
+    if not len(w):
+        return np.zeros(0, np.int64)
+    ends = np.r_[a, b]
+    edge = np.r_[np.arange(len(w)), np.arange(len(w))]
+    order = np.lexsort((-w[edge], ends))
+    first = np.r_[True, ends[order][1:] != ends[order][:-1]]
+    return np.unique(edge[order][first])
+
+
+def _most_violated(a: np.ndarray, b: np.ndarray, reduced: np.ndarray, candidate: np.ndarray) -> np.ndarray:
+    """Among the ``candidate`` edges, each vertex's edge of the largest reduced cost (partial pricing: the LP
+    stays near the size of the optimum's support instead of taking every violated edge of a poor first dual)."""
+    edge = np.flatnonzero(candidate)
+    if not len(edge):
+        return edge
+    ends, both = np.r_[a[edge], b[edge]], np.r_[edge, edge]
+    order = np.lexsort((-reduced[both], ends))
+    first = np.r_[True, ends[order][1:] != ends[order][:-1]]
+    return np.unique(both[order][first])
+
+
+def _cover(n: int, a: np.ndarray, b: np.ndarray, sets: OddSets, dual: np.ndarray) -> np.ndarray:
+    """Each edge's cover ``y_a + y_b + Σ z`` (the odd sets holding it) under ``dual`` clipped at 0."""
+    y, z = np.maximum(dual[:n], 0.0), np.maximum(dual[n:], 0.0)
+    return y[a] + y[b] + np.bincount(sets.edge, weights=z[sets.set_of], minlength=len(a))
 
 
 def _degree(n: int, a: np.ndarray, b: np.ndarray) -> sp.csr_matrix:
