@@ -1,4 +1,4 @@
-"""One prediction per scenario hour: the demand rates a scenario implies, τ_0, caching and warm starts.
+"""One prediction per scenario hour: the demand rates a scenario implies, τ_0, caching and the hours in parallel.
 
 :func:`scenario_predictions` is what the FL strategies call.  It takes the
 rates λ_w from the scenario's :class:`~rpbench.scenarios.base.Demand` (the
@@ -8,8 +8,9 @@ nearly equal calibrations share one cached prediction, reuses a solved
 prediction from the disk cache, and otherwise solves the fixed point on the
 cached structure (:mod:`.list_cache`): the matching sets depend only on the OD
 set, the geometry and the priority rule (0.67 GB for the 39,510-OD month
-table, built once per machine), while the demand level and τ_0 enter the
-fixed point only.
+table, built once per machine and shared by every hour, τ_0 and run), while the
+demand level and τ_0 enter the fixed point only.  The hours still to solve are
+solved side by side in worker processes (:mod:`.pool`).
 """
 
 from __future__ import annotations
@@ -20,7 +21,8 @@ import numpy as np
 
 from rpbench.exceptions import LookaheadError, ParameterError
 from rpbench.predict.config import PredictConfig
-from rpbench.predict.prediction import Prediction, cached_prediction, predict
+from rpbench.predict.pool import solve_predictions
+from rpbench.predict.prediction import Prediction, cached_prediction
 from rpbench.predict.rates import OdRates, month_rates, order_rates, rate_basis
 from rpbench.predict.zones import zone_representatives
 from rpbench.scenarios.base import LOOKAHEAD_HINT, Demand, OnlineView, Scenario
@@ -40,43 +42,37 @@ def scenario_predictions(
     tau0_s: np.ndarray,
     config: PredictConfig,
     zone_m: float | None = None,
+    *,
+    workers: int | None = None,
 ) -> list[Prediction]:
     """One prediction per hour of ``scenario`` (``len(tau0_s)`` hours; hours with equal inputs share one).
 
-    The dispatcher reads per-OD values only, so the hours come back slim
-    (24 hours of per-state arrays would be 2.4 GB for the month table); an
-    hour that must be solved is warm-started from the previous hour's ρ,
-    read back from the cache when that hour was cached.  ``zone_m``: pool a demand history over zones of this
-    side (:func:`history_zone_m`).
+    The dispatcher reads per-OD values only, so the hours come back slim and the hours solved here are
+    cached lean (24 hours of per-state arrays would be 2.3 GB for the month table).  Each hour is solved
+    from ρ = 0, independently of the others, so an hour's values are a function of its own inputs (its cache
+    key), whichever hours were cached before, and the hours to solve can be solved in parallel:
+    ``workers`` processes (default: the cores; 1: here, one after another; :mod:`.pool`), with the same
+    values either way.  ``zone_m``: pool a demand history over zones of this side (:func:`history_zone_m`).
     """
     hours = len(tau0_s)
     tau0_s = np.maximum(TAU0_RESOLUTION_S, np.round(np.asarray(tau0_s) / TAU0_RESOLUTION_S) * TAU0_RESOLUTION_S)
     rates = hourly_rates(scenario, source, hours, zone_m)
     net, params = scenario.network, scenario.params
-    out: list[Prediction] = []
-    memo: dict[tuple, Prediction] = {}
-    previous: tuple[OdRates, PredictConfig, Prediction] | None = None
-    for h in range(hours):
-        cfg = config.replace(tau0_s=float(tau0_s[h]))
-        key = (id(rates[h]), cfg.tau0_s)
-        if key not in memo:
-            prediction = cached_prediction(net, rates[h], params, cfg, slim=True)
-            if prediction is None:
-                # Warm-start from the previous hour when the OD set is the same (only the demand level moved).
-                rho0 = None
-                if previous is not None and _same_ods(previous[0], rates[h]):
-                    rho0 = (
-                        previous[2].rho if len(previous[2].rho) else predict(net, previous[0], params, previous[1]).rho
-                    )
-                prediction = predict(net, rates[h], params, cfg, rho0=rho0)
-            previous = (rates[h], cfg, prediction)
-            memo[key] = prediction.slim()
-        out.append(memo[key])
-    return out
-
-
-def _same_ods(a: OdRates, b: OdRates) -> bool:
-    return len(a) == len(b) and np.array_equal(a.origin, b.origin) and np.array_equal(a.destination, b.destination)
+    configs = [config.replace(tau0_s=float(t)) for t in tau0_s]
+    keys = [(id(rates[h]), configs[h].tau0_s) for h in range(hours)]
+    found: dict[tuple, Prediction] = {}
+    missing: dict[tuple, int] = {}  # the first hour of each distinct input not in the cache
+    for h, key in enumerate(keys):
+        if key in found or key in missing:
+            continue
+        hit = cached_prediction(net, rates[h], params, configs[h], slim=True)
+        if hit is None:
+            missing[key] = h
+        else:
+            found[key] = hit
+    solved = solve_predictions(net, params, [(rates[h], configs[h]) for h in missing.values()], workers)
+    found.update(zip(missing, solved, strict=True))
+    return [found[key] for key in keys]
 
 
 def rate_source(source: str, demand: Demand) -> str:

@@ -93,9 +93,16 @@ class Prediction:
     STATE_FIELDS = ("state_od", "state_k", "state_head", "state_tau_s", "rho", "p_taker", "eta", "lam_taker")
 
     def arrays(self) -> tuple[dict[str, np.ndarray], dict]:
-        """(arrays, facts) as the disk cache stores them."""
-        arrays = {f"od_{f.name}": getattr(self.od, f.name) for f in dataclasses.fields(SavingsResult)}
-        arrays.update({name: getattr(self, name) for name in self.STATE_FIELDS})
+        """(arrays, facts) as the disk cache stores them: a lean prediction (``info["lean"]``) without its
+        per-state arrays."""
+        lean = self.info.get("lean", False)
+        arrays = {
+            f"od_{f.name}": getattr(self.od, f.name)
+            for f in dataclasses.fields(SavingsResult)
+            if not (lean and f.name in SavingsResult.STATE_FIELDS)
+        }
+        if not lean:
+            arrays.update({name: getattr(self, name) for name in self.STATE_FIELDS})
         return arrays, self.info
 
     @classmethod
@@ -128,6 +135,11 @@ class Prediction:
         od = dataclasses.replace(self.od, **{name: empty for name in SavingsResult.STATE_FIELDS})
         per_state: dict[str, Any] = {name: empty for name in self.STATE_FIELDS}
         return dataclasses.replace(self, od=od, **per_state)
+
+    @property
+    def lean(self) -> bool:
+        """Whether the prediction was solved and cached without its per-state arrays (:func:`predict`)."""
+        return bool(self.info.get("lean", False))
 
     # ------------------------------------------------------------------ queries
     @cached_property
@@ -307,10 +319,14 @@ def _sweep_bar(progress: Callable[[int, float], None] | None) -> Iterator[Callab
 def cached_prediction(
     network: RoadNetwork, rates: OdRates, params: Params, config: PredictConfig, *, slim: bool = False
 ) -> Prediction | None:
-    """The prediction for these inputs from the disk cache, or None; ``slim`` reads its per-OD arrays only."""
+    """The prediction for these inputs from the disk cache, or None; ``slim`` reads its per-OD arrays only.
+
+    A lean entry (per-OD arrays only, :func:`predict` with ``lean``) serves a slim read; a full read
+    finds nothing there (None), so the prediction is solved again and cached in full.
+    """
     key = cache.cache_key(network, rates, params, config)
     hit = cache.load(key, len(rates), skip=Prediction.per_state_members() if slim else frozenset())
-    if hit is None:
+    if hit is None or (not slim and hit[1].get("lean", False)):
         return None
     return Prediction.from_arrays(hit, node_id=network.node_id, rates=rates, config=config)
 
@@ -324,22 +340,28 @@ def predict(
     use_cache: bool = True,
     progress: Callable[[int, float], None] | None = None,
     rho0: np.ndarray | None = None,
+    lean: bool = False,
 ) -> Prediction:
     """The prediction for ``rates`` on ``network`` (cached on disk by inputs, parameters and network).
 
     When it is not cached, it is solved on the seeker/taker structure (built
     once per machine), warm-started from ``rho0`` if given, and then cached.
+    ``lean``: what a dispatcher reads, the per-OD values only (:meth:`Prediction.slim`), returned and
+    cached (a few MB instead of about 95 MB for the month table; a later full read solves it again).
     """
     params = params or Params()
     config = config or PredictConfig()
     if use_cache:
-        hit = cached_prediction(network, rates, params, config)
+        hit = cached_prediction(network, rates, params, config, slim=lean)
         if hit is not None:
             return hit
     t0, c0 = time.perf_counter(), time.process_time()
     model = build_prediction_model(network, rates, params, config, use_cache=use_cache)
     prediction = solve_prediction_model(model, progress=progress, rho0=rho0)
     del model
+    if lean:
+        prediction = prediction.slim()
+        prediction.info["lean"] = True
     prediction.info["time_s"] = round(time.perf_counter() - t0, 4)
     prediction.info["cpu_s"] = round(time.process_time() - c0, 4)  # wall > cpu when the machine is shared
     prediction.info["peak_rss_mb"] = round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0, 1)

@@ -36,7 +36,9 @@ Options (``--opt fl.NAME=VALUE``):
   prediction options (:class:`rpbench.predict.PredictConfig`); FL solves the
   fixed point with Anderson mixing by default (the same fixed point as the
   spec's damped iteration, in about half the sweeps).  Hours of the full-day
-  stand-in share one built model and warm-start from the previous hour.
+  stand-in share one cached structure and are solved side by side in
+  ``workers`` processes (default: the cores), each hour from its own inputs
+  only, so the predictions do not depend on ``workers``.
 """
 
 from __future__ import annotations
@@ -112,6 +114,12 @@ class ForwardOptions(CalibratedOptions):
         "anderson",
         "fixed-point acceleration (the same fixed point as the damped map, in about half the sweeps)",
         choices=ACCELERATIONS,
+    )
+    workers: int | None = option(
+        None,
+        "processes solving the hourly predictions side by side (default: the cores); the same predictions "
+        "whatever the number",
+        range=Range(1, 256, integer=True),
     )
 
     def predict_config(self) -> PredictConfig:
@@ -192,7 +200,9 @@ class _ForwardBase(MBCalibrated, Strategy[ForwardOptions]):
         tau0 = _per_hour(self.options.tau0_s, hours, FALLBACK_TAU0_S, "tau0_s")
         self.mean_pickup_m = _per_hour(self.options.mean_pickup_m, hours, FALLBACK_MEAN_PICKUP_M, "mean_pickup_m")
         zone = history_zone_m(self.options.rates, scenario.demand, self.options.zone_m)
-        self.predictions = scenario_predictions(scenario, self.options.rates, tau0, self.options.predict_config(), zone)
+        self.predictions = scenario_predictions(
+            scenario, self.options.rates, tau0, self.options.predict_config(), zone, workers=self.options.workers
+        )
         self.zone_node = None if zone is None else zone_representatives(scenario.network, zone)
 
     def predicted_od(self, state: RoundState) -> tuple[np.ndarray, np.ndarray]:

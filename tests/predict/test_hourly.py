@@ -1,5 +1,6 @@
-"""One prediction per scenario hour: slim results for the dispatcher, warm starts, shared equal hours; the rates
-an online FL reads (the demand known before the day, never the day's own orders)."""
+"""One prediction per scenario hour: slim results for the dispatcher, cached lean, shared equal hours, the same
+values solved here or in worker processes; the rates an online FL reads (the demand known before the day, never
+the day's own orders)."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ from helpers import line_network, scenario_of
 from rpbench.exceptions import LookaheadError, ParameterError
 from rpbench.predict import PredictConfig, predict, scenario_predictions
 from rpbench.predict.hourly import hourly_rates, rate_source, reads_realised_orders
+from rpbench.predict.pool import solve_predictions
 from rpbench.predict.prediction import cached_prediction
 from rpbench.scenarios.base import Demand
 from rpbench.scenarios.registry import build_scenario
@@ -20,33 +22,57 @@ from rpbench.scenarios.registry import build_scenario
 def test_hours_are_slim_and_equal_hours_are_shared(tmp_path, monkeypatch):
     monkeypatch.setenv("RPBENCH_CACHE", str(tmp_path / "cache"))
     scenario = build_scenario("toy", sample=1.0, seed=0)
-    preds = scenario_predictions(scenario, "scenario", np.array([60.0, 60.0]), PredictConfig())
+    preds = scenario_predictions(scenario, "scenario", np.array([60.0, 60.0]), PredictConfig(), workers=1)
     assert len(preds) == 2
     for pred in preds:
         assert len(pred.rho) == 0 and len(pred.od.e_taker) == 0  # per-state arrays dropped
         assert len(pred.od.pairing_prob) == len(pred.rates)  # per-OD values kept
-    full = cached_prediction(scenario.network, preds[0].rates, scenario.params, PredictConfig(tau0_s=60.0))
-    assert len(full.rho) > 0
+    config = PredictConfig(tau0_s=60.0)
+    full = predict(scenario.network, preds[0].rates, scenario.params, config, use_cache=False)
     look_full = full.lookup(full.rates.origin, full.rates.destination)
     look_slim = preds[0].lookup(full.rates.origin, full.rates.destination)
     for a, b in zip(look_full.__dict__.values(), look_slim.__dict__.values(), strict=True):
         np.testing.assert_array_equal(a, b)
 
 
-def test_an_hour_is_solved_and_cached_by_predict(tmp_path, monkeypatch):
-    """The hours FL solves go through :func:`predict`: the same cache entry, with its timing facts."""
+def test_an_hour_is_solved_and_cached_lean_by_predict(tmp_path, monkeypatch):
+    """The hours FL solves go through :func:`predict` and are cached lean (per-OD arrays, timing facts): a slim
+    read finds them, a full read solves the prediction again and caches it in full."""
     monkeypatch.setenv("RPBENCH_CACHE", str(tmp_path / "cache"))
     scenario = build_scenario("toy", sample=1.0, seed=0)
-    (hour,) = scenario_predictions(scenario, "scenario", np.array([60.0]), PredictConfig())
+    (hour,) = scenario_predictions(scenario, "scenario", np.array([60.0]), PredictConfig(), workers=1)
+    assert hour.lean and not hour.from_cache
     config = PredictConfig(tau0_s=60.0)
-    stored = cached_prediction(scenario.network, hour.rates, scenario.params, config)
-    assert stored is not None and {"time_s", "cpu_s", "peak_rss_mb"} <= set(stored.info)
+    stored = cached_prediction(scenario.network, hour.rates, scenario.params, config, slim=True)
+    assert stored is not None and stored.lean and {"time_s", "cpu_s", "peak_rss_mb"} <= set(stored.info)
+    assert cached_prediction(scenario.network, hour.rates, scenario.params, config) is None  # no per-state arrays
     again = predict(scenario.network, hour.rates, scenario.params, config)
-    assert again.from_cache
-    fresh = predict(scenario.network, hour.rates, scenario.params, config, use_cache=False)
-    assert not fresh.from_cache
-    for name, value in fresh.arrays()[0].items():
-        np.testing.assert_array_equal(again.arrays()[0][name], value, err_msg=name)
+    assert not again.from_cache and not again.lean and len(again.rho) > 0
+    cached = predict(scenario.network, hour.rates, scenario.params, config)
+    assert cached.from_cache and len(cached.rho) == len(again.rho)
+    for name, value in hour.arrays()[0].items():
+        np.testing.assert_array_equal(cached.arrays()[0][name], value, err_msg=name)
+
+
+def test_predictions_solved_in_worker_processes_equal_the_serial_ones(tmp_path, monkeypatch):
+    """Each prediction is solved from its own inputs only: two workers give the serial values bit for bit, and a
+    prediction does not depend on which were solved before it."""
+    scenario = build_scenario("toy", sample=1.0, seed=0)
+    (rates,) = hourly_rates(scenario.online_view(), "auto", 1)
+    jobs = [(rates, PredictConfig(tau0_s=t)) for t in (60.0, 90.0, 120.0)]
+
+    def solve(cache: str, workers: int, todo=jobs):
+        monkeypatch.setenv("RPBENCH_CACHE", str(tmp_path / cache))
+        return solve_predictions(scenario.network, scenario.params, todo, workers)
+
+    serial, pooled, alone = solve("serial", 1), solve("pooled", 2), solve("alone", 1, jobs[2:])
+    assert not any(p.from_cache for p in serial + pooled) and all(p.lean for p in pooled)
+    for a, b in zip(serial, pooled, strict=True):
+        for name, value in a.arrays()[0].items():
+            np.testing.assert_array_equal(b.arrays()[0][name], value, err_msg=name)
+    for name, value in alone[0].arrays()[0].items():
+        np.testing.assert_array_equal(serial[2].arrays()[0][name], value, err_msg=name)
+    assert all(p.from_cache for p in solve("pooled", 2))
 
 
 def moved_destination(scenario):
