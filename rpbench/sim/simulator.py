@@ -55,6 +55,7 @@ from rpbench.scenarios.base import Scenario
 from rpbench.sim import lookahead, routes, ties
 from rpbench.sim.fleet import DROPOFF, PICKUP, FleetState, Stop
 from rpbench.sim.ties import canonicalize
+from rpbench.strategies import candidates
 from rpbench.strategies.base import Kind, RoundModel, RoundState, Strategy, received, received_moves
 
 T = TypeVar("T")
@@ -207,7 +208,7 @@ class Simulator:
         self.events: list[tuple] = []
         self.rounds: list[tuple] = []
         self.waiting: list[int] = []
-        for kernels in (routes, lookahead, ties, model_kernels):  # their one-off load, before the first round
+        for kernels in (routes, lookahead, ties, model_kernels, candidates):  # their one-off load, before round 0
             kernels.load()
 
     # ------------------------------------------------------------------ run

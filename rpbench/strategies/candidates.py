@@ -17,6 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from rpbench.geometry import TOLERANCE_M, choose_order, pair_geometry
 from rpbench.model import AssignmentModel, quantize
@@ -134,6 +135,33 @@ def assignment_round(
     a deterministic order the tie canonicalisation relies on.  Model
     vehicle rows are V0 (state order) followed by V1.
     """
+    columns = _ordered_columns(state, vac, vac_utility_m, join, join_utility_m, wait_utility_m)
+    if columns is None:
+        columns = _ordered_columns_numpy(state, vac, vac_utility_m, join, join_utility_m, wait_utility_m)
+    passenger, model_vehicle, sim_vehicle, kind, utility, pickup, fofo = columns
+    model = AssignmentModel(
+        state.n_passengers,
+        state.n_v0 + state.n_v1,
+        passenger,
+        model_vehicle,
+        quantize(utility, VALUE_UNIT_M),
+        unit_m=VALUE_UNIT_M,
+        name=name,
+    )
+    return RoundModel(
+        model=model,
+        kind=kind,
+        vehicle=sim_vehicle,
+        first=state.p_order[passenger],
+        second=np.full(len(kind), -1, dtype=np.int64),
+        fofo=fofo,
+        utility_m=utility,
+        pickup_m=pickup,
+    )
+
+
+def _ordered_columns_numpy(state, vac, vac_utility_m, join, join_utility_m, wait_utility_m) -> tuple[np.ndarray, ...]:
+    """The columns (passenger, model vehicle row, vehicle id, kind, utility, pick-up, FOFO) in their order."""
     n_p = state.n_passengers
     wait_p = np.arange(n_p)
     passenger = np.concatenate([vac.p, join.p, wait_p])
@@ -145,28 +173,94 @@ def assignment_round(
     utility = np.concatenate([vac_utility_m, join_utility_m, wait_utility_m]).astype(np.float64)
     pickup = np.concatenate([vac.pickup_m, join.pickup_m, np.full(n_p, np.nan)])
     fofo = np.concatenate([np.zeros(len(vac.p), bool), join.fofo, np.zeros(n_p, bool)])
-    # Deterministic column order: passenger, kind (vacant < join < wait), vehicle id.
+    # Deterministic column order: passenger, kind (as numbers: wait < vacant < join), vehicle id.
     order = np.lexsort((sim_vehicle, kind, passenger))
-    model = AssignmentModel(
-        n_p,
-        state.n_v0 + state.n_v1,
+    return (
         passenger[order],
         model_vehicle[order],
-        quantize(utility[order], VALUE_UNIT_M),
-        unit_m=VALUE_UNIT_M,
-        name=name,
+        sim_vehicle[order],
+        kind[order],
+        utility[order],
+        pickup[order],
+        fofo[order],
     )
-    first = state.p_order[passenger[order]]
-    return RoundModel(
-        model=model,
-        kind=kind[order],
-        vehicle=sim_vehicle[order],
-        first=first,
-        second=np.full(len(order), -1, dtype=np.int64),
-        fofo=fofo[order],
-        utility_m=utility[order],
-        pickup_m=pickup[order],
-    )
+
+
+def _ordered_columns(state, vac, vac_utility_m, join, join_utility_m, wait_utility_m) -> tuple[np.ndarray, ...] | None:
+    """:func:`_ordered_columns_numpy` in one compiled pass, for options and utilities of the usual shapes
+    and ranges (None otherwise: the numpy passes then build, or refuse, the same columns)."""
+    arrays = []
+    for raw, dtype in (
+        (vac.p, np.int64), (vac.v, np.int64), (vac_utility_m, np.float64), (vac.pickup_m, np.float64),
+        (join.p, np.int64), (join.v, np.int64), (join_utility_m, np.float64), (join.pickup_m, np.float64),
+        (join.fofo, np.bool_), (wait_utility_m, np.float64),
+    ):  # fmt: skip
+        arr = np.asarray(raw)
+        if arr.ndim != 1 or (len(arr) and arr.dtype.kind not in ("b" if dtype is np.bool_ else "biuf")):
+            return None
+        if dtype is not np.float64 and arr.dtype.kind == "f":
+            return None  # float indices: the numpy passes say what they make of them
+        arrays.append(arr.astype(dtype, copy=False))
+    vp, vv, vu, vk, jp, jv, ju, jk, jf, wu = arrays
+    v0, v1 = np.asarray(state.v0_vehicle, np.int64), np.asarray(state.v1_vehicle, np.int64)
+    fits, *columns = _columns_kernel(vp, vv, vu, vk, jp, jv, ju, jk, jf, wu, v0, v1, state.n_passengers)
+    return tuple(columns) if fits else None
+
+
+@njit(cache=True, nogil=True)
+def _columns_kernel(
+    vac_p, vac_v, vac_u, vac_pk, join_p, join_v, join_u, join_pk, join_fofo, wait_u, v0_vehicle, v1_vehicle, n_p
+):  # pragma: no cover - compiled
+    """Whether the inputs fit, then the ordered columns of :func:`_ordered_columns_numpy`, sorted by one stable
+    sort of a mixed-radix key (passenger, kind, vehicle id)."""
+    n_vac, n_join = len(vac_p), len(join_p)
+    n = n_vac + n_join + n_p
+    n_v0, n_v1 = len(v0_vehicle), len(v1_vehicle)
+    passenger = np.zeros(n, np.int64)
+    row = np.zeros(n, np.int64)
+    vehicle = np.zeros(n, np.int64)
+    kind = np.zeros(n, np.int8)
+    utility = np.zeros(n)
+    pickup = np.zeros(n)
+    fofo = np.zeros(n, np.bool_)
+    fits = len(vac_v) == n_vac and len(vac_u) == n_vac and len(vac_pk) == n_vac and len(wait_u) == n_p
+    fits = fits and len(join_v) == n_join and len(join_u) == n_join and len(join_pk) == n_join
+    fits = fits and len(join_fofo) == n_join
+    for i in range(n_vac if fits else 0):
+        fits = fits and 0 <= vac_v[i] < n_v0
+        if fits:
+            passenger[i], row[i], vehicle[i], kind[i] = vac_p[i], vac_v[i], v0_vehicle[vac_v[i]], 1
+    for i in range(n_join if fits else 0):
+        fits = fits and 0 <= join_v[i] < n_v1
+        if fits:
+            j = n_vac + i
+            passenger[j], row[j], vehicle[j], kind[j] = join_p[i], n_v0 + join_v[i], v1_vehicle[join_v[i]], 2
+    for p in range(n_p if fits else 0):
+        j = n_vac + n_join + p
+        passenger[j], row[j], vehicle[j], kind[j] = p, -1, -1, 0
+    top = 0
+    for j in range(n if fits else 0):
+        fits = fits and 0 <= passenger[j] < n_p and vehicle[j] >= -1
+        top = max(top, vehicle[j])
+    if not fits or float(n_p) * 3.0 * (top + 2) >= 2.0**62:
+        return False, passenger, row, vehicle, kind, utility, pickup, fofo
+    key = (passenger * 3 + kind) * (top + 2) + (vehicle + 1)
+    order = np.argsort(key, kind="mergesort")
+    for j in range(n):
+        c = order[j]
+        if c < n_vac:
+            utility[j], pickup[j] = vac_u[c], vac_pk[c]
+        elif c < n_vac + n_join:
+            utility[j], pickup[j], fofo[j] = join_u[c - n_vac], join_pk[c - n_vac], join_fofo[c - n_vac]
+        else:
+            utility[j], pickup[j] = wait_u[c - n_vac - n_join], np.nan
+    return True, passenger[order], row[order], vehicle[order], kind[order], utility, pickup, fofo
+
+
+def load() -> None:
+    """Load (or compile) the kernel now: its first call costs a one-off load of its machine code."""
+    i, f = np.zeros(0, np.int64), np.zeros(0)
+    _columns_kernel(i, i, f, f, i, i, f, f, np.zeros(0, np.bool_), f, i, i, 0)
 
 
 # Which node pairs lie within a distance: a table that pre-filters pick-up candidates.

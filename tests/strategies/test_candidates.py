@@ -6,7 +6,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from helpers import network_from_edges, round_state
+from helpers import line_network, network_from_edges, round_state
 
 from rpbench.geometry import TOLERANCE_M, choose_order, pair_geometry
 from rpbench.scenarios.base import Params
@@ -111,3 +111,41 @@ def test_a_negative_lead_distance_searches_every_pair():
     p, v, pk = _reference_vacant(state)
     assert np.array_equal(vac.p, p) and np.array_equal(vac.v, v) and np.array_equal(vac.pickup_m, pk)
     assert len(p) == 1
+
+
+def test_the_compiled_columns_are_the_numpy_columns_in_any_option_order():
+    from rpbench.strategies.candidates import JoinOptions, VacantOptions, _ordered_columns, _ordered_columns_numpy
+
+    rng = np.random.default_rng(9)
+    net = line_network(6)
+    for _ in range(200):
+        n_p, n_v0, n_v1 = int(rng.integers(0, 5)), int(rng.integers(0, 4)), int(rng.integers(0, 3))
+        state = round_state(
+            net,
+            [(0, 5)] * n_p,
+            [(int(rng.integers(0, 6)), 0.0) for _ in range(n_v0)],
+            occupied=[{"node": 3, "origin": 3, "destination": 5} for _ in range(n_v1)],
+        )
+        state = replace(
+            state,
+            p_order=rng.permutation(100)[:n_p],
+            v0_vehicle=rng.permutation(50)[:n_v0],
+            v1_vehicle=50 + rng.permutation(50)[:n_v1],
+        )
+        vac_pairs = [(p, v) for p in range(n_p) for v in range(n_v0) if rng.random() < 0.7]
+        join_pairs = [(p, v) for p in range(n_p) for v in range(n_v1) if rng.random() < 0.7]
+        rng.shuffle(vac_pairs), rng.shuffle(join_pairs)  # any order: the columns are sorted all the same
+        vp = np.array([q[0] for q in vac_pairs], np.int64)
+        vv = np.array([q[1] for q in vac_pairs], np.int64)
+        jp = np.array([q[0] for q in join_pairs], np.int64)
+        jv = np.array([q[1] for q in join_pairs], np.int64)
+        vac = VacantOptions(vp, vv, rng.random(len(vp)) * 3000)
+        nj = len(jp)
+        join = JoinOptions(jp, jv, rng.random(nj) * 3000, rng.random(nj) * 900, rng.random(nj) < 0.5, rng.random(nj))
+        utilities = (-rng.integers(0, 3, len(vp)) * 1.0, rng.integers(0, 3, nj) * 1.0, np.full(n_p, -7.0))
+        got = _ordered_columns(state, vac, utilities[0], join, utilities[1], utilities[2])
+        want = _ordered_columns_numpy(state, vac, utilities[0], join, utilities[1], utilities[2])
+        assert got is not None and len(got) == len(want)
+        for g, w in zip(got, want, strict=True):
+            assert g.dtype == w.dtype
+            np.testing.assert_array_equal(g, w)
