@@ -115,6 +115,12 @@ def prove_maximum(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, target: f
     lp = _CuttingPlaneLP(n, a, b, w)
     best = 0
     beat = np.floor(target + 1e-9) + 1  # a matching worth this much would beat the target
+    # Reduced-cost fixing, every round: with a dual feasible on the edges ``live`` of value ``upper``, every
+    # matching M of them has w(M) <= upper - (the dual slack of M's edges), so one worth ``beat - 1`` (the
+    # target) uses only edges of slack <= upper - beat + 1.  The others leave ``live`` (and the LP, the
+    # pricing and the odd sets' rows) for good: the proof goes on over the edges that a matching worth the
+    # target or more could use.
+    live = np.arange(m)
     slack: np.ndarray | None = None
     upper = float("inf")
     history: list[float] = []
@@ -123,28 +129,35 @@ def prove_maximum(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, target: f
         if solved is None:
             break
         x, dual = solved
-        best = max(best, _rounded_matching(n, a, b, w, x))
-        upper, slack = _dual_value(n, a, b, w, sets, dual)
+        best = max(best, _rounded_matching(n, a[live], b[live], w[live], x[live]))
+        upper, slack = _dual_value(n, a, b, w, sets, dual, live)
         if best > target or upper < beat - 1e-6:
-            return MatchingProof(best, upper, "dual certificate", len(sets))
-        enter = lp.price(sets, dual)
-        if not len(enter):  # an optimum of the LP over every edge: did the last odd sets lower it?
+            if len(live) == m:
+                return MatchingProof(best, upper, "dual certificate", len(sets))
+            # a matching using a fixed edge is worth less than ``beat``: at most beat - 1 (integral weights)
+            return MatchingProof(
+                best, float(max(upper, beat - 1)), "dual certificate and reduced-cost fixing", len(sets)
+            )
+        drop = slack > upper - (beat - 1) + 1e-6  # kept: the edges of matchings worth the target, too
+        if drop.any():
+            lp.fix(live[drop])
+            live, slack = live[~drop], slack[~drop]
+        enter = lp.price(sets, dual, live)
+        if not len(enter):  # an optimum of the LP over the live edges: did the last odd sets lower it?
             history.append(upper)
             if len(history) > STALL_ROUNDS and history[-1 - STALL_ROUNDS] - upper < 1.0:
                 break
         lp.add_columns(enter)  # before the new sets: their rows are added over every column
-        frac = (x > FRACTIONAL) & (x < 1 - FRACTIONAL)
+        frac = np.flatnonzero((x > FRACTIONAL) & (x < 1 - FRACTIONAL))
         first = len(sets)
-        if not sets.add(_odd_components(n, a[frac], b[frac])) and not len(enter):
+        if not sets.add(_odd_components(n, a[frac], b[frac]), live) and not len(enter):
             break
         lp.add_rows(sets, first)
     if slack is None:
         return dataclasses.replace(_exact(n, a, b, w, sets), mip_edges=len(a))
-    # Reduced-cost fixing: with a feasible dual of value ``upper``, every matching M has
-    # w(M) <= upper - (the dual slack of M's edges), so one worth ``beat`` uses only edges of slack
-    # <= upper - beat; the MIP need only decide the graph of those (a few thousand of the full day's
-    # 1.4 M pairs, when the loop stalls a few metres above the optimum).
-    near = np.flatnonzero(slack <= upper - beat + 1e-6)
+    # The MIP need only decide the graph of the edges left (a few tens of thousands of the full day's 1.4 M
+    # pairs, when the loop stalls a few metres above the optimum).
+    near = live[slack <= upper - beat + 1e-6]
     proof = _exact(n, a[near], b[near], w[near], OddSets(n, a[near], b[near]))
     if proof.best < beat:  # no matching of the whole graph reaches ``beat`` either
         return MatchingProof(
@@ -261,11 +274,20 @@ class _CuttingPlaneLP:
         x[self.edges] = np.asarray(sol.col_value, np.float64)
         return x, -np.asarray(sol.row_dual, np.float64)
 
-    def price(self, sets: OddSets, dual: np.ndarray) -> np.ndarray:
-        """The edges to add: outside the LP, of positive reduced cost under ``dual`` (each vertex's largest).
-        None left: ``dual`` is an optimal dual of the LP over every edge."""
-        reduced = self.w - _cover(self.n, self.a, self.b, sets, dual)
-        return _most_violated(self.a, self.b, reduced, (reduced > PRICING_TOL * (1.0 + self.w)) & (self.column < 0))
+    def price(self, sets: OddSets, dual: np.ndarray, live: np.ndarray) -> np.ndarray:
+        """The edges to add: live, outside the LP, of positive reduced cost under ``dual`` (each vertex's
+        largest).  None left: ``dual`` is an optimal dual of the LP over the live edges."""
+        reduced = self.w[live] - _cover(self.n, self.a, self.b, sets, dual, live)
+        out = (reduced > PRICING_TOL * (1.0 + self.w[live])) & (self.column[live] < 0)
+        return _most_violated(self.a, self.b, live[out], reduced[out])
+
+    def fix(self, edges: np.ndarray) -> None:
+        """Edges that no matching beating the target uses: those in the LP are held at 0."""
+        cols = self.column[edges]
+        cols = cols[cols >= 0].astype(np.int32)
+        if len(cols):
+            zero = np.zeros(len(cols))
+            self.h.changeColsBounds(len(cols), cols, zero, zero)
 
 
 def _initial_edges(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray) -> np.ndarray:
@@ -280,22 +302,23 @@ def _initial_edges(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray) -> np.nd
     return np.unique(edge[order][first])
 
 
-def _most_violated(a: np.ndarray, b: np.ndarray, reduced: np.ndarray, candidate: np.ndarray) -> np.ndarray:
-    """Among the ``candidate`` edges, each vertex's edge of the largest reduced cost (partial pricing: the LP
-    stays near the size of the optimum's support instead of taking every violated edge of a poor first dual)."""
-    edge = np.flatnonzero(candidate)
+def _most_violated(a: np.ndarray, b: np.ndarray, edge: np.ndarray, reduced: np.ndarray) -> np.ndarray:
+    """Among the edges ``edge`` of reduced costs ``reduced``, each vertex's edge of the largest (partial
+    pricing: the LP stays near the size of the optimum's support instead of taking every violated edge of a
+    poor first dual)."""
     if not len(edge):
         return edge
-    ends, both = np.r_[a[edge], b[edge]], np.r_[edge, edge]
-    order = np.lexsort((-reduced[both], ends))
+    ends, both, value = np.r_[a[edge], b[edge]], np.r_[edge, edge], np.r_[reduced, reduced]
+    order = np.lexsort((-value, ends))
     first = np.r_[True, ends[order][1:] != ends[order][:-1]]
     return np.unique(both[order][first])
 
 
-def _cover(n: int, a: np.ndarray, b: np.ndarray, sets: OddSets, dual: np.ndarray) -> np.ndarray:
-    """Each edge's cover ``y_a + y_b + Σ z`` (the odd sets holding it) under ``dual`` clipped at 0."""
+def _cover(n: int, a: np.ndarray, b: np.ndarray, sets: OddSets, dual: np.ndarray, live: np.ndarray) -> np.ndarray:
+    """Each live edge's cover ``y_a + y_b + Σ z`` (the odd sets holding it) under ``dual`` clipped at 0."""
     y, z = np.maximum(dual[:n], 0.0), np.maximum(dual[n:], 0.0)
-    return y[a] + y[b] + np.bincount(sets.edge, weights=z[sets.set_of], minlength=len(a))
+    inside = np.bincount(sets.edge, weights=z[sets.set_of], minlength=len(a))[live]
+    return y[a[live]] + y[b[live]] + inside
 
 
 def _degree(n: int, a: np.ndarray, b: np.ndarray) -> sp.csr_matrix:
@@ -316,17 +339,19 @@ class OddSets:
     def __len__(self) -> int:
         return len(self.capacity)
 
-    def add(self, sets: list[np.ndarray]) -> bool:
-        """Add ``sets`` (disjoint vertex sets); False when there are none."""
+    def add(self, sets: list[np.ndarray], live: np.ndarray | None = None) -> bool:
+        """Add ``sets`` (disjoint vertex sets), with their inside edges among ``live`` (None: every edge);
+        False when there are none."""
         if not sets:
             return False
         label = np.full(self.n, -1, np.int64)
         for i, s in enumerate(sets):
             label[s] = len(self) + i
-        la, lb = label[self.a], label[self.b]
-        inside = np.flatnonzero((la >= 0) & (la == lb))
+        edges = np.arange(len(self.a)) if live is None else live
+        la, lb = label[self.a[edges]], label[self.b[edges]]
+        inside = (la >= 0) & (la == lb)
         self.set_of = np.r_[self.set_of, la[inside]]
-        self.edge = np.r_[self.edge, inside]
+        self.edge = np.r_[self.edge, edges[inside]]
         self.capacity = np.r_[self.capacity, [(len(s) - 1) // 2 for s in sets]]
         return True
 
@@ -337,16 +362,18 @@ class OddSets:
 
 
 def _dual_value(
-    n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, sets: OddSets, dual: np.ndarray
+    n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, sets: OddSets, dual: np.ndarray, live: np.ndarray
 ) -> tuple[float, np.ndarray]:
-    """The value of the solver's dual made feasible here, and each edge's slack under it (cover - w >= 0): y, z
-    clipped at 0, each edge's shortfall (float tolerance of the solver) added to its first end.  Feasible,
-    so an upper bound on every matching."""
+    """The value of the solver's dual made feasible on the edges ``live`` here, and each live edge's slack
+    under it (cover - w >= 0): y, z clipped at 0, each edge's shortfall (float tolerance of the solver, or an
+    edge not yet priced into the LP) added to its first end.  Feasible, so an upper bound on every matching
+    of the live edges."""
     y, z = np.maximum(dual[:n], 0.0), np.maximum(dual[n:], 0.0)
-    inside = np.bincount(sets.edge, weights=z[sets.set_of], minlength=len(a))
-    short = np.maximum(w - (y[a] + y[b] + inside), 0.0)
-    np.maximum.at(y, a, y[a] + short)
-    slack = np.maximum(y[a] + y[b] + inside - w, 0.0)
+    al, bl, wl = a[live], b[live], w[live]
+    inside = np.bincount(sets.edge, weights=z[sets.set_of], minlength=len(a))[live]
+    short = np.maximum(wl - (y[al] + y[bl] + inside), 0.0)
+    np.maximum.at(y, al, y[al] + short)
+    slack = np.maximum(y[al] + y[bl] + inside - wl, 0.0)
     return float(y.sum() + z @ sets.capacity), slack
 
 
