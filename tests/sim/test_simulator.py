@@ -175,3 +175,23 @@ def test_vehicles_are_moved_in_rounds_without_columns_and_where_nobody_waits():
     waiting = _WaitingMover(idle=False)
     Simulator(sc, waiting, load_preset("highs")).run()
     assert {kind for kind, _ in waiting.calls} == {"reposition"}
+
+
+def test_the_event_table_is_the_rows_sorted_stably_by_time_order_and_event():
+    from rpbench.sim.simulator import EVENT_COLUMNS, EVENT_DTYPES
+
+    sim = Simulator(scenario_of(line_network(6), [(0.0, 0, 5), (0.0, 1, 5), (3.0, 2, 4)], [0, 1]), None, None)  # type: ignore[arg-type]
+    rng = np.random.default_rng(0)
+    names = ["request", "assign", "pickup", "dropoff", "cancel", "reposition"]
+    for _ in range(300):  # many ties in time and order, so the stable order and the event name decide
+        t, o = float(rng.integers(0, 5)), int(rng.integers(-1, 4))
+        vehicle, node, partner = (int(x) for x in rng.integers(-1, 4, 3))
+        event = names[int(rng.integers(0, 6))]
+        sim._event(t, event, o, vehicle, node, "vacant", rng.random(), rng.random(), partner, rng.random() < 0.5)
+    want = (
+        pd.DataFrame(sim.events, columns=EVENT_COLUMNS)
+        .astype(EVENT_DTYPES)
+        .sort_values(["t_s", "order", "event"], kind="stable")
+        .reset_index(drop=True)
+    )
+    pd.testing.assert_frame_equal(sim._event_table(), want, check_exact=True)
