@@ -29,7 +29,7 @@ from rpbench.oracle import find_candidates, solve_oracle
 from rpbench.oracle.runs import ORACLE_RUNS
 from rpbench.oracle.solve import OracleResult
 from rpbench.report import plots
-from rpbench.report.comparison import write_report
+from rpbench.report.comparison import draw_kpi_figure, write_report
 from rpbench.report.html import write_html
 from rpbench.results import metrics
 from rpbench.results.folder import StrategyRun, oracle_kpis, rounds_table, write_folder
@@ -62,7 +62,8 @@ def run_comparison(
     # The offline runs and report.md in a second process, beside the simulations and report.html.
     side = sidecar.start(
         lambda: solve_offline(built, spec.offline, oracle_preset),
-        lambda folder, name: write_report(folder, name=name, formats=spec.formats),
+        lambda folder, name: write_report(folder, name=name, formats=spec.formats, kpis_drawn=True),
+        lambda folder, name: draw_kpi_figure(folder, folder, spec.formats),
         warm_up=plots.warm_up,
     )
     try:

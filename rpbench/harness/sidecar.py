@@ -6,8 +6,9 @@ written folder while report.html is rendered from the same files.  :func:`start`
 comparison starts (nothing is pickled in: it inherits the scenario and the spec); the child solves the
 offline runs and sends them back while the parent simulates, imports the plotting library, then waits until
 the parent has written the folder and writes report.md and its figures into it while the parent writes
-report.html.  The results are those of the serial path, the same functions on the same inputs: the offline
-runs are deterministic and come back as pickles, the reports are functions of the folder's files.
+report.html, one figure (``beside``) drawn meanwhile by a child of its own.  The results are those of the
+serial path, the same functions on the same inputs: the offline runs are deterministic and come back as
+pickles, the reports are functions of the folder's files.
 
 The child is forked only from a top-level process, before the comparison's first solve: a worker of a
 multi-day pool has siblings on the other cores already, and daemonic workers may not have children.
@@ -34,13 +35,15 @@ ReportFn = Callable[[Path, str], object]
 class Serial:
     """The steps in-process: the offline runs when they are asked for, report.md when the folder is ready."""
 
-    def __init__(self, offline: OfflineFn, report: ReportFn) -> None:
-        self._offline, self._report = offline, report
+    def __init__(self, offline: OfflineFn, report: ReportFn, beside: ReportFn | None = None) -> None:
+        self._offline, self._report, self._beside = offline, report, beside
 
     def offline(self) -> Any:
         return self._offline()
 
     def report(self, folder: Path, name: str) -> None:
+        if self._beside is not None:
+            self._beside(folder, name)
         self._report(folder, name)
 
     def wait(self) -> None:
@@ -53,11 +56,13 @@ class Serial:
 class Forked(Serial):
     """The steps in a forked child; the same calls, each answered from the child."""
 
-    def __init__(self, offline: OfflineFn, report: ReportFn, *, warm_up: Callable[[], None]) -> None:
-        super().__init__(offline, report)
+    def __init__(
+        self, offline: OfflineFn, report: ReportFn, beside: ReportFn | None = None, *, warm_up: Callable[[], None]
+    ) -> None:
+        super().__init__(offline, report, beside)
         ctx = multiprocessing.get_context("fork")
         self._conn, child_end = ctx.Pipe(duplex=True)
-        self._child = ctx.Process(target=_child_main, args=(child_end, self._conn, offline, report, warm_up))
+        self._child = ctx.Process(target=_child_main, args=(child_end, self._conn, offline, report, beside, warm_up))
         self._child.start()
         child_end.close()
         self._asked_report = False
@@ -94,18 +99,21 @@ class Forked(Serial):
         return self._child.exitcode
 
 
-def start(offline: OfflineFn, report: ReportFn, *, warm_up: Callable[[], None]) -> Serial:
+def start(
+    offline: OfflineFn, report: ReportFn, beside: ReportFn | None = None, *, warm_up: Callable[[], None]
+) -> Serial:
     """The comparison's second process (:class:`Forked`) where it can run, else :class:`Serial`.
 
-    ``offline()`` returns the offline runs; ``report(folder, name)`` writes report.md into ``folder``;
-    ``warm_up()`` (in the child, between the two) imports what ``report`` needs.
+    ``offline()`` returns the offline runs; ``report(folder, name)`` writes report.md into ``folder``, and
+    ``beside(folder, name)`` the part of it that can be drawn at the same time; ``warm_up()`` (in the child,
+    between the offline runs and the report) imports what ``report`` needs.
     """
     if not _may_fork():
-        return Serial(offline, report)
+        return Serial(offline, report, beside)
     try:
-        return Forked(offline, report, warm_up=warm_up)
+        return Forked(offline, report, beside, warm_up=warm_up)
     except OSError:  # no process or memory to fork: the same work in-process
-        return Serial(offline, report)
+        return Serial(offline, report, beside)
 
 
 def _may_fork() -> bool:
@@ -117,7 +125,12 @@ def _may_fork() -> bool:
 
 
 def _child_main(
-    conn: Connection, parent_end: Connection, offline: OfflineFn, report: ReportFn, warm_up: Callable[[], None]
+    conn: Connection,
+    parent_end: Connection,
+    offline: OfflineFn,
+    report: ReportFn,
+    beside: ReportFn | None,
+    warm_up: Callable[[], None],
 ) -> None:
     parent_end.close()  # so that the parent's exit closes the pipe: recv() then ends this process
     # Ctrl-C and SIGTERM reach the whole process group: the parent stops, then ends this child itself.
@@ -127,8 +140,44 @@ def _child_main(
         _send(conn, offline)
         warm_up()
         job = conn.recv()
-        _send(conn, lambda: report(*job))
+        _send(conn, lambda: _both(report, beside, *job))
     except (EOFError, BrokenPipeError):  # the parent is gone or stopped listening
+        pass
+    finally:
+        conn.close()
+
+
+def _both(report: ReportFn, beside: ReportFn | None, folder: Path, name: str) -> None:
+    """``report`` here and ``beside`` in a child of this process (forked with matplotlib loaded), both done."""
+    if beside is None:
+        report(folder, name)
+        return
+    ctx = multiprocessing.get_context("fork")
+    conn, child_end = ctx.Pipe(duplex=False)
+    helper = ctx.Process(target=_helper_main, args=(child_end, conn, lambda: beside(folder, name)))
+    helper.start()
+    child_end.close()
+    try:
+        report(folder, name)
+        try:
+            ok, value = conn.recv()
+        except EOFError:
+            raise RpbenchError(f"the process drawing beside report.md died (exit status {helper.exitcode})") from None
+        if not ok:
+            raise value
+    finally:
+        if helper.is_alive():
+            helper.kill()
+        helper.join()
+        conn.close()
+
+
+def _helper_main(conn: Connection, parent_end: Connection, fn: Callable[[], Any]) -> None:
+    parent_end.close()
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        _send(conn, fn)
+    except BrokenPipeError:
         pass
     finally:
         conn.close()

@@ -409,14 +409,16 @@ def write_report(
     *,
     figures: bool = True,
     formats: Sequence[str] = DEFAULT_FIGURE_FORMATS,
+    kpis_drawn: bool = False,
 ) -> Path:
     """Write ``report.md`` and its figures (:data:`FIGURES`, in ``formats``) into ``folder``, or into ``dest``
     (``folder`` is then only read); ``name``: the folder's final name, for the text.  ``figures=False``: a
-    published unit of an evaluation, whose figures (and any left in ``dest``) are left out.  Returns the
+    published unit of an evaluation, whose figures (and any left in ``dest``) are left out.  ``kpis_drawn``:
+    the caller draws :data:`KPIS_PNG` itself (:func:`draw_kpi_figure`, in another process).  Returns the
     report's path."""
     dest = folder if dest is None else dest
     if figures:
-        text = report_markdown(folder, name, figure_lines(folder, dest, formats))
+        text = report_markdown(folder, name, figure_lines(folder, dest, formats, kpis_drawn=kpis_drawn))
     else:
         for figure in FIGURES:
             for suffix in (".png", *layout.VECTOR_SUFFIXES):
@@ -444,14 +446,24 @@ def write_paper_tables(folder: Path, dest: Path) -> None:
     csv_table(table, rows, styles).to_csv(dest / layout.TABLE_CSV)
 
 
-def figure_lines(folder: Path, dest: Path, formats: Sequence[str] = DEFAULT_FIGURE_FORMATS) -> list[str]:
-    """Draw the figures of ``folder`` into ``dest`` in ``formats``; return the report's figure section embedding
-    them (the same whichever formats)."""
+def draw_kpi_figure(folder: Path, dest: Path, formats: Sequence[str] = DEFAULT_FIGURE_FORMATS) -> Path:
+    """:data:`KPIS_PNG` of ``folder``, the headline KPIs of its table, drawn into ``dest`` in ``formats``."""
+    meta = report_meta(folder)
+    table, styles = load_kpis(folder), run_styles(meta)
+    return kpi_figure(table, dest / KPIS_PNG, meta["scenario"]["label"], fmt, styles, formats=formats)
+
+
+def figure_lines(
+    folder: Path, dest: Path, formats: Sequence[str] = DEFAULT_FIGURE_FORMATS, *, kpis_drawn: bool = False
+) -> list[str]:
+    """Draw the figures of ``folder`` into ``dest`` in ``formats`` (:data:`KPIS_PNG` unless ``kpis_drawn``);
+    return the report's figure section embedding them (the same whichever formats)."""
     meta = report_meta(folder)
     sc = meta["scenario"]
     table = load_kpis(folder)
     styles = run_styles(meta)
-    kpi_figure(table, dest / KPIS_PNG, sc["label"], fmt, styles, formats=formats)
+    if not kpis_drawn:
+        draw_kpi_figure(folder, dest, formats)
     no_ratio = (
         "; the competitive ratio is drawn as its interval, from saving / upper bound (bar) to saving / best known "
         "schedule (the segment above it)"

@@ -87,3 +87,34 @@ def test_close_ends_a_child_still_working():
     side.offline()
     side.close()
     assert not side._child.is_alive()
+
+
+def _beside(folder: Path, name: str) -> None:
+    (folder / "beside.txt").write_text(f"{name} from {os.getpid()}")
+
+
+@pytest.mark.parametrize("kind", [sidecar.Forked, sidecar.Serial])
+def test_a_part_is_drawn_beside_the_report(kind, tmp_path):
+    kwargs = {"warm_up": _nothing} if kind is sidecar.Forked else {}
+    side = kind(lambda: os.getpid(), _write, _beside, **kwargs)
+    try:
+        child = side.offline()
+        side.report(tmp_path, "final")
+        side.wait()
+    finally:
+        side.close()
+    report_pid = int((tmp_path / "report.md").read_text().split(" from ")[1])
+    beside_pid = int((tmp_path / "beside.txt").read_text().split(" from ")[1])
+    assert report_pid == child
+    assert (beside_pid != report_pid) == (kind is sidecar.Forked)
+
+
+def test_an_error_beside_the_report_is_raised_in_the_parent(tmp_path):
+    side = sidecar.Forked(lambda: 1, _write, lambda folder, name: _fail(), warm_up=_nothing)
+    try:
+        side.offline()
+        side.report(tmp_path, "x")
+        with pytest.raises(ParameterError, match="no such oracle"):
+            side.wait()
+    finally:
+        side.close()
