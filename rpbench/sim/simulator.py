@@ -52,7 +52,7 @@ from rpbench.model import Solution, Status
 from rpbench.model import kernels as model_kernels
 from rpbench.model.instances import save_instance
 from rpbench.scenarios.base import Scenario
-from rpbench.sim import lookahead, routes, ties
+from rpbench.sim import gather, lookahead, routes, ties
 from rpbench.sim.fleet import DROPOFF, PICKUP, FleetState, Stop
 from rpbench.sim.ties import canonicalize
 from rpbench.strategies import candidates
@@ -194,7 +194,7 @@ class Simulator:
         self.n_orders = len(o)
         self.origin = o.origin.astype(np.int64)
         self.destination = o.destination.astype(np.int64)
-        self.request = o.request_s
+        self.request = np.ascontiguousarray(o.request_s, dtype=np.float64)
         self.patience = o.patience_s
         self.solo = self.dist[self.origin, self.destination] if self.n_orders else np.zeros(0)
         self.state = np.full(self.n_orders, PENDING, dtype=np.int8)
@@ -209,7 +209,8 @@ class Simulator:
         self.rounds: list[tuple] = []
         self.waiting: list[int] = []
         self._n_on = -1  # vehicles on duty in the previous round (-1: none looked at yet)
-        for kernels in (routes, lookahead, ties, model_kernels, candidates):  # their one-off load, before round 0
+        # the compiled kernels' one-off load, before the first round rather than in it
+        for kernels in (routes, lookahead, gather, ties, model_kernels, candidates):
             kernels.load()
 
     # ------------------------------------------------------------------ run
@@ -387,32 +388,33 @@ class Simulator:
     def _round_state(self, t: float) -> RoundState:
         fl = self.fleet
         p = np.asarray(self.waiting, dtype=np.int64)
-        v0 = np.flatnonzero((fl.load == 0) & fl.on_duty)
-        v1 = np.flatnonzero((fl.load == 1) & ~fl.paired & fl.on_duty)
+        v0, v1 = gather.fleet_split(fl.load, fl.paired, fl.on_duty)
         _, v0_node, v0_pre = fl.positions(v0, t)
         # A V1 vehicle's one passenger is the one its vacant assignment gave it (a join or a
         # trip pairs the vehicle), so one array lookup replaces a scan of its passenger lists.
         v1_order = self.rider[v1]
-        v1_onboard = self.state[v1_order] == ONBOARD
-        v1_node = self.origin[v1_order]  # not yet picked up: h = o_A, δ = 0, pre = 0 (A14)
-        v1_delta = np.zeros(len(v1))
-        v1_pre = np.zeros(len(v1))
         if len(v1):
             _, node_next, pre_next = fl.positions(v1, t)
             odo_next = fl.next_odometers(v1)
-            v1_node = np.where(v1_onboard, node_next, v1_node)
-            v1_pre = np.where(v1_onboard, pre_next, v1_pre)
-            v1_delta = np.where(v1_onboard, odo_next - self.pickup_odo[v1_order], v1_delta)
-        waited = np.maximum(1, np.ceil((t - self.request[p]) / self.params.dt_s - 1e-9)).astype(np.int64)
+        else:
+            node_next, pre_next, odo_next = v1, np.zeros(0), np.zeros(0)
+        # not yet picked up: h = o_A, δ = 0, pre = 0 (A14)
+        v1_node, v1_delta, v1_pre, v1_onboard, v1_origin, v1_destination, v1_solo = gather.riders(
+            v1_order, self.state, ONBOARD, self.origin, self.destination, self.solo, self.pickup_odo,
+            node_next, pre_next, odo_next,
+        )  # fmt: skip
+        origin, destination, solo, request, waited = gather.passengers(
+            p, self.origin, self.destination, self.solo, self.request, t, self.params.dt_s
+        )
         return RoundState(
             t_s=t,
             params=self.params,
             dist=self.dist,
             p_order=p,
-            p_origin=self.origin[p],
-            p_destination=self.destination[p],
-            p_solo_m=self.solo[p],
-            p_request_s=self.request[p],
+            p_origin=origin,
+            p_destination=destination,
+            p_solo_m=solo,
+            p_request_s=request,
             p_rounds_waited=waited,
             v0_vehicle=v0,
             v0_node=v0_node,
@@ -422,9 +424,9 @@ class Simulator:
             v1_delta_m=v1_delta,
             v1_pre_m=v1_pre,
             v1_order=v1_order,
-            v1_origin=self.origin[v1_order],
-            v1_destination=self.destination[v1_order],
-            v1_solo_m=self.solo[v1_order],
+            v1_origin=v1_origin,
+            v1_destination=v1_destination,
+            v1_solo_m=v1_solo,
             v1_onboard=v1_onboard,
         )
 
