@@ -30,7 +30,13 @@ the simulator would realise given when A's vehicle drives A's shortest path P_A:
 A maximum-weight matching of these values (``plan_solver``, an exact preset) gives every open order a
 planned partner and a role: the first takes a vacant vehicle, the second joins it.  Between two plans the
 pairs are kept and only the forecasts of the waiting firsts renewed (re-planning every round changed the
-saving by -1.3 to +0.8 % on four peak hours at twice the time).
+saving by -1.3 to +0.8 % on four peak hours at twice the time); with ``repair_s`` below ``replan_s`` a
+plan one of whose pairs can no longer form (the partner decided otherwise, or the first on board with no
+feasible join left) is made again once it is ``repair_s`` old.
+
+The value of an edge whose first is not yet requested does not depend on the round (its pick-up range
+is fixed under ``plan_pickup = "range"``), so it is computed once, when the edge first enters a plan's
+window, and kept: a plan computes afresh only the edges of waiting and on-board firsts.
 
 **The round** is the assignment model of MB and FL (:mod:`.candidates`, Eqs. 1-4) with utilities that
 carry the plan out (``C = plan_bonus_m`` puts the plan before everything else):
@@ -50,7 +56,8 @@ carry the plan out (``C = plan_bonus_m`` puts the plan before everything else):
 
 After the round, and in rounds where nobody waits, idle vacant vehicles are sent towards the origins of
 the orders that will need one soonest (planned firsts and unplanned orders waiting or requested within
-``reposition_s``), by a minimum-total-distance assignment (:meth:`Hindsight.reposition`).
+``reposition_s``), by a minimum-total-distance assignment (:meth:`Hindsight.reposition`); a vehicle
+already on its way to the same node is not sent again before it can be there.
 
 A forecast that proves wrong costs saving, never feasibility: the simulator commits only feasible
 columns, and the next round re-plans from the state it reached.
@@ -131,11 +138,16 @@ class HindsightOptions(RunOptions):
         choices=UNPLANNED,
     )
     plan_solver: str = option("matching", "solver preset of the plan's maximum-weight matching (exact)")
+    repair_s: float = option(
+        30.0,
+        "a plan one of whose pairs can no longer form is made again once it is this many seconds old",
+        range=Range(0.0, 86400.0, "s"),
+    )
     replan_s: float = option(
         30.0,
         "the plan's matching is made again every this many seconds; in between its pairs are kept and only "
         "their forecasts renewed",
-        range=Range(0.0, 3600.0, "s"),
+        range=Range(0.0, 86400.0, "s"),
     )
 
 
@@ -195,6 +207,16 @@ class Hindsight(Strategy[HindsightOptions]):
         self.planned_pairs = set()
         self.commitments = {}
         self._forecasts: dict[tuple[int, int], float] = {}
+        # The forecast of each edge, both pick-up orders, when its first is assigned in a later round: it
+        # depends on nothing the rounds change while the first is still to be requested (the pick-up
+        # range is fixed under ``plan_pickup = "range"``), so it is computed once, when the edge first
+        # enters a plan's window (``_valued`` edges so far), and kept.
+        self._cache_later = self.options.plan_pickup == "range"
+        self._later_lo_first = np.full(len(self.edge_lo), np.nan)
+        self._later_hi_first = np.full(len(self.edge_lo), np.nan)
+        self._valued = 0
+        #: Vehicles sent towards a node: vehicle id -> (node, when it is there at the earliest).
+        self._sent: dict[int, tuple[int, float]] = {}
         #: The last plan: (its round's time, planned partner, role) of every order.
         self._kept: tuple[float, np.ndarray, np.ndarray] | None = None
 
@@ -205,7 +227,7 @@ class Hindsight(Strategy[HindsightOptions]):
         self.pickups.observe(state)
         vac = vacant_options(state)
         join = join_options(state)
-        if self._kept is None or t >= self._kept[0] + self.options.replan_s - 1e-9:
+        if self._kept is None or self._plan_due(state):
             mate, first, wait_value = self._plan(state, vac)
             self._kept = (t, mate, first)
         else:
@@ -273,6 +295,8 @@ class Hindsight(Strategy[HindsightOptions]):
         """
         t, mate, first = self._round_plan
         self._record_commitments(rm, chosen, mate)
+        for v in rm.vehicle[chosen].tolist():  # assigned: no longer on its way anywhere
+            self._sent.pop(v, None)
         busy = np.isin(state.v0_vehicle, rm.vehicle[chosen])
         served = np.isin(state.p_order, rm.first[chosen])
         return self._send_idle(state, t, mate, first, busy, served)
@@ -305,7 +329,17 @@ class Hindsight(Strategy[HindsightOptions]):
         cost = state.v0_pre_m[idle][:, None] + self.dist[state.v0_node[idle][:, None], self.origin[need][None, :]]
         rows, cols = linear_sum_assignment(cost)
         far = cost[rows, cols] > self.options.reposition_m
-        return state.v0_vehicle[idle[rows[far]]].astype(np.int64), self.origin[need[cols[far]]].astype(np.int64)
+        vehicles = state.v0_vehicle[idle[rows[far]]].astype(np.int64)
+        targets = self.origin[need[cols[far]]].astype(np.int64)
+        arrive = t + cost[rows[far], cols[far]] / self.params.speed_mps
+        # a vehicle already on its way to the same node keeps going: sending it again would only draw
+        # a new cruise for after its arrival (and cost the simulator a re-plan)
+        sent = self._sent
+        pairs = zip(vehicles.tolist(), targets.tolist(), strict=True)
+        new = np.array([sent.get(v, (-1, 0.0))[0] != node or t >= sent[v][1] for v, node in pairs], bool)
+        for v, node, when in zip(vehicles[new].tolist(), targets[new].tolist(), arrive[new].tolist(), strict=True):
+            sent[v] = (node, when)
+        return vehicles[new], targets[new]
 
     def _record_commitments(self, rm: RoundModel, chosen: np.ndarray, mate: np.ndarray) -> None:
         """Remember, for every planned first assigned in the current round, its planned partner and forecast saving."""
@@ -340,11 +374,14 @@ class Hindsight(Strategy[HindsightOptions]):
         if not len(x):
             return mate, first, wait
         # directed candidates (A first, B joins): B is never a V1 passenger
+        edge = np.flatnonzero(sel) + lo_i
         a = np.concatenate([x, y])
         b = np.concatenate([y, x])
+        edge = np.concatenate([edge, edge])
+        lo_first = np.repeat([True, False], len(x))
         d = ~v1[b]
-        a, b = a[d], b[d]
-        w, later = self._pair_values(state, vac, a, b, waiting, v1)
+        a, b, edge, lo_first = a[d], b[d], edge[d], lo_first[d]
+        w, later = self._edge_values(state, vac, a, b, edge, lo_first, waiting, v1, int(hi_i))
         good = np.isfinite(w) & (w >= PLAN_UNIT_M)
         a, b, w, later = a[good], b[good], w[good], later[good]
         if not len(a):
@@ -374,6 +411,41 @@ class Hindsight(Strategy[HindsightOptions]):
         self.planned_pairs.update(zip(lo[chosen].tolist(), hi[chosen].tolist(), strict=True))
         return mate, first, wait
 
+    def _plan_due(self, state: RoundState) -> bool:
+        """Whether the plan is made again in the current round: the kept one is ``replan_s`` old, or
+        ``repair_s`` old with one of its pairs broken (:meth:`_broken`)."""
+        assert self._kept is not None
+        age = state.t_s - self._kept[0]
+        if age >= self.options.replan_s - 1e-9:
+            return True
+        if age < self.options.repair_s - 1e-9:
+            return False
+        return len(self._broken(state, self._kept[1], self._kept[2])) > 0
+
+    def _broken(self, state: RoundState, mate: np.ndarray, first: np.ndarray) -> np.ndarray:
+        """The open orders (waiting, on board or on the way, or not yet requested) of planned pairs that can no
+        longer form: the partner decided otherwise (served alone, cancelled), or the first on board with no
+        feasible join left for the second."""
+        t = state.t_s
+        n = self.n
+        waiting = np.zeros(n, bool)
+        waiting[state.p_order] = True
+        v1 = np.zeros(n, bool)
+        v1[state.v1_order] = True
+        open_ = waiting | v1 | (self.request > t)
+        a = np.flatnonzero((mate >= 0) & first)
+        b = mate[a]
+        both, one = open_[a] & open_[b], open_[a] != open_[b]
+        dead = one.copy()
+        on = np.flatnonzero(both & v1[a])
+        if len(on):
+            sight = self.sight
+            aa, bb = a[on], b[on]
+            w = sight.forecast(aa, bb, sight.join_from(bb, t, t), self.last_round[bb], self.pickups.of_v1(state, aa))
+            dead[on] = ~np.isfinite(w)
+        loose = np.concatenate([a[dead], b[dead]])
+        return loose[open_[loose]]
+
     def _planned_waits(self, state: RoundState, vac: VacantOptions, mate: np.ndarray, first: np.ndarray) -> np.ndarray:
         """Between two plans: the forecast of each waiting planned first's pair when it is assigned later."""
         wait = np.full(self.n, np.nan)
@@ -389,6 +461,60 @@ class Hindsight(Strategy[HindsightOptions]):
         _, later = self._pair_values(state, vac, a[keep], b[keep], waiting, v1)
         wait[a[keep]] = later
         return wait
+
+    def _edge_values(
+        self,
+        state: RoundState,
+        vac: VacantOptions,
+        a: np.ndarray,
+        b: np.ndarray,
+        edge: np.ndarray,
+        lo_first: np.ndarray,
+        waiting: np.ndarray,
+        v1: np.ndarray,
+        upto: int,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`_pair_values` of the directed edges (``edge``: index in the sorted edges; ``lo_first``: its
+        lower order is A), with the kept forecast of every first not yet requested (edges up to ``upto``)."""
+        if not self._cache_later:
+            return self._pair_values(state, vac, a, b, waiting, v1)
+        self._value_edges(upto)
+        w = np.where(lo_first, self._later_lo_first[edge], self._later_hi_first[edge])
+        later = w.copy()
+        # A waiting or on board: its vehicle and pick-up depend on the round
+        i = np.flatnonzero(waiting[a] | v1[a])
+        w[i], later[i] = self._pair_values(state, vac, a[i], b[i], waiting, v1)
+        return w, later
+
+    def _value_edges(self, upto: int) -> None:
+        """Keep the later-assignment forecast of the sorted edges ``[_valued, upto)``, both pick-up orders."""
+        k0 = self._valued
+        if upto <= k0:
+            return
+        lo, hi = self.edge_lo[k0:upto], self.edge_hi[k0:upto]
+        self._later_lo_first[k0:upto] = self._later_of(lo, hi)
+        self._later_hi_first[k0:upto] = self._later_of(hi, lo)
+        self._valued = upto
+
+    def _later_of(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """The forecast saving of each directed pair when A, not yet requested, is assigned in one of its
+        rounds and picked up after a time in :meth:`_pickup_range_s` (NaN: cannot): what
+        :meth:`_pair_values` gives such an A, in any round before A's request."""
+        p = self.params
+        sight = self.sight
+        out = np.full(len(a), np.nan)
+        r_min, r_max = self.first_round[a], self.last_round[a]
+        i = np.flatnonzero(r_min <= r_max + 1e-9)
+        tau_min, tau_max = self._pickup_range_s()
+        out[i] = sight.forecast(
+            a[i],
+            b[i],
+            sight.join_from(b[i], r_min[i] + p.dt_s, -np.inf),
+            self.last_round[b[i]],
+            r_max[i] + tau_max,
+            r_min[i] + tau_min,
+        )
+        return out
 
     def _pair_values(
         self, state: RoundState, vac: VacantOptions, a: np.ndarray, b: np.ndarray, waiting: np.ndarray, v1: np.ndarray

@@ -131,3 +131,68 @@ def test_an_unknown_option_value_is_one_error_line(tmp_path, capsys):
     assert code == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "unplanned" in err[0] and not (tmp_path / "never").exists()
+
+
+def test_the_kept_forecasts_of_firsts_not_yet_requested_are_those_the_round_would_compute(monkeypatch):
+    """The plan keeps each edge's later-assignment forecast from the first plan that sees it; for every first
+    not yet requested it must equal what :meth:`Hindsight._pair_values` computes in the current round."""
+    compared = []
+    kept_values = Hindsight._edge_values
+
+    def both(self, state, vac, a, b, edge, lo_first, waiting, v1, upto):
+        w, later = kept_values(self, state, vac, a, b, edge, lo_first, waiting, v1, upto)
+        w_now, later_now = self._pair_values(state, vac, a, b, waiting, v1)
+        np.testing.assert_array_equal(w, w_now)
+        np.testing.assert_array_equal(later, later_now)
+        compared.append(int((~waiting[a] & ~v1[a]).sum()))
+        return w, later
+
+    monkeypatch.setattr(Hindsight, "_edge_values", both)
+    simulate(build_scenario("toy", sample=0.2, seed=4), "hindsight")
+    assert len(compared) > 5 and sum(compared) > 100
+
+
+@pytest.mark.parametrize("seed", [0, 4])
+def test_a_vehicle_on_its_way_to_an_origin_is_not_sent_there_again(seed):
+    """Idle vehicles are sent towards the origins of the orders that need one; a vehicle already driving to
+    a node (sent more than ``reposition_m`` away, so at least that long on its way) gets no second move to
+    the same node before it can be there, unless it was assigned in between."""
+    scenario = build_scenario("toy", sample=0.2, seed=seed)
+    strategy, res, _, _ = simulate(scenario, "hindsight")
+    ev = res.events
+    moves = ev[ev["event"].isin(["reposition", "assign"])].sort_values("t_s", kind="stable")
+    soonest = strategy.options.reposition_m / scenario.params.speed_mps
+    last: dict[int, tuple[float, int]] = {}
+    sent = 0
+    for kind, t, v, node in moves[["event", "t_s", "vehicle", "node"]].itertuples(index=False):
+        if kind == "assign":
+            last.pop(int(v), None)
+            continue
+        sent += 1
+        before = last.get(int(v))
+        assert before is None or before[1] != node or t - before[0] >= soonest - 1e-6
+        last[int(v)] = (t, int(node))
+    assert sent > 10
+
+
+def test_a_plan_is_made_again_early_only_when_one_of_its_pairs_breaks(monkeypatch):
+    """With ``replan_s`` longer than the day, every plan after the first is a repair: made ``repair_s`` or
+    more after the last, in a round where one of the last plan's pairs can no longer form; with ``repair_s``
+    as long, there is one plan."""
+    scenario = build_scenario("toy", sample=0.2, seed=0)
+    day = scenario.horizon_s + 3600.0
+    ages: list[float] = []
+    due = Hindsight._plan_due
+
+    def record(self, state):
+        answer = due(self, state)
+        if answer:
+            ages.append(state.t_s - self._kept[0])
+        return answer
+
+    monkeypatch.setattr(Hindsight, "_plan_due", record)
+    simulate(scenario, "hindsight", replan_s=day, repair_s=60.0)
+    assert ages and all(60.0 - 1e-6 <= age < day for age in ages)
+    ages.clear()
+    simulate(scenario, "hindsight", replan_s=day, repair_s=day)
+    assert ages == []
