@@ -70,10 +70,8 @@ def vacant_options(state: RoundState) -> VacantOptions:
         empty = np.zeros(0, np.int64)
         return VacantOptions(empty, empty, np.zeros(0))
     limit = state.params.max_pickup_m + TOLERANCE_M
-    p, v = _within_road_distance(state, state.v0_node, state.v0_pre_m, limit)
-    pk = state.v0_pre_m[v] + state.dist[state.v0_node[v], state.p_origin[p]]
-    ok = pk <= limit
-    return VacantOptions(p[ok], v[ok], pk[ok])
+    p, v, pk = _within_pickup(state, state.v0_node, state.v0_pre_m, limit)
+    return VacantOptions(p, v, pk)
 
 
 def join_options(state: RoundState, order_rule: str = "min_feasible") -> JoinOptions:
@@ -82,10 +80,7 @@ def join_options(state: RoundState, order_rule: str = "min_feasible") -> JoinOpt
         return JoinOptions.empty()
     # Cheap pick-up filter first: most pairs fail R̄.
     limit = state.params.max_pickup_m + TOLERANCE_M
-    p, v = _within_road_distance(state, state.v1_node, state.v1_pre_m, limit)
-    pk = state.v1_pre_m[v] + state.dist[state.v1_node[v], state.p_origin[p]]
-    near = pk <= limit
-    p, v = p[near], v[near]
+    p, v, _ = _within_pickup(state, state.v1_node, state.v1_pre_m, limit)
     g = pair_geometry(
         state.dist,
         state.v1_origin[v],
@@ -105,17 +100,47 @@ def join_options(state: RoundState, order_rule: str = "min_feasible") -> JoinOpt
     return JoinOptions(p[ok], v[ok], r.pk[ok], r.saving[ok], r.fofo[ok], remaining[ok])
 
 
-def _within_road_distance(state: RoundState, nodes: np.ndarray, pre_m: np.ndarray, limit_m: float):
-    """(passenger, vehicle) position pairs, passenger-major, that may have ``pre + l(node, o_p) <= limit``.
+def _within_pickup(state: RoundState, nodes: np.ndarray, pre_m: np.ndarray, limit_m: float):
+    """(passenger, vehicle) position pairs, passenger-major, with pick-up ``pre + l(node, o_p) <= limit``, and
+    that pick-up.
 
-    With ``pre >= 0`` only pairs whose road distance alone is within the limit can (:mod:`.nearby`);
-    otherwise every pair is returned.  The caller applies the exact test.
+    With ``pre >= 0`` only pairs whose road distance alone is within the limit can (:class:`NearTable`), so
+    only those are measured; otherwise every pair is.
     """
-    if np.all(pre_m >= 0):
-        mask = near_table(state.dist, limit_m).mask(nodes, state.p_origin)
-    else:
-        mask = np.ones((state.n_passengers, len(nodes)), dtype=bool)
-    return np.nonzero(mask)
+    pre = np.asarray(pre_m, dtype=np.float64)
+    screened = bool(np.all(pre >= 0))
+    reach = near_table(state.dist, limit_m).reach if screened else np.ones((1, 1), dtype=bool)
+    return _pickup_pairs(
+        reach,
+        screened,
+        state.dist,
+        np.asarray(state.p_origin, dtype=np.int64),
+        np.asarray(nodes, dtype=np.int64),
+        pre,
+        float(limit_m),
+    )
+
+
+@njit(cache=True, nogil=True)
+def _pickup_pairs(reach, screened, dist, origins, nodes, pre, limit):  # pragma: no cover - compiled
+    """Pairs (p, v) in passenger-major order with ``pre[v] + dist[nodes[v], origins[p]] <= limit``, measured only
+    where ``reach[origins[p], nodes[v]]`` (when ``screened``), and their pick-up distances."""
+    n_p, n_v = len(origins), len(nodes)
+    candidates = 0
+    for i in range(n_p):
+        for j in range(n_v):
+            if not screened or reach[origins[i], nodes[j]]:
+                candidates += 1
+    p, v, pk = np.empty(candidates, np.int64), np.empty(candidates, np.int64), np.empty(candidates)
+    k = 0
+    for i in range(n_p):
+        for j in range(n_v):
+            if not screened or reach[origins[i], nodes[j]]:
+                d = pre[j] + dist[nodes[j], origins[i]]
+                if d <= limit:
+                    p[k], v[k], pk[k] = i, j, d
+                    k += 1
+    return p[:k], v[:k], pk[:k]
 
 
 def assignment_round(
@@ -258,9 +283,10 @@ def _columns_kernel(
 
 
 def load() -> None:
-    """Load (or compile) the kernel now: its first call costs a one-off load of its machine code."""
+    """Load (or compile) the kernels now: the first call of each costs a one-off load of its machine code."""
     i, f = np.zeros(0, np.int64), np.zeros(0)
     _columns_kernel(i, i, f, f, i, i, f, f, np.zeros(0, np.bool_), f, i, i, 0)
+    _pickup_pairs(np.ones((1, 1), dtype=bool), True, np.zeros((1, 1)), i, i, f, 0.0)
 
 
 # Which node pairs lie within a distance: a table that pre-filters pick-up candidates.
