@@ -262,22 +262,15 @@ class FleetState:
 
     # ------------------------------------------------------------ trajectory
     def trajectory(self, v: int, t_end: float | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The driven node sequence with times and odometer (up to ``t_end``)."""
+        """The driven node sequence with times and odometer (up to ``t_end``).
+
+        History and plan, chunk after chunk, each chunk's first node dropped where it repeats the node
+        the trajectory has reached at that time (the anchor a replan starts from).
+        """
         chunks = self.history[v] + [self.plans[v]]
-        nodes: list[np.ndarray] = []
-        tt: list[np.ndarray] = []
-        odo: list[np.ndarray] = []
-        for c in chunks:
-            n, t, o = c.nodes, c.tt, c.odo
-            if nodes and nodes[-1][-1] == n[0] and tt[-1][-1] >= t[0] - _EPS_S:
-                n, t, o = n[1:], t[1:], o[1:]  # drop the repeated anchor node
-            if len(n):
-                nodes.append(n)
-                tt.append(t)
-                odo.append(o)
-        nodes_a, tt_a, odo_a = np.concatenate(nodes), np.concatenate(tt), np.concatenate(odo)
-        if t_end is not None:
-            keep = tt_a <= t_end + _EPS_S
-            keep[0] = True
-            nodes_a, tt_a, odo_a = nodes_a[keep], tt_a[keep], odo_a[keep]
-        return nodes_a, tt_a, odo_a
+        nodes = np.concatenate([c.nodes for c in chunks])
+        tt = np.concatenate([c.tt for c in chunks])
+        odo = np.concatenate([c.odo for c in chunks])
+        starts = np.cumsum([0] + [len(c.nodes) for c in chunks])
+        keep = routes.trajectory_keep(nodes, tt, starts, _EPS_S, np.inf if t_end is None else t_end)
+        return nodes[keep], tt[keep], odo[keep]

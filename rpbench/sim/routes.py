@@ -127,6 +127,34 @@ def plan_arrays(
     return -1
 
 
+@njit(cache=True, nogil=True)
+def trajectory_keep(
+    nodes: np.ndarray, tt: np.ndarray, starts: np.ndarray, eps: float, t_end: float
+) -> np.ndarray:  # pragma: no cover - compiled
+    """Which entries of a vehicle's plan chunks (``starts``: their offsets) its trajectory keeps.
+
+    A chunk's first node is dropped when it is the last kept node at a time no earlier (within
+    ``eps``); then every node after ``t_end`` (within ``eps``), except the first.
+    """
+    keep = np.ones(len(nodes), np.bool_)
+    kept = False
+    last_node, last_tt = 0, 0.0
+    for i in range(len(starts) - 1):
+        s, e = starts[i], starts[i + 1]
+        if e == s:
+            continue
+        if kept and last_node == nodes[s] and last_tt >= tt[s] - eps:
+            keep[s] = False
+            s += 1
+        if e > s:
+            kept = True
+            last_node, last_tt = nodes[e - 1], tt[e - 1]
+    for j in range(1, len(nodes)):
+        if not tt[j] <= t_end + eps:
+            keep[j] = False
+    return keep
+
+
 def load() -> None:
     """Load (or compile) every kernel now: the first call of each costs a one-off load of its machine code."""
     offsets, heads = np.array([0, 1, 2], np.int64), np.array([1, 0], np.int64)
@@ -134,3 +162,4 @@ def load() -> None:
     route_through(np.zeros((2, 2), np.int32), np.zeros(2, np.int64), np.zeros(1, np.int64))
     one = np.zeros(1)
     plan_arrays(offsets, heads, one, 0, np.zeros(0, np.int64), 0.0, 0.0, 1.0, np.zeros(1, np.int32), one, one.copy())
+    trajectory_keep(np.zeros(1, np.int32), one, np.array([0, 1], np.int64), 0.0, np.inf)
