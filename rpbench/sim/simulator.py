@@ -55,6 +55,7 @@ from rpbench.scenarios.base import Scenario
 from rpbench.sim import gather, lookahead, routes, ties
 from rpbench.sim.fleet import DROPOFF, PICKUP, FleetState, Stop
 from rpbench.sim.ties import canonicalize
+from rpbench.strategies import base as strategy_base
 from rpbench.strategies import candidates
 from rpbench.strategies.base import Kind, RoundModel, RoundState, Strategy, received, received_moves
 
@@ -210,7 +211,7 @@ class Simulator:
         self.waiting: list[int] = []
         self._n_on = -1  # vehicles on duty in the previous round (-1: none looked at yet)
         # the compiled kernels' one-off load, before the first round rather than in it
-        for kernels in (routes, lookahead, gather, ties, model_kernels, candidates):
+        for kernels in (routes, lookahead, gather, ties, model_kernels, candidates, strategy_base):
             kernels.load()
 
     # ------------------------------------------------------------------ run

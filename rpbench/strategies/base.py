@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar, Generic, TypeVar, cast
 
 import numpy as np
+from numba import njit
 
 from rpbench.exceptions import ModelError, one_line
 from rpbench.model import AssignmentModel, Structure, TripPackingModel
@@ -233,6 +234,11 @@ def _check_decoding(rm: RoundModel, state: RoundState) -> None:
             f"the model has {passengers} passenger and {model.n_vehicles} vehicle rows for a round of "
             f"{state.n_passengers} waiting passengers and {n_vehicles} vehicles (V0 then V1)"
         )
+    if r2 is None and _assignment_decoded(
+        rm.kind, rm.vehicle, rm.first, rm.second, rm.utility_m, rm.pickup_m, row_vehicle, r1,
+        state.v0_vehicle, state.v1_vehicle, state.p_order,
+    ):  # fmt: skip
+        return  # every column as below, in one compiled pass; the numpy passes find what is wrong
     # the decision of each column; index -1 (keep waiting, no second request) reads the appended -1
     vehicle = np.concatenate([state.v0_vehicle, state.v1_vehicle, [-1]])[row_vehicle]
     kind = (row_vehicle >= state.n_v0).astype(np.int8) + np.int8(Kind.VACANT)  # VACANT or JOIN
@@ -250,6 +256,33 @@ def _check_decoding(rm: RoundModel, state: RoundState) -> None:
         ok = (rm.kind == kind) & (rm.vehicle == vehicle) & orders & v0 & finite
     if not ok.all():
         _explain(rm, state, int(np.flatnonzero(~ok)[0]), kind, vehicle, a, None if r2 is None else b)
+
+
+@njit(cache=True, nogil=True)
+def _assignment_decoded(
+    kind, vehicle, first, second, utility, pickup, row_vehicle, row_passenger, v0_vehicle, v1_vehicle, p_order
+) -> bool:  # pragma: no cover - compiled
+    """Whether every column of an assignment round decodes as :func:`_check_decoding` requires."""
+    n_v0 = len(v0_vehicle)
+    for c in range(len(kind)):
+        row = row_vehicle[c]
+        if row < 0:
+            want_kind, want_vehicle = 0, -1  # Kind.WAIT
+        elif row < n_v0:
+            want_kind, want_vehicle = 1, v0_vehicle[row]  # Kind.VACANT
+        else:
+            want_kind, want_vehicle = 2, v1_vehicle[row - n_v0]  # Kind.JOIN
+        if kind[c] != want_kind or vehicle[c] != want_vehicle or first[c] != p_order[row_passenger[c]]:
+            return False
+        if second[c] != -1 or not (row < 0 or np.isfinite(utility[c] + pickup[c])):
+            return False
+    return True
+
+
+def load() -> None:
+    """Load (or compile) the decoding check now: its first call costs a one-off load of its machine code."""
+    i, f = np.zeros(0, np.int64), np.zeros(0)
+    _assignment_decoded(np.zeros(0, np.int8), i, i, i, f, f, np.zeros(0, np.int32), np.zeros(0, np.int32), i, i, i)
 
 
 def _explain(
