@@ -547,7 +547,9 @@ def make_solution(model: _Model, chosen, status: Status, backend: str, **kw) -> 
         raise SolverError(
             f"backend {backend!r} chose column index {float(raw[bad])!r} of {model.name!r}, not an integer"
         )
-    unique = np.unique(raw.astype(np.int64))
+    unique = raw.astype(np.int64)  # a copy of our own
+    if len(unique) > 1 and not (unique[1:] > unique[:-1]).all():  # already sorted and distinct: as np.unique
+        unique = np.unique(unique)
     if len(unique) != len(raw):  # a 0/1 vector passed as indices, say: never silently deduplicated
         raise SolverError(f"backend {backend!r} chose a column of {model.name!r} twice")
     unique.setflags(write=False)
