@@ -118,12 +118,13 @@ def reduction_costs(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray) -> tupl
     """
     ends = np.concatenate([a, b])
     ww = np.concatenate([w, w])
-    order = np.lexsort((-ww, ends))
-    ends, ww = ends[order], ww[order]
-    first = np.searchsorted(ends, np.arange(n))
-    deg = np.bincount(ends, minlength=n)
-    t1 = np.where(deg > 0, ww[np.minimum(first, len(ww) - 1)], 0)
-    t2 = np.where(deg > 1, ww[np.minimum(first + 1, len(ww) - 1)], 0)
+    # the two largest incident weights in O(E), without sorting: t2 is t1 again where t1 occurs twice
+    t1 = np.zeros(n, ww.dtype)
+    np.maximum.at(t1, ends, ww)
+    top = ww == t1[ends]
+    t2 = np.zeros(n, ww.dtype)
+    np.maximum.at(t2, ends[~top], ww[~top])
+    t2 = np.where(np.bincount(ends[top], minlength=n) > 1, t1, t2)
     beta = (t1 + t2) // 2 + 1
     return beta[a] + beta[b] - w, beta
 

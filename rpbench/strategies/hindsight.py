@@ -200,7 +200,8 @@ class Hindsight(Strategy[HindsightOptions]):
         lo, hi = cand.low, cand.high
         later = np.maximum(self.request[lo], self.request[hi])
         by_later = np.argsort(later, kind="stable")
-        self.edge_lo, self.edge_hi, self.edge_later = lo[by_later], hi[by_later], later[by_later]
+        self.edge_lo, self.edge_hi = lo[by_later].astype(np.int64), hi[by_later].astype(np.int64)
+        self.edge_later = later[by_later]
         self.max_patience = float(sight.patience.max()) if n else 0.0
         # what the simulator's V1 vehicles do: the pick-up time of every assigned first passenger
         self.pickups = PickupTimes(n, p.speed_mps, self.options.pickup_time_s)
@@ -373,27 +374,40 @@ class Hindsight(Strategy[HindsightOptions]):
         x, y = x[sel], y[sel]
         if not len(x):
             return mate, first, wait
-        # directed candidates (A first, B joins): B is never a V1 passenger
+        # directed candidates (A first, B joins; the lower order first, then the higher): B is never a V1
+        # passenger
+        m = len(x)
         edge = np.flatnonzero(sel) + lo_i
         a = np.concatenate([x, y])
         b = np.concatenate([y, x])
-        edge = np.concatenate([edge, edge])
-        lo_first = np.repeat([True, False], len(x))
-        d = ~v1[b]
-        a, b, edge, lo_first = a[d], b[d], edge[d], lo_first[d]
-        w, later = self._edge_values(state, vac, a, b, edge, lo_first, waiting, v1, int(hi_i))
-        good = np.isfinite(w) & (w >= PLAN_UNIT_M)
-        a, b, w, later = a[good], b[good], w[good], later[good]
-        if not len(a):
+        d = np.flatnonzero(~v1[b])
+        lo_first = d < m
+        w_d, later_d = self._edge_values(
+            state, vac, a[d], b[d], np.concatenate([edge, edge])[d], lo_first, waiting, v1, int(hi_i)
+        )
+        w2 = np.full(2 * m, -np.inf)
+        later2 = np.full(2 * m, np.nan)
+        good = np.isfinite(w_d) & (w_d >= PLAN_UNIT_M)
+        w2[d[good]] = w_d[good]
+        later2[d] = later_d
+        # the better pick-up order of each pair (a tie: the lower order first)
+        higher_first = w2[m:] > w2[:m]
+        w = np.where(higher_first, w2[m:], w2[:m])
+        keep = np.flatnonzero(np.isfinite(w))
+        if not len(keep):
             return mate, first, wait
-        # the better pick-up order of each pair
-        lo, hi = np.minimum(a, b), np.maximum(a, b)
-        srt = np.lexsort((-w, hi, lo))
+        higher_first, w = higher_first[keep], w[keep]
+        lo, hi = x[keep], y[keep]
+        a, b = np.where(higher_first, hi, lo), np.where(higher_first, lo, hi)
+        later = np.where(higher_first, later2[m:][keep], later2[:m][keep])
+        srt = np.argsort(lo * n + hi, kind="stable")  # by (lo, hi)
         a, b, w, lo, hi, later = a[srt], b[srt], w[srt], lo[srt], hi[srt], later[srt]
-        head = np.ones(len(a), bool)
-        head[1:] = (lo[1:] != lo[:-1]) | (hi[1:] != hi[:-1])
-        a, b, w, lo, hi, later = a[head], b[head], w[head], lo[head], hi[head], later[head]
-        nodes, inv = np.unique(np.concatenate([lo, hi]), return_inverse=True)
+        used = np.zeros(n, bool)
+        used[lo] = used[hi] = True
+        nodes = np.flatnonzero(used)
+        index = np.zeros(n, np.int64)
+        index[nodes] = np.arange(len(nodes))
+        inv = np.concatenate([index[lo], index[hi]])
         model = PairingModel(
             len(nodes),
             inv[: len(lo)],

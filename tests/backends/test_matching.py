@@ -78,6 +78,21 @@ def test_reduction_costs_satisfy_the_star_condition():
             assert 2 * beta[v] > incident[0] + incident[1]
 
 
+@pytest.mark.parametrize("high", [3, 1000])
+def test_each_boundary_cost_is_set_by_the_two_largest_incident_weights(high):
+    """β_v = ⌊(t1 + t2) / 2⌋ + 1 read off each vertex's incident weights sorted (a weight met twice
+    counts twice; low weights make ties common; isolated vertices get 1)."""
+    rng = np.random.default_rng(high)
+    n = 40
+    a, b = rng.integers(0, n, 300), rng.integers(0, n, 300)
+    w = rng.integers(1, high, 300)
+    _, beta = mb.reduction_costs(n, a, b, w)
+    for v in range(n):
+        incident = np.sort(np.r_[w[a == v], w[b == v]])[::-1]
+        t1, t2 = (list(incident[:2]) + [0, 0])[:2]
+        assert beta[v] == (t1 + t2) // 2 + 1
+
+
 def test_values_beyond_the_exact_range_fall_back_to_an_exact_mip(no_blossom_v):
     # 2e7 units cannot be a PyMatching weight (max 2^24 - 1): the answer must still be exact
     v = np.array([20_000_001, 40_000_001, 20_000_001])
