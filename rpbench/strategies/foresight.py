@@ -17,6 +17,7 @@ what the simulator's V1 vehicles do, observed from the rounds that assigned them
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 from rpbench.geometry import TOLERANCE_M, choose_order, pair_geometry
 from rpbench.scenarios.base import Scenario
@@ -103,19 +104,8 @@ class Foresight:
         s_hi = v * np.maximum(0.0, t_hi[rows] - early[rows])
         start = np.searchsorted(self.path_key, s_lo - 1e-6 + aa * _PATH_GAP_M, side="left")
         end = self.path_offsets[aa + 1]
-        hit = np.full(len(rows), -1, np.int64)
-        k = start.copy()
-        active = np.flatnonzero(k < end)
         cum, nodes = self.path_cum, self.path_nodes
-        while len(active):
-            kk = k[active]
-            gap = r_bar - dist[nodes[kk], o[bb[active]]]  # how far before h the vehicle may still be
-            earliest = np.maximum(s_lo[active], cum[kk] - gap)
-            found = (gap >= 0) & (earliest <= np.minimum(s_hi[active], cum[kk]) + 1e-6)
-            hit[active[found]] = kk[found]
-            go = ~found & (cum[kk] - r_bar <= s_hi[active]) & (kk + 1 < end[active])
-            k[active[go]] += 1
-            active = active[go]
+        hit = _first_turn(start, end, o[bb], s_lo, s_hi, r_bar, cum, nodes, dist)
         ok = hit >= 0
         if not ok.any():
             return out
@@ -136,6 +126,34 @@ class Foresight:
         r = choose_order(g, np.inf)
         out[rows[r.feasible]] = r.saving[r.feasible]
         return out
+
+
+@njit(cache=True, nogil=True)
+def _first_turn(
+    start: np.ndarray,
+    end: np.ndarray,
+    origin_b: np.ndarray,
+    s_lo: np.ndarray,
+    s_hi: np.ndarray,
+    r_bar: float,
+    cum: np.ndarray,
+    nodes: np.ndarray,
+    dist: np.ndarray,
+) -> np.ndarray:  # pragma: no cover (compiled; covered through Foresight.forecast)
+    """For each row, the first path index ``k`` in ``[start, end)`` the vehicle can have next, in the arc
+    lengths ``[s_lo, s_hi]`` it can have driven, with ``pre + l(h, o_B) <= R̄`` (-1: none).  The walk stops
+    once the node lies more than R̄ beyond ``s_hi``: no later node can be had in time."""
+    out = np.full(len(start), -1, np.int64)
+    for i in range(len(start)):
+        for k in range(start[i], end[i]):
+            gap = r_bar - dist[nodes[k], origin_b[i]]  # how far before h the vehicle may still be
+            earliest = max(s_lo[i], cum[k] - gap)
+            if gap >= 0 and earliest <= min(s_hi[i], cum[k]) + 1e-6:
+                out[i] = k
+                break
+            if cum[k] - r_bar > s_hi[i]:
+                break
+    return out
 
 
 class PickupTimes:
