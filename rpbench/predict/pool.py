@@ -36,8 +36,8 @@ from rpbench.scenarios.base import Params
 #: prctl(2) option: the signal the kernel sends this process when its parent's thread exits (Linux).
 _PR_SET_PDEATHSIG = 1
 
-#: In a worker: the network and parameters every job of the pool shares (sent once, not with every job).
-_shared: tuple[RoadNetwork, Params] | None = None
+#: In a worker: the networks its jobs came with, by content hash, so that their distance table is read once.
+_networks: dict[str, RoadNetwork] = {}
 
 
 def solve_predictions(
@@ -57,12 +57,15 @@ def solve_predictions(
     if n <= 1:
         return [predict(network, rates, params, config, lean=True) for rates, config in jobs]
     threads = max(1, get_num_threads() // n)
-    # the distance table (hundreds of MB) is not sent: each worker reads it from the disk cache
+    # The jobs carry the network without its distance table (hundreds of MB; each worker reads it from the disk
+    # cache).  They go through the pool's queue, not with the worker's start: a worker that dies starting (a
+    # script that runs itself again, unguarded by `if __name__ == "__main__"`) is then an error, where a start
+    # payload larger than a pipe's buffer would leave this process waiting for it forever.
     bare = dataclasses.replace(network, _index={})
     context = multiprocessing.get_context("spawn")
-    pool = ProcessPoolExecutor(n, mp_context=context, initializer=_start_worker, initargs=(bare, params, threads))
+    pool = ProcessPoolExecutor(n, mp_context=context, initializer=_start_worker, initargs=(threads,))
     try:
-        results = list(pool.map(_solve, jobs))
+        results = list(pool.map(_solve, [(bare, params, rates, config) for rates, config in jobs]))
     except BaseException:
         _stop(pool)
         raise
@@ -70,20 +73,17 @@ def solve_predictions(
     return results
 
 
-def _start_worker(network: RoadNetwork, params: Params, threads: int) -> None:
+def _start_worker(threads: int) -> None:
     """Worker initializer: die with the parent, leave Ctrl-C to it, take its share of the threads."""
-    global _shared
-    _shared = (network, params)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     with contextlib.suppress(OSError, AttributeError):  # not Linux: the parent stops its workers itself
         ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGKILL)
     set_num_threads(threads)
 
 
-def _solve(job: tuple[OdRates, PredictConfig]) -> Prediction:
-    assert _shared is not None  # set by the initializer
-    network, params = _shared
-    rates, config = job
+def _solve(job: tuple[RoadNetwork, Params, OdRates, PredictConfig]) -> Prediction:
+    network, params, rates, config = job
+    network = _networks.setdefault(network.content_hash, network)
     return predict(network, rates, params, config, lean=True)
 
 
