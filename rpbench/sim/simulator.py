@@ -229,6 +229,7 @@ class Simulator:
         # the future gets them all up front (and its run is marked so).
         clairvoyant = bool(self.strategy.clairvoyant_on(self.scenario))
         self.strategy.prepare(self.scenario if clairvoyant else self.scenario.online_view(self._strategy_text()))
+        candidates.prepare_tables(self.dist, self.params)  # the option search's table, with the run's preparation
         with _older_objects_frozen():
             return self._loop(t_prepare, clairvoyant)
 
