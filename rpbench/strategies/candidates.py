@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from rpbench.geometry import TOLERANCE_M, choose_order, pair_geometry
+from rpbench.geometry import ORDER_RULES, TOLERANCE_M, choose_order, pair_geometry
 from rpbench.model import AssignmentModel, quantize
 from rpbench.scenarios.base import Params
 from rpbench.strategies.base import Kind, RoundModel, RoundState
@@ -79,6 +79,32 @@ def join_options(state: RoundState, order_rule: str = "min_feasible") -> JoinOpt
     """Every (waiting passenger, partially occupied vehicle) pair that POOL accepts."""
     if state.n_passengers == 0 or state.n_v1 == 0:
         return JoinOptions.empty()
+    limit = state.params.max_pickup_m + TOLERANCE_M
+    pre = np.asarray(state.v1_pre_m, dtype=np.float64)
+    if order_rule not in ORDER_RULES or not np.all(pre >= 0):
+        return _join_options_numpy(state, order_rule)
+    p, v, pk, saving, fofo, remaining = _join_pairs(
+        near_table(state.dist, limit).reach,
+        state.dist,
+        np.asarray(state.p_origin, dtype=np.int64),
+        np.asarray(state.p_destination, dtype=np.int64),
+        np.asarray(state.p_solo_m, dtype=np.float64),
+        np.asarray(state.v1_node, dtype=np.int64),
+        pre,
+        np.asarray(state.v1_delta_m, dtype=np.float64),
+        np.asarray(state.v1_origin, dtype=np.int64),
+        np.asarray(state.v1_destination, dtype=np.int64),
+        np.asarray(state.v1_solo_m, dtype=np.float64),
+        float(state.params.max_pickup_m),
+        float(state.params.max_detour_m),
+        order_rule == "min_feasible",
+    )
+    return JoinOptions(p, v, pk, saving, fofo, remaining)
+
+
+def _join_options_numpy(state: RoundState, order_rule: str) -> JoinOptions:
+    """:func:`join_options` by numpy passes and :func:`~rpbench.geometry.pair_geometry` (the compiled pass's
+    reference; taken for negative distances before the vehicles' next nodes and for an unknown rule)."""
     # Cheap pick-up filter first: most pairs fail R̄.
     limit = state.params.max_pickup_m + TOLERANCE_M
     p, v, _ = _within_pickup(state, state.v1_node, state.v1_pre_m, limit)
@@ -99,6 +125,57 @@ def join_options(state: RoundState, order_rule: str = "min_feasible") -> JoinOpt
     ok = r.feasible
     remaining = state.v1_pre_m[v] + r.length - state.v1_delta_m[v]
     return JoinOptions(p[ok], v[ok], r.pk[ok], r.saving[ok], r.fofo[ok], remaining[ok])
+
+
+@njit(cache=True, nogil=True)
+def _join_pairs(
+    reach, dist, o_b, d_b, l_b, h, pre, delta, o_a, d_a, l_a, max_pickup, max_detour, min_feasible
+):  # pragma: no cover - compiled
+    """The join options as :func:`_join_options_numpy` finds them, pair by pair in passenger-major order:
+    the pick-up screen of :func:`_pickup_pairs`, then POOL's two service orders with the same arithmetic as
+    :func:`~rpbench.geometry.pair_geometry` and :func:`~rpbench.geometry.choose_order`."""
+    n_p, n_v = len(o_b), len(h)
+    pick_lim = max_pickup + TOLERANCE_M
+    lim = max_detour + TOLERANCE_M
+    candidates = 0
+    for i in range(n_p):
+        for j in range(n_v):
+            if reach[o_b[i], h[j]]:
+                candidates += 1
+    out_p, out_v = np.empty(candidates, np.int64), np.empty(candidates, np.int64)
+    out_pk, out_e, out_rem = np.empty(candidates), np.empty(candidates), np.empty(candidates)
+    out_fofo = np.empty(candidates, np.bool_)
+    k = 0
+    for i in range(n_p):
+        for j in range(n_v):
+            if not reach[o_b[i], h[j]]:
+                continue
+            p = dist[h[j], o_b[i]]
+            pk = pre[j] + p
+            if not pk <= pick_lim:
+                continue
+            l_ob_da = dist[o_b[i], d_a[j]]
+            l_da_db = dist[d_a[j], d_b[i]]
+            l_db_da = dist[d_b[i], d_a[j]]
+            head = delta[j] + p
+            fofo_length = head + l_ob_da + l_da_db
+            folo_length = head + l_b[i] + l_db_da
+            fofo_ok = (head + l_ob_da - l_a[j] <= lim) and (l_ob_da + l_da_db - l_b[i] <= lim)
+            folo_ok = folo_length - l_a[j] <= lim
+            if min_feasible:
+                fofo = fofo_ok and ((not folo_ok) or fofo_length <= folo_length)
+                ok = fofo_ok or folo_ok
+            else:
+                fofo = fofo_length <= folo_length
+                ok = fofo_ok if fofo else folo_ok
+            if not (ok and pk <= pick_lim and l_a[j] > TOLERANCE_M and l_b[i] > TOLERANCE_M):
+                continue
+            length = fofo_length if fofo else folo_length
+            out_p[k], out_v[k], out_pk[k], out_fofo[k] = i, j, pk, fofo
+            out_e[k] = l_a[j] + l_b[i] - length
+            out_rem[k] = pre[j] + length - delta[j]
+            k += 1
+    return out_p[:k], out_v[:k], out_pk[:k], out_e[:k], out_fofo[:k], out_rem[:k]
 
 
 def _within_pickup(state: RoundState, nodes: np.ndarray, pre_m: np.ndarray, limit_m: float):
@@ -288,6 +365,7 @@ def load() -> None:
     i, f = np.zeros(0, np.int64), np.zeros(0)
     _columns_kernel(i, i, f, f, i, i, f, f, np.zeros(0, np.bool_), f, i, i, 0)
     _pickup_pairs(np.ones((1, 1), dtype=bool), True, np.zeros((1, 1)), i, i, f, 0.0)
+    _join_pairs(np.ones((1, 1), dtype=bool), np.zeros((1, 1)), i, i, f, i, f, f, i, i, f, 0.0, 0.0, True)
 
 
 # Which node pairs lie within a distance: a table that pre-filters pick-up candidates.

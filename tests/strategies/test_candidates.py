@@ -149,3 +149,37 @@ def test_the_compiled_columns_are_the_numpy_columns_in_any_option_order():
         for g, w in zip(got, want, strict=True):
             assert g.dtype == w.dtype
             np.testing.assert_array_equal(g, w)
+
+
+@pytest.mark.parametrize("rule", ["min_feasible", "min_then_check"])
+def test_the_compiled_join_options_are_the_numpy_ones(rule):
+    from rpbench.strategies.candidates import _join_options_numpy
+
+    rng = np.random.default_rng(21)
+    n = 30
+    edges = [(i, (i + 1) % n, float(rng.integers(100, 900))) for i in range(n)]
+    edges += [((i + 1) % n, i, float(rng.integers(100, 900))) for i in range(n)]
+    edges += [(int(a), int(b), float(rng.integers(200, 3000))) for a, b in rng.integers(0, n, (40, 2)) if a != b]
+    net = network_from_edges(edges, name="ring")
+    params = Params(max_pickup_m=2500.0, max_detour_m=1500.0)
+    found = 0
+    for _ in range(60):
+        passengers = [tuple(int(x) for x in rng.integers(0, n, 2)) for _ in range(int(rng.integers(1, 8)))]
+        occupied = [
+            {
+                "node": int(rng.integers(0, n)),
+                "origin": int(rng.integers(0, n)),
+                "destination": int(rng.integers(0, n)),
+                "delta": float(rng.random() * 800),
+                "pre": float(rng.random() * 300) * int(rng.integers(0, 2)),
+                "onboard": bool(rng.random() < 0.5),
+            }
+            for _ in range(int(rng.integers(1, 6)))
+        ]
+        state = round_state(net, passengers, [], params=params, occupied=occupied)
+        got, want = join_options(state, rule), _join_options_numpy(state, rule)
+        for name in ("p", "v", "pickup_m", "saving_m", "fofo", "remaining_m"):
+            g, w = getattr(got, name), getattr(want, name)
+            assert g.dtype == w.dtype and g.tolist() == w.tolist(), name
+        found += len(got.p)
+    assert found > 20
