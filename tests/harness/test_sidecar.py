@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import gzip
 import os
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from rpbench.exceptions import ParameterError, RpbenchError
@@ -35,12 +37,31 @@ def test_offline_runs_then_the_report(kind, tmp_path):
     assert int(pid) == offline["bound"]  # one child does both
 
 
-def test_start_forks_in_a_top_level_process():
+def test_start_forks_in_a_top_level_process_with_a_core_idle(monkeypatch):
+    monkeypatch.setattr(sidecar, "idle_core", lambda: True)
     side = sidecar.start(lambda: 1, _write, warm_up=_nothing)
     try:
         assert isinstance(side, sidecar.Forked) and side.offline() == 1
     finally:
         side.close()
+
+
+def test_start_stays_in_process_without_an_idle_core(monkeypatch):
+    monkeypatch.setattr(sidecar, "idle_core", lambda: False)
+    side = sidecar.start(lambda: os.getpid(), _write, warm_up=_nothing)
+    assert isinstance(side, sidecar.Serial) and not isinstance(side, sidecar.Forked)
+    assert side.offline() == os.getpid()
+
+
+def test_an_idle_core_needs_two_cores_and_a_load_below_them(monkeypatch):
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 1})
+    monkeypatch.setattr(os, "getloadavg", lambda: (0.8, 0.0, 0.0))
+    assert sidecar.idle_core()
+    monkeypatch.setattr(os, "getloadavg", lambda: (1.5, 0.0, 0.0))
+    assert not sidecar.idle_core()
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0})
+    monkeypatch.setattr(os, "getloadavg", lambda: (0.0, 0.0, 0.0))
+    assert not sidecar.idle_core()
 
 
 def _fail() -> None:
@@ -118,3 +139,35 @@ def test_an_error_beside_the_report_is_raised_in_the_parent(tmp_path):
             side.wait()
     finally:
         side.close()
+
+
+def _folder_files(folder: Path) -> dict[str, bytes]:
+    """Every file of a results folder but those holding times, the run's date or its folder's name."""
+    skip = {"meta.json", "rounds.csv.gz", "report.md", "report.html", "kpis.png", "table.tex", "table.csv"}
+    out = {}
+    for path in sorted(folder.rglob("*")):
+        if path.is_file() and path.name not in skip:
+            data = path.read_bytes()
+            if path.suffix == ".gz":  # the header holds a time
+                data = gzip.decompress(data)
+            elif path.suffix == ".npz":  # so do the zip entries
+                with np.load(path) as arrays:
+                    data = b"".join(name.encode() + arrays[name].tobytes() for name in sorted(arrays.files))
+            if path.name == "kpis.csv":  # the timing rows aside
+                data = b"\n".join(line for line in data.splitlines() if b"_s," not in line and b"decision" not in line)
+            out[str(path.relative_to(folder))] = data
+    return out
+
+
+@pytest.mark.slow
+def test_a_comparison_writes_the_same_folder_with_or_without_the_second_process(tmp_path, monkeypatch):
+    from rpbench import RunSpec, ScenarioRequest, run_comparison
+
+    spec = RunSpec.of(ScenarioRequest("toy", sample=0.2), ["mb", "fl", "bound", "oracle1"])
+    folders = {}
+    for forked in (True, False):
+        monkeypatch.setattr(sidecar, "idle_core", lambda forked=forked: forked)
+        folders[forked] = run_comparison(spec, tmp_path / str(forked), progress=False).folder
+    assert _folder_files(folders[True]) == _folder_files(folders[False])
+    for folder in folders.values():
+        assert {"report.md", "report.html", "kpis.png", "timeline.png"} <= {p.name for p in folder.iterdir()}
