@@ -109,7 +109,17 @@ class _Model:
         raise NotImplementedError
 
     def row_exact(self) -> np.ndarray:
-        """Boolean per row: True for "= 1", False for "<= 1"."""
+        """Boolean per row: True for "= 1", False for "<= 1" (read-only; computed once per model, as
+        :meth:`column_rows`: a simulation round asks for it several times)."""
+        cached = self.__dict__.get("_row_exact_cache")
+        if cached is None:
+            cached = self._row_exact()
+            cached.setflags(write=False)
+            object.__setattr__(self, "_row_exact_cache", cached)
+        return cached
+
+    def _row_exact(self) -> np.ndarray:
+        """:meth:`row_exact` computed from the model's sizes."""
         raise NotImplementedError
 
     def column_rows(self) -> tuple[np.ndarray, np.ndarray]:
@@ -145,6 +155,7 @@ class _Model:
         """
         twin = copy.copy(self)
         twin.__dict__.pop("_column_rows_cache", None)  # derived from the arrays as they were then
+        twin.__dict__.pop("_row_exact_cache", None)
         for f in fields(self):
             value = getattr(self, f.name)
             if isinstance(value, np.ndarray):
@@ -328,7 +339,7 @@ class AssignmentModel(_Model):
     def n_rows(self) -> int:
         return self.n_passengers + self.n_vehicles
 
-    def row_exact(self) -> np.ndarray:
+    def _row_exact(self) -> np.ndarray:
         return np.concatenate([np.ones(self.n_passengers, bool), np.zeros(self.n_vehicles, bool)])
 
     def _column_rows(self) -> tuple[np.ndarray, np.ndarray]:
@@ -403,7 +414,7 @@ class TripPackingModel(_Model):
     def n_rows(self) -> int:
         return self.n_requests + self.n_vehicles
 
-    def row_exact(self) -> np.ndarray:
+    def _row_exact(self) -> np.ndarray:
         return np.zeros(self.n_rows, dtype=bool)
 
     def _column_rows(self) -> tuple[np.ndarray, np.ndarray]:
@@ -477,7 +488,7 @@ class PairingModel(_Model):
     def n_rows(self) -> int:
         return self.n_orders
 
-    def row_exact(self) -> np.ndarray:
+    def _row_exact(self) -> np.ndarray:
         return np.zeros(self.n_orders, dtype=bool)
 
     def _column_rows(self) -> tuple[np.ndarray, np.ndarray]:

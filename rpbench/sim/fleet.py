@@ -73,7 +73,7 @@ class FleetState:
         self.load = np.zeros(n, dtype=np.int64)  # passengers assigned or on board
         self.paired = np.zeros(n, dtype=bool)  # carries (or will carry) a pooled pair
         self.on_duty = np.zeros(n, dtype=bool)
-        self._version = np.zeros(n, dtype=np.int64)
+        self._version = [0] * n  # plain ints: read and bumped a few times a round, element by element
         self._heap: list[tuple[float, int, int]] = []  # (time of next stop, vehicle, version)
         # Cached next plan node per vehicle, valid until the vehicle reaches it.
         self._next_k = np.zeros(n, dtype=np.int64)
@@ -205,7 +205,7 @@ class FleetState:
         self._windows.fill(v, new.nodes, new.tt, new.odo, cruising, 0)
         self._version[v] += 1
         if new.stops:
-            heapq.heappush(self._heap, (float(new.tt[new.stops[0].index]), v, int(self._version[v])))
+            heapq.heappush(self._heap, (float(new.tt[new.stops[0].index]), v, self._version[v]))
 
     # -------------------------------------------------------------- cruising
     def start_cruise(self, v: int, anchor: int, t: float | None = None) -> None:
@@ -257,7 +257,7 @@ class FleetState:
             node = int(plan.nodes[stop.index])
             odo = float(plan.odo[stop.index])
             if plan.stops:
-                heapq.heappush(self._heap, (float(plan.tt[plan.stops[0].index]), v, int(self._version[v])))
+                heapq.heappush(self._heap, (float(plan.tt[plan.stops[0].index]), v, self._version[v]))
             yield float(plan.tt[stop.index]), v, stop, node, odo
 
     # ------------------------------------------------------------ trajectory
