@@ -71,7 +71,7 @@ class Forked(Serial):
         self._asked_report = False
 
     def offline(self) -> Any:
-        return self._answer("the offline runs")
+        return self._answer("solving the offline runs")
 
     def report(self, folder: Path, name: str) -> None:
         self._conn.send((folder, name))
@@ -80,7 +80,7 @@ class Forked(Serial):
     def wait(self) -> None:
         if self._asked_report:
             self._asked_report = False
-            self._answer("report.md")
+            self._answer("writing report.md")
 
     def close(self) -> None:
         if self._child.is_alive():
@@ -92,7 +92,7 @@ class Forked(Serial):
         try:
             ok, value = self._conn.recv()
         except EOFError:
-            raise RpbenchError(f"the process writing {what} died (exit status {self._exit_status()})") from None
+            raise RpbenchError(f"the second process died {what} (exit status {self._exit_status()})") from None
         if not ok:
             raise value
         return value
@@ -173,7 +173,10 @@ def _both(report: ReportFn, beside: ReportFn | None, folder: Path, name: str) ->
         try:
             ok, value = conn.recv()
         except EOFError:
-            raise RpbenchError(f"the process drawing beside report.md died (exit status {helper.exitcode})") from None
+            helper.join(timeout=1.0)
+            raise RpbenchError(
+                f"the process drawing a figure beside report.md died (exit status {helper.exitcode})"
+            ) from None
         if not ok:
             raise value
     finally:

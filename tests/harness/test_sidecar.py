@@ -88,7 +88,7 @@ def test_an_error_of_the_child_is_raised_in_the_parent(tmp_path):
 def test_a_child_that_dies_is_an_error():
     side = sidecar.Forked(lambda: os._exit(3), _write, warm_up=_nothing)
     try:
-        with pytest.raises(RpbenchError, match="offline runs died"):
+        with pytest.raises(RpbenchError, match="died solving the offline runs"):
             side.offline()
     finally:
         side.close()
