@@ -346,8 +346,9 @@ def predict(
 
     When it is not cached, it is solved on the seeker/taker structure (built
     once per machine), warm-started from ``rho0`` if given, and then cached.
-    ``lean``: what a dispatcher reads, the per-OD values only (:meth:`Prediction.slim`), returned and
-    cached (a few MB instead of about 95 MB for the month table; a later full read solves it again).
+    ``lean``: what a dispatcher reads, the per-OD values only (:meth:`Prediction.slim`; ρ kept in memory, to
+    warm-start another solve), cached so (a few MB instead of about 95 MB for the month table; a later full
+    read solves it again).
     """
     params = params or Params()
     config = config or PredictConfig()
@@ -359,8 +360,8 @@ def predict(
     model = build_prediction_model(network, rates, params, config, use_cache=use_cache)
     prediction = solve_prediction_model(model, progress=progress, rho0=rho0)
     del model
-    if lean:
-        prediction = prediction.slim()
+    if lean:  # ρ stays in memory (a warm start for the next hour), not in the cache entry
+        prediction = dataclasses.replace(prediction.slim(), rho=prediction.rho)
         prediction.info["lean"] = True
     prediction.info["time_s"] = round(time.perf_counter() - t0, 4)
     prediction.info["cpu_s"] = round(time.process_time() - c0, 4)  # wall > cpu when the machine is shared
