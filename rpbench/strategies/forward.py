@@ -36,9 +36,10 @@ Options (``--opt fl.NAME=VALUE``):
   prediction options (:class:`rpbench.predict.PredictConfig`); FL solves the
   fixed point with Anderson mixing by default (the same fixed point as the
   spec's damped iteration, in about half the sweeps).  Hours of the full-day
-  stand-in share one cached structure and are solved side by side in
-  ``workers`` processes (default: the cores), each hour from its own inputs
-  only, so the predictions do not depend on ``workers``.
+  stand-in share one cached structure; chains of six hours, each hour
+  warm-started from the previous one, are solved side by side in ``workers``
+  processes (default: the cores), and the predictions do not depend on
+  ``workers``.
 """
 
 from __future__ import annotations
