@@ -91,6 +91,17 @@ def _distinct_keys(*keys: np.ndarray) -> bool:
     return not (key[1:] == key[:-1]).any()
 
 
+_FIELD_NAMES: dict[type, tuple[str, ...]] = {}
+
+
+def _field_names(cls: type) -> tuple[str, ...]:
+    """A model class's dataclass field names, kept (``dataclasses.fields`` rebuilds them on every call)."""
+    names = _FIELD_NAMES.get(cls)
+    if names is None:
+        names = _FIELD_NAMES[cls] = tuple(f.name for f in fields(cls))
+    return names
+
+
 # --------------------------------------------------------------------- models
 @dataclass(frozen=True, eq=False)
 class _Model:
@@ -156,12 +167,12 @@ class _Model:
         twin = copy.copy(self)
         twin.__dict__.pop("_column_rows_cache", None)  # derived from the arrays as they were then
         twin.__dict__.pop("_row_exact_cache", None)
-        for f in fields(self):
-            value = getattr(self, f.name)
+        for name in _field_names(type(self)):
+            value = getattr(self, name)
             if isinstance(value, np.ndarray):
                 mine = value.copy()
                 mine.setflags(write=False)
-                object.__setattr__(twin, f.name, mine)
+                object.__setattr__(twin, name, mine)
         twin._validate()
         return twin
 
