@@ -60,6 +60,8 @@ def test_no_strategy_pools_a_zero_length_order(preset, case, strategy):
 
 def test_mb_pooled_one_at_a_loss_before_the_rule(preset, monkeypatch):
     monkeypatch.setattr(candidates, "choose_order", without_the_rule)
+    # the join options' numpy passes (the compiled pass's reference) are the ones that call choose_order
+    monkeypatch.setattr(candidates, "ORDER_RULES", ())
     sc = scenario_of(network_from_edges(NETWORK), CASES["B off A's path"], vehicles=[0])
     run = simulate_strategy(sc, "mb", preset, progress=False)
     assert run.passengers["pooled"].all() and run.kpis["total_saving_km"] < 0
@@ -91,6 +93,7 @@ def test_the_checker_fails_a_run_that_pools_a_zero_length_order(capsys, tmp_path
     monkeypatch.setenv("RPBENCH_CACHE", str(tmp_path / "cache"))
     monkeypatch.setattr(candidates, "choose_order", without_the_rule)
     monkeypatch.setattr(geometry, "choose_order", without_the_rule)
+    monkeypatch.setattr(candidates, "ORDER_RULES", ())  # the numpy passes, which call choose_order
     out = tmp_path / "old"
     meta = run_with_same_node_orders(tmp_path, fake_data, out)
     assert meta["scenario"]["summary"]["zero_length_orders"] > 0
