@@ -89,7 +89,7 @@ def cover(
     return 0, twice, over, times, under
 
 
-def load() -> None:
+def load_model_kernels() -> None:
     """Load (or compile) the kernels now: the first call of each costs a one-off load of its machine code."""
     assignment_valid(1, 1, np.zeros(1, np.int32), np.zeros(1, np.int32), np.zeros(1))
     cover(np.array([0, 1], np.int64), np.zeros(1, np.int32), np.ones(1, np.bool_), np.zeros(1, np.int64))

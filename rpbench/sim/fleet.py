@@ -26,7 +26,7 @@ import numpy as np
 from rpbench.exceptions import ParameterError
 from rpbench.network import Distances, RoadNetwork
 from rpbench.sim import routes
-from rpbench.sim.lookahead import PlanWindows, advance, gather
+from rpbench.sim.lookahead import PlanWindows, advance, gather_positions
 
 PICKUP, DROPOFF = 0, 1
 CRUISE_ARCS = 24  # random-walk arcs added per extension (~11 km on Haikou)
@@ -161,7 +161,7 @@ class FleetState:
             self._next_tt[v] = tt_k
             self._next_odo[v] = plan.odo[k]
             self._windows.fill(v, plan.nodes, plan.tt, plan.odo, plan.cruising, k)
-        return gather(vehicles, t, self.speed, self._next_k, self._next_node, self._next_tt, self._idle)
+        return gather_positions(vehicles, t, self.speed, self._next_k, self._next_node, self._next_tt, self._idle)
 
     def next_odometers(self, vehicles: np.ndarray) -> np.ndarray:
         """Odometer at the plan node each vehicle reaches next, as found by the last :meth:`positions` call.

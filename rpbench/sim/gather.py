@@ -87,7 +87,7 @@ def riders(
     return node, delta, pre, onboard, o, d, s
 
 
-def load() -> None:
+def load_gather_kernels() -> None:
     """Load (or compile) the kernels now: the first call of each costs a one-off load of its machine code."""
     i, f = np.zeros(1, np.int64), np.zeros(1)
     fleet_split(i, np.zeros(1, np.bool_), np.zeros(1, np.bool_))

@@ -163,7 +163,7 @@ def advance(
 
 
 @njit(cache=True, nogil=True)
-def gather(
+def gather_positions(
     vehicles: np.ndarray,
     t: float,
     speed: float,
@@ -183,7 +183,7 @@ def gather(
     return k, node, pre
 
 
-def load() -> None:
+def load_lookahead_kernels() -> None:
     """Load (or compile) the kernels now: the first call of each costs a one-off load of its machine code."""
     w = PlanWindows(1)
     one = np.zeros(1, np.int64)
@@ -206,5 +206,5 @@ def load() -> None:
         np.zeros(1, bool),
         one.copy(),
     )
-    gather(one, 0.0, 1.0, one, one, np.zeros(1), np.zeros(1, bool))
+    gather_positions(one, 0.0, 1.0, one, one, np.zeros(1), np.zeros(1, bool))
     w.fill(0, np.zeros(1, np.int32), np.zeros(1), np.zeros(1), False, 0)

@@ -155,7 +155,7 @@ def trajectory_keep(
     return keep
 
 
-def load() -> None:
+def load_route_kernels() -> None:
     """Load (or compile) every kernel now: the first call of each costs a one-off load of its machine code."""
     offsets, heads = np.array([0, 1, 2], np.int64), np.array([1, 0], np.int64)
     random_walk(offsets, heads, 0, -1, np.zeros(1))

@@ -211,8 +211,13 @@ class Simulator:
         self.waiting: list[int] = []
         self._n_on = -1  # vehicles on duty in the previous round (-1: none looked at yet)
         # the compiled kernels' one-off load, before the first round rather than in it
-        for kernels in (routes, lookahead, gather, ties, model_kernels, candidates, strategy_base):
-            kernels.load()
+        routes.load_route_kernels()
+        lookahead.load_lookahead_kernels()
+        gather.load_gather_kernels()
+        ties.load_tie_kernels()
+        model_kernels.load_model_kernels()
+        candidates.load_candidate_kernels()
+        strategy_base.load_state_kernels()
 
     # ------------------------------------------------------------------ run
     def run(self) -> SimResult:

@@ -209,7 +209,7 @@ def _column_with(sorted_keys, key_order, q) -> int:  # pragma: no cover - compil
     return key_order[pos] if sorted_keys[pos] == q else -1
 
 
-def load() -> None:
+def load_tie_kernels() -> None:
     """Load (or compile) the kernel now: its first call costs a one-off load of its machine code."""
     model = AssignmentModel(1, 1, [0, 0], [0, -1], [0.0, 0.0])
     _repair(model, np.zeros(1, np.int64), model.col_vehicle.astype(np.int64), (model.col_passenger.astype(np.int64),))

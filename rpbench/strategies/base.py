@@ -279,7 +279,7 @@ def _assignment_decoded(
     return True
 
 
-def load() -> None:
+def load_state_kernels() -> None:
     """Load (or compile) the decoding check now: its first call costs a one-off load of its machine code."""
     i, f = np.zeros(0, np.int64), np.zeros(0)
     _assignment_decoded(np.zeros(0, np.int8), i, i, i, f, f, np.zeros(0, np.int32), np.zeros(0, np.int32), i, i, i)

@@ -360,7 +360,7 @@ def _columns_kernel(
     return True, passenger[order], row[order], vehicle[order], kind[order], utility, pickup, fofo
 
 
-def load() -> None:
+def load_candidate_kernels() -> None:
     """Load (or compile) the kernels now: the first call of each costs a one-off load of its machine code."""
     i, f = np.zeros(0, np.int64), np.zeros(0)
     _columns_kernel(i, i, f, f, i, i, f, f, np.zeros(0, np.bool_), f, i, i, 0)
