@@ -56,8 +56,7 @@ carry the plan out (``C = plan_bonus_m`` puts the plan before everything else):
 
 After the round, and in rounds where nobody waits, idle vacant vehicles are sent towards the origins of
 the orders that will need one soonest (planned firsts and unplanned orders waiting or requested within
-``reposition_s``), by a minimum-total-distance assignment (:meth:`Hindsight.reposition`); a vehicle
-already on its way to the same node is not sent again before it can be there.
+``reposition_s``), by a minimum-total-distance assignment (:meth:`Hindsight.reposition`).
 
 A forecast that proves wrong costs saving, never feasibility: the simulator commits only feasible
 columns, and the next round re-plans from the state it reached.
@@ -216,8 +215,7 @@ class Hindsight(Strategy[HindsightOptions]):
         self._later_lo_first = np.full(len(self.edge_lo), np.nan)
         self._later_hi_first = np.full(len(self.edge_lo), np.nan)
         self._valued = 0
-        #: Vehicles sent towards a node: vehicle id -> (node, when it is there at the earliest).
-        self._sent: dict[int, tuple[int, float]] = {}
+
         #: The last plan: (its round's time, planned partner, role) of every order.
         self._kept: tuple[float, np.ndarray, np.ndarray] | None = None
 
@@ -296,8 +294,6 @@ class Hindsight(Strategy[HindsightOptions]):
         """
         t, mate, first = self._round_plan
         self._record_commitments(rm, chosen, mate)
-        for v in rm.vehicle[chosen].tolist():  # assigned: no longer on its way anywhere
-            self._sent.pop(v, None)
         busy = np.isin(state.v0_vehicle, rm.vehicle[chosen])
         served = np.isin(state.p_order, rm.first[chosen])
         return self._send_idle(state, t, mate, first, busy, served)
@@ -330,17 +326,7 @@ class Hindsight(Strategy[HindsightOptions]):
         cost = state.v0_pre_m[idle][:, None] + self.dist[state.v0_node[idle][:, None], self.origin[need][None, :]]
         rows, cols = linear_sum_assignment(cost)
         far = cost[rows, cols] > self.options.reposition_m
-        vehicles = state.v0_vehicle[idle[rows[far]]].astype(np.int64)
-        targets = self.origin[need[cols[far]]].astype(np.int64)
-        arrive = t + cost[rows[far], cols[far]] / self.params.speed_mps
-        # a vehicle already on its way to the same node keeps going: sending it again would only draw
-        # a new cruise for after its arrival (and cost the simulator a re-plan)
-        sent = self._sent
-        pairs = zip(vehicles.tolist(), targets.tolist(), strict=True)
-        new = np.array([sent.get(v, (-1, 0.0))[0] != node or t >= sent[v][1] for v, node in pairs], bool)
-        for v, node, when in zip(vehicles[new].tolist(), targets[new].tolist(), arrive[new].tolist(), strict=True):
-            sent[v] = (node, when)
-        return vehicles[new], targets[new]
+        return state.v0_vehicle[idle[rows[far]]].astype(np.int64), self.origin[need[cols[far]]].astype(np.int64)
 
     def _record_commitments(self, rm: RoundModel, chosen: np.ndarray, mate: np.ndarray) -> None:
         """Remember, for every planned first assigned in the current round, its planned partner and forecast saving."""

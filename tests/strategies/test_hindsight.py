@@ -152,29 +152,6 @@ def test_the_kept_forecasts_of_firsts_not_yet_requested_are_those_the_round_woul
     assert len(compared) > 5 and sum(compared) > 100
 
 
-@pytest.mark.parametrize("seed", [0, 4])
-def test_a_vehicle_on_its_way_to_an_origin_is_not_sent_there_again(seed):
-    """Idle vehicles are sent towards the origins of the orders that need one; a vehicle already driving to
-    a node (sent more than ``reposition_m`` away, so at least that long on its way) gets no second move to
-    the same node before it can be there, unless it was assigned in between."""
-    scenario = build_scenario("toy", sample=0.2, seed=seed)
-    strategy, res, _, _ = simulate(scenario, "hindsight")
-    ev = res.events
-    moves = ev[ev["event"].isin(["reposition", "assign"])].sort_values("t_s", kind="stable")
-    soonest = strategy.options.reposition_m / scenario.params.speed_mps
-    last: dict[int, tuple[float, int]] = {}
-    sent = 0
-    for kind, t, v, node in moves[["event", "t_s", "vehicle", "node"]].itertuples(index=False):
-        if kind == "assign":
-            last.pop(int(v), None)
-            continue
-        sent += 1
-        before = last.get(int(v))
-        assert before is None or before[1] != node or t - before[0] >= soonest - 1e-6
-        last[int(v)] = (t, int(node))
-    assert sent > 10
-
-
 def test_a_plan_is_made_again_early_only_when_one_of_its_pairs_breaks(monkeypatch):
     """With ``replan_s`` longer than the day, every plan after the first is a repair: made ``repair_s`` or
     more after the last, in a round where one of the last plan's pairs can no longer form; with ``repair_s``
