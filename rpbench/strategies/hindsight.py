@@ -346,10 +346,7 @@ class Hindsight(Strategy[HindsightOptions]):
         mate = np.full(n, -1, np.int64)
         first = np.zeros(n, bool)
         wait = np.full(n, np.nan)
-        waiting = np.zeros(n, bool)
-        waiting[state.p_order] = True
-        v1 = np.zeros(n, bool)
-        v1[state.v1_order] = True
+        waiting, v1 = self._who(state)
         # edges whose later order is still undecided and requested within the horizon
         lo_i = np.searchsorted(self.edge_later, t - self.max_patience - p.dt_s, side="left")
         hi_i = np.searchsorted(self.edge_later, t + self.options.horizon_s, side="right")
@@ -427,11 +424,7 @@ class Hindsight(Strategy[HindsightOptions]):
         longer form: the partner decided otherwise (served alone, cancelled), or the first on board with no
         feasible join left for the second."""
         t = state.t_s
-        n = self.n
-        waiting = np.zeros(n, bool)
-        waiting[state.p_order] = True
-        v1 = np.zeros(n, bool)
-        v1[state.v1_order] = True
+        waiting, v1 = self._who(state)
         open_ = waiting | v1 | (self.request > t)
         a = np.flatnonzero((mate >= 0) & first)
         b = mate[a]
@@ -439,12 +432,23 @@ class Hindsight(Strategy[HindsightOptions]):
         dead = one.copy()
         on = np.flatnonzero(both & v1[a])
         if len(on):
-            sight = self.sight
-            aa, bb = a[on], b[on]
-            w = sight.forecast(aa, bb, sight.join_from(bb, t, t), self.last_round[bb], self.pickups.of_v1(state, aa))
-            dead[on] = ~np.isfinite(w)
+            dead[on] = ~np.isfinite(self._on_board_values(state, a[on], b[on]))
         loose = np.concatenate([a[dead], b[dead]])
         return loose[open_[loose]]
+
+    def _who(self, state: RoundState) -> tuple[np.ndarray, np.ndarray]:
+        """Masks over every order: waiting in the current round, and the passenger of a V1 vehicle."""
+        waiting = np.zeros(self.n, bool)
+        waiting[state.p_order] = True
+        v1 = np.zeros(self.n, bool)
+        v1[state.v1_order] = True
+        return waiting, v1
+
+    def _on_board_values(self, state: RoundState, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """The forecast saving of B joining the V1 vehicle of A from the current round on (NaN: cannot)."""
+        t = state.t_s
+        sight = self.sight
+        return sight.forecast(a, b, sight.join_from(b, t, t), self.last_round[b], self.pickups.of_v1(state, a))
 
     def _planned_waits(self, state: RoundState, vac: VacantOptions, mate: np.ndarray, first: np.ndarray) -> np.ndarray:
         """Between two plans: the forecast of each waiting planned first's pair when it is assigned later."""
@@ -452,10 +456,7 @@ class Hindsight(Strategy[HindsightOptions]):
         a = state.p_order[(mate[state.p_order] >= 0) & first[state.p_order]]
         if not len(a):
             return wait
-        waiting = np.zeros(self.n, bool)
-        waiting[state.p_order] = True
-        v1 = np.zeros(self.n, bool)
-        v1[state.v1_order] = True
+        waiting, v1 = self._who(state)
         b = mate[a]
         keep = ~v1[b]
         _, later = self._pair_values(state, vac, a[keep], b[keep], waiting, v1)
@@ -536,7 +537,7 @@ class Hindsight(Strategy[HindsightOptions]):
         has[state.p_order[vac.p]] = True
         t_hi = self.last_round[b]
         i = np.flatnonzero(v1[a])
-        w[i] = sight.forecast(a[i], b[i], sight.join_from(b[i], t, t), t_hi[i], self.pickups.of_v1(state, a[i]))
+        w[i] = self._on_board_values(state, a[i], b[i])
         # assigned in a later round (any up to A's last), picked up after a time in [τ_min, τ_max]
         r_min = np.where(waiting[a], t + p.dt_s, self.first_round[a])
         r_max = self.last_round[a]

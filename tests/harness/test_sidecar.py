@@ -85,19 +85,17 @@ def test_an_error_of_the_child_is_raised_in_the_parent(tmp_path):
         side.close()
 
 
-def test_a_child_that_dies_is_an_error():
-    side = sidecar.Forked(lambda: os._exit(3), _write, warm_up=_nothing)
+@pytest.mark.parametrize(
+    ("offline", "message"),
+    [
+        (lambda: os._exit(3), "died solving the offline runs"),  # a child that dies is an error
+        (lambda: lambda: None, "not passed on"),  # an unpicklable answer is one line
+    ],
+)
+def test_a_child_that_cannot_answer_is_one_error(offline, message):
+    side = sidecar.Forked(offline, _write, warm_up=_nothing)
     try:
-        with pytest.raises(RpbenchError, match="died solving the offline runs"):
-            side.offline()
-    finally:
-        side.close()
-
-
-def test_an_unpicklable_answer_is_one_line():
-    side = sidecar.Forked(lambda: lambda: None, _write, warm_up=_nothing)
-    try:
-        with pytest.raises(RpbenchError, match="not passed on"):
+        with pytest.raises(RpbenchError, match=message):
             side.offline()
     finally:
         side.close()
