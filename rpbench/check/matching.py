@@ -27,6 +27,7 @@ from scipy.sparse.csgraph import connected_components
 from rpbench.check.certificate import _orientation_weight, all_paths
 from rpbench.check.core import TOL_M, TOL_S
 from rpbench.check.folder import Folder
+from rpbench.check.separation import is_violated_blossom, violated_blossoms
 
 #: Pairs (one orientation each) valued per numpy block: bounds memory to a few hundred MB.
 CHECK_BLOCK_PAIRS = 1 << 20
@@ -99,14 +100,18 @@ class MatchingProof:
     upper: float  # a verified upper bound on the maximum (a feasible dual's value, or the exact maximum)
     method: str
     odd_sets: int = 0
-    #: Edges whose matching HiGHS's MIP decided, on its own optimality claim (None: the dual certificate alone).
+    #: Edges whose matching an exact code decided (Blossom V, else HiGHS's MIP: ``method`` says which), on its
+    #: own optimality claim (None: the dual certificate alone).
     mip_edges: int | None = None
+    rounds: int = 0  # LP solves of the cutting-plane loop
+    separated: int = 0  # odd sets found by the exact separator (the others: odd components and cycles)
 
 
 def prove_maximum(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, target: float) -> MatchingProof:
     """A matching and an upper bound on the maximum weight of any matching of ``(n, a, b, w)`` (``w`` positive
     integers); stops as soon as the upper bound is below ``target + 1`` or a matching above ``target`` is
-    found, else solves the MIP."""
+    found; if the cutting-plane loop ends first (its round limit, a stall, or an LP optimum inside the
+    matching polytope above the target), an exact matching code decides the edges reduced-cost fixing left."""
     m = len(w)
     if m == 0:
         return MatchingProof(0, 0.0, "no edges")
@@ -124,7 +129,8 @@ def prove_maximum(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, target: f
     slack: np.ndarray | None = None
     upper = float("inf")
     history: list[float] = []
-    for _ in range(MAX_ROUNDS):
+    rounds = separated = 0
+    for rounds in range(1, MAX_ROUNDS + 1):
         solved = lp.solve()
         if solved is None:
             break
@@ -133,11 +139,10 @@ def prove_maximum(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, target: f
         upper, slack = _dual_value(n, a, b, w, sets, dual, live)
         if best > target or upper < beat - 1e-6:
             if len(live) == m:
-                return MatchingProof(best, upper, "dual certificate", len(sets))
+                return MatchingProof(best, upper, "dual certificate", len(sets), None, rounds, separated)
             # a matching using a fixed edge is worth less than ``beat``: at most beat - 1 (integral weights)
-            return MatchingProof(
-                best, float(max(upper, beat - 1)), "dual certificate and reduced-cost fixing", len(sets)
-            )
+            method = "dual certificate and reduced-cost fixing"
+            return MatchingProof(best, float(max(upper, beat - 1)), method, len(sets), None, rounds, separated)
         drop = slack > upper - (beat - 1) + 1e-6  # kept: the edges of matchings worth the target, too
         if drop.any():
             lp.fix(live[drop])
@@ -148,17 +153,17 @@ def prove_maximum(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, target: f
             if len(history) > STALL_ROUNDS and history[-1 - STALL_ROUNDS] - upper < 1.0:
                 break
         lp.add_columns(enter)  # before the new sets: their rows are added over every column
-        frac = np.flatnonzero((x > FRACTIONAL) & (x < 1 - FRACTIONAL))
         first = len(sets)
-        if not sets.add(_odd_components(n, a[frac], b[frac]), live) and not len(enter):
-            break
+        found, exact = _cutting_sets(n, a, b, x)
+        separated += len(found) if exact else 0
+        if not sets.add(found, live) and not len(enter):
+            break  # x is in the matching polytope of the live edges: the LP's optimum is their maximum
         lp.add_rows(sets, first)
     if slack is None:
-        return dataclasses.replace(_exact(n, a, b, w, sets), mip_edges=len(a))
-    # The MIP need only decide the graph of the edges left (a few tens of thousands of the full day's 1.4 M
-    # pairs, when the loop stalls a few metres above the optimum).
+        return dataclasses.replace(_decide(n, a, b, w, sets), mip_edges=len(a), rounds=rounds, separated=separated)
+    # The exact code need only decide the graph of the edges left (those of slack within the gap).
     near = live[slack <= upper - beat + 1e-6]
-    proof = _exact(n, a[near], b[near], w[near], OddSets(n, a[near], b[near]))
+    proof = _decide(n, a[near], b[near], w[near], OddSets(n, a[near], b[near]))
     if proof.best < beat:  # no matching of the whole graph reaches ``beat`` either
         return MatchingProof(
             max(best, proof.best),
@@ -166,8 +171,10 @@ def prove_maximum(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, target: f
             f"dual certificate and reduced-cost fixing; {proof.method} on the {len(near)} edges left",
             len(sets),
             len(near),
+            rounds,
+            separated,
         )
-    return MatchingProof(proof.best, float(proof.best), proof.method, len(sets), len(near))
+    return MatchingProof(proof.best, float(proof.best), proof.method, len(sets), len(near), rounds, separated)
 
 
 class _CuttingPlaneLP:
@@ -340,18 +347,20 @@ class OddSets:
         return len(self.capacity)
 
     def add(self, sets: list[np.ndarray], live: np.ndarray | None = None) -> bool:
-        """Add ``sets`` (disjoint vertex sets), with their inside edges among ``live`` (None: every edge);
+        """Add ``sets`` (vertex sets, disjoint or not), with their inside edges among ``live`` (None: every edge);
         False when there are none."""
         if not sets:
             return False
-        label = np.full(self.n, -1, np.int64)
-        for i, s in enumerate(sets):
-            label[s] = len(self) + i
         edges = np.arange(len(self.a)) if live is None else live
-        la, lb = label[self.a[edges]], label[self.b[edges]]
-        inside = (la >= 0) & (la == lb)
-        self.set_of = np.r_[self.set_of, la[inside]]
-        self.edge = np.r_[self.edge, edges[inside]]
+        ea, eb = self.a[edges], self.b[edges]
+        for layer in _disjoint_layers(sets):  # one pass over the edges per layer of disjoint sets
+            label = np.full(self.n, -1, np.int64)
+            for i in layer:
+                label[sets[i]] = len(self) + i
+            la, lb = label[ea], label[eb]
+            inside = (la >= 0) & (la == lb)
+            self.set_of = np.r_[self.set_of, la[inside]]
+            self.edge = np.r_[self.edge, edges[inside]]
         self.capacity = np.r_[self.capacity, [(len(s) - 1) // 2 for s in sets]]
         return True
 
@@ -359,6 +368,22 @@ class OddSets:
         """One row per set: 1 on every edge inside it."""
         shape = (len(self), len(self.a))
         return sp.csr_matrix((np.ones(len(self.edge)), (self.set_of, self.edge)), shape=shape)
+
+
+def _disjoint_layers(sets: list[np.ndarray]) -> list[list[int]]:
+    """The indices of ``sets`` in groups of pairwise disjoint sets (each set in the first group it fits: the
+    exact separator's sets are laminar, a few deep)."""
+    layers: list[tuple[list[int], set[int]]] = []
+    for i, s in enumerate(sets):
+        members = set(s.tolist())
+        for indices, used in layers:
+            if used.isdisjoint(members):
+                indices.append(i)
+                used |= members
+                break
+        else:
+            layers.append(([i], members))
+    return [indices for indices, _ in layers]
 
 
 def _dual_value(
@@ -383,6 +408,18 @@ def _rounded_matching(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, x: np
     if (np.bincount(np.r_[a[take], b[take]], minlength=n) > 1).any():
         return 0
     return int(w[take].sum())
+
+
+def _cutting_sets(n: int, a: np.ndarray, b: np.ndarray, x: np.ndarray) -> tuple[list[np.ndarray], bool]:
+    """Odd sets whose blossom inequalities the LP solution ``x`` violates, and whether the exact separator
+    found them: the odd components and cycles of its fractional edges that are violated (cheap, and most sets
+    of the early rounds), else the exact separator's (:mod:`.separation`), which finds none only when ``x``
+    lies in the matching polytope."""
+    support = np.flatnonzero(x > FRACTIONAL)
+    sa, sb, sx = a[support], b[support], x[support]
+    frac = sx < 1 - FRACTIONAL
+    found = [s for s in _odd_components(n, sa[frac], sb[frac]) if is_violated_blossom(n, sa, sb, sx, s)]
+    return (found, False) if found else (violated_blossoms(n, sa, sb, sx), True)
 
 
 def _odd_components(n: int, a: np.ndarray, b: np.ndarray) -> list[np.ndarray]:
@@ -427,6 +464,23 @@ def _odd_cycle(a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
                     cycle |= {x, y}
                 return np.array(sorted(cycle), np.int64)
     return None
+
+
+def _decide(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, sets: OddSets) -> MatchingProof:
+    """The maximum of the graph ``(n, a, b, w)`` by an exact code, on its own optimality claim: OGDF's Blossom V
+    (combinatorial, polynomial; not the code the bound run solves with) when the optional ``blossom`` extra is
+    installed, else HiGHS's MIP."""
+    from rpbench.backends.blossom import blossom_v_matching
+    from rpbench.exceptions import SolverNotInstalledError
+
+    try:
+        chosen = blossom_v_matching(n, a, b, np.rint(w).astype(np.int64))
+    except SolverNotInstalledError:
+        return _exact(n, a, b, w, sets)
+    x = np.zeros(len(w))
+    x[chosen] = 1.0
+    value = _rounded_matching(n, a, b, w, x)  # 0 if Blossom V's edges were not a matching
+    return MatchingProof(value, float(value), "Blossom V (OGDF; its optimality claim)", len(sets))
 
 
 def _exact(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, sets: OddSets) -> MatchingProof:
