@@ -59,15 +59,19 @@ def run_comparison(
     preset, oracle_preset = checked_presets(spec)
     scenario = scenario if scenario is not None else spec.request.build()
     built = scenario
-    # The offline runs and report.md in a second process, beside the simulations and report.html.
+    # The offline runs, the independent runs the parent has not reached and report.md in a second process,
+    # beside the simulations and report.html.
     side = sidecar.start(
         lambda: solve_offline(built, spec.offline, oracle_preset),
         lambda folder, name: write_report(folder, name=name, formats=spec.formats, kpis_drawn=True),
         lambda folder, name: draw_kpi_figure(folder, folder, spec.formats),
         warm_up=plots.warm_up,
+        simulate=lambda i: simulate_strategy(built, spec.simulated[i], preset, progress=False, strict=spec.strict),
+        runs=len(spec.simulated),
+        movable=independent_runs(spec),
     )
     try:
-        runs = simulate_all(spec, scenario, preset, progress)
+        runs = simulate_all(spec, scenario, preset, progress, side=side)
         offline = side.offline()
         for name, result in offline.items():
             require_proven(
@@ -115,15 +119,21 @@ def run_task(task: ComparisonTask) -> Outcome:
     return run_comparison(task.spec, task.out, progress=False)
 
 
-def simulate_all(spec: RunSpec, scenario: Scenario, preset: Preset, progress: bool | None) -> list[StrategyRun]:
+def simulate_all(
+    spec: RunSpec, scenario: Scenario, preset: Preset, progress: bool | None, *, side: sidecar.Serial | None = None
+) -> list[StrategyRun]:
     """Every simulated run of ``spec``, in order, each calibrated first where its strategy asks for it.
 
     A calibration run uses the calibrating strategy's default options and is shared with the
-    comparison's own column of it (runs are deterministic: once or twice gives the same numbers).
+    comparison's own column of it (runs are deterministic: once or twice gives the same numbers).  With a
+    second process (``side``), the runs it took (:func:`independent_runs`) come from it.
     """
+    side = side if side is not None else sidecar.Serial(dict, lambda folder, name: None)
     done: dict[str, StrategyRun] = {}  # by strategy source: calibration runs and default-option columns
-    runs = []
-    for entry in spec.simulated:
+    by_index: dict[int, StrategyRun] = {}
+    for index, entry in enumerate(spec.simulated):
+        if not side.claim(index):
+            continue
         entry = calibrated(entry, scenario, preset, done, progress, strict=spec.strict)
         reuse = done.get(entry.source)
         run = reuse if reuse is not None and reuse.options == entry.options else None
@@ -132,10 +142,34 @@ def simulate_all(spec: RunSpec, scenario: Scenario, preset: Preset, progress: bo
         if run.name != entry.name:
             run = dataclasses.replace(run, name=entry.name)
         done.setdefault(entry.source, run)
-        if spec.decision_budget_s is not None:
-            run = with_decision_budget(run, spec.decision_budget_s)
-        runs.append(run)
+        by_index[index] = run
+    by_index.update(side.simulated())
+    runs = [by_index[index] for index in range(len(spec.simulated))]
+    if spec.decision_budget_s is not None:
+        runs = [with_decision_budget(run, spec.decision_budget_s) for run in runs]
     return runs
+
+
+def independent_runs(spec: RunSpec) -> list[int]:
+    """The simulated runs of ``spec`` that need nothing from another run, by index: no calibration to wait
+    for, no other run calibrated by their strategy, and no twin (the same strategy and options) whose
+    simulation the parent would share."""
+    entries = spec.simulated
+    references = set()
+    for entry in entries:
+        cls = entry.strategy_class()
+        if cls.calibrated_by is not None and cls.needs_calibration(entry.options):
+            references.add(resolve_runs([cls.calibrated_by])[0].source)
+    twins = [(e.source, e.options) for e in entries]
+    out = []
+    for index, entry in enumerate(entries):
+        cls = entry.strategy_class()
+        if cls.calibrated_by is not None and cls.needs_calibration(entry.options):
+            continue
+        if entry.source in references or twins.count((entry.source, entry.options)) > 1:
+            continue
+        out.append(index)
+    return out
 
 
 def with_decision_budget(run: StrategyRun, budget_s: float) -> StrategyRun:

@@ -1,14 +1,17 @@
 """A comparison's second process: the work that need not wait for the simulations, done on the other core.
 
-A comparison's simulations run one after another on one core.  Two parts of its other work do not depend on
-them: the offline runs (bound, oracles) need only the scenario, and report.md's figures need only the
-written folder while report.html is rendered from the same files.  :func:`start` forks a child when the
-comparison starts (nothing is pickled in: it inherits the scenario and the spec); the child solves the
-offline runs and sends them back while the parent simulates, imports the plotting library, then waits until
-the parent has written the folder and writes report.md and its figures into it while the parent writes
-report.html, one figure (``beside``) drawn meanwhile by a child of its own.  The results are those of the
-serial path, the same functions on the same inputs: the offline runs are deterministic and come back as
-pickles, the reports are functions of the folder's files.
+A comparison's simulations run one after another on one core.  Parts of its other work do not depend on
+them: the offline runs (bound, oracles) need only the scenario; a simulated run that needs nothing from
+another run (no calibration, and no other run calibrated by it) needs only the scenario too; and report.md's
+figures need only the written folder while report.html is rendered from the same files.  :func:`start` forks
+a child when the comparison starts (nothing is pickled in: it inherits the scenario and the spec); the child
+solves the offline runs and sends them back, then takes such independent runs from the end of the list
+while the parent simulates from its start (:class:`Claims`: each run is simulated once, by whichever
+process reaches it first), imports the plotting library, then waits until the parent has written the folder
+and writes report.md and its figures into it while the parent writes report.html, one figure (``beside``)
+drawn meanwhile by a child of its own.  The results are those of the serial path, the same functions on the
+same inputs: the offline runs and the simulations are deterministic and come back as pickles, the reports
+are functions of the folder's files.
 
 The child is forked only from a top-level process, before the comparison's first solve, and only when a core
 is idle (the load average a core below the cores this process may use): a worker of a multi-day pool has
@@ -33,16 +36,48 @@ from rpbench.exceptions import RpbenchError
 
 OfflineFn = Callable[[], Any]
 ReportFn = Callable[[Path, str], object]
+#: Simulates the comparison's run of that index (its place in the spec's simulated runs).
+SimulateFn = Callable[[int], Any]
+
+#: Who took a run (:class:`Claims`).
+_FREE, _PARENT, _CHILD = 0, 1, 2
+
+
+class Claims:
+    """Which process simulates each run: the parent takes every run from the front, in order; the child takes
+    the ``movable`` ones (runs that need nothing from another) from the back.  A run is taken once, under a
+    lock in memory both processes share, so the two meet and none is simulated twice."""
+
+    def __init__(self, runs: int, movable: list[int]) -> None:
+        ctx = multiprocessing.get_context("fork")
+        self._taken = ctx.Array("b", max(runs, 1))  # shared by fork: _FREE, _PARENT or _CHILD per run
+        self.movable = sorted(movable)
+
+    def take(self, index: int, who: int) -> bool:
+        with self._taken.get_lock():
+            if self._taken[index] != _FREE:
+                return False
+            self._taken[index] = who
+            return True
 
 
 class Serial:
-    """The steps in-process: the offline runs when they are asked for, report.md when the folder is ready."""
+    """The steps in-process: the offline runs when they are asked for, report.md when the folder is ready, and
+    every simulated run the parent's (:meth:`claim` is always true)."""
 
     def __init__(self, offline: OfflineFn, report: ReportFn, beside: ReportFn | None = None) -> None:
         self._offline, self._report, self._beside = offline, report, beside
 
     def offline(self) -> Any:
         return self._offline()
+
+    def claim(self, index: int) -> bool:
+        """May the parent simulate run ``index`` (False: the child has taken it)?"""
+        return True
+
+    def simulated(self) -> dict[int, Any]:
+        """The runs the child simulated, by index (call after :meth:`offline`)."""
+        return {}
 
     def report(self, folder: Path, name: str) -> None:
         if self._beside is not None:
@@ -60,18 +95,47 @@ class Forked(Serial):
     """The steps in a forked child; the same calls, each answered from the child."""
 
     def __init__(
-        self, offline: OfflineFn, report: ReportFn, beside: ReportFn | None = None, *, warm_up: Callable[[], None]
+        self,
+        offline: OfflineFn,
+        report: ReportFn,
+        beside: ReportFn | None = None,
+        *,
+        warm_up: Callable[[], None],
+        simulate: SimulateFn | None = None,
+        claims: Claims | None = None,
     ) -> None:
         super().__init__(offline, report, beside)
         ctx = multiprocessing.get_context("fork")
+        self._claims = claims if simulate is not None else None
         self._conn, child_end = ctx.Pipe(duplex=True)
-        self._child = ctx.Process(target=_child_main, args=(child_end, self._conn, offline, report, beside, warm_up))
+        self._child = ctx.Process(
+            target=_child_main,
+            args=(child_end, self._conn, offline, report, beside, warm_up, simulate, self._claims),
+        )
         self._child.start()
         child_end.close()
         self._asked_report = False
+        self._offline_value: tuple[Any] | None = None  # received once, kept
+        self._runs: dict[int, Any] | None = None
 
     def offline(self) -> Any:
-        return self._answer("solving the offline runs")
+        if self._offline_value is None:
+            self._offline_value = (self._answer("solving the offline runs"),)
+        return self._offline_value[0]
+
+    def claim(self, index: int) -> bool:
+        return self._claims is None or self._claims.take(index, _PARENT)
+
+    def simulated(self) -> dict[int, Any]:
+        if self._runs is None:
+            self.offline()  # the child answers in order: the offline runs first
+            runs: dict[int, Any] = {}
+            if self._claims is not None:
+                while (answer := self._answer("simulating a run")) is not None:
+                    index, run = answer
+                    runs[index] = run
+            self._runs = runs
+        return self._runs
 
     def report(self, folder: Path, name: str) -> None:
         self._conn.send((folder, name))
@@ -103,18 +167,27 @@ class Forked(Serial):
 
 
 def start(
-    offline: OfflineFn, report: ReportFn, beside: ReportFn | None = None, *, warm_up: Callable[[], None]
+    offline: OfflineFn,
+    report: ReportFn,
+    beside: ReportFn | None = None,
+    *,
+    warm_up: Callable[[], None],
+    simulate: SimulateFn | None = None,
+    runs: int = 0,
+    movable: list[int] | None = None,
 ) -> Serial:
     """The comparison's second process (:class:`Forked`) where it can run, else :class:`Serial`.
 
     ``offline()`` returns the offline runs; ``report(folder, name)`` writes report.md into ``folder``, and
     ``beside(folder, name)`` the part of it that can be drawn at the same time; ``warm_up()`` (in the child,
-    between the offline runs and the report) imports what ``report`` needs.
+    between the offline runs and the report) imports what ``report`` needs.  ``simulate(i)`` simulates run
+    ``i`` of ``runs``: the child may take those of ``movable`` the parent has not reached (:class:`Claims`).
     """
     if not _may_fork():
         return Serial(offline, report, beside)
     try:
-        return Forked(offline, report, beside, warm_up=warm_up)
+        claims = Claims(runs, movable) if simulate is not None and movable else None
+        return Forked(offline, report, beside, warm_up=warm_up, simulate=simulate, claims=claims)
     except OSError:  # no process or memory to fork: the same work in-process
         return Serial(offline, report, beside)
 
@@ -142,6 +215,8 @@ def _child_main(
     report: ReportFn,
     beside: ReportFn | None,
     warm_up: Callable[[], None],
+    simulate: SimulateFn | None,
+    claims: Claims | None,
 ) -> None:
     parent_end.close()  # so that the parent's exit closes the pipe: recv() then ends this process
     # Ctrl-C and SIGTERM reach the whole process group: the parent stops, then ends this child itself.
@@ -149,6 +224,9 @@ def _child_main(
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     try:
         _send(conn, offline)
+        if simulate is not None and claims is not None:
+            _simulate_from_the_back(conn, simulate, claims)
+            conn.send((True, None))  # no more runs
         warm_up()
         job = conn.recv()
         _send(conn, lambda: _both(report, beside, *job))
@@ -156,6 +234,15 @@ def _child_main(
         pass
     finally:
         conn.close()
+
+
+def _simulate_from_the_back(conn: Connection, simulate: SimulateFn, claims: Claims) -> None:
+    """The movable runs the parent has not taken, last first, each sent when simulated; stops at the first
+    the parent took (the parent goes in order: the runs before it are its own or this loop's), or after an
+    error (sent on: the parent raises it)."""
+    for index in reversed(claims.movable):
+        if not claims.take(index, _CHILD) or not _send(conn, lambda index=index: (index, simulate(index))):
+            return
 
 
 def _both(report: ReportFn, beside: ReportFn | None, folder: Path, name: str) -> None:
@@ -197,8 +284,9 @@ def _helper_main(conn: Connection, parent_end: Connection, fn: Callable[[], Any]
         conn.close()
 
 
-def _send(conn: Connection, fn: Callable[[], Any]) -> None:
-    """``fn()``'s value, or the exception it raised, to the parent (one that cannot be pickled as a line)."""
+def _send(conn: Connection, fn: Callable[[], Any]) -> bool:
+    """``fn()``'s value, or the exception it raised, to the parent (one that cannot be pickled as a line);
+    whether ``fn`` returned."""
     try:
         answer: tuple[bool, Any] = (True, fn())
     except BaseException as exc:
@@ -209,3 +297,5 @@ def _send(conn: Connection, fn: Callable[[], Any]) -> None:
         raise
     except Exception as exc:  # an unpicklable value or exception
         conn.send((False, RpbenchError(f"{type(answer[1]).__name__}: {answer[1]} (not passed on: {exc})")))
+        return False
+    return answer[0]

@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 
 from rpbench.check import check_folder
-from rpbench.harness import comparison
+from rpbench.harness import comparison, sidecar
 from rpbench.harness.comparison import run_comparison
 from rpbench.results.metrics import TIMING_KPIS
 from rpbench.results.read import over_budget_runs
@@ -17,6 +17,12 @@ from rpbench.results.store import read_meta
 from rpbench.scenarios import ScenarioRequest
 from rpbench.spec import RunSpec
 from rpbench.strategies.forward import ForwardOptions
+
+
+@pytest.fixture(autouse=True)
+def in_one_process(monkeypatch):
+    """The tests here count the simulations this process makes: no second process takes a run."""
+    monkeypatch.setattr(sidecar, "idle_core", lambda: False)
 
 
 @pytest.fixture(scope="module")
@@ -146,3 +152,21 @@ def test_the_note_names_each_run_with_rounds_over_the_budget(budget_folders):
     n = int((rounds["run"] == "mb").sum())
     assert notes["mb"].startswith(f"{n} of {n} rounds decided slower than the 1e-09 s budget (slowest ")
     assert over_budget_runs(budget_folders[86400.0]) == {}
+
+
+@pytest.mark.parametrize(
+    ("runs", "options", "movable"),
+    [
+        # MB calibrates FL and FL-no_delay: neither they nor MB may move; NP, RTV and Hindsight may
+        (["np", "mb", "rtv", "fl-nd", "fl", "hindsight"], {}, ["np", "rtv", "hindsight"]),
+        # a fully specified FL needs no MB run: both may move
+        (["mb", "fl"], {"fl": {"tau0_s": 60.0, "mean_pickup_m": 500.0}}, ["mb", "fl"]),
+        # two runs of MB with other options: each its own simulation, both may move
+        (["mb", "mb@order_rule=min_then_check", "np"], {}, ["mb", "mb@order_rule=min_then_check", "np"]),
+        # two runs of MB with the same options: the parent shares one simulation, so neither moves
+        (["mb", "mb@order_rule=min_feasible", "np"], {}, ["np"]),
+    ],
+)
+def test_independent_runs_need_nothing_from_another(runs, options, movable):
+    spec = RunSpec.of(ScenarioRequest("toy"), runs, options=options)
+    assert [spec.simulated[i].name for i in comparison.independent_runs(spec)] == movable

@@ -139,6 +139,52 @@ def test_an_error_beside_the_report_is_raised_in_the_parent(tmp_path):
         side.close()
 
 
+def test_the_runs_are_shared_out_once_each_the_child_from_the_back():
+    def simulate(index: int) -> tuple[int, int]:
+        return index, os.getpid()
+
+    claims = sidecar.Claims(7, [0, 2, 6])
+    side = sidecar.Forked(lambda: "offline", _write, warm_up=_nothing, simulate=simulate, claims=claims)
+    try:
+        assert side.offline() == "offline"
+        stolen = side.simulated()  # the parent has claimed nothing yet: the child took every movable run
+        parents = [index for index in range(7) if side.claim(index)]
+    finally:
+        side.close()
+    assert sorted(stolen) == [0, 2, 6] and parents == [1, 3, 4, 5]
+    assert {pid for _, pid in stolen.values()} != {os.getpid()}
+    assert all(stolen[index][0] == index for index in stolen)
+
+
+def test_the_child_stops_where_the_parent_has_been():
+    claims = sidecar.Claims(4, [1, 3])
+    assert claims.take(3, sidecar._PARENT)  # the parent reached the last run first
+    side = sidecar.Forked(lambda: None, _write, warm_up=_nothing, simulate=lambda i: i, claims=claims)
+    try:
+        side.offline()
+        assert side.simulated() == {}
+        assert side.claim(1)  # the child stopped at run 3 and left run 1
+    finally:
+        side.close()
+
+
+def test_an_error_simulating_in_the_child_is_raised_in_the_parent():
+    side = sidecar.Forked(
+        lambda: None, _write, warm_up=_nothing, simulate=lambda i: _fail(), claims=sidecar.Claims(2, [1])
+    )
+    try:
+        side.offline()
+        with pytest.raises(ParameterError, match="no such oracle"):
+            side.simulated()
+    finally:
+        side.close()
+
+
+def test_serial_keeps_every_run_in_process():
+    side = sidecar.Serial(lambda: None, _write)
+    assert all(side.claim(index) for index in range(3)) and side.simulated() == {}
+
+
 def _folder_files(folder: Path) -> dict[str, bytes]:
     """Every file of a results folder but those holding times, the run's date or its folder's name."""
     skip = {"meta.json", "rounds.csv.gz", "report.md", "report.html", "kpis.png", "table.tex", "table.csv"}
@@ -160,12 +206,28 @@ def _folder_files(folder: Path) -> dict[str, bytes]:
 @pytest.mark.slow
 def test_a_comparison_writes_the_same_folder_with_or_without_the_second_process(tmp_path, monkeypatch):
     from rpbench import RunSpec, ScenarioRequest, run_comparison
+    from rpbench.harness import comparison
 
-    spec = RunSpec.of(ScenarioRequest("toy", sample=0.2), ["mb", "fl", "bound", "oracle1"])
+    spec = RunSpec.of(ScenarioRequest("toy", sample=0.2), ["np", "mb", "fl", "hindsight", "bound", "oracle1"])
+    simulate = comparison.simulate_strategy
+    parent, pids = os.getpid(), tmp_path / "pids"
+
+    def slow_parent(scenario, entry, *args, **kwargs):
+        """Notes which process simulated each run; the parent starts late, so the child takes its share."""
+        if os.getpid() == parent and not pids.exists():
+            __import__("time").sleep(3.0)
+        with pids.open("a") as f:
+            f.write(f"{entry.name} {os.getpid()}\n")
+        return simulate(scenario, entry, *args, **kwargs)
+
+    monkeypatch.setattr(comparison, "simulate_strategy", slow_parent)
     folders = {}
     for forked in (True, False):
         monkeypatch.setattr(sidecar, "idle_core", lambda forked=forked: forked)
         folders[forked] = run_comparison(spec, tmp_path / str(forked), progress=False).folder
+        if forked:
+            by = dict(line.split() for line in pids.read_text().splitlines())
+            assert by["hindsight"] != str(parent) and by["mb"] == by["fl"] == str(parent)
     assert _folder_files(folders[True]) == _folder_files(folders[False])
     for folder in folders.values():
         assert {"report.md", "report.html", "kpis.png", "timeline.png"} <= {p.name for p in folder.iterdir()}
