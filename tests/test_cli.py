@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 
 import pytest
 
@@ -56,3 +58,18 @@ def test_bad_input_is_one_line_and_exit_2(capsys, argv, message):
 def test_date_without_file(capsys, fake_data):
     code, _, err = run_cli(capsys, "scenario", "haikou-peak", "--data", str(fake_data), "--date", "2017-05-02")
     assert code == 2 and "no peak-hour order file for 2017-05-02" in err
+
+
+def _console(*args: str, **kwargs) -> subprocess.CompletedProcess:
+    """The console script's path: ``entry`` in a process of its own."""
+    code = "import sys; from rpbench.cli import entry; sys.argv[0] = 'rpbench'; entry()"
+    streams = {"stdout": subprocess.PIPE, "stderr": subprocess.PIPE, **kwargs}
+    return subprocess.run([sys.executable, "-c", code, *args], text=True, timeout=120, **streams)
+
+
+def test_the_console_script_ends_at_once_with_its_output_flushed_and_its_status():
+    done = _console("scenario", "toy", "--json")
+    assert done.returncode == 0 and json.loads(done.stdout)["orders"] == 400
+    bad = _console("run", "--sample", "-1")
+    assert bad.returncode == 2 and bad.stdout == "" and len(bad.stderr.strip().splitlines()) == 1
+
