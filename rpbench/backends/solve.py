@@ -86,6 +86,8 @@ def verify(model: Model, solution: object, solver: str) -> Solution:
 
 
 def _finite(value: object) -> bool:
+    if type(value) is float:  # the usual case, without the abstract-class check
+        return math.isfinite(value)
     return isinstance(value, Real) and not isinstance(value, bool) and math.isfinite(value)
 
 

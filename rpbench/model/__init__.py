@@ -212,6 +212,13 @@ class _Model:
             )
         if arr.dtype.kind == "i" and arr.dtype.itemsize <= 4:
             return arr.astype(np.int32, copy=False)
+        if arr.dtype == np.int64 and arr.ndim == 1:  # a strategy's usual columns: one compiled range pass
+            from rpbench.model import kernels  # compiled on first use
+
+            bad = kernels.first_outside_int32(arr)
+            if bad >= 0:
+                raise ModelError(f"model {self.name!r}: {what} of column {bad} is {arr[bad].item()!r}, out of range")
+            return arr.astype(np.int32)
         if len(arr):
             if arr.dtype.kind == "f" and not np.all(arr == np.round(arr)):  # NaN != NaN: refused too
                 bad = int(np.flatnonzero(arr != np.round(arr))[0])
@@ -351,16 +358,14 @@ class AssignmentModel(_Model):
         return self.n_passengers + self.n_vehicles
 
     def _row_exact(self) -> np.ndarray:
-        return np.concatenate([np.ones(self.n_passengers, bool), np.zeros(self.n_vehicles, bool)])
+        exact = np.zeros(self.n_passengers + self.n_vehicles, bool)
+        exact[: self.n_passengers] = True
+        return exact
 
     def _column_rows(self) -> tuple[np.ndarray, np.ndarray]:
-        has_v = self.col_vehicle >= 0
-        counts = 1 + has_v.astype(np.int64)
-        start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-        rows = np.empty(start[-1], dtype=np.int32)
-        rows[start[:-1]] = self.col_passenger
-        rows[start[:-1][has_v] + 1] = self.n_passengers + self.col_vehicle[has_v]
-        return start, rows
+        from rpbench.model import kernels  # compiled on first use
+
+        return kernels.assignment_column_rows(self.n_passengers, self.col_passenger, self.col_vehicle)
 
     @property
     def wait_columns(self) -> np.ndarray:

@@ -89,7 +89,63 @@ def cover(
     return 0, twice, over, times, under
 
 
+@njit(cache=True, nogil=True)
+def assignment_column_rows(
+    n_passengers: int, col_passenger: np.ndarray, col_vehicle: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - compiled
+    """An assignment model's rows per column as CSC ``(start, rows)``: each column's passenger row, then,
+    unless it keeps the passenger waiting (vehicle -1), its vehicle's row ``n_passengers + vehicle``."""
+    n = len(col_passenger)
+    start = np.empty(n + 1, np.int64)
+    start[0] = 0
+    for c in range(n):
+        start[c + 1] = start[c] + (2 if col_vehicle[c] >= 0 else 1)
+    rows = np.empty(start[n], np.int32)
+    for c in range(n):
+        rows[start[c]] = col_passenger[c]
+        if col_vehicle[c] >= 0:
+            rows[start[c] + 1] = n_passengers + col_vehicle[c]
+    return start, rows
+
+
+@njit(cache=True, nogil=True)
+def first_outside_int32(arr: np.ndarray) -> int:  # pragma: no cover - compiled
+    """The first entry of an integer array outside int32's range (-1: none)."""
+    lo, hi = np.iinfo(np.int32).min, np.iinfo(np.int32).max
+    for i in range(len(arr)):
+        if arr[i] < lo or arr[i] > hi:
+            return i
+    return -1
+
+
+@njit(cache=True, nogil=True)
+def integral_support(x: np.ndarray) -> tuple[float, int, np.ndarray]:  # pragma: no cover - compiled
+    """A solver's 0/1 values read in one pass: the largest distance to an integer ``max |x - round(x)|``
+    (0 for no values, NaN when some distance is NaN) and the first entry attaining it (as ``np.max`` and
+    ``np.argmax`` give them), and the entries ``> 0.5`` in increasing order (as ``np.flatnonzero(x > 0.5)``)."""
+    n = len(x)
+    worst = 0.0
+    at = 0
+    count = 0
+    for i in range(n):
+        off = abs(x[i] - np.round(x[i]))
+        if worst == worst and (off != off or off > worst):  # the first NaN stays, as in np.max
+            worst, at = off, i
+        if x[i] > 0.5:
+            count += 1
+    chosen = np.empty(count, np.int64)
+    k = 0
+    for i in range(n):
+        if x[i] > 0.5:
+            chosen[k] = i
+            k += 1
+    return worst, at, chosen
+
+
 def load_model_kernels() -> None:
     """Load (or compile) the kernels now: the first call of each costs a one-off load of its machine code."""
     assignment_valid(1, 1, np.zeros(1, np.int32), np.zeros(1, np.int32), np.zeros(1))
     cover(np.array([0, 1], np.int64), np.zeros(1, np.int32), np.ones(1, np.bool_), np.zeros(1, np.int64))
+    assignment_column_rows(1, np.zeros(1, np.int32), np.zeros(1, np.int32))
+    first_outside_int32(np.zeros(1, np.int64))
+    integral_support(np.zeros(1))

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import heapq
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
@@ -33,20 +34,50 @@ CRUISE_ARCS = 24  # random-walk arcs added per extension (~11 km on Haikou)
 _EPS_S = 1e-9
 
 
-@dataclass
+@dataclass(slots=True)
 class Stop:
     index: int  # position in the plan
     kind: int  # PICKUP or DROPOFF
     order: int  # scenario order index
 
 
-@dataclass
+@dataclass(slots=True)
 class Plan:
     nodes: np.ndarray
     tt: np.ndarray  # time at each node (s)
     odo: np.ndarray  # odometer at each node (m)
     stops: list[Stop] = field(default_factory=list)
     cruising: bool = False
+
+
+class DrivenPart(NamedTuple):
+    """A plan's driven part, kept in a vehicle's history: the plan's arrays up to (not including) ``end``.
+
+    The arrays are the plan's own (never changed in place: a cruise's extension makes new ones), so
+    keeping them costs no copy; the part is cut out when the trajectory is assembled.
+    """
+
+    all_nodes: np.ndarray
+    all_tt: np.ndarray
+    all_odo: np.ndarray
+    end: int
+
+    @property
+    def nodes(self) -> np.ndarray:
+        return self.all_nodes[: self.end]
+
+    @property
+    def tt(self) -> np.ndarray:
+        return self.all_tt[: self.end]
+
+    @property
+    def odo(self) -> np.ndarray:
+        return self.all_odo[: self.end]
+
+
+def _stop_key(stop: Stop) -> tuple[int, int]:
+    """A plan's stop order: by plan index, pick-ups before drop-offs at one node."""
+    return stop.index, stop.kind
 
 
 class FleetState:
@@ -66,7 +97,7 @@ class FleetState:
         self.rng = rng
         n = len(initial_nodes)
         self.n = n
-        self.history: list[list[Plan]] = [[] for _ in range(n)]
+        self.history: list[list[DrivenPart]] = [[] for _ in range(n)]
         self.plans: list[Plan] = [self._still(int(node), 0.0, 0.0) for node in initial_nodes]
         self.onboard: list[list[int]] = [[] for _ in range(n)]
         self.assigned: list[list[int]] = [[] for _ in range(n)]  # assigned, not yet picked up
@@ -97,7 +128,7 @@ class FleetState:
         """A plan driving ``start_node`` then ``nodes_tail`` (consecutive nodes joined by arcs)."""
         n = len(nodes_tail) + 1
         nodes, tt, od = np.empty(n, np.int32), np.empty(n), np.empty(n)
-        tail = np.asarray(nodes_tail, dtype=np.int64)
+        tail = np.asarray(nodes_tail, dtype=np.int32)  # as plans hold nodes; the route kernels' tails are so already
         bad = routes.plan_arrays(
             self._offsets, self._heads, self._lengths, start_node, tail, t, odo, self.speed, nodes, tt, od
         )
@@ -194,10 +225,11 @@ class FleetState:
         plan = self.plans[v]
         if plan.stops and plan.stops[0].index < anchor:
             raise RuntimeError(f"vehicle {v}: replanning past an unserved stop")  # pragma: no cover
-        self.history[v].append(Plan(plan.nodes[: anchor + 1], plan.tt[: anchor + 1], plan.odo[: anchor + 1]))
+        self.history[v].append(DrivenPart(plan.nodes, plan.tt, plan.odo, anchor + 1))
         t0 = float(plan.tt[anchor]) if start_t is None else max(float(plan.tt[anchor]), start_t)
         new = self._plan_from(int(plan.nodes[anchor]), t0, float(plan.odo[anchor]), nodes_tail)
-        new.stops = sorted(stops, key=lambda s: (s.index, s.kind))
+        if stops:
+            new.stops = sorted(stops, key=_stop_key)
         new.cruising = cruising
         self.plans[v] = new
         self._next_tt[v] = -np.inf  # stale: found again in the new plan's window, filled now
@@ -267,10 +299,11 @@ class FleetState:
         History and plan, chunk after chunk, each chunk's first node dropped where it repeats the node
         the trajectory has reached at that time (the anchor a replan starts from).
         """
-        chunks = self.history[v] + [self.plans[v]]
-        nodes = np.concatenate([c.nodes for c in chunks])
-        tt = np.concatenate([c.tt for c in chunks])
-        odo = np.concatenate([c.odo for c in chunks])
-        starts = np.cumsum([0] + [len(c.nodes) for c in chunks])
+        plan = self.plans[v]
+        parts = self.history[v]
+        nodes = np.concatenate([p.all_nodes[: p.end] for p in parts] + [plan.nodes])
+        tt = np.concatenate([p.all_tt[: p.end] for p in parts] + [plan.tt])
+        odo = np.concatenate([p.all_odo[: p.end] for p in parts] + [plan.odo])
+        starts = np.cumsum([0] + [p.end for p in parts] + [len(plan.nodes)])
         keep = routes.trajectory_keep(nodes, tt, starts, _EPS_S, np.inf if t_end is None else t_end)
         return nodes[keep], tt[keep], odo[keep]

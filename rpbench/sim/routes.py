@@ -161,5 +161,5 @@ def load_route_kernels() -> None:
     random_walk(offsets, heads, 0, -1, np.zeros(1))
     route_through(np.zeros((2, 2), np.int32), np.zeros(2, np.int64), np.zeros(1, np.int64))
     one = np.zeros(1)
-    plan_arrays(offsets, heads, one, 0, np.zeros(0, np.int64), 0.0, 0.0, 1.0, np.zeros(1, np.int32), one, one.copy())
+    plan_arrays(offsets, heads, one, 0, np.zeros(0, np.int32), 0.0, 0.0, 1.0, np.zeros(1, np.int32), one, one.copy())
     trajectory_keep(np.zeros(1, np.int32), one, np.array([0, 1], np.int64), 0.0, np.inf)

@@ -66,6 +66,8 @@ Capture = Callable[[int, float, RoundModel, Solution], None]
 
 # passenger states
 PENDING, WAITING, ASSIGNED, ONBOARD, DONE, CANCELLED = range(6)
+# column kinds as plain ints (compared once per committed column)
+_VACANT, _JOIN, _TRIP2 = int(Kind.VACANT), int(Kind.JOIN), int(Kind.TRIP2)
 EVENT_COLUMNS = ["t_s", "event", "order", "vehicle", "node", "kind", "utility_m", "pickup_plan_m", "partner", "fofo"]
 EVENT_DTYPES = {
     "t_s": "float64",
@@ -198,6 +200,8 @@ class Simulator:
         self.request = np.ascontiguousarray(o.request_s, dtype=np.float64)
         self.patience = o.patience_s
         self.solo = self.dist[self.origin, self.destination] if self.n_orders else np.zeros(0)
+        self._origin_list: list[int] = self.origin.tolist()  # waypoints of the routes a commit plans
+        self._destination_list: list[int] = self.destination.tolist()
         self.state = np.full(self.n_orders, PENDING, dtype=np.int8)
         self.vehicle_of = np.full(self.n_orders, -1, dtype=np.int64)
         self.pickup_odo = np.full(self.n_orders, np.nan)
@@ -440,45 +444,57 @@ class Simulator:
     # --------------------------------------------------------------- commit
     def _commit(self, rm: RoundModel, chosen: np.ndarray, t: float) -> int:
         fl = self.fleet
-        served = 0
+        origin, destination = self._origin_list, self._destination_list
+        assigned: list[int] = []
         # Every chosen vehicle's position at once: each vehicle is chosen once, and replanning one
-        # leaves the others' positions as they were.
+        # leaves the others' positions as they were.  The chosen columns' fields are read as Python
+        # values once, not element by element.
         moving = chosen[rm.kind[chosen] != Kind.WAIT]
-        ks, hs, _ = fl.positions(rm.vehicle[moving], t)
-        for c, k, h in zip(moving.tolist(), ks.tolist(), hs.tolist(), strict=True):
-            kind = int(rm.kind[c])
-            v = int(rm.vehicle[c])
-            a, b = int(rm.first[c]), int(rm.second[c])
-            fofo = bool(rm.fofo[c])
-            if kind == Kind.VACANT:
-                tail, reach = fl.route_through([h, self.origin[a], self.destination[a]])
-                stops = [Stop(reach[0], PICKUP, a), Stop(reach[1], DROPOFF, a)]
-                fl.replan(v, k, tail, stops)
+        vehicles = rm.vehicle[moving]
+        ks, hs, _ = fl.positions(vehicles, t)
+        columns = zip(
+            rm.kind[moving].tolist(),
+            vehicles.tolist(),
+            rm.first[moving].tolist(),
+            rm.second[moving].tolist(),
+            rm.fofo[moving].tolist(),
+            rm.utility_m[moving].tolist(),
+            rm.pickup_m[moving].tolist(),
+            ks.tolist(),
+            hs.tolist(),
+            strict=True,
+        )
+        for kind, v, a, b, fofo, utility, pickup, k, h in columns:
+            if kind == _VACANT:
+                tail, reach = fl.route_through([h, origin[a], destination[a]])
+                fl.replan(v, k, tail, [Stop(reach[0], PICKUP, a), Stop(reach[1], DROPOFF, a)])
                 self.rider[v] = a
-                self._assign(a, v, t, rm, c, partner=-1)
-                served += 1
-            elif kind == Kind.JOIN:
-                first = fl.onboard[v][0] if fl.onboard[v] else fl.assigned[v][0]
+                self._assign(a, v, t, "vacant", utility, pickup, -1, fofo)
+                assigned.append(a)
+            elif kind == _JOIN:
+                onboard = fl.onboard[v]
+                first = onboard[0] if onboard else fl.assigned[v][0]
                 drops = self._drop_order(first, a, fofo)
-                drop_nodes = [int(self.destination[o]) for o in drops]
-                if fl.onboard[v]:
-                    tail, reach = fl.route_through([h, self.origin[a], *drop_nodes])
+                if onboard:
+                    tail, reach = fl.route_through([h, origin[a], destination[drops[0]], destination[drops[1]]])
                     stops = [Stop(reach[0], PICKUP, a)]
                     anchor = k
                 else:  # divert after picking up the first passenger at o_A (A14)
                     plan = fl.plans[v]
                     anchor = next(s.index for s in plan.stops if s.kind == PICKUP and s.order == first)
-                    tail, reach = fl.route_through([int(plan.nodes[anchor]), self.origin[a], *drop_nodes])
+                    tail, reach = fl.route_through(
+                        [int(plan.nodes[anchor]), origin[a], destination[drops[0]], destination[drops[1]]]
+                    )
                     stops = [Stop(0, PICKUP, first), Stop(reach[0], PICKUP, a)]
                 stops += [Stop(reach[1], DROPOFF, drops[0]), Stop(reach[2], DROPOFF, drops[1])]
                 fl.replan(v, anchor, tail, stops)
                 fl.paired[v] = True
-                self._assign(a, v, t, rm, c, partner=first)
-                served += 1
-            elif kind == Kind.TRIP2:
+                self._assign(a, v, t, "join", utility, pickup, first, fofo)
+                assigned.append(a)
+            elif kind == _TRIP2:
                 drops = self._drop_order(a, b, fofo)
                 tail, reach = fl.route_through(
-                    [h, self.origin[a], self.origin[b], *(int(self.destination[o]) for o in drops)]
+                    [h, origin[a], origin[b], destination[drops[0]], destination[drops[1]]]
                 )
                 stops = [
                     Stop(reach[0], PICKUP, a),
@@ -488,10 +504,16 @@ class Simulator:
                 ]
                 fl.replan(v, k, tail, stops)
                 fl.paired[v] = True
-                self._assign(a, v, t, rm, c, partner=b)
-                self._assign(b, v, t, rm, c, partner=a)
-                served += 2
-        return served
+                self._assign(a, v, t, "trip2", utility, pickup, b, fofo)
+                self._assign(b, v, t, "trip2", utility, pickup, a, fofo)
+                assigned += [a, b]
+        if assigned:
+            taken = set(assigned)
+            left = [o for o in self.waiting if o not in taken]
+            if len(self.waiting) - len(left) != len(assigned):  # pragma: no cover - received() rules it out
+                raise RuntimeError(f"round at t={t:g} s assigned an order twice or one that was not waiting")
+            self.waiting = left
+        return len(assigned)
 
     def _reposition(self, v: int, node: int, t: float) -> None:
         """Send a vacant vehicle to ``node``; it stays vacant and cruises on from there."""
@@ -512,16 +534,15 @@ class Simulator:
         """The two orders in drop-off sequence (FOFO: the first passenger is dropped first)."""
         return [a, b] if a_first else [b, a]
 
-    def _assign(self, order: int, v: int, t: float, rm: RoundModel, c: int, partner: int) -> None:
+    def _assign(
+        self, order: int, v: int, t: float, kind: str, utility: float, pickup: float, partner: int, fofo: bool
+    ) -> None:
+        """``order`` assigned to vehicle ``v`` (the caller takes it off the waiting list)."""
         self.state[order] = ASSIGNED
         self.vehicle_of[order] = v
         self.fleet.assigned[v].append(order)
         self.fleet.load[v] += 1
-        self.waiting.remove(order)
-        kind = {Kind.VACANT: "vacant", Kind.JOIN: "join", Kind.TRIP2: "trip2"}[Kind(int(rm.kind[c]))]
-        self._event(
-            t, "assign", order, v, -1, kind, float(rm.utility_m[c]), float(rm.pickup_m[c]), partner, bool(rm.fofo[c])
-        )
+        self._event(t, "assign", order, v, -1, kind, utility, pickup, partner, fofo)
 
     # ---------------------------------------------------------------- stops
     def _process_stops(self, t: float) -> None:
