@@ -227,14 +227,21 @@ class FleetState:
             raise RuntimeError(f"vehicle {v}: replanning past an unserved stop")  # pragma: no cover
         self.history[v].append(DrivenPart(plan.nodes, plan.tt, plan.odo, anchor + 1))
         t0 = float(plan.tt[anchor]) if start_t is None else max(float(plan.tt[anchor]), start_t)
-        new = self._plan_from(int(plan.nodes[anchor]), t0, float(plan.odo[anchor]), nodes_tail)
-        if stops:
-            new.stops = sorted(stops, key=_stop_key)
-        new.cruising = cruising
+        # the new plan (as :meth:`_plan_from` builds it) and its window from its first node, in one call
+        start = int(plan.nodes[anchor])
+        tail = np.asarray(nodes_tail, dtype=np.int32)
+        w = self._windows
+        nodes, tt, odo, bad = routes.plan_and_window(
+            self._offsets, self._heads, self._lengths, start, tail, t0, float(plan.odo[anchor]), self.speed,
+            w.tt, w.node, w.odo, w.base, w.length, w.tt_before, w.last, w.cruising, v, cruising,
+        )  # fmt: skip
+        if bad >= 0:
+            before = start if bad == 0 else int(tail[bad - 1])
+            raise ValueError(f"no arc from node {before} to node {int(tail[bad])} in a vehicle's plan")
+        new = Plan(nodes, tt, odo, sorted(stops, key=_stop_key) if stops else [], cruising)
         self.plans[v] = new
         self._next_tt[v] = -np.inf  # stale: found again in the new plan's window, filled now
         self._idle[v] = False
-        self._windows.fill(v, new.nodes, new.tt, new.odo, cruising, 0)
         self._version[v] += 1
         if new.stops:
             heapq.heappush(self._heap, (float(new.tt[new.stops[0].index]), v, self._version[v]))
@@ -307,3 +314,36 @@ class FleetState:
         starts = np.cumsum([0] + [p.end for p in parts] + [len(plan.nodes)])
         keep = routes.trajectory_keep(nodes, tt, starts, _EPS_S, np.inf if t_end is None else t_end)
         return nodes[keep], tt[keep], odo[keep]
+
+    def trajectories(self, t_end: float | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Every vehicle's :meth:`trajectory` at once: the vehicles' offsets into the concatenated nodes,
+        times and odometers (vehicle ``v`` owns entries ``offsets[v]`` to ``offsets[v + 1]``), then those.
+
+        One concatenation and one compiled pass over all vehicles' chunks instead of a few numpy calls per
+        vehicle; the entries are the same.
+        """
+        nodes, tt, odo, lengths, firsts = [], [], [], [0], [0]
+        for v in range(self.n):
+            for part in self.history[v]:
+                end = part.end
+                nodes.append(part.all_nodes[:end])
+                tt.append(part.all_tt[:end])
+                odo.append(part.all_odo[:end])
+                lengths.append(end)
+            plan = self.plans[v]
+            nodes.append(plan.nodes)
+            tt.append(plan.tt)
+            odo.append(plan.odo)
+            lengths.append(len(plan.nodes))
+            firsts.append(len(lengths) - 1)
+        all_nodes, all_tt, all_odo = np.concatenate(nodes), np.concatenate(tt), np.concatenate(odo)
+        keep, counts = routes.fleet_trajectory_keep(
+            all_nodes,
+            all_tt,
+            np.cumsum(np.asarray(lengths, dtype=np.int64)),
+            np.asarray(firsts, dtype=np.int64),
+            _EPS_S,
+            np.inf if t_end is None else t_end,
+        )
+        offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        return offsets, all_nodes[keep], all_tt[keep], all_odo[keep]

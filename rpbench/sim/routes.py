@@ -17,6 +17,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from rpbench.sim.lookahead import fill_row
+
 
 @njit(cache=True, nogil=True)
 def random_walk(offsets: np.ndarray, heads: np.ndarray, node: int, prev: int, u: np.ndarray) -> np.ndarray:
@@ -128,6 +130,38 @@ def plan_arrays(
 
 
 @njit(cache=True, nogil=True)
+def plan_and_window(
+    offsets: np.ndarray,
+    heads: np.ndarray,
+    lengths: np.ndarray,
+    start: int,
+    tail: np.ndarray,
+    t0: float,
+    odo0: float,
+    speed: float,
+    w_tt: np.ndarray,
+    w_node: np.ndarray,
+    w_odo: np.ndarray,
+    base: np.ndarray,
+    length: np.ndarray,
+    tt_before: np.ndarray,
+    last: np.ndarray,
+    w_cruising: np.ndarray,
+    v: int,
+    cruising: bool,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:  # pragma: no cover - compiled
+    """A new plan of vehicle ``v`` (:func:`plan_arrays`: its nodes, times and odometers, and -1 or the first
+    node of ``tail`` not joined by an arc) and, when it is valid, the vehicle's window over it from its
+    first node (:func:`~rpbench.sim.lookahead.fill_row`): a replan's two steps in one compiled call."""
+    n = len(tail) + 1
+    nodes, tt, odo = np.empty(n, np.int32), np.empty(n), np.empty(n)
+    bad = plan_arrays(offsets, heads, lengths, start, tail, t0, odo0, speed, nodes, tt, odo)
+    if bad < 0:
+        fill_row(w_tt, w_node, w_odo, base, length, tt_before, last, w_cruising, v, nodes, tt, odo, cruising, 0)
+    return nodes, tt, odo, bad
+
+
+@njit(cache=True, nogil=True)
 def trajectory_keep(
     nodes: np.ndarray, tt: np.ndarray, starts: np.ndarray, eps: float, t_end: float
 ) -> np.ndarray:  # pragma: no cover - compiled
@@ -155,6 +189,40 @@ def trajectory_keep(
     return keep
 
 
+@njit(cache=True, nogil=True)
+def fleet_trajectory_keep(
+    nodes: np.ndarray, tt: np.ndarray, starts: np.ndarray, firsts: np.ndarray, eps: float, t_end: float
+) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - compiled
+    """:func:`trajectory_keep` for every vehicle at once: the chunks of all vehicles one after another
+    (``starts``: the chunks' offsets), vehicle ``v`` owning chunks ``firsts[v]`` to ``firsts[v + 1]``.
+
+    Returns the mask over all entries and, per vehicle, how many entries it keeps.
+    """
+    keep = np.ones(len(nodes), np.bool_)
+    counts = np.zeros(len(firsts) - 1, np.int64)
+    for v in range(len(firsts) - 1):
+        kept = False
+        last_node, last_tt = 0, 0.0
+        for i in range(firsts[v], firsts[v + 1]):
+            s, e = starts[i], starts[i + 1]
+            if e == s:
+                continue
+            if kept and last_node == nodes[s] and last_tt >= tt[s] - eps:
+                keep[s] = False
+                s += 1
+            if e > s:
+                kept = True
+                last_node, last_tt = nodes[e - 1], tt[e - 1]
+        lo, hi = starts[firsts[v]], starts[firsts[v + 1]]
+        for j in range(lo + 1, hi):
+            if not tt[j] <= t_end + eps:
+                keep[j] = False
+        for j in range(lo, hi):
+            if keep[j]:
+                counts[v] += 1
+    return keep, counts
+
+
 def load_route_kernels() -> None:
     """Load (or compile) every kernel now: the first call of each costs a one-off load of its machine code."""
     offsets, heads = np.array([0, 1, 2], np.int64), np.array([1, 0], np.int64)
@@ -163,3 +231,11 @@ def load_route_kernels() -> None:
     one = np.zeros(1)
     plan_arrays(offsets, heads, one, 0, np.zeros(0, np.int32), 0.0, 0.0, 1.0, np.zeros(1, np.int32), one, one.copy())
     trajectory_keep(np.zeros(1, np.int32), one, np.array([0, 1], np.int64), 0.0, np.inf)
+    fleet_trajectory_keep(np.zeros(1, np.int32), one, np.array([0, 1], np.int64), np.array([0, 1], np.int64), 0.0, 1.0)
+    from rpbench.sim.lookahead import PlanWindows
+
+    w = PlanWindows(1)
+    plan_and_window(
+        offsets, heads, one, 0, np.zeros(0, np.int32), 0.0, 0.0, 1.0,
+        w.tt, w.node, w.odo, w.base, w.length, w.tt_before, w.last, w.cruising, 0, False,
+    )  # fmt: skip

@@ -617,16 +617,5 @@ class Simulator:
         return pd.DataFrame({name: a[order] for name, a in arrays.items()}).astype(EVENT_DTYPES)
 
     def _trajectories(self, end: float) -> dict[str, np.ndarray]:
-        nodes, tt, odo, offsets = [], [], [], [0]
-        for v in range(self.fleet.n):
-            n, t_, o = self.fleet.trajectory(v, end)
-            nodes.append(n)
-            tt.append(t_)
-            odo.append(o)
-            offsets.append(offsets[-1] + len(n))
-        return {
-            "vehicle_offsets": np.asarray(offsets, np.int64),
-            "node": np.concatenate(nodes).astype(np.int32),
-            "t_s": np.concatenate(tt),
-            "odo_m": np.concatenate(odo),
-        }
+        offsets, nodes, tt, odo = self.fleet.trajectories(end)
+        return {"vehicle_offsets": offsets, "node": nodes.astype(np.int32), "t_s": tt, "odo_m": odo}

@@ -38,15 +38,16 @@ def canonicalize(model: Model, solution: Solution) -> tuple[Solution, int]:
     if solution.status != Status.OPTIMAL or len(solution.chosen) == 0 or solution.unique:
         return solution, 0
     items: tuple[np.ndarray, ...]  # per column, the orders it serves: one array, or two for a trip
+    # The model's own int32 columns go to the kernel as they are (no int64 copies: it widens as it reads).
     if isinstance(model, AssignmentModel):
-        resource = model.col_vehicle.astype(np.int64)
-        items = (model.col_passenger.astype(np.int64),)
+        resource = model.col_vehicle
+        items = model.col_passenger.reshape(1, -1)
     elif isinstance(model, TripPackingModel):
-        resource = model.col_vehicle.astype(np.int64)
-        items = (model.col_request1.astype(np.int64), model.col_request2.astype(np.int64))
+        resource = model.col_vehicle
+        items = np.stack((model.col_request1, model.col_request2))
     else:
         return solution, 0
-    chosen, moves = _repair(model, solution.chosen.astype(np.int64), resource, items)
+    chosen, moves = _repair(model, solution.chosen, resource, items)
     if moves == 0:
         return solution, 0
     fixed = make_solution(
@@ -66,17 +67,21 @@ def canonicalize(model: Model, solution: Solution) -> tuple[Solution, int]:
     return fixed, moves
 
 
-def _repair(model, chosen: np.ndarray, resource: np.ndarray, items: tuple[np.ndarray, ...]):
-    """The moves of the module docstring until none applies: the chosen columns (sorted) and the moves made."""
+def _repair(model, chosen: np.ndarray, resource: np.ndarray, items: np.ndarray):
+    """The moves of the module docstring until none applies: the chosen columns (sorted) and the moves made.
+
+    ``items``: per column, the orders it serves (one row of the table per order slot: one for an
+    assignment, two for a trip), ``-1`` where a slot is empty.
+    """
     start, rows = model.column_rows()
-    out = np.sort(chosen)
+    out = np.sort(chosen.astype(np.int64, copy=False))  # a new array: the kernel changes it in place
     moves = _repair_kernel(
         np.ascontiguousarray(model.values, dtype=np.float64),
         start.astype(np.int64, copy=False),
-        rows.astype(np.int64, copy=False),
+        rows,
         model.row_exact(),
         resource,
-        np.stack(items),
+        items,
         out,
     )
     return out, moves
@@ -212,4 +217,4 @@ def _column_with(sorted_keys, key_order, q) -> int:  # pragma: no cover - compil
 def load_tie_kernels() -> None:
     """Load (or compile) the kernel now: its first call costs a one-off load of its machine code."""
     model = AssignmentModel(1, 1, [0, 0], [0, -1], [0.0, 0.0])
-    _repair(model, np.zeros(1, np.int64), model.col_vehicle.astype(np.int64), (model.col_passenger.astype(np.int64),))
+    _repair(model, np.zeros(1, np.int64), model.col_vehicle, model.col_passenger.reshape(1, -1))

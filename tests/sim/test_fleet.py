@@ -296,3 +296,24 @@ def test_plan_and_stop_records():
     assert plan.stops == [] and plan.cruising is False
     assert (PICKUP, DROPOFF) == (0, 1)
     assert Stop(2, PICKUP, 9) == Stop(index=2, kind=0, order=9)
+
+
+def test_the_fleet_trajectories_are_each_vehicles_trajectory(tee):
+    rng = np.random.default_rng(5)
+    fl = fleet(tee, [4, 0, 2])
+    for step in range(40):  # replans at random anchors, cruises and stops, as a run makes them
+        v = int(rng.integers(0, 3))
+        t = 10.0 * step
+        k, h, _ = fl.positions(np.array([v]), t)
+        if rng.random() < 0.5:
+            fl.start_cruise(v, int(k[0]), t)
+        else:
+            tail, _ = fl.route_through([int(h[0]), int(rng.integers(0, 5))])
+            fl.replan(v, int(k[0]), tail, [])
+    for end in (None, 150.0, 1e9):
+        offsets, nodes, tt, odo = fl.trajectories(end)
+        for v in range(3):
+            want = fl.trajectory(v, end)
+            got = (nodes[offsets[v] : offsets[v + 1]], tt[offsets[v] : offsets[v + 1]], odo[offsets[v] : offsets[v + 1]])
+            for a, b in zip(got, want, strict=True):
+                assert np.array_equal(a, b)

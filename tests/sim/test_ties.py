@@ -206,8 +206,8 @@ def test_the_compiled_repair_matches_the_numpy_passes_on_tied_assignments():
     moved = 0
     for _ in range(300):
         m, start = _random_tied_assignment(rng)
-        resource, items = m.col_vehicle.astype(np.int64), (m.col_passenger.astype(np.int64),)
-        got, moves = _repair(m, np.array(start, np.int64), resource, items)
+        resource, items = m.col_vehicle, (m.col_passenger,)  # the model's int32 columns, as canonicalize passes them
+        got, moves = _repair(m, np.array(start, np.int64), resource, np.stack(items))
         want, want_moves = _numpy_repair(m, start, resource, items)
         assert got.tolist() == want and moves == want_moves
         moved += moves > 0
@@ -233,8 +233,8 @@ def test_the_compiled_repair_matches_the_numpy_passes_on_trip_packing():
             if not rows & used:
                 used |= rows
                 start.append(int(c))
-        resource = m.col_vehicle.astype(np.int64)
-        items = (m.col_request1.astype(np.int64), m.col_request2.astype(np.int64))
-        got, moves = _repair(m, np.array(start, np.int64), resource, items)
+        resource = m.col_vehicle
+        items = (m.col_request1, m.col_request2)
+        got, moves = _repair(m, np.array(start, np.int64), resource, np.stack(items))
         want, want_moves = _numpy_repair(m, start, resource, items)
         assert got.tolist() == want and moves == want_moves
