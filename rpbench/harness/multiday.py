@@ -14,6 +14,7 @@ from pathlib import Path
 import pandas as pd
 
 from rpbench import files, results
+from rpbench.harness import sidecar
 from rpbench.harness.comparison import ComparisonTask, run_task
 from rpbench.harness.outcome import Outcome
 from rpbench.harness.parallel import run_tasks
@@ -50,6 +51,7 @@ def run_days(
     terminal).
     """
     check_new_folder(out)
+    spare = sidecar.may_fork()  # asked now: at the end the load average still holds the days' own load
     request = spec.request.resolved()
     default = f"{results.timestamp()}_{request.name}_{dates[0]}..{dates[-1]}_{spec.preset}"
     with results.new_results_folder(out, default) as (tmp, final):
@@ -72,7 +74,7 @@ def run_days(
             },
         )
         stats = write_summary(tmp)
-        write_multiday_report(tmp, name=final.name, formats=spec.formats)
+        write_multiday_report(tmp, name=final.name, formats=spec.formats, fork=spare)
         write_html(tmp, name=final.name)
     mean = stats["mean"].unstack("run")[spec.names]
     return Outcome(tmp, mean, children=tuple(days)).moved_to(final)
@@ -89,10 +91,10 @@ def write_summary(parent: Path) -> pd.DataFrame:
 
 
 def write_multiday_report(
-    parent: Path, name: str | None = None, formats: Sequence[str] = DEFAULT_FIGURE_FORMATS
+    parent: Path, name: str | None = None, formats: Sequence[str] = DEFAULT_FIGURE_FORMATS, *, fork: bool = False
 ) -> Path:
     """``report.md`` of a multi-day folder: mean KPIs, per-day key KPIs, findings per day, plots (in
-    ``formats``)."""
+    ``formats``; with ``fork``, every other one drawn by a forked child meanwhile)."""
     meta = results.read_meta(parent)
     table = by_day_table(parent)
     mean = table.groupby(["kpi", "run"], sort=False)["value"].mean().unstack("run")
@@ -148,7 +150,12 @@ def write_multiday_report(
         lines += ["## Do the paper's findings hold?", "", "| claim | days where it holds |", "|---|---:|"]
         lines += [f"| {c} | {sum(v)} of {len(v)} |" for c, v in claims.items()]
         lines.append("")
-    plots = per_day_figures(table, parent, MULTIDAY_PLOT_KPIS, styles, formats=formats)
+    mine, theirs = sidecar.side_by_side(
+        lambda: per_day_figures(table, parent, MULTIDAY_PLOT_KPIS[0::2], styles, formats=formats),
+        lambda: per_day_figures(table, parent, MULTIDAY_PLOT_KPIS[1::2], styles, formats=formats),
+        fork=fork,
+    )
+    plots = sorted(mine + theirs, key=lambda path: MULTIDAY_PLOT_KPIS.index(path.stem.removeprefix("by_day_")))
     if plots:
         lines += ["## Per-day plots", ""] + [f"![{p.stem}]({p.name})" for p in plots] + [""]
     lines += [

@@ -183,7 +183,7 @@ def start(
     between the offline runs and the report) imports what ``report`` needs.  ``simulate(i)`` simulates run
     ``i`` of ``runs``: the child may take those of ``movable`` the parent has not reached (:class:`Claims`).
     """
-    if not _may_fork():
+    if not may_fork():
         return Serial(offline, report, beside)
     try:
         claims = Claims(runs, movable) if simulate is not None and movable else None
@@ -192,7 +192,10 @@ def start(
         return Serial(offline, report, beside)
 
 
-def _may_fork() -> bool:
+def may_fork() -> bool:
+    """Whether this process may fork a helper that pays: ``fork`` exists, this is a top-level process (a
+    pool's workers have siblings on the other cores, and daemonic ones may not have children) and a core
+    is idle (:func:`idle_core`)."""
     return (
         "fork" in multiprocessing.get_all_start_methods()
         and multiprocessing.parent_process() is None
@@ -250,22 +253,34 @@ def _both(report: ReportFn, beside: ReportFn | None, folder: Path, name: str) ->
     if beside is None:
         report(folder, name)
         return
+    side_by_side(lambda: report(folder, name), lambda: beside(folder, name), fork=True)
+
+
+def side_by_side(here: Callable[[], Any], there: Callable[[], Any], *, fork: bool | None = None) -> tuple[Any, Any]:
+    """``(here(), there())``, ``there`` run in a forked child meanwhile when ``fork`` (default: when
+    :func:`may_fork`), else after ``here``; an exception of either is raised here, the child ended first.
+
+    ``there``'s value comes back pickled.  A caller that knows the machine better than the load average
+    does passes ``fork`` (a pool's parent whose workers just ended: their load is still in the average).
+    """
+    fork = may_fork() if fork is None else fork
+    if not fork or "fork" not in multiprocessing.get_all_start_methods():
+        return here(), there()
     ctx = multiprocessing.get_context("fork")
     conn, child_end = ctx.Pipe(duplex=False)
-    helper = ctx.Process(target=_helper_main, args=(child_end, conn, lambda: beside(folder, name)))
+    helper = ctx.Process(target=_helper_main, args=(child_end, conn, there))
     helper.start()
     child_end.close()
     try:
-        report(folder, name)
+        mine = here()
         try:
             ok, value = conn.recv()
         except EOFError:
             helper.join(timeout=1.0)
-            raise RpbenchError(
-                f"the process drawing a figure beside report.md died (exit status {helper.exitcode})"
-            ) from None
+            raise RpbenchError(f"the process drawing beside this one died (exit status {helper.exitcode})") from None
         if not ok:
             raise value
+        return mine, value
     finally:
         if helper.is_alive():
             helper.kill()

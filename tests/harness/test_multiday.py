@@ -79,3 +79,25 @@ def test_every_day_is_flagged_against_the_decision_budget(two_day_data, tmp_path
     summary = pd.read_csv(out / "summary.csv").set_index(["run", "kpi"])
     assert summary.loc[("mb", "rounds_over_budget"), "count"] == 2
     assert all(found.status == "ok" for found in check_tree(out))
+
+
+def test_the_per_day_figures_drawn_in_two_processes_give_the_same_report(two_day_data, tmp_path):
+    """With a spare core the parent's per-day figures are split with a forked child: the same report.md and
+    the same figures as drawn in one process."""
+    import shutil
+
+    from rpbench.harness.multiday import write_multiday_report
+
+    request = ScenarioRequest("haikou-peak", sample=0.3, data_dir=str(two_day_data))
+    spec = RunSpec.of(request, ["mb", "rtv"], command="test")
+    folder = run_days(spec, ["2017-05-01", "2017-05-02"], str(tmp_path / "days"), workers=1).folder
+    reports = {}
+    for fork in (False, True):
+        copy = tmp_path / f"fork-{fork}"
+        shutil.copytree(folder, copy)
+        for png in copy.glob("by_day_*.png"):
+            png.unlink()
+        write_multiday_report(copy, name="days", fork=fork)
+        reports[fork] = ((copy / "report.md").read_text(), sorted(p.name for p in copy.glob("by_day_*.png")))
+    assert reports[True] == reports[False]
+    assert len(reports[True][1]) >= 8 and all(f"]({name})" in reports[True][0] for name in reports[True][1])
