@@ -27,7 +27,7 @@ import numpy as np
 from rpbench.exceptions import ParameterError
 from rpbench.network import Distances, RoadNetwork
 from rpbench.sim import routes
-from rpbench.sim.lookahead import PlanWindows, advance, gather_positions
+from rpbench.sim.lookahead import PlanWindows, advance, gather_positions, refill_from_plan
 
 PICKUP, DROPOFF = 0, 1
 CRUISE_ARCS = 24  # random-walk arcs added per extension (~11 km on Haikou)
@@ -182,16 +182,16 @@ class FleetState:
         )  # fmt: skip
         for v in self._missed[:n_missed].tolist():  # past the window: look up the plan, then refill
             plan = self.plans[v]
-            k = int(plan.tt.searchsorted(before))  # :meth:`position`, inlined for the common case
-            if k >= len(plan.nodes):
+            k = -1  # :meth:`position`, in the kernel for the common case
+            while True:
+                k = refill_from_plan(
+                    v, k, before, t, plan.nodes, plan.tt, plan.odo, plan.cruising,
+                    self._next_k, self._next_node, self._next_tt, self._next_odo, self._idle,
+                    w.tt, w.node, w.odo, w.base, w.length, w.tt_before, w.last, w.cruising,
+                )  # fmt: skip
+                if k >= 0:
+                    break
                 k = self.position(v, t)[0]  # past the plan's end: cruise extended, or standing
-            tt_k = plan.tt[k]
-            self._next_k[v] = k
-            self._next_node[v] = plan.nodes[k]
-            self._idle[v] = k == len(plan.nodes) - 1 and tt_k <= t and not plan.cruising
-            self._next_tt[v] = tt_k
-            self._next_odo[v] = plan.odo[k]
-            self._windows.fill(v, plan.nodes, plan.tt, plan.odo, plan.cruising, k)
         return gather_positions(vehicles, t, self.speed, self._next_k, self._next_node, self._next_tt, self._idle)
 
     def next_odometers(self, vehicles: np.ndarray) -> np.ndarray:
@@ -260,16 +260,14 @@ class FleetState:
     def _extend_cruise(self, v: int, t: float) -> None:
         plan = self.plans[v]
         while plan.tt[-1] < t + 1.0:
-            prev = int(plan.nodes[-2]) if len(plan.nodes) > 1 else -1
-            extra = self._plan_from(
-                int(plan.nodes[-1]),
-                float(plan.tt[-1]),
-                float(plan.odo[-1]),
-                self._random_walk(int(plan.nodes[-1]), prev),
-            )
-            plan.nodes = np.concatenate([plan.nodes, extra.nodes[1:]])
-            plan.tt = np.concatenate([plan.tt, extra.tt[1:]])
-            plan.odo = np.concatenate([plan.odo, extra.odo[1:]])
+            # :meth:`_random_walk` from the plan's end, timed as :meth:`_plan_from` times it, appended: one call
+            nodes, tt, odo, bad = routes.extended_cruise(
+                self._offsets, self._heads, self._lengths, plan.nodes, plan.tt, plan.odo, self.speed,
+                self.rng.random(CRUISE_ARCS),
+            )  # fmt: skip
+            if bad >= 0:  # pragma: no cover - a random walk follows arcs
+                raise ValueError(f"vehicle {v}: a cruise left the network's arcs")
+            plan.nodes, plan.tt, plan.odo = nodes, tt, odo
         self._invalidate(v)
 
     def random_walk_from(self, node: int, prev: int) -> np.ndarray:

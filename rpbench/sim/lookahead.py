@@ -163,6 +163,48 @@ def advance(
 
 
 @njit(cache=True, nogil=True)
+def refill_from_plan(
+    v: int,
+    k: int,
+    before: float,
+    t: float,
+    nodes: np.ndarray,
+    tt: np.ndarray,
+    odo: np.ndarray,
+    cruising: bool,
+    next_k: np.ndarray,
+    next_node: np.ndarray,
+    next_tt: np.ndarray,
+    next_odo: np.ndarray,
+    idle: np.ndarray,
+    w_tt: np.ndarray,
+    w_node: np.ndarray,
+    w_odo: np.ndarray,
+    base: np.ndarray,
+    length: np.ndarray,
+    tt_before: np.ndarray,
+    last: np.ndarray,
+    w_cruising: np.ndarray,
+) -> int:  # pragma: no cover - compiled
+    """Vehicle ``v``'s cached next node and window from its plan (``nodes``, ``tt``, ``odo``) when its window
+    could not answer: at plan index ``k``, or (``k < 0``) at its first node reached at or after ``before``
+    (``searchsorted(tt, before)``).  Returns that index, or -1, changing nothing, when it lies past the plan's
+    end (the caller extends a cruise or stands the vehicle at its last node, then passes the index)."""
+    if k < 0:
+        k = np.searchsorted(tt, before)
+        if k >= len(nodes):
+            return -1
+    tt_k = tt[k]
+    next_k[v] = k
+    next_node[v] = nodes[k]
+    idle[v] = k == len(nodes) - 1 and tt_k <= t and not cruising
+    next_tt[v] = tt_k
+    next_odo[v] = odo[k]
+    fill_row(w_tt, w_node, w_odo, base, length, tt_before, last, w_cruising, v, nodes, tt, odo, cruising, k)
+    return k
+
+
+@njit(cache=True, nogil=True)
 def gather_positions(
     vehicles: np.ndarray,
     t: float,
@@ -207,4 +249,9 @@ def load_lookahead_kernels() -> None:
         one.copy(),
     )
     gather_positions(one, 0.0, 1.0, one, one, np.zeros(1), np.zeros(1, bool))
+    refill_from_plan(
+        0, -1, 0.0, 0.0, np.zeros(1, np.int32), np.zeros(1), np.zeros(1), False,
+        one.copy(), one.copy(), np.zeros(1), np.zeros(1), np.zeros(1, bool),
+        w.tt, w.node, w.odo, w.base, w.length, w.tt_before, w.last, w.cruising,
+    )  # fmt: skip
     w.fill(0, np.zeros(1, np.int32), np.zeros(1), np.zeros(1), False, 0)

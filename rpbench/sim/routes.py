@@ -162,6 +162,32 @@ def plan_and_window(
 
 
 @njit(cache=True, nogil=True)
+def extended_cruise(
+    offsets: np.ndarray,
+    heads: np.ndarray,
+    lengths: np.ndarray,
+    nodes: np.ndarray,
+    tt: np.ndarray,
+    odo: np.ndarray,
+    speed: float,
+    u: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:  # pragma: no cover - compiled
+    """A cruising plan (``nodes``, ``tt``, ``odo``) continued by ``len(u)`` random arcs from its last node
+    (:func:`random_walk`, having come from the node before it), timed from its last node as
+    :func:`plan_arrays` times a plan; and -1, or the position of the first arc not found."""
+    n = len(nodes)
+    prev = nodes[n - 2] if n > 1 else -1
+    walk = random_walk(offsets, heads, nodes[n - 1], prev, u)
+    m = len(walk) + 1
+    x_nodes, x_tt, x_odo = np.empty(m, np.int32), np.empty(m), np.empty(m)
+    bad = plan_arrays(offsets, heads, lengths, nodes[n - 1], walk, tt[n - 1], odo[n - 1], speed, x_nodes, x_tt, x_odo)
+    out_nodes, out_tt, out_odo = np.empty(n + m - 1, np.int32), np.empty(n + m - 1), np.empty(n + m - 1)
+    out_nodes[:n], out_tt[:n], out_odo[:n] = nodes, tt, odo
+    out_nodes[n:], out_tt[n:], out_odo[n:] = x_nodes[1:], x_tt[1:], x_odo[1:]
+    return out_nodes, out_tt, out_odo, bad
+
+
+@njit(cache=True, nogil=True)
 def trajectory_keep(
     nodes: np.ndarray, tt: np.ndarray, starts: np.ndarray, eps: float, t_end: float
 ) -> np.ndarray:  # pragma: no cover - compiled
@@ -232,6 +258,7 @@ def load_route_kernels() -> None:
     plan_arrays(offsets, heads, one, 0, np.zeros(0, np.int32), 0.0, 0.0, 1.0, np.zeros(1, np.int32), one, one.copy())
     trajectory_keep(np.zeros(1, np.int32), one, np.array([0, 1], np.int64), 0.0, np.inf)
     fleet_trajectory_keep(np.zeros(1, np.int32), one, np.array([0, 1], np.int64), np.array([0, 1], np.int64), 0.0, 1.0)
+    extended_cruise(offsets, heads, one, np.zeros(1, np.int32), one, one.copy(), 1.0, np.zeros(1))
     from rpbench.sim.lookahead import PlanWindows
 
     w = PlanWindows(1)

@@ -174,6 +174,10 @@ def _a(obj: object) -> str:
 
 def _frozen(raw: object, name: str, dtype: type, n: int | None = None) -> np.ndarray:
     """A read-only copy of ``raw`` as ``dtype`` (``n`` entries), refusing a cast that would change its values."""
+    if type(raw) is np.ndarray and raw.dtype == dtype and raw.ndim == 1 and (n is None or len(raw) == n):
+        out = raw.copy()  # the usual case: already as wanted, nothing to check
+        out.setflags(write=False)
+        return out
     arr = np.array(raw)
     if arr.ndim != 1 or (n is not None and len(arr) != n):
         raise ModelError(f"{name} has shape {arr.shape}" + (f" for {n} columns" if n is not None else ""))

@@ -298,6 +298,9 @@ def _ordered_columns(state, vac, vac_utility_m, join, join_utility_m, wait_utili
         (join.p, np.int64), (join.v, np.int64), (join_utility_m, np.float64), (join.pickup_m, np.float64),
         (join.fofo, np.bool_), (wait_utility_m, np.float64),
     ):  # fmt: skip
+        if type(raw) is np.ndarray and raw.dtype == dtype and raw.ndim == 1:  # the usual case: as it is
+            arrays.append(raw)
+            continue
         arr = np.asarray(raw)
         if arr.ndim != 1 or (len(arr) and arr.dtype.kind not in ("b" if dtype is np.bool_ else "biuf")):
             return None
