@@ -19,6 +19,19 @@ from typing import Any, ClassVar
 from rpbench.exceptions import SolverNotInstalledError
 from rpbench.model import Model, Solution, Structure
 
+#: Solver libraries found installed in this process.  A library once found stays installed, so a backend
+#: checks each only until it is found; a missing one is looked for again at every check (it may be
+#: installed meanwhile), which is only the error path.  Every solve checks: a path search per library
+#: and solve (a library not imported yet, such as highspy under the matching preset, where it is only the
+#: fallback) was a sixth of Hindsight's round loop.
+_FOUND: set[str] = set()
+
+
+def _installed(library: str) -> bool:
+    if library not in _FOUND and importlib.util.find_spec(library) is not None:
+        _FOUND.add(library)
+    return library in _FOUND
+
 
 @dataclass(frozen=True)
 class SolveOptions:
@@ -56,7 +69,7 @@ class Backend(ABC):
 
     @classmethod
     def missing_libraries(cls) -> list[str]:
-        return [lib for lib in cls.requires if importlib.util.find_spec(lib) is None]
+        return [lib for lib in cls.requires if not _installed(lib)]
 
     @classmethod
     def is_installed(cls) -> bool:

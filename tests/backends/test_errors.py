@@ -7,6 +7,7 @@ import importlib.util
 import pytest
 
 from rpbench.backends import BACKEND_REGISTRY, SolveOptions, backend_class, get_backend
+from rpbench.backends import base as backends_base
 from rpbench.backends.highs import HighsBackend
 from rpbench.backends.presets import load_preset, parse_preset
 from rpbench.exceptions import PresetError, RpbenchError, SolverError, SolverNotInstalledError
@@ -57,6 +58,7 @@ def test_missing_solver_library_is_reported_by_name(name, monkeypatch):
     cls = backend_class(name)
     real = importlib.util.find_spec
     monkeypatch.setattr(importlib.util, "find_spec", lambda mod, *a: None if mod == cls.requires[0] else real(mod, *a))
+    monkeypatch.setattr(backends_base, "_FOUND", set())  # as in a process where it was never found
     # [0]: with an optional extra absent (blossom), its other libraries are missing too
     assert not cls.is_installed() and cls.missing_libraries()[0] == cls.requires[0]
     with pytest.raises(SolverNotInstalledError, match=f"needs the Python package.*{cls.requires[0]}.*--solver"):
@@ -109,3 +111,17 @@ def test_every_backend_declares_what_it_needs():
     for name in BACKEND_REGISTRY:
         cls = backend_class(name)
         assert cls.name == name and cls.requires and cls.exact and cls.description
+
+
+def test_a_library_found_once_is_not_looked_for_again(monkeypatch):
+    monkeypatch.setattr(backends_base, "_FOUND", set())
+    looked = []
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec", lambda mod, *a: looked.append(mod) or real(mod, *a))
+    for _ in range(3):
+        HighsBackend.ensure_installed()
+    assert looked == ["highspy"]
+    monkeypatch.setattr(HighsBackend, "requires", ("highspy", "no_such_solver_lib"))
+    for _ in range(2):  # a missing library is looked for at every check: it may be installed meanwhile
+        assert HighsBackend.missing_libraries() == ["no_such_solver_lib"]
+    assert looked == ["highspy", "no_such_solver_lib", "no_such_solver_lib"]
