@@ -178,8 +178,21 @@ def classify(state: str, objective: float, bound: float | None, rel_gap: float) 
     return Status.OPTIMAL if proven else Status.TIME_LIMIT
 
 
-def finish(model: Model, raw: Raw, backend: str, clock: Clock, rel_gap: float = 0.0, message: str = "") -> Solution:
-    """Check a raw answer and wrap it as a :class:`Solution` (see the module docstring)."""
+def finish(
+    model: Model,
+    raw: Raw,
+    backend: str,
+    clock: Clock,
+    rel_gap: float = 0.0,
+    message: str = "",
+    *,
+    chosen: np.ndarray | None = None,
+) -> Solution:
+    """Check a raw answer and wrap it as a :class:`Solution` (see the module docstring).
+
+    ``chosen``: the columns ``raw.x`` sets to 1 when the caller has read them already, its values found
+    integral within :data:`INT_TOL` (as :func:`chosen_columns` checks them).
+    """
     note = "; ".join(m for m in (message, raw.message) if m)
     if raw.state == INFEASIBLE:
         if model.structure is not Structure.ASSIGNMENT:
@@ -197,7 +210,7 @@ def finish(model: Model, raw: Raw, backend: str, clock: Clock, rel_gap: float = 
             )
         chosen = np.zeros(0, np.int64)
         note = note or "time limit before any incumbent: returning x = 0"
-    else:
+    elif chosen is None or np.shape(raw.x) != (model.n_cols,):
         chosen = chosen_columns(model, raw.x, backend)
     objective = model.objective_of(chosen)
     bound = integral_bound(raw.bound)

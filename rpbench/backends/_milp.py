@@ -78,8 +78,11 @@ class ProgramBackend(Backend):
                 raw = self.run(prog, options, clock, time_limit=clock.remaining(options.time_limit_s))
                 return finish(model, raw, self.name, clock, options.mip_rel_gap, message=note)
             x = raw.x
-            if raw.state != OPTIMAL or x is None or _integral(x):
+            if raw.state != OPTIMAL or x is None:
                 return finish(model, raw, self.name, clock, options.mip_rel_gap)
+            integral, chosen = _integral_support(x)
+            if integral:  # the columns set to 1, read once: finish() need not check the same values again
+                return finish(model, raw, self.name, clock, options.mip_rel_gap, chosen=chosen)
             note = "LP vertex was fractional (numerical trouble); re-solved as a MIP"
             raw = self.run(prog, options, clock, time_limit=clock.remaining(options.time_limit_s))
             return finish(model, raw, self.name, clock, options.mip_rel_gap, message=note)
@@ -114,11 +117,13 @@ class ProgramBackend(Backend):
         return finish(model, stage2, self.name, clock, options.mip_rel_gap)
 
 
-def _integral(x) -> bool:
-    """Whether every LP value lies within 1e-6 of an integer (a NaN is not)."""
+def _integral_support(x) -> tuple[bool, np.ndarray | None]:
+    """Whether every LP value lies within 1e-6 of an integer (a NaN is not) and, for one-dimensional
+    values, the columns set to 1 (as :func:`~rpbench.backends._common.chosen_columns` reads them)."""
     x = np.asarray(x, dtype=np.float64)
     if x.ndim != 1:
-        return bool(np.abs(x - np.round(x)).max(initial=0.0) <= 1e-6)
+        return bool(np.abs(x - np.round(x)).max(initial=0.0) <= 1e-6), None
     from rpbench.model import kernels  # compiled on first use
 
-    return kernels.integral_support(x)[0] <= 1e-6
+    worst, _, chosen = kernels.integral_support(x)
+    return worst <= 1e-6, chosen

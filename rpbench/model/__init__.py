@@ -267,7 +267,11 @@ class _Model:
 
     # -- solutions -------------------------------------------------------------
     def objective_of(self, chosen) -> float:
-        return float(self.values[np.asarray(chosen, dtype=np.int64)].sum()) if len(chosen) else 0.0
+        if not len(chosen):
+            return 0.0
+        if type(chosen) is not np.ndarray or chosen.dtype != np.int64:
+            chosen = np.asarray(chosen, dtype=np.int64)
+        return float(self.values[chosen].sum())
 
     def violations(self, chosen) -> list[str]:
         """Constraint violations of a 0/1 solution given as chosen column indices."""

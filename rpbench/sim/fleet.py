@@ -194,6 +194,15 @@ class FleetState:
                 k = self.position(v, t)[0]  # past the plan's end: cruise extended, or standing
         return gather_positions(vehicles, t, self.speed, self._next_k, self._next_node, self._next_tt, self._idle)
 
+    def positions_found(self, vehicles: np.ndarray, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`positions` as the last call found them, without looking for vehicles that moved on.
+
+        Valid, as :meth:`next_odometers`, for vehicles passed to :meth:`positions` at time ``t`` and not
+        replanned since.
+        """
+        vehicles = np.asarray(vehicles, dtype=np.int64)
+        return gather_positions(vehicles, t, self.speed, self._next_k, self._next_node, self._next_tt, self._idle)
+
     def next_odometers(self, vehicles: np.ndarray) -> np.ndarray:
         """Odometer at the plan node each vehicle reaches next, as found by the last :meth:`positions` call.
 

@@ -37,6 +37,7 @@ import stat
 import tempfile
 import time
 from collections.abc import Callable
+from operator import itemgetter
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -252,14 +253,15 @@ class Simulator:
         k = 0
         t = 0.0
         last_request = float(self.request[-1]) if self.n_orders else 0.0
+        requests: list[float] = self.request.tolist()  # read one by one as rounds reveal them
         while True:
             t = k * dt
             self._process_stops(t)
             self._update_duty(t)
-            while next_order < self.n_orders and self.request[next_order] <= t:
+            while next_order < self.n_orders and requests[next_order] <= t:
                 self.state[next_order] = WAITING
                 self.waiting.append(next_order)
-                self._event(self.request[next_order], "request", next_order, -1, self.origin[next_order])
+                self._event(requests[next_order], "request", next_order, -1, self._origin_list[next_order])
                 next_order += 1
             self._expire(t)
             if self.waiting:
@@ -272,7 +274,7 @@ class Simulator:
                 break
             k += 1
         self._process_stops(math.inf)
-        end = max([t] + [e[0] for e in self.events])
+        end = max(t, max(map(itemgetter(0), self.events), default=t))
         return SimResult(
             strategy=self.strategy.name,
             events=self._event_table(),
@@ -447,11 +449,12 @@ class Simulator:
         origin, destination = self._origin_list, self._destination_list
         assigned: list[int] = []
         # Every chosen vehicle's position at once: each vehicle is chosen once, and replanning one
-        # leaves the others' positions as they were.  The chosen columns' fields are read as Python
-        # values once, not element by element.
+        # leaves the others' positions as they were.  The round state found them at t (the chosen
+        # vehicles are the round's V0 and V1, which received() checks), and nothing moved since.
+        # The chosen columns' fields are read as Python values once, not element by element.
         moving = chosen[rm.kind[chosen] != Kind.WAIT]
         vehicles = rm.vehicle[moving]
-        ks, hs, _ = fl.positions(vehicles, t)
+        ks, hs, _ = fl.positions_found(vehicles, t)
         columns = zip(
             rm.kind[moving].tolist(),
             vehicles.tolist(),
