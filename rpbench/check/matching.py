@@ -4,14 +4,18 @@ The checker enumerates the bound's graph itself (every pair of orders inside the
 orientation valued by :mod:`.certificate`'s own rule), so a pair left out of the candidate set counts as
 much as a pair left out of the matching.  The maximum is then bounded by a dual certificate of the
 matching polytope: degree constraints plus the odd-set (blossom) constraints that a cutting-plane loop
-finds (odd components of the fractional edges, or odd cycles of its even ones), solved with HiGHS (one instance,
-warm-started as rows are added).
+finds (the violated odd components of the fractional edges, or odd cycles of its even ones; when there are
+none, the exact separator of :mod:`.separation`), solved with HiGHS (one instance, warm-started as rows are
+added).  With exact separation the loop ends only when the LP's solution lies in the matching polytope
+(Edmonds), where the LP's optimum is the maximum matching.
 The solver only searches: the dual it returns is made feasible and summed by numpy here, and any feasible
 dual bounds every matching (weak duality), so the verdict rests on that arithmetic, not on the solver's
-claim.  Weights are integral (the model's unit), so a dual below ``U + 1`` proves ``max <= U``.  When the
-loop stalls above ``U + 1`` (the full day: no odd component left, a few metres above), the dual still fixes
-every edge whose slack exceeds the gap (no matching using it can reach ``U + 1``), and HiGHS's MIP decides the
-few edges left, on its own optimality claim; the check says so (``mip_edges``).
+claim.  Weights are integral (the model's unit), so a dual below ``U + 1`` proves ``max <= U``.  Should the
+loop end above ``U + 1`` anyway (its round limit, or a stall), the dual still fixes every edge whose slack
+exceeds the gap (no matching using it can reach ``U + 1``), and an exact matching code decides the edges
+left, on its own optimality claim: OGDF's Blossom V when the optional ``blossom`` extra is installed (not
+PyMatching, which the bound run may have used), else HiGHS's MIP; the check says so (``mip_edges``, and the
+method named).
 """
 
 from __future__ import annotations
@@ -34,10 +38,10 @@ CHECK_BLOCK_PAIRS = 1 << 20
 #: A weight this close above a multiple of the unit is float noise: rounded down, never up (the checker's
 #: rounded weights then never exceed the run's, whose optimum is the bound).
 ROUND_SLACK = 1e-6
-#: Cutting-plane rounds before the exact fallback.
+#: Cutting-plane rounds before the exact matching code decides.
 MAX_ROUNDS = 100
 #: The loop has stalled when this many rounds of odd sets in a row lowered the dual bound by less than one
-#: unit of weight (the weights are integral): reduced-cost fixing and the MIP then decide.
+#: unit of weight (the weights are integral): reduced-cost fixing and the exact matching code then decide.
 STALL_ROUNDS = 5
 FRACTIONAL = 1e-6
 #: An edge enters the LP when its reduced cost exceeds this, relative to its weight (the solver's tolerance).

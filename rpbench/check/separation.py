@@ -57,11 +57,12 @@ def violated_blossoms(n: int, a: np.ndarray, b: np.ndarray, x: np.ndarray) -> li
         return []
     a, b, x = a[support], b[support], x[support]
     _, label = connected_components(sp.coo_matrix((x, (a, b)), shape=(n, n)), directed=False)
-    size = np.bincount(label[np.r_[a, b]], minlength=label.max() + 1)
-    edge_comp = label[a]
+    size = np.bincount(label[np.unique(np.r_[a, b])], minlength=label.max() + 1)  # vertices a component
+    order = np.argsort(label[a], kind="stable")
+    first = np.searchsorted(label[a][order], np.arange(len(size) + 1))
     found: list[np.ndarray] = []
     for comp in np.flatnonzero(size >= 3).tolist():
-        inside = edge_comp == comp
+        inside = order[first[comp] : first[comp + 1]]
         found += _component_blossoms(n, a[inside], b[inside], x[inside])
     return found
 
@@ -125,14 +126,10 @@ def _fundamental_sides(parent: np.ndarray) -> list[np.ndarray]:
     """For every node but the root 0 of the tree ``parent``, the nodes of its subtree (the side of its tree
     edge's cut without the root)."""
     k = len(parent)
-    depth = np.zeros(k, np.int64)
-    for node in range(1, k):  # depths by walking up (the trees are small: a support component)
-        d, up = 0, node
-        while up != 0:
-            up, d = int(parent[up]), d + 1
-        depth[node] = d
+    tree = sp.csr_matrix((np.ones(k - 1), (parent[1:], np.arange(1, k))), shape=(k, k))
+    top_down = breadth_first_order(tree, 0, directed=True, return_predecessors=False)
     members: list[list[int]] = [[i] for i in range(k)]
-    for node in np.argsort(-depth, kind="stable").tolist():
+    for node in top_down[::-1].tolist():  # children before their parents
         if node:
             members[int(parent[node])] += members[node]
     return [np.array(members[i], np.int64) for i in range(1, k)]
