@@ -72,12 +72,10 @@ def verify(model: Model, solution: object, solver: str) -> Solution:
             f"{solver} reports objective {reported!r} on {model.name!r}, but its chosen columns are worth "
             f"{exact:.17g} (the sum of their values)"
         )
-    for name in ("bound", "gap"):
-        value = getattr(solution, name)
+    for name, value in (("bound", solution.bound), ("gap", solution.gap)):
         if value is not None and not _finite(value):
             raise SolverError(f"{solver} reports {name} {value!r} on {model.name!r}; expected a finite number or None")
-    for name in ("build_s", "solve_s", "extract_s"):
-        value = getattr(solution, name)
+    for name, value in (("build_s", solution.build_s), ("solve_s", solution.solve_s), ("extract_s", solution.extract_s)):
         if not (_finite(value) and value >= 0):
             raise SolverError(f"{solver} reports {name} = {value!r} on {model.name!r}; times are seconds >= 0")
     if chosen is solution.chosen:
@@ -91,6 +89,13 @@ def _finite(value: object) -> bool:
     return isinstance(value, Real) and not isinstance(value, bool) and math.isfinite(value)
 
 
+def _strictly_increasing(raw: np.ndarray) -> bool:
+    """Whether the int64 indices are sorted without repeats (one compiled pass)."""
+    from rpbench.model import kernels  # compiled on first use
+
+    return bool(kernels.strictly_increasing(raw))
+
+
 def _chosen(model: Model, raw: object, solver: str) -> np.ndarray:
     """A solution's chosen columns as sorted read-only int64 indices, or a :class:`SolverError`.
 
@@ -102,7 +107,7 @@ def _chosen(model: Model, raw: object, solver: str) -> np.ndarray:
         and raw.dtype == np.int64
         and raw.ndim == 1
         and not raw.flags.writeable
-        and (len(raw) < 2 or bool(np.all(raw[1:] > raw[:-1])))
+        and _strictly_increasing(raw)
     ):
         return raw
     arr = np.asarray(raw)

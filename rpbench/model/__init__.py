@@ -567,6 +567,17 @@ def make_solution(model: _Model, chosen, status: Status, backend: str, **kw) -> 
     a repeated one is a :class:`SolverError`, not something cast or
     deduplicated into a different answer.
     """
+    if type(chosen) is np.ndarray and chosen.dtype == np.int64 and chosen.ndim == 1:
+        # the usual case (a backend's column indices): a copy of our own, sorted and distinct
+        from rpbench.model import kernels  # compiled on first use
+
+        unique = chosen.copy()
+        if not kernels.strictly_increasing(unique):
+            unique = np.unique(unique)
+            if len(unique) != len(chosen):
+                raise SolverError(f"backend {backend!r} chose a column of {model.name!r} twice")
+        unique.setflags(write=False)
+        return Solution(chosen=unique, objective=model.objective_of(unique), status=status, backend=backend, **kw)
     raw = np.asarray(chosen)
     if raw.ndim != 1 or (len(raw) and raw.dtype.kind not in "iuf"):
         raise SolverError(

@@ -142,6 +142,15 @@ def integral_support(x: np.ndarray) -> tuple[float, int, np.ndarray]:  # pragma:
     return worst, at, chosen
 
 
+@njit(cache=True, nogil=True)
+def strictly_increasing(a: np.ndarray) -> bool:  # pragma: no cover - compiled
+    """Whether every entry is larger than the one before it (sorted, no repeats)."""
+    for i in range(1, len(a)):  # noqa: SIM110 (numba compiles loops, not generators)
+        if not a[i] > a[i - 1]:
+            return False
+    return True
+
+
 def load_model_kernels() -> None:
     """Load (or compile) the kernels now: the first call of each costs a one-off load of its machine code."""
     assignment_valid(1, 1, np.zeros(1, np.int32), np.zeros(1, np.int32), np.zeros(1))
@@ -149,3 +158,4 @@ def load_model_kernels() -> None:
     assignment_column_rows(1, np.zeros(1, np.int32), np.zeros(1, np.int32))
     first_outside_int32(np.zeros(1, np.int64))
     integral_support(np.zeros(1))
+    strictly_increasing(np.zeros(1, np.int64))

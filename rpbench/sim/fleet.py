@@ -19,6 +19,8 @@ verifies (consecutive nodes joined by arcs, driven at the set speed).
 from __future__ import annotations
 
 import heapq
+import itertools
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -254,6 +256,57 @@ class FleetState:
         self._version[v] += 1
         if new.stops:
             heapq.heappush(self._heap, (float(new.tt[new.stops[0].index]), v, self._version[v]))
+
+    def replan_through(
+        self,
+        vehicles: list[int],
+        anchors: list[int],
+        waypoints: list[list[int]],
+        stops_of: Callable[[int, list[int]], list[Stop]],
+    ) -> None:
+        """:meth:`route_through` and :meth:`replan` for many vehicles (each at most once): vehicle
+        ``vehicles[i]`` keeps its plan up to index ``anchors[i]`` and drives on through ``waypoints[i]`` (the
+        first being its plan node there), with the stops ``stops_of(i, reach)`` gives (``reach``: the new
+        plan's index of each later waypoint).  The routes, plans and windows are found in one compiled call;
+        the plans are the same as one :meth:`replan` each would make.
+        """
+        if not vehicles:
+            return
+        wp_start = [0]
+        for points in waypoints:
+            wp_start.append(wp_start[-1] + len(points))
+        flat = np.fromiter(itertools.chain.from_iterable(waypoints), np.int64, wp_start[-1])
+        plans = [self.plans[v] for v in vehicles]
+        t0 = np.array([float(plan.tt[a]) for plan, a in zip(plans, anchors, strict=True)])
+        odo0 = np.array([float(plan.odo[a]) for plan, a in zip(plans, anchors, strict=True)])
+        reach = np.zeros(wp_start[-1] - len(vehicles), np.int64)
+        w = self._windows
+        nodes, tt, odo, plan_start, bad, where, why = routes.routed_plans(
+            self._pred, self._offsets, self._heads, self._lengths, self.speed, flat, np.asarray(wp_start, np.int64),
+            t0, odo0, reach, np.asarray(vehicles, np.int64),
+            w.tt, w.node, w.odo, w.base, w.length, w.tt_before, w.last, w.cruising,
+        )  # fmt: skip
+        if bad >= 0:
+            points = waypoints[bad]
+            if why == 1:
+                raise ParameterError(f"no path from node {points[where]} to node {points[where + 1]}")
+            p0 = int(plan_start[bad])
+            before = int(nodes[p0 + where])
+            raise ValueError(f"no arc from node {before} to node {int(nodes[p0 + where + 1])} in a vehicle's plan")
+        reach_list, starts = reach.tolist(), plan_start.tolist()
+        for i, (v, anchor, plan) in enumerate(zip(vehicles, anchors, plans, strict=True)):
+            if plan.stops and plan.stops[0].index < anchor:
+                raise RuntimeError(f"vehicle {v}: replanning past an unserved stop")  # pragma: no cover
+            self.history[v].append(DrivenPart(plan.nodes, plan.tt, plan.odo, anchor + 1))
+            p0, p1 = starts[i], starts[i + 1]
+            stops = stops_of(i, reach_list[wp_start[i] - i : wp_start[i + 1] - i - 1])
+            new = Plan(nodes[p0:p1], tt[p0:p1], odo[p0:p1], sorted(stops, key=_stop_key) if stops else [], False)
+            self.plans[v] = new
+            self._next_tt[v] = -np.inf  # stale: found again in the new plan's window, filled above
+            self._idle[v] = False
+            self._version[v] += 1
+            if new.stops:
+                heapq.heappush(self._heap, (float(new.tt[new.stops[0].index]), v, self._version[v]))
 
     # -------------------------------------------------------------- cruising
     def start_cruise(self, v: int, anchor: int, t: float | None = None) -> None:

@@ -162,6 +162,79 @@ def plan_and_window(
 
 
 @njit(cache=True, nogil=True)
+def routed_plans(
+    pred: np.ndarray,
+    offsets: np.ndarray,
+    heads: np.ndarray,
+    lengths: np.ndarray,
+    speed: float,
+    waypoints: np.ndarray,
+    wp_start: np.ndarray,
+    t0: np.ndarray,
+    odo0: np.ndarray,
+    reach: np.ndarray,
+    vehicles: np.ndarray,
+    w_tt: np.ndarray,
+    w_node: np.ndarray,
+    w_odo: np.ndarray,
+    base: np.ndarray,
+    length: np.ndarray,
+    tt_before: np.ndarray,
+    last: np.ndarray,
+    w_cruising: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int, int, int]:  # pragma: no cover - compiled
+    """Many replans' new plans at once: route ``i`` drives the shortest paths through its waypoints
+    ``waypoints[wp_start[i]:wp_start[i + 1]]`` (as :func:`route_through` finds them) from time ``t0[i]`` and
+    odometer ``odo0[i]`` (as :func:`plan_arrays` times them), and vehicle ``vehicles[i]``'s window is filled
+    over it from its first node (:func:`~rpbench.sim.lookahead.fill_row`).
+
+    Returns the plans' nodes, times and odometers one after another with their offsets, then ``(-1, 0, 0)``,
+    or the first route that failed, its segment and why (1: no path, 2: no arc; nothing is filled then).
+    ``reach`` receives each route's plan index of each waypoint after its first, routes one after another.
+    """
+    n_routes = len(wp_start) - 1
+    plan_start = np.zeros(n_routes + 1, np.int64)
+    for i in range(n_routes):  # the plans' lengths, and each waypoint's place in its plan
+        total = 0
+        r0 = wp_start[i] - i
+        for s in range(wp_start[i + 1] - wp_start[i] - 1):
+            a, cur = waypoints[wp_start[i] + s], waypoints[wp_start[i] + s + 1]
+            while cur != a:
+                cur = pred[a, cur]
+                if cur < 0:
+                    return np.empty(0, np.int32), np.empty(0), np.empty(0), plan_start, i, s, 1
+                total += 1
+            reach[r0 + s] = total
+        plan_start[i + 1] = plan_start[i] + total + 1
+    n = plan_start[n_routes]
+    nodes, tt, odo = np.empty(n, np.int32), np.empty(n), np.empty(n)
+    for i in range(n_routes):
+        p0, p1 = plan_start[i], plan_start[i + 1]
+        r0 = wp_start[i] - i
+        nodes[p0] = waypoints[wp_start[i]]
+        for s in range(wp_start[i + 1] - wp_start[i] - 1):  # each segment backwards from its end
+            a, cur = waypoints[wp_start[i] + s], waypoints[wp_start[i] + s + 1]
+            pos = p0 + reach[r0 + s]
+            while cur != a:
+                nodes[pos] = cur
+                pos -= 1
+                cur = pred[a, cur]
+        bad = plan_arrays(
+            offsets, heads, lengths, nodes[p0], nodes[p0 + 1 : p1], t0[i], odo0[i], speed,
+            nodes[p0:p1], tt[p0:p1], odo[p0:p1],
+        )  # fmt: skip
+        if bad >= 0:
+            return nodes, tt, odo, plan_start, i, bad, 2
+    for i in range(n_routes):
+        p0, p1 = plan_start[i], plan_start[i + 1]
+        fill_row(
+            w_tt, w_node, w_odo, base, length, tt_before, last, w_cruising, vehicles[i],
+            nodes[p0:p1], tt[p0:p1], odo[p0:p1], False, 0,
+        )  # fmt: skip
+    return nodes, tt, odo, plan_start, -1, 0, 0
+
+
+@njit(cache=True, nogil=True)
 def extended_cruise(
     offsets: np.ndarray,
     heads: np.ndarray,
@@ -262,6 +335,11 @@ def load_route_kernels() -> None:
     from rpbench.sim.lookahead import PlanWindows
 
     w = PlanWindows(1)
+    z = np.zeros(1, np.int64)
+    routed_plans(
+        np.zeros((2, 2), np.int32), offsets, heads, one, 1.0, np.zeros(2, np.int64), np.array([0, 2], np.int64),
+        np.zeros(1), np.zeros(1), z, z.copy(), w.tt, w.node, w.odo, w.base, w.length, w.tt_before, w.last, w.cruising,
+    )  # fmt: skip
     plan_and_window(
         offsets, heads, one, 0, np.zeros(0, np.int32), 0.0, 0.0, 1.0,
         w.tt, w.node, w.odo, w.base, w.length, w.tt_before, w.last, w.cruising, 0, False,

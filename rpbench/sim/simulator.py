@@ -68,7 +68,7 @@ Capture = Callable[[int, float, RoundModel, Solution], None]
 # passenger states
 PENDING, WAITING, ASSIGNED, ONBOARD, DONE, CANCELLED = range(6)
 # column kinds as plain ints (compared once per committed column)
-_VACANT, _JOIN, _TRIP2 = int(Kind.VACANT), int(Kind.JOIN), int(Kind.TRIP2)
+_WAIT, _VACANT, _JOIN, _TRIP2 = int(Kind.WAIT), int(Kind.VACANT), int(Kind.JOIN), int(Kind.TRIP2)
 EVENT_COLUMNS = ["t_s", "event", "order", "vehicle", "node", "kind", "utility_m", "pickup_plan_m", "partner", "fofo"]
 EVENT_DTYPES = {
     "t_s": "float64",
@@ -452,7 +452,7 @@ class Simulator:
         # leaves the others' positions as they were.  The round state found them at t (the chosen
         # vehicles are the round's V0 and V1, which received() checks), and nothing moved since.
         # The chosen columns' fields are read as Python values once, not element by element.
-        moving = chosen[rm.kind[chosen] != Kind.WAIT]
+        moving = chosen[rm.kind[chosen] != _WAIT]
         vehicles = rm.vehicle[moving]
         ks, hs, _ = fl.positions_found(vehicles, t)
         columns = zip(
@@ -467,49 +467,64 @@ class Simulator:
             hs.tolist(),
             strict=True,
         )
+        # First every chosen column's route (its anchor, waypoints and how its stops follow from them), then
+        # the vehicles replanned in one call, then the assignments in column order.
+        vehicle_ids: list[int] = []
+        anchors: list[int] = []
+        waypoints: list[list[int]] = []
+        stop_rules: list[tuple] = []
+        assigns: list[tuple] = []
         for kind, v, a, b, fofo, utility, pickup, k, h in columns:
             if kind == _VACANT:
-                tail, reach = fl.route_through([h, origin[a], destination[a]])
-                fl.replan(v, k, tail, [Stop(reach[0], PICKUP, a), Stop(reach[1], DROPOFF, a)])
-                self.rider[v] = a
-                self._assign(a, v, t, "vacant", utility, pickup, -1, fofo)
-                assigned.append(a)
+                anchor, points = k, [h, origin[a], destination[a]]
+                stop_rules.append((_VACANT, a, 0, 0, 0))
+                assigns.append((v, a, "vacant", utility, pickup, -1, fofo, False))
             elif kind == _JOIN:
                 onboard = fl.onboard[v]
                 first = onboard[0] if onboard else fl.assigned[v][0]
                 drops = self._drop_order(first, a, fofo)
                 if onboard:
-                    tail, reach = fl.route_through([h, origin[a], destination[drops[0]], destination[drops[1]]])
-                    stops = [Stop(reach[0], PICKUP, a)]
-                    anchor = k
+                    anchor, points = k, [h, origin[a], destination[drops[0]], destination[drops[1]]]
                 else:  # divert after picking up the first passenger at o_A (A14)
                     plan = fl.plans[v]
                     anchor = next(s.index for s in plan.stops if s.kind == PICKUP and s.order == first)
-                    tail, reach = fl.route_through(
-                        [int(plan.nodes[anchor]), origin[a], destination[drops[0]], destination[drops[1]]]
-                    )
-                    stops = [Stop(0, PICKUP, first), Stop(reach[0], PICKUP, a)]
-                stops += [Stop(reach[1], DROPOFF, drops[0]), Stop(reach[2], DROPOFF, drops[1])]
-                fl.replan(v, anchor, tail, stops)
-                fl.paired[v] = True
-                self._assign(a, v, t, "join", utility, pickup, first, fofo)
-                assigned.append(a)
+                    points = [int(plan.nodes[anchor]), origin[a], destination[drops[0]], destination[drops[1]]]
+                stop_rules.append((_JOIN, a, first if not onboard else -1, drops[0], drops[1]))
+                assigns.append((v, a, "join", utility, pickup, first, fofo, True))
             elif kind == _TRIP2:
                 drops = self._drop_order(a, b, fofo)
-                tail, reach = fl.route_through(
-                    [h, origin[a], origin[b], destination[drops[0]], destination[drops[1]]]
-                )
-                stops = [
-                    Stop(reach[0], PICKUP, a),
-                    Stop(reach[1], PICKUP, b),
-                    Stop(reach[2], DROPOFF, drops[0]),
-                    Stop(reach[3], DROPOFF, drops[1]),
-                ]
-                fl.replan(v, k, tail, stops)
+                anchor, points = k, [h, origin[a], origin[b], destination[drops[0]], destination[drops[1]]]
+                stop_rules.append((_TRIP2, a, b, drops[0], drops[1]))
+                assigns.append((v, a, "trip2", utility, pickup, b, fofo, True))
+                assigns.append((v, b, "trip2", utility, pickup, a, fofo, True))
+            else:
+                continue
+            vehicle_ids.append(v)
+            anchors.append(anchor)
+            waypoints.append(points)
+
+        def stops_of(i: int, reach: list[int]) -> list[Stop]:
+            rule, a, x, drop0, drop1 = stop_rules[i]
+            if rule == _VACANT:
+                return [Stop(reach[0], PICKUP, a), Stop(reach[1], DROPOFF, a)]
+            if rule == _JOIN:  # x: the first passenger when still to be picked up at the anchor, else -1
+                stops = [Stop(reach[0], PICKUP, a)] if x < 0 else [Stop(0, PICKUP, x), Stop(reach[0], PICKUP, a)]
+                return [*stops, Stop(reach[1], DROPOFF, drop0), Stop(reach[2], DROPOFF, drop1)]
+            return [
+                Stop(reach[0], PICKUP, a),
+                Stop(reach[1], PICKUP, x),
+                Stop(reach[2], DROPOFF, drop0),
+                Stop(reach[3], DROPOFF, drop1),
+            ]
+
+        fl.replan_through(vehicle_ids, anchors, waypoints, stops_of)
+        for v, order, kind_name, utility, pickup, partner, fofo, paired in assigns:
+            if paired:
                 fl.paired[v] = True
-                self._assign(a, v, t, "trip2", utility, pickup, b, fofo)
-                self._assign(b, v, t, "trip2", utility, pickup, a, fofo)
-                assigned += [a, b]
+            else:
+                self.rider[v] = order
+            self._assign(order, v, t, kind_name, utility, pickup, partner, fofo)
+            assigned.append(order)
         if assigned:
             taken = set(assigned)
             left = [o for o in self.waiting if o not in taken]
