@@ -23,6 +23,7 @@ import numpy as np
 import pytest
 from helpers import line_network, network_from_edges
 
+from rpbench.exceptions import ParameterError
 from rpbench.sim.fleet import CRUISE_ARCS, DROPOFF, PICKUP, FleetState, Plan, Stop
 
 SPEED = 10.0
@@ -317,3 +318,44 @@ def test_the_fleet_trajectories_are_each_vehicles_trajectory(tee):
             got = (nodes[offsets[v] : offsets[v + 1]], tt[offsets[v] : offsets[v + 1]], odo[offsets[v] : offsets[v + 1]])
             for a, b in zip(got, want, strict=True):
                 assert np.array_equal(a, b)
+
+
+def test_replanning_many_vehicles_at_once_is_replanning_each(grid):
+    rng = np.random.default_rng(9)
+    for _ in range(30):
+        one, many = fleet(grid, [0, 4, 8, 2], seed=3), fleet(grid, [0, 4, 8, 2], seed=3)
+        t = float(rng.uniform(0.0, 200.0))
+        vehicles = sorted(rng.choice(4, size=int(rng.integers(1, 5)), replace=False).tolist())
+        ks, hs, _ = one.positions(np.array(vehicles), t)
+        many.positions(np.array(vehicles), t)
+        waypoints = [[int(h), *rng.integers(0, 9, size=int(rng.integers(1, 4))).tolist()] for h in hs.tolist()]
+
+        def stops_of(i, reach, waypoints=waypoints):
+            return [Stop(r, PICKUP if j % 2 == 0 else DROPOFF, 10 * i + j) for j, r in enumerate(reach)]
+
+        for i, (v, k) in enumerate(zip(vehicles, ks.tolist(), strict=True)):
+            tail, reach = one.route_through(waypoints[i])
+            one.replan(v, k, tail, stops_of(i, reach))
+        many.replan_through(vehicles, ks.tolist(), waypoints, stops_of)
+        for v in range(4):
+            a, b = one.plans[v], many.plans[v]
+            assert a.nodes.tolist() == b.nodes.tolist() and a.tt.tolist() == b.tt.tolist()
+            assert a.odo.tolist() == b.odo.tolist() and a.stops == b.stops and a.cruising == b.cruising
+        for name in ("tt", "node", "odo", "base", "length", "tt_before", "last", "cruising"):
+            assert np.array_equal(getattr(one._windows, name), getattr(many._windows, name)), name
+        later = t + float(rng.uniform(0.0, 300.0))
+        assert list(one.due_stops(later)) == list(many.due_stops(later))
+        for v in range(4):
+            for x, y in zip(one.trajectory(v), many.trajectory(v), strict=True):
+                assert np.array_equal(x, y)
+
+
+def test_replanning_many_vehicles_names_a_missing_path():
+    one_way = network_from_edges([(0, 1, 100.0), (1, 2, 100.0), (2, 0, 100.0)], name="ring")
+    d = one_way.distances()
+    fl = FleetState(one_way, d, np.array([0, 1]), SPEED, np.random.default_rng(0))
+    fl._pred = d.pred.copy()
+    fl._pred[0, 2] = -1  # as if node 2 could not be reached from node 0
+    with pytest.raises(ParameterError, match="no path from node 0 to node 2"):
+        fl.replan_through([0, 1], [0, 0], [[0, 1], [1, 0, 2]], lambda i, reach: [])
+    assert fl.plans[0].nodes.tolist() == [0] and fl.plans[1].nodes.tolist() == [1]  # nobody replanned
