@@ -164,7 +164,11 @@ class _Model:
         Validation on construction does not cover arrays their builder changes afterwards (a plug-in
         strategy setting a value to NaN); the copy can no longer change, and is checked as it is.
         """
-        twin = copy.copy(self)
+        if type(self) in _MODEL_CLASSES:  # as copy.copy copies them, without its protocol lookups
+            twin = object.__new__(type(self))
+            twin.__dict__.update(self.__dict__)
+        else:
+            twin = copy.copy(self)
         twin.__dict__.pop("_column_rows_cache", None)  # derived from the arrays as they were then
         twin.__dict__.pop("_row_exact_cache", None)
         for name in _field_names(type(self)):
@@ -520,6 +524,8 @@ class PairingModel(_Model):
 
 
 Model = AssignmentModel | TripPackingModel | PairingModel
+#: The model classes themselves (not subclasses, which may copy themselves otherwise).
+_MODEL_CLASSES = (AssignmentModel, TripPackingModel, PairingModel)
 
 
 # ------------------------------------------------------------------ solutions

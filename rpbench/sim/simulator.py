@@ -630,7 +630,10 @@ class Simulator:
             name: np.array(column, dtype=object if EVENT_DTYPES[name] == "object" else EVENT_DTYPES[name])
             for name, column in zip(EVENT_COLUMNS, zip(*self.events, strict=True), strict=True)
         }
-        _, event_rank = np.unique(arrays["event"].astype(str), return_inverse=True)
+        # each event name's rank among the few names present, in sorted order (as np.unique ranks them)
+        names = [e[1] for e in self.events]
+        rank = {name: i for i, name in enumerate(sorted(set(names)))}
+        event_rank = np.fromiter(map(rank.__getitem__, names), np.int64, len(names))
         order = np.lexsort((event_rank, arrays["order"], arrays["t_s"]))
         return pd.DataFrame({name: a[order] for name, a in arrays.items()}).astype(EVENT_DTYPES)
 
