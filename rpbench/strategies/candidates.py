@@ -137,14 +137,10 @@ def _join_pairs(
     n_p, n_v = len(o_b), len(h)
     pick_lim = max_pickup + TOLERANCE_M
     lim = max_detour + TOLERANCE_M
-    candidates = 0
-    for i in range(n_p):
-        for j in range(n_v):
-            if reach[o_b[i], h[j]]:
-                candidates += 1
-    out_p, out_v = np.empty(candidates, np.int64), np.empty(candidates, np.int64)
-    out_pk, out_e, out_rem = np.empty(candidates), np.empty(candidates), np.empty(candidates)
-    out_fofo = np.empty(candidates, np.bool_)
+    # room for every pair, filled in one pass: the screen reads the table once, not once to count
+    out_p, out_v = np.empty(n_p * n_v, np.int64), np.empty(n_p * n_v, np.int64)
+    out_pk, out_e, out_rem = np.empty(n_p * n_v), np.empty(n_p * n_v), np.empty(n_p * n_v)
+    out_fofo = np.empty(n_p * n_v, np.bool_)
     k = 0
     for i in range(n_p):
         for j in range(n_v):
@@ -175,7 +171,8 @@ def _join_pairs(
             out_e[k] = l_a[j] + l_b[i] - length
             out_rem[k] = pre[j] + length - delta[j]
             k += 1
-    return out_p[:k], out_v[:k], out_pk[:k], out_e[:k], out_fofo[:k], out_rem[:k]
+    # copies of the filled part: the room for every pair is let go at once
+    return out_p[:k].copy(), out_v[:k].copy(), out_pk[:k].copy(), out_e[:k].copy(), out_fofo[:k].copy(), out_rem[:k].copy()
 
 
 def _within_pickup(state: RoundState, nodes: np.ndarray, pre_m: np.ndarray, limit_m: float):
@@ -204,12 +201,8 @@ def _pickup_pairs(reach, screened, dist, origins, nodes, pre, limit):  # pragma:
     """Pairs (p, v) in passenger-major order with ``pre[v] + dist[nodes[v], origins[p]] <= limit``, measured only
     where ``reach[origins[p], nodes[v]]`` (when ``screened``), and their pick-up distances."""
     n_p, n_v = len(origins), len(nodes)
-    candidates = 0
-    for i in range(n_p):
-        for j in range(n_v):
-            if not screened or reach[origins[i], nodes[j]]:
-                candidates += 1
-    p, v, pk = np.empty(candidates, np.int64), np.empty(candidates, np.int64), np.empty(candidates)
+    # room for every pair, filled in one pass: the screen reads the table once, not once to count
+    p, v, pk = np.empty(n_p * n_v, np.int64), np.empty(n_p * n_v, np.int64), np.empty(n_p * n_v)
     k = 0
     for i in range(n_p):
         for j in range(n_v):
@@ -218,7 +211,7 @@ def _pickup_pairs(reach, screened, dist, origins, nodes, pre, limit):  # pragma:
                 if d <= limit:
                     p[k], v[k], pk[k] = i, j, d
                     k += 1
-    return p[:k], v[:k], pk[:k]
+    return p[:k].copy(), v[:k].copy(), pk[:k].copy()  # the filled part: the room for every pair is let go
 
 
 def assignment_round(
