@@ -234,10 +234,7 @@ class FleetState:
         anchor until then (used when an off-duty vehicle resumes).
         """
         plan = self.plans[v]
-        if plan.stops and plan.stops[0].index < anchor:
-            raise RuntimeError(f"vehicle {v}: replanning past an unserved stop")  # pragma: no cover
-        self.history[v].append(DrivenPart(plan.nodes, plan.tt, plan.odo, anchor + 1))
-        t0 = float(plan.tt[anchor]) if start_t is None else max(float(plan.tt[anchor]), start_t)
+        t0 = self._leave(v, plan, anchor, start_t)
         # the new plan (as :meth:`_plan_from` builds it) and its window from its first node, in one call
         start = int(plan.nodes[anchor])
         tail = np.asarray(nodes_tail, dtype=np.int32)
@@ -249,9 +246,19 @@ class FleetState:
         if bad >= 0:
             before = start if bad == 0 else int(tail[bad - 1])
             raise ValueError(f"no arc from node {before} to node {int(tail[bad])} in a vehicle's plan")
-        new = Plan(nodes, tt, odo, sorted(stops, key=_stop_key) if stops else [], cruising)
+        self._adopt(v, Plan(nodes, tt, odo, sorted(stops, key=_stop_key) if stops else [], cruising))
+
+    def _leave(self, v: int, plan: Plan, anchor: int, start_t: float | None) -> float:
+        """Vehicle ``v``'s plan kept up to index ``anchor`` (into its history); the time the new plan starts."""
+        if plan.stops and plan.stops[0].index < anchor:
+            raise RuntimeError(f"vehicle {v}: replanning past an unserved stop")  # pragma: no cover
+        self.history[v].append(DrivenPart(plan.nodes, plan.tt, plan.odo, anchor + 1))
+        return float(plan.tt[anchor]) if start_t is None else max(float(plan.tt[anchor]), start_t)
+
+    def _adopt(self, v: int, new: Plan) -> None:
+        """``new`` as vehicle ``v``'s plan, its window filled already; its first stop, if any, queued."""
         self.plans[v] = new
-        self._next_tt[v] = -np.inf  # stale: found again in the new plan's window, filled now
+        self._next_tt[v] = -np.inf  # stale: found again in the new plan's window
         self._idle[v] = False
         self._version[v] += 1
         if new.stops:
@@ -295,25 +302,27 @@ class FleetState:
             raise ValueError(f"no arc from node {before} to node {int(nodes[p0 + where + 1])} in a vehicle's plan")
         reach_list, starts = reach.tolist(), plan_start.tolist()
         for i, (v, anchor, plan) in enumerate(zip(vehicles, anchors, plans, strict=True)):
-            if plan.stops and plan.stops[0].index < anchor:
-                raise RuntimeError(f"vehicle {v}: replanning past an unserved stop")  # pragma: no cover
-            self.history[v].append(DrivenPart(plan.nodes, plan.tt, plan.odo, anchor + 1))
+            self._leave(v, plan, anchor, None)
             p0, p1 = starts[i], starts[i + 1]
             stops = stops_of(i, reach_list[wp_start[i] - i : wp_start[i + 1] - i - 1])
-            new = Plan(nodes[p0:p1], tt[p0:p1], odo[p0:p1], sorted(stops, key=_stop_key) if stops else [], False)
-            self.plans[v] = new
-            self._next_tt[v] = -np.inf  # stale: found again in the new plan's window, filled above
-            self._idle[v] = False
-            self._version[v] += 1
-            if new.stops:
-                heapq.heappush(self._heap, (float(new.tt[new.stops[0].index]), v, self._version[v]))
+            self._adopt(v, Plan(nodes[p0:p1], tt[p0:p1], odo[p0:p1], sorted(stops, key=_stop_key) if stops else [], False))
 
     # -------------------------------------------------------------- cruising
     def start_cruise(self, v: int, anchor: int, t: float | None = None) -> None:
         """Random cruising from plan index ``anchor`` (at time ``t`` if later)."""
-        node = int(self.plans[v].nodes[anchor])
-        prev = int(self.plans[v].nodes[anchor - 1]) if anchor > 0 else -1
-        self.replan(v, anchor, self._random_walk(node, prev), [], cruising=True, start_t=t)
+        plan = self.plans[v]
+        node = int(plan.nodes[anchor])
+        prev = int(plan.nodes[anchor - 1]) if anchor > 0 else -1
+        u = self.rng.random(CRUISE_ARCS)  # :meth:`_random_walk`'s numbers, drawn as it draws them
+        t0 = self._leave(v, plan, anchor, t)
+        w = self._windows
+        nodes, tt, odo, bad = routes.cruise_and_window(
+            self._offsets, self._heads, self._lengths, node, prev, u, t0, float(plan.odo[anchor]), self.speed,
+            w.tt, w.node, w.odo, w.base, w.length, w.tt_before, w.last, w.cruising, v,
+        )  # fmt: skip
+        if bad >= 0:  # pragma: no cover - a random walk follows arcs
+            raise ValueError(f"vehicle {v}: a cruise left the network's arcs")
+        self._adopt(v, Plan(nodes, tt, odo, [], True))
 
     def park(self, v: int, anchor: int) -> None:
         """Stop at plan index ``anchor`` and stand still (off duty)."""

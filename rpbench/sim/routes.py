@@ -162,6 +162,36 @@ def plan_and_window(
 
 
 @njit(cache=True, nogil=True)
+def cruise_and_window(
+    offsets: np.ndarray,
+    heads: np.ndarray,
+    lengths: np.ndarray,
+    start: int,
+    prev: int,
+    u: np.ndarray,
+    t0: float,
+    odo0: float,
+    speed: float,
+    w_tt: np.ndarray,
+    w_node: np.ndarray,
+    w_odo: np.ndarray,
+    base: np.ndarray,
+    length: np.ndarray,
+    tt_before: np.ndarray,
+    last: np.ndarray,
+    w_cruising: np.ndarray,
+    v: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:  # pragma: no cover - compiled
+    """A new random cruise of vehicle ``v`` from ``start`` (reached from ``prev``): :func:`random_walk` over
+    ``u``, then :func:`plan_and_window` of it as a cruising plan: one compiled call for a cruise's start."""
+    tail = random_walk(offsets, heads, start, prev, u)
+    return plan_and_window(
+        offsets, heads, lengths, start, tail, t0, odo0, speed,
+        w_tt, w_node, w_odo, base, length, tt_before, last, w_cruising, v, True,
+    )  # fmt: skip
+
+
+@njit(cache=True, nogil=True)
 def routed_plans(
     pred: np.ndarray,
     offsets: np.ndarray,
@@ -335,6 +365,10 @@ def load_route_kernels() -> None:
     from rpbench.sim.lookahead import PlanWindows
 
     w = PlanWindows(1)
+    cruise_and_window(
+        offsets, heads, one, 0, -1, np.zeros(1), 0.0, 0.0, 1.0,
+        w.tt, w.node, w.odo, w.base, w.length, w.tt_before, w.last, w.cruising, 0,
+    )  # fmt: skip
     z = np.zeros(1, np.int64)
     routed_plans(
         np.zeros((2, 2), np.int32), offsets, heads, one, 1.0, np.zeros(2, np.int64), np.array([0, 2], np.int64),
