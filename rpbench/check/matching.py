@@ -31,7 +31,7 @@ from scipy.sparse.csgraph import connected_components
 from rpbench.check.certificate import _orientation_weight, all_paths
 from rpbench.check.core import TOL_M, TOL_S
 from rpbench.check.folder import Folder
-from rpbench.check.separation import is_violated_blossom, violated_blossoms
+from rpbench.check.separation import VIOLATION_TOL, violated_blossoms
 
 #: Pairs (one orientation each) valued per numpy block: bounds memory to a few hundred MB.
 CHECK_BLOCK_PAIRS = 1 << 20
@@ -422,8 +422,24 @@ def _cutting_sets(n: int, a: np.ndarray, b: np.ndarray, x: np.ndarray) -> tuple[
     support = np.flatnonzero(x > FRACTIONAL)
     sa, sb, sx = a[support], b[support], x[support]
     frac = sx < 1 - FRACTIONAL
-    found = [s for s in _odd_components(n, sa[frac], sb[frac]) if is_violated_blossom(n, sa, sb, sx, s)]
+    found = _violated_disjoint(n, sa, sb, sx, _odd_components(n, sa[frac], sb[frac]))
     return (found, False) if found else (violated_blossoms(n, sa, sb, sx), True)
+
+
+def _violated_disjoint(n: int, a: np.ndarray, b: np.ndarray, x: np.ndarray, sets: list[np.ndarray]) -> list[np.ndarray]:
+    """The sets among the disjoint ``sets`` that are odd, of 3 or more vertices, and whose blossom inequality
+    ``x`` violates (by more than :data:`.separation.VIOLATION_TOL`), in one pass over the edges."""
+    if not sets:
+        return []
+    label = np.full(n, -1, np.int64)
+    for i, members in enumerate(sets):
+        label[members] = i
+    la, lb = label[a], label[b]
+    inside = (la >= 0) & (la == lb)
+    weight = np.bincount(la[inside], weights=x[inside], minlength=len(sets))
+    size = np.array([len(members) for members in sets])
+    keep = (size >= 3) & (size % 2 == 1) & (weight > (size - 1) / 2 + VIOLATION_TOL)
+    return [sets[i] for i in np.flatnonzero(keep)]
 
 
 def _odd_components(n: int, a: np.ndarray, b: np.ndarray) -> list[np.ndarray]:
