@@ -82,8 +82,13 @@ class Preset:
         """The backend object that solves this preset's models (its solver library is not imported yet)."""
         if self.instance is not None:
             return self.instance
+        known = self.__dict__.get("_adapter_class")  # found once per preset: every solve asks for it
+        if known is not None:
+            return known()
         try:
-            return backend_class(self.backend)()
+            cls = backend_class(self.backend)
+            object.__setattr__(self, "_adapter_class", cls)
+            return cls()
         except ModuleNotFoundError as exc:  # a broken installation: an adapter module of the package is gone
             if not (exc.name or "").startswith("rpbench.backends."):
                 raise

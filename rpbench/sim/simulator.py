@@ -203,6 +203,8 @@ class Simulator:
         self.solo = self.dist[self.origin, self.destination] if self.n_orders else np.zeros(0)
         self._origin_list: list[int] = self.origin.tolist()  # waypoints of the routes a commit plans
         self._destination_list: list[int] = self.destination.tolist()
+        self._request_list: list[float] = self.request.tolist()  # read one by one each round
+        self._patience_list: list[float] = np.asarray(self.patience, dtype=np.float64).tolist()
         self.state = np.full(self.n_orders, PENDING, dtype=np.int8)
         self.vehicle_of = np.full(self.n_orders, -1, dtype=np.int64)
         self.pickup_odo = np.full(self.n_orders, np.nan)
@@ -253,7 +255,7 @@ class Simulator:
         k = 0
         t = 0.0
         last_request = float(self.request[-1]) if self.n_orders else 0.0
-        requests: list[float] = self.request.tolist()  # read one by one as rounds reveal them
+        requests = self._request_list
         while True:
             t = k * dt
             self._process_stops(t)
@@ -605,10 +607,11 @@ class Simulator:
 
     def _expire(self, t: float) -> None:
         keep = []
+        request, patience = self._request_list, self._patience_list  # the same doubles, read as Python floats
         for o in self.waiting:
-            if t - self.request[o] > self.patience[o] + 1e-9:
+            if t - request[o] > patience[o] + 1e-9:
                 self.state[o] = CANCELLED
-                self._event(self.request[o] + self.patience[o], "cancel", o, -1, self.origin[o])
+                self._event(request[o] + patience[o], "cancel", o, -1, self._origin_list[o])
             else:
                 keep.append(o)
         self.waiting = keep
