@@ -87,6 +87,9 @@ class Backend(ABC):
     def supports(self, structure: Structure) -> bool:
         return structure in self.exact
 
+    def load(self) -> None:
+        """Import the solver library now, before a run's first solve (default: nothing to do ahead)."""
+
     @abstractmethod
     def solve(self, model: Model, options: SolveOptions) -> Solution:
         """Solve ``model`` and return a validated solution (a backend with :attr:`accepts_hint` also takes

@@ -149,6 +149,11 @@ class HighsBackend(ProgramBackend):
     requires = ("highspy",)
     description = "HiGHS via highspy (bulk CSC arrays): simplex LP for the assignment, MIP for packing and pairing"
 
+    def load(self) -> None:
+        """Import highspy (when installed; a missing one is reported by the solve)."""
+        if self.is_installed():
+            import highspy  # noqa: F401
+
     def solve(self, model: Model, options: SolveOptions, hint: np.ndarray | None = None) -> Solution:
         """As :meth:`ProgramBackend.solve`; trip packing first tries the LP with a uniqueness proof.
 

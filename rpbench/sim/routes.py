@@ -370,8 +370,11 @@ def load_route_kernels() -> None:
         w.tt, w.node, w.odo, w.base, w.length, w.tt_before, w.last, w.cruising, 0,
     )  # fmt: skip
     z = np.zeros(1, np.int64)
+    pred = np.zeros((2, 2), np.int32)
+    pred.setflags(write=False)  # a run's predecessor table is read-only: machine code of its own
+    route_through(pred, np.zeros(2, np.int64), np.zeros(1, np.int64))
     routed_plans(
-        np.zeros((2, 2), np.int32), offsets, heads, one, 1.0, np.zeros(2, np.int64), np.array([0, 2], np.int64),
+        pred, offsets, heads, one, 1.0, np.zeros(2, np.int64), np.array([0, 2], np.int64),
         np.zeros(1), np.zeros(1), z, z.copy(), w.tt, w.node, w.odo, w.base, w.length, w.tt_before, w.last, w.cruising,
     )  # fmt: skip
     plan_and_window(

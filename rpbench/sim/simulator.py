@@ -165,6 +165,18 @@ def _older_objects_frozen():
         gc.unfreeze()
 
 
+def _load_solver_libraries(preset: Preset) -> None:
+    """The preset's backend loads its solver library now (:meth:`~rpbench.backends.base.Backend.load`):
+    ``import rpbench`` loads no solver, and the first solve would otherwise import it in the first round.
+    An unknown or broken preset is left for the solve to report."""
+    try:
+        load = getattr(preset.adapter(), "load", None)
+        if load is not None:
+            load()
+    except Exception:  # noqa: BLE001 - reported by the solve, with the backend's own message
+        return
+
+
 class Simulator:
     """One run of one strategy on one scenario with one solver backend."""
 
@@ -225,6 +237,7 @@ class Simulator:
         model_kernels.load_model_kernels()
         candidates.load_candidate_kernels()
         strategy_base.load_state_kernels()
+        _load_solver_libraries(preset)
 
     # ------------------------------------------------------------------ run
     def run(self) -> SimResult:

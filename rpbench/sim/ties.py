@@ -217,4 +217,6 @@ def _column_with(sorted_keys, key_order, q) -> int:  # pragma: no cover - compil
 def load_tie_kernels() -> None:
     """Load (or compile) the kernel now: its first call costs a one-off load of its machine code."""
     model = AssignmentModel(1, 1, [0, 0], [0, -1], [0.0, 0.0])
-    _repair(model, np.zeros(1, np.int64), model.col_vehicle, model.col_passenger.reshape(1, -1))
+    for m in (model, model.frozen()):  # a round passes a frozen model: read-only arrays, machine code of their own
+        _repair(m, np.zeros(1, np.int64), m.col_vehicle, m.col_passenger.reshape(1, -1))
+        _repair(m, np.zeros(1, np.int64), m.col_vehicle, np.stack((m.col_passenger,)))  # a trip's stacked orders

@@ -287,6 +287,12 @@ def load_state_kernels() -> None:
     """Load (or compile) the decoding check now: its first call costs a one-off load of its machine code."""
     i, f = np.zeros(0, np.int64), np.zeros(0)
     _assignment_decoded(np.zeros(0, np.int8), i, i, i, f, f, np.zeros(0, np.int32), np.zeros(0, np.int32), i, i, i)
+    # as received() calls it: the round model's arrays are read-only copies
+    ro = [np.zeros(0, np.int8), np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0),
+          np.zeros(0), np.zeros(0, np.int32), np.zeros(0, np.int32)]  # fmt: skip
+    for a in ro:
+        a.setflags(write=False)
+    _assignment_decoded(*ro, i, i, i)
 
 
 def _explain(

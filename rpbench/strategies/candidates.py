@@ -360,8 +360,16 @@ def load_candidate_kernels() -> None:
     """Load (or compile) the kernels now: the first call of each costs a one-off load of its machine code."""
     i, f = np.zeros(0, np.int64), np.zeros(0)
     _columns_kernel(i, i, f, f, i, i, f, f, np.zeros(0, np.bool_), f, i, i, 0)
-    _pickup_pairs(np.ones((1, 1), dtype=bool), True, np.zeros((1, 1)), i, i, f, 0.0)
-    _join_pairs(np.ones((1, 1), dtype=bool), np.zeros((1, 1)), i, i, f, i, f, f, i, i, f, 0.0, 0.0, True)
+    reach = np.ones((1, 1), dtype=bool)
+    for dist in (np.zeros((1, 1)), _read_only(np.zeros((1, 1)))):  # a run's distance table is read-only
+        _pickup_pairs(reach, True, dist, i, i, f, 0.0)
+        _join_pairs(reach, dist, i, i, f, i, f, f, i, i, f, 0.0, 0.0, True)
+
+
+def _read_only(a: np.ndarray) -> np.ndarray:
+    """``a`` made read-only (a compiled kernel has one machine code per writability of its arrays)."""
+    a.setflags(write=False)
+    return a
 
 
 # Which node pairs lie within a distance: a table that pre-filters pick-up candidates.
