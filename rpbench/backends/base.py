@@ -87,7 +87,7 @@ class Backend(ABC):
     def supports(self, structure: Structure) -> bool:
         return structure in self.exact
 
-    def load(self) -> None:
+    def load(self) -> None:  # noqa: B027 - optional: most backends have nothing to load ahead
         """Import the solver library now, before a run's first solve (default: nothing to do ahead)."""
 
     @abstractmethod

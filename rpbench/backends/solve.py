@@ -75,7 +75,8 @@ def verify(model: Model, solution: object, solver: str) -> Solution:
     for name, value in (("bound", solution.bound), ("gap", solution.gap)):
         if value is not None and not _finite(value):
             raise SolverError(f"{solver} reports {name} {value!r} on {model.name!r}; expected a finite number or None")
-    for name, value in (("build_s", solution.build_s), ("solve_s", solution.solve_s), ("extract_s", solution.extract_s)):
+    times = (("build_s", solution.build_s), ("solve_s", solution.solve_s), ("extract_s", solution.extract_s))
+    for name, value in times:
         if not (_finite(value) and value >= 0):
             raise SolverError(f"{solver} reports {name} = {value!r} on {model.name!r}; times are seconds >= 0")
     if chosen is solution.chosen:

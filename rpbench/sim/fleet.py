@@ -126,19 +126,6 @@ class FleetState:
     def _still(self, node: int, t: float, odo: float) -> Plan:
         return Plan(np.array([node], np.int32), np.array([t]), np.array([odo]))
 
-    def _plan_from(self, start_node: int, t: float, odo: float, nodes_tail: np.ndarray) -> Plan:
-        """A plan driving ``start_node`` then ``nodes_tail`` (consecutive nodes joined by arcs)."""
-        n = len(nodes_tail) + 1
-        nodes, tt, od = np.empty(n, np.int32), np.empty(n), np.empty(n)
-        tail = np.asarray(nodes_tail, dtype=np.int32)  # as plans hold nodes; the route kernels' tails are so already
-        bad = routes.plan_arrays(
-            self._offsets, self._heads, self._lengths, start_node, tail, t, odo, self.speed, nodes, tt, od
-        )
-        if bad >= 0:
-            before = start_node if bad == 0 else int(tail[bad - 1])
-            raise ValueError(f"no arc from node {before} to node {int(tail[bad])} in a vehicle's plan")
-        return Plan(nodes, tt, od)
-
     def route_through(self, waypoints: list[int]) -> tuple[np.ndarray, list[int]]:
         """Shortest-path node sequence visiting ``waypoints`` (the first is the start node).
 
@@ -235,7 +222,7 @@ class FleetState:
         """
         plan = self.plans[v]
         t0 = self._leave(v, plan, anchor, start_t)
-        # the new plan (as :meth:`_plan_from` builds it) and its window from its first node, in one call
+        # the new plan (:func:`~rpbench.sim.routes.plan_arrays`) and its window from its first node, in one call
         start = int(plan.nodes[anchor])
         tail = np.asarray(nodes_tail, dtype=np.int32)
         w = self._windows
@@ -305,7 +292,8 @@ class FleetState:
             self._leave(v, plan, anchor, None)
             p0, p1 = starts[i], starts[i + 1]
             stops = stops_of(i, reach_list[wp_start[i] - i : wp_start[i + 1] - i - 1])
-            self._adopt(v, Plan(nodes[p0:p1], tt[p0:p1], odo[p0:p1], sorted(stops, key=_stop_key) if stops else [], False))
+            ordered = sorted(stops, key=_stop_key) if stops else []
+            self._adopt(v, Plan(nodes[p0:p1], tt[p0:p1], odo[p0:p1], ordered, False))
 
     # -------------------------------------------------------------- cruising
     def start_cruise(self, v: int, anchor: int, t: float | None = None) -> None:
@@ -331,7 +319,7 @@ class FleetState:
     def _extend_cruise(self, v: int, t: float) -> None:
         plan = self.plans[v]
         while plan.tt[-1] < t + 1.0:
-            # :meth:`_random_walk` from the plan's end, timed as :meth:`_plan_from` times it, appended: one call
+            # :meth:`_random_walk` from the plan's end, timed as a replan times its plan, appended: one call
             nodes, tt, odo, bad = routes.extended_cruise(
                 self._offsets, self._heads, self._lengths, plan.nodes, plan.tt, plan.odo, self.speed,
                 self.rng.random(CRUISE_ARCS),

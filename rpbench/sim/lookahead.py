@@ -191,7 +191,7 @@ def refill_from_plan(
     (``searchsorted(tt, before)``).  Returns that index, or -1, changing nothing, when it lies past the plan's
     end (the caller extends a cruise or stands the vehicle at its last node, then passes the index)."""
     if k < 0:
-        k = np.searchsorted(tt, before)
+        k = int(np.searchsorted(tt, before))
         if k >= len(nodes):
             return -1
     tt_k = tt[k]

@@ -37,9 +37,9 @@ import stat
 import tempfile
 import time
 from collections.abc import Callable
-from operator import itemgetter
 from contextlib import contextmanager
 from dataclasses import dataclass, field
+from operator import itemgetter
 from pathlib import Path
 from typing import TypeVar
 
@@ -173,7 +173,7 @@ def _load_solver_libraries(preset: Preset) -> None:
         load = getattr(preset.adapter(), "load", None)
         if load is not None:
             load()
-    except Exception:  # noqa: BLE001 - reported by the solve, with the backend's own message
+    except Exception:  # reported by the solve, with the backend's own message
         return
 
 

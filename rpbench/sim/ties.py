@@ -37,7 +37,7 @@ def canonicalize(model: Model, solution: Solution) -> tuple[Solution, int]:
     # A proven-unique optimum has no value-neutral move (each would give a second optimum).
     if solution.status != Status.OPTIMAL or len(solution.chosen) == 0 or solution.unique:
         return solution, 0
-    items: tuple[np.ndarray, ...]  # per column, the orders it serves: one array, or two for a trip
+    items: np.ndarray  # per column, the orders it serves: one row, or two for a trip
     # The model's own int32 columns go to the kernel as they are (no int64 copies: it widens as it reads).
     if isinstance(model, AssignmentModel):
         resource = model.col_vehicle

@@ -175,9 +175,9 @@ def _a(obj: object) -> str:
 def _frozen(raw: object, name: str, dtype: type, n: int | None = None) -> np.ndarray:
     """A read-only copy of ``raw`` as ``dtype`` (``n`` entries), refusing a cast that would change its values."""
     if type(raw) is np.ndarray and raw.dtype == dtype and raw.ndim == 1 and (n is None or len(raw) == n):
-        out = raw.copy()  # the usual case: already as wanted, nothing to check
-        out.setflags(write=False)
-        return out
+        same = raw.copy()  # the usual case: already as wanted, nothing to check
+        same.setflags(write=False)
+        return same
     arr = np.array(raw)
     if arr.ndim != 1 or (n is not None and len(arr) != n):
         raise ModelError(f"{name} has shape {arr.shape}" + (f" for {n} columns" if n is not None else ""))
@@ -288,11 +288,13 @@ def load_state_kernels() -> None:
     i, f = np.zeros(0, np.int64), np.zeros(0)
     _assignment_decoded(np.zeros(0, np.int8), i, i, i, f, f, np.zeros(0, np.int32), np.zeros(0, np.int32), i, i, i)
     # as received() calls it: the round model's arrays are read-only copies
-    ro = [np.zeros(0, np.int8), np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0),
-          np.zeros(0), np.zeros(0, np.int32), np.zeros(0, np.int32)]  # fmt: skip
+    ro: list[np.ndarray] = [
+        np.zeros(0, dtype)
+        for dtype in (np.int8, np.int64, np.int64, np.int64, np.float64, np.float64, np.int32, np.int32)
+    ]
     for a in ro:
         a.setflags(write=False)
-    _assignment_decoded(*ro, i, i, i)
+    _assignment_decoded(ro[0], ro[1], ro[2], ro[3], ro[4], ro[5], ro[6], ro[7], i, i, i)
 
 
 def _explain(

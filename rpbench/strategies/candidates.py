@@ -172,7 +172,14 @@ def _join_pairs(
             out_rem[k] = pre[j] + length - delta[j]
             k += 1
     # copies of the filled part: the room for every pair is let go at once
-    return out_p[:k].copy(), out_v[:k].copy(), out_pk[:k].copy(), out_e[:k].copy(), out_fofo[:k].copy(), out_rem[:k].copy()
+    return (
+        out_p[:k].copy(),
+        out_v[:k].copy(),
+        out_pk[:k].copy(),
+        out_e[:k].copy(),
+        out_fofo[:k].copy(),
+        out_rem[:k].copy(),
+    )
 
 
 def _within_pickup(state: RoundState, nodes: np.ndarray, pre_m: np.ndarray, limit_m: float):

@@ -315,7 +315,8 @@ def test_the_fleet_trajectories_are_each_vehicles_trajectory(tee):
         offsets, nodes, tt, odo = fl.trajectories(end)
         for v in range(3):
             want = fl.trajectory(v, end)
-            got = (nodes[offsets[v] : offsets[v + 1]], tt[offsets[v] : offsets[v + 1]], odo[offsets[v] : offsets[v + 1]])
+            mine = slice(offsets[v], offsets[v + 1])
+            got = (nodes[mine], tt[mine], odo[mine])
             for a, b in zip(got, want, strict=True):
                 assert np.array_equal(a, b)
 
