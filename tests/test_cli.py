@@ -72,4 +72,3 @@ def test_the_console_script_ends_at_once_with_its_output_flushed_and_its_status(
     assert done.returncode == 0 and json.loads(done.stdout)["orders"] == 400
     bad = _console("run", "--sample", "-1")
     assert bad.returncode == 2 and bad.stdout == "" and len(bad.stderr.strip().splitlines()) == 1
-

@@ -24,6 +24,7 @@ Ctrl-C, SIGKILL) ends the child: it kills it, or the child finds the pipe closed
 
 from __future__ import annotations
 
+import functools
 import multiprocessing
 import os
 import signal
@@ -244,8 +245,12 @@ def _simulate_from_the_back(conn: Connection, simulate: SimulateFn, claims: Clai
     the parent took (the parent goes in order: the runs before it are its own or this loop's), or after an
     error (sent on: the parent raises it)."""
     for index in reversed(claims.movable):
-        if not claims.take(index, _CHILD) or not _send(conn, lambda index=index: (index, simulate(index))):
+        if not claims.take(index, _CHILD) or not _send(conn, functools.partial(_indexed, simulate, index)):
             return
+
+
+def _indexed(simulate: SimulateFn, index: int) -> tuple[int, Any]:
+    return index, simulate(index)
 
 
 def _both(report: ReportFn, beside: ReportFn | None, folder: Path, name: str) -> None:
