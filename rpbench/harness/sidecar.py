@@ -227,10 +227,15 @@ def _child_main(
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     try:
-        _send(conn, offline)
+        # Everything is computed before anything is sent: a large answer waits in the pipe until the parent
+        # reads it, after its own simulations, and the child must not wait there while runs are left to take.
+        answers = [_answer_of(offline)]
         if simulate is not None and claims is not None:
-            _simulate_from_the_back(conn, simulate, claims)
-            conn.send((True, None))  # no more runs
+            if answers[0][0]:
+                answers += _simulate_from_the_back(simulate, claims)
+            answers.append((True, None))  # no more runs
+        for answer in answers:
+            _post(conn, answer)
         warm_up()
         job = conn.recv()
         _send(conn, lambda: _both(report, beside, *job))
@@ -240,13 +245,18 @@ def _child_main(
         conn.close()
 
 
-def _simulate_from_the_back(conn: Connection, simulate: SimulateFn, claims: Claims) -> None:
-    """The movable runs the parent has not taken, last first, each sent when simulated; stops at the first
-    the parent took (the parent goes in order: the runs before it are its own or this loop's), or after an
-    error (sent on: the parent raises it)."""
+def _simulate_from_the_back(simulate: SimulateFn, claims: Claims) -> list[tuple[bool, Any]]:
+    """The movable runs the parent has not taken, last first, each answered as :func:`_answer_of` does; stops
+    at the first the parent took (the parent goes in order: the runs before it are its own or this loop's),
+    or after an error (passed on: the parent raises it)."""
+    answers: list[tuple[bool, Any]] = []
     for index in reversed(claims.movable):
-        if not claims.take(index, _CHILD) or not _send(conn, functools.partial(_indexed, simulate, index)):
-            return
+        if not claims.take(index, _CHILD):
+            break
+        answers.append(_answer_of(functools.partial(_indexed, simulate, index)))
+        if not answers[-1][0]:
+            break
+    return answers
 
 
 def _indexed(simulate: SimulateFn, index: int) -> tuple[int, Any]:
@@ -305,12 +315,21 @@ def _helper_main(conn: Connection, parent_end: Connection, fn: Callable[[], Any]
 
 
 def _send(conn: Connection, fn: Callable[[], Any]) -> bool:
-    """``fn()``'s value, or the exception it raised, to the parent (one that cannot be pickled as a line);
-    whether ``fn`` returned."""
+    """``fn()``'s value, or the exception it raised, to the parent; whether ``fn`` returned."""
+    answer = _answer_of(fn)
+    return _post(conn, answer) and answer[0]
+
+
+def _answer_of(fn: Callable[[], Any]) -> tuple[bool, Any]:
+    """``(True, fn())``, or ``(False, the exception it raised)``."""
     try:
-        answer: tuple[bool, Any] = (True, fn())
+        return True, fn()
     except BaseException as exc:
-        answer = (False, exc)
+        return False, exc
+
+
+def _post(conn: Connection, answer: tuple[bool, Any]) -> bool:
+    """``answer`` to the parent (one that cannot be pickled as one line naming it); whether it went as it was."""
     try:
         conn.send(answer)
     except (BrokenPipeError, EOFError):
@@ -318,4 +337,4 @@ def _send(conn: Connection, fn: Callable[[], Any]) -> bool:
     except Exception as exc:  # an unpicklable value or exception
         conn.send((False, RpbenchError(f"{type(answer[1]).__name__}: {answer[1]} (not passed on: {exc})")))
         return False
-    return answer[0]
+    return True

@@ -156,6 +156,23 @@ def test_the_runs_are_shared_out_once_each_the_child_from_the_back():
     assert all(stolen[index][0] == index for index in stolen)
 
 
+def test_the_child_takes_its_runs_before_the_parent_reads_a_large_answer():
+    """The offline runs' answer can exceed what the pipe holds; the parent reads it only after its own runs, so
+    the child must take and simulate its share first."""
+    import time
+
+    claims = sidecar.Claims(3, [1, 2])
+    side = sidecar.Forked(lambda: b"x" * 20_000_000, _write, warm_up=_nothing, simulate=lambda i: i, claims=claims)
+    try:
+        deadline = time.monotonic() + 60.0
+        while list(claims._taken) != [sidecar._FREE, sidecar._CHILD, sidecar._CHILD] and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert list(claims._taken)[1:] == [sidecar._CHILD, sidecar._CHILD]  # taken while nothing was read
+        assert len(side.offline()) == 20_000_000 and side.simulated() == {1: 1, 2: 2}
+    finally:
+        side.close()
+
+
 def test_the_child_stops_where_the_parent_has_been():
     claims = sidecar.Claims(4, [1, 3])
     assert claims.take(3, sidecar._PARENT)  # the parent reached the last run first
