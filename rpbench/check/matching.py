@@ -159,7 +159,7 @@ def prove_maximum(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, target: f
         lp.add_columns(enter)  # before the new sets: their rows are added over every column
         first = len(sets)
         found, exact = _cutting_sets(n, a, b, x)
-        separated += len(found) if exact else 0
+        separated += exact
         if not sets.add(found, live) and not len(enter):
             break  # x is in the matching polytope of the live edges: the LP's optimum is their maximum
         lp.add_rows(sets, first)
@@ -414,16 +414,19 @@ def _rounded_matching(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, x: np
     return int(w[take].sum())
 
 
-def _cutting_sets(n: int, a: np.ndarray, b: np.ndarray, x: np.ndarray) -> tuple[list[np.ndarray], bool]:
-    """Odd sets whose blossom inequalities the LP solution ``x`` violates, and whether the exact separator
-    found them: the odd components and cycles of its fractional edges that are violated (cheap, and most sets
-    of the early rounds), else the exact separator's (:mod:`.separation`), which finds none only when ``x``
-    lies in the matching polytope."""
+def _cutting_sets(n: int, a: np.ndarray, b: np.ndarray, x: np.ndarray) -> tuple[list[np.ndarray], int]:
+    """Odd sets whose blossom inequalities the LP solution ``x`` violates, and how many of them only the exact
+    separator found: the odd components and cycles of its fractional edges that are violated (cheap, and most
+    sets of the early rounds) and the exact separator's (:mod:`.separation`: a most violated set, which a
+    large, barely violated odd component can hide), each set once.  None only when ``x`` lies in the
+    matching polytope."""
     support = np.flatnonzero(x > FRACTIONAL)
     sa, sb, sx = a[support], b[support], x[support]
     frac = sx < 1 - FRACTIONAL
     found = _violated_disjoint(n, sa, sb, sx, _odd_components(n, sa[frac], sb[frac]))
-    return (found, False) if found else (violated_blossoms(n, sa, sb, sx), True)
+    seen = {tuple(np.sort(s).tolist()) for s in found}
+    exact = [s for s in violated_blossoms(n, sa, sb, sx) if tuple(np.sort(s).tolist()) not in seen]
+    return found + exact, len(exact)
 
 
 def _violated_disjoint(n: int, a: np.ndarray, b: np.ndarray, x: np.ndarray, sets: list[np.ndarray]) -> list[np.ndarray]:

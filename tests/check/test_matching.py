@@ -81,7 +81,7 @@ def stall(monkeypatch):
     """A cutting-plane loop that never finds an odd set: it stalls at the degree LP."""
     from rpbench.check import matching
 
-    monkeypatch.setattr(matching, "_cutting_sets", lambda n, a, b, x: ([], False))
+    monkeypatch.setattr(matching, "_cutting_sets", lambda n, a, b, x: ([], 0))
 
 
 def no_blossom_v(monkeypatch):
@@ -141,7 +141,7 @@ def test_exact_separation_finds_a_violated_set_inside_an_odd_component_that_is_n
     assert sorted(component.tolist()) == [0, 1, 2, 3, 4] and not is_violated_blossom(5, a, b, x, component)
     assert [sorted(s.tolist()) for s in violated_blossoms(5, a, b, x)] == [[0, 1, 2]]
     found, exact = _cutting_sets(5, a, b, x)
-    assert exact and [sorted(s.tolist()) for s in found] == [[0, 1, 2]]
+    assert exact == 1 and [sorted(s.tolist()) for s in found] == [[0, 1, 2]]
 
 
 def fractional_point(seed: int, n: int = 9):
