@@ -58,7 +58,16 @@ def _send_sigterm_to_self(*args, **kwargs):
     raise AssertionError("SIGTERM did not interrupt")
 
 
-def test_sigterm_during_the_final_write_removes_the_partial_folder(capsys, tmp_path, monkeypatch):
+@pytest.fixture
+def report_in_this_process(monkeypatch):
+    """report.md written by this process, not by the comparison's second one: a signal sent to "self" from it
+    must reach the process whose cleanup is under test (the terminal signals the whole group, child too)."""
+    monkeypatch.setattr("rpbench.harness.sidecar.idle_core", lambda: False)
+
+
+def test_sigterm_during_the_final_write_removes_the_partial_folder(
+    capsys, tmp_path, monkeypatch, report_in_this_process
+):
     monkeypatch.setattr("rpbench.harness.comparison.write_report", _send_sigterm_to_self)
     out = tmp_path / "out"
     code, stdout, err = run_cli(capsys, "run", *TOY, "--strategies", "mb", "--out", out)
@@ -76,7 +85,7 @@ def test_sigterm_during_the_simulation_writes_nothing(capsys, tmp_path, monkeypa
     assert_nothing_written(tmp_path, out, tmp_path / "deep")
 
 
-def test_a_second_sigterm_does_not_interrupt_the_cleanup(capsys, tmp_path, monkeypatch):
+def test_a_second_sigterm_does_not_interrupt_the_cleanup(capsys, tmp_path, monkeypatch, report_in_this_process):
     real_rmtree = store.shutil.rmtree
 
     def rmtree_under_fire(path, *args, **kwargs):
