@@ -124,7 +124,7 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def entry() -> None:
-    """The ``rpbench`` console script: :func:`main`, then the process ends at once.
+    """The ``rpbench`` console script: :func:`main`, then, after a success, the process ends at once.
 
     Every file is written and closed, every child process reaped and the output flushed before
     :func:`main` returns, so what an ordinary interpreter exit adds is only the tearing down of the loaded
@@ -132,6 +132,11 @@ def entry() -> None:
     that run :func:`main` in-process keep their interpreter.
     """
     code = main()
+    if code != 0:
+        # An error or a stop: an ordinary exit, whose second matters nothing here.  It lets multiprocessing
+        # release the semaphores of a pool stopped mid-task; skipped, the pool's resource tracker warns about
+        # "leaked" ones on stderr after rpbench's last line.
+        sys.exit(code)
     logging.shutdown()
     for stream in (sys.stdout, sys.stderr):
         with contextlib.suppress(OSError, ValueError):  # a closed pipe (``rpbench list | head``) or stream
