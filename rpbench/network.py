@@ -29,7 +29,7 @@ from scipy.spatial import cKDTree
 
 from rpbench.data.road import NetworkTables
 from rpbench.exceptions import DataError, ParameterError, one_line
-from rpbench.files.paths import cache_dir, cache_write_error, temporary_file
+from rpbench.files.paths import builder_lock, cache_dir, cache_write_error, temporary_file
 
 EARTH_RADIUS_M = 6_371_008.8
 _NO_PRED = -9999  # scipy's marker for "no predecessor"
@@ -206,16 +206,23 @@ class Distances:
             return cls.build(network)
         files = _ApspFiles.of(network)
         t0 = time.perf_counter()
-        arrays, problem = files.load_verified(network.n_nodes)
+        arrays, _ = files.load_verified(network.n_nodes)
         if arrays is not None:
             return cls(network, *arrays, build_s=time.perf_counter() - t0, from_cache=True)
-        if problem:
-            print(
-                f"rpbench: note: the cached all-pairs distances {files.stem.name}-* {problem}; rebuilding them",
-                file=sys.stderr,
-            )
-        oracle = cls.build(network)
-        files.save(oracle.dist, oracle.pred)
+        # Another process (a parallel sweep's worker) may be writing the files right now: a table without
+        # its digest yet is theirs to finish, not a fault, so the files are judged once their lock is ours.
+        waiting = f"rpbench: note: another process is building the all-pairs distances {files.stem.name}-*; waiting"
+        with builder_lock(files.lock, waiting):
+            arrays, problem = files.load_verified(network.n_nodes)
+            if arrays is not None:
+                return cls(network, *arrays, build_s=time.perf_counter() - t0, from_cache=True)
+            if problem:
+                print(
+                    f"rpbench: note: the cached all-pairs distances {files.stem.name}-* {problem}; rebuilding them",
+                    file=sys.stderr,
+                )
+            oracle = cls.build(network)
+            files.save(oracle.dist, oracle.pred)
         return oracle
 
     # -------------------------------------------------------------- queries
@@ -305,6 +312,11 @@ class _ApspFiles:
     @property
     def digest(self) -> Path:
         return Path(f"{self.stem}.sha256")
+
+    @property
+    def lock(self) -> Path:
+        """Held by the process building the table (:func:`~rpbench.files.paths.builder_lock`)."""
+        return Path(f"{self.stem}.lock")
 
     def load_verified(self, n_nodes: int) -> tuple[tuple[np.ndarray, np.ndarray] | None, str]:
         """``((dist, pred), "")`` when the cached table checks out, else ``(None, what is wrong)``.

@@ -20,16 +20,20 @@ cache folder that cannot be used is one clear error (:func:`cache_dir`).
 Entries are written under hidden temporary names that carry the writer's
 pid (:func:`temporary_file`, :func:`temporary_folder`) and renamed into
 place; the first use of a cache folder in a process sweeps the temporaries
-of writers that died (:func:`sweep_stale_temporaries`).
+of writers that died (:func:`sweep_stale_temporaries`).  Builders of one entry take turns under a lock
+(:func:`builder_lock`), so a second process waits for the first's entry instead of reading it half-renamed.
 """
 
 from __future__ import annotations
 
+import fcntl
 import os
 import shutil
 import sys
 import tempfile
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 from platformdirs import user_cache_dir, user_data_dir
@@ -312,3 +316,26 @@ def cache_write_error(path: Path, exc: OSError) -> CacheError:
         f"cannot write the cache file {str(path)!r}: {one_line(exc)}; free some space or "
         f"point ${CACHE_ENV} at another writable folder"
     )
+
+
+@contextmanager
+def builder_lock(path: Path, waiting: str) -> Iterator[None]:
+    """Hold the exclusive lock of one cache entry's builders (``flock`` on ``path``, released by the kernel
+    if the process dies); print ``waiting`` on stderr first when another process holds it.
+
+    The caller checks the entry again once it holds the lock: the process it waited for may have written it.
+    """
+    try:
+        fh = open(path, "a+")  # noqa: SIM115 (held for the lock's lifetime, closed below)
+    except OSError as exc:
+        raise cache_write_error(path, exc) from None
+    with fh:
+        try:
+            fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            print(waiting, file=sys.stderr)
+            fcntl.flock(fh, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(fh, fcntl.LOCK_UN)

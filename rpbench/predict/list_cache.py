@@ -38,7 +38,6 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import dataclasses
-import fcntl
 import hashlib
 import json
 import os
@@ -47,15 +46,14 @@ import sys
 import tempfile
 import time
 import zipfile
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from rpbench.exceptions import one_line
-from rpbench.files.paths import cache_dir, cache_write_error, temporary_folder
+from rpbench.files.paths import builder_lock, cache_dir, cache_write_error, temporary_folder
 from rpbench.network import RoadNetwork
 from rpbench.predict.config import PredictConfig
 from rpbench.predict.match_sets import ListGeometry, Matching, build_matching
@@ -117,7 +115,8 @@ def load_lists(
     if found is not None:
         _RECENT[key] = found
         return found
-    with _build_lock(root / f"predict-structure-{key}.lock", len(rates)):
+    waiting = f"rpbench: another process is building the prediction structure for {len(rates):,} ODs; waiting for it"
+    with builder_lock(root / f"predict-structure-{key}.lock", waiting):
         found = _open_entry(final, network, rates, params, config)  # another process may have finished it meanwhile
         if found is not None:
             return found
@@ -350,25 +349,3 @@ def _write_stamp(directory: Path, manifest: dict) -> None:
         os.replace(tmp, directory / STAMP)
     finally:
         tmp.unlink(missing_ok=True)
-
-
-@contextmanager
-def _build_lock(path: Path, n_od: int) -> Iterator[None]:
-    """Exclusive lock of one entry's builders (released by the kernel if the process dies)."""
-    try:
-        fh = open(path, "a+")  # noqa: SIM115 (held for the lock's lifetime, closed below)
-    except OSError as exc:
-        raise cache_write_error(path, exc) from None
-    with fh:
-        try:
-            fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            print(
-                f"rpbench: another process is building the prediction structure for {n_od:,} ODs; waiting for it",
-                file=sys.stderr,
-            )
-            fcntl.flock(fh, fcntl.LOCK_EX)
-        try:
-            yield
-        finally:
-            fcntl.flock(fh, fcntl.LOCK_UN)

@@ -7,8 +7,10 @@ Every test caches into its own temporary ``$RPBENCH_CACHE`` (never the user cach
 from __future__ import annotations
 
 import errno
+import fcntl
 import json
 import os
+import threading
 import zipfile
 from pathlib import Path
 
@@ -33,6 +35,12 @@ def cache(tmp_path: Path, monkeypatch) -> Path:
 
 
 # ----------------------------------------------------------- all-pairs distance cache
+def entries(cache: Path, pattern: str) -> list[Path]:
+    """The cache's files matching ``pattern``, but its builders' lock files: empty, kept on purpose (deleting
+    one a waiting process has opened would let a third process build beside it)."""
+    return [p for p in cache.glob(pattern) if p.suffix != ".lock"]
+
+
 def apsp_files(cache: Path) -> dict[str, Path]:
     (dist,) = cache.glob("apsp-*-dist.npy")
     stem = dist.name.removesuffix("-dist.npy")
@@ -100,6 +108,31 @@ def test_damaged_distance_cache_is_rebuilt_to_the_fresh_table(cache, capsys, dam
     assert not leftovers(cache)
 
 
+def test_a_table_another_process_is_writing_is_waited_for_not_rebuilt(cache, capsys):
+    """A parallel sweep's workers build the same table: one that finds the arrays renamed into place but not
+    yet their digest waits for the writer's lock and loads its table, with no "rebuilding" note."""
+    network = grid_network(5)
+    fresh = Distances.build(network)
+    cache.mkdir()
+    stem = cache / f"apsp-{network.content_hash}"
+    np.save(f"{stem}-dist.npy", fresh.dist)
+    np.save(f"{stem}-pred.npy", fresh.pred)
+    loaded: list[Distances] = []
+    with open(f"{stem}.lock", "a+") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # we are the writer, between the arrays and the digest
+        reader = threading.Thread(target=lambda: loaded.append(Distances.load_or_build(network)))
+        reader.start()
+        reader.join(timeout=1.0)
+        assert reader.is_alive()  # it waits for the lock
+        Path(f"{stem}.sha256").write_text(apsp_digest(fresh.dist, fresh.pred) + "\n")
+        fcntl.flock(lock, fcntl.LOCK_UN)
+    reader.join(timeout=60)
+    [oracle] = loaded
+    assert oracle.from_cache and np.array_equal(oracle.dist, fresh.dist)
+    notes = capsys.readouterr().err.splitlines()
+    assert len(notes) == 1 and "another process is building" in notes[0], notes
+
+
 def test_first_build_writes_a_digest_and_no_note(cache, capsys):
     oracle = Distances.load_or_build(grid_network(4))
     files = apsp_files(cache)
@@ -157,7 +190,7 @@ def test_disk_full_while_writing_the_distance_cache(cache, capsys, monkeypatch):
     monkeypatch.setattr(np, "save", save_then_fail)
     line = cli_error(capsys, "scenario", "toy", "--json")
     assert "cannot write the cache file" in line and "No space left on device" in line
-    assert not leftovers(cache) and not list(cache.glob("apsp-*"))  # nothing half-written
+    assert not leftovers(cache) and not entries(cache, "apsp-*")  # nothing half-written
     monkeypatch.setattr(np, "save", real_save)
     cli_ok(capsys, "scenario", "toy", "--json")  # and the next run works
 
@@ -289,4 +322,4 @@ def test_disk_full_while_writing_a_prediction(cache, monkeypatch):
     monkeypatch.setattr(np, "savez", fail)
     with pytest.raises(CacheError, match="cannot write the cache file .*predict-.*No space left"):
         predict(*inputs)
-    assert not leftovers(cache) and not list(cache.glob("predict-*"))
+    assert not leftovers(cache) and not entries(cache, "predict-*")
