@@ -209,10 +209,10 @@ class Distances:
         arrays, _ = files.load_verified(network.n_nodes)
         if arrays is not None:
             return cls(network, *arrays, build_s=time.perf_counter() - t0, from_cache=True)
-        # Another process (a parallel sweep's worker) may be writing the files right now: a table without
-        # its digest yet is theirs to finish, not a fault, so the files are judged once their lock is ours.
-        waiting = f"rpbench: note: another process is building the all-pairs distances {files.stem.name}-*; waiting"
-        with builder_lock(files.lock, waiting):
+        # Another process (a parallel sweep's worker, the comparison's second process) may be writing the
+        # files right now: a table without its digest yet is theirs to finish, not a fault, so the files are
+        # judged once their lock is ours.  The wait is silent: it is shorter than building the table.
+        with builder_lock(files.lock):
             arrays, problem = files.load_verified(network.n_nodes)
             if arrays is not None:
                 return cls(network, *arrays, build_s=time.perf_counter() - t0, from_cache=True)

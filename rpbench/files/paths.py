@@ -319,9 +319,9 @@ def cache_write_error(path: Path, exc: OSError) -> CacheError:
 
 
 @contextmanager
-def builder_lock(path: Path, waiting: str) -> Iterator[None]:
+def builder_lock(path: Path, waiting: str | None = None) -> Iterator[None]:
     """Hold the exclusive lock of one cache entry's builders (``flock`` on ``path``, released by the kernel
-    if the process dies); print ``waiting`` on stderr first when another process holds it.
+    if the process dies); print ``waiting`` on stderr first, if given, when another process holds it.
 
     The caller checks the entry again once it holds the lock: the process it waited for may have written it.
     """
@@ -333,7 +333,8 @@ def builder_lock(path: Path, waiting: str) -> Iterator[None]:
         try:
             fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
-            print(waiting, file=sys.stderr)
+            if waiting is not None:
+                print(waiting, file=sys.stderr)
             fcntl.flock(fh, fcntl.LOCK_EX)
         try:
             yield

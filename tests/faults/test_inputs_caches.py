@@ -129,8 +129,7 @@ def test_a_table_another_process_is_writing_is_waited_for_not_rebuilt(cache, cap
     reader.join(timeout=60)
     [oracle] = loaded
     assert oracle.from_cache and np.array_equal(oracle.dist, fresh.dist)
-    notes = capsys.readouterr().err.splitlines()
-    assert len(notes) == 1 and "another process is building" in notes[0], notes
+    assert capsys.readouterr().err == ""  # waiting is no fault of the cache
 
 
 def test_first_build_writes_a_digest_and_no_note(cache, capsys):
