@@ -295,6 +295,36 @@ class FleetState:
             ordered = sorted(stops, key=_stop_key) if stops else []
             self._adopt(v, Plan(nodes[p0:p1], tt[p0:p1], odo[p0:p1], ordered, False))
 
+    def send(self, vehicles: np.ndarray, targets: np.ndarray, t: float) -> None:
+        """Vacant vehicles ``vehicles`` (distinct) sent from where they are at time ``t`` to ``targets``, each
+        cruising on from there: the shortest path, then a random cruise having come along it.  One compiled
+        call for all; the plans are those :meth:`route_through` and :meth:`replan` make one by one, each
+        cruise drawing its numbers in the order of ``vehicles`` once every position is found."""
+        vehicles = np.asarray(vehicles, dtype=np.int64)
+        if not len(vehicles):
+            return
+        anchors, starts, _ = self.positions(vehicles, t)
+        listed, at = vehicles.tolist(), anchors.tolist()
+        plans = [self.plans[v] for v in listed]
+        t0 = np.array([float(plan.tt[a]) for plan, a in zip(plans, at, strict=True)])
+        odo0 = np.array([float(plan.odo[a]) for plan, a in zip(plans, at, strict=True)])
+        u = self.rng.random((len(listed), CRUISE_ARCS))  # row i: :meth:`_random_walk`'s numbers for vehicle i
+        w = self._windows
+        nodes, tt, odo, plan_start, bad, why = routes.repositioned_plans(
+            self._pred, self._offsets, self._heads, self._lengths, self.speed,
+            np.asarray(starts, np.int64), np.asarray(targets, np.int64), u, t0, odo0, vehicles,
+            w.tt, w.node, w.odo, w.base, w.length, w.tt_before, w.last, w.cruising,
+        )  # fmt: skip
+        if bad >= 0:  # pragma: no cover - a network is strongly connected, and paths follow its arcs
+            if why == 1:
+                raise ParameterError(f"no path from node {int(starts[bad])} to node {int(targets[bad])}")
+            raise ValueError(f"vehicle {listed[bad]}: its route left the network's arcs")
+        bounds = plan_start.tolist()
+        for i, (v, anchor, plan) in enumerate(zip(listed, at, plans, strict=True)):
+            self._leave(v, plan, anchor, None)
+            p0, p1 = bounds[i], bounds[i + 1]
+            self._adopt(v, Plan(nodes[p0:p1], tt[p0:p1], odo[p0:p1], [], True))
+
     # -------------------------------------------------------------- cruising
     def start_cruise(self, v: int, anchor: int, t: float | None = None) -> None:
         """Random cruising from plan index ``anchor`` (at time ``t`` if later)."""

@@ -265,6 +265,77 @@ def routed_plans(
 
 
 @njit(cache=True, nogil=True)
+def repositioned_plans(
+    pred: np.ndarray,
+    offsets: np.ndarray,
+    heads: np.ndarray,
+    lengths: np.ndarray,
+    speed: float,
+    starts: np.ndarray,
+    targets: np.ndarray,
+    u: np.ndarray,
+    t0: np.ndarray,
+    odo0: np.ndarray,
+    vehicles: np.ndarray,
+    w_tt: np.ndarray,
+    w_node: np.ndarray,
+    w_odo: np.ndarray,
+    base: np.ndarray,
+    length: np.ndarray,
+    tt_before: np.ndarray,
+    last: np.ndarray,
+    w_cruising: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int, int]:  # pragma: no cover - compiled
+    """Many vacant vehicles' new cruising plans at once: plan ``i`` drives the shortest path from
+    ``starts[i]`` to ``targets[i]`` (as :func:`route_through` finds it), then a random cruise over the numbers
+    ``u[i]`` from the target, having come from the node before it, or from the start when the path has at most
+    one arc (:func:`random_walk`); it is timed from ``t0[i]`` and odometer ``odo0[i]`` (:func:`plan_arrays`)
+    and vehicle ``vehicles[i]``'s window is filled over it as a cruise's.
+
+    Returns the plans' nodes, times and odometers one after another with their offsets, then ``(-1, 0)``, or
+    the first plan that failed and why (1: no path, 2: no arc; nothing is filled then).
+    """
+    n_plans = len(starts)
+    n_walk = u.shape[1]
+    plan_start = np.zeros(n_plans + 1, np.int64)
+    hops = np.zeros(n_plans, np.int64)
+    for i in range(n_plans):  # the paths' lengths
+        a, cur = starts[i], targets[i]
+        while cur != a:
+            cur = pred[a, cur]
+            if cur < 0:
+                return np.empty(0, np.int32), np.empty(0), np.empty(0), plan_start, i, 1
+            hops[i] += 1
+        plan_start[i + 1] = plan_start[i] + 1 + hops[i] + n_walk
+    n = plan_start[n_plans]
+    nodes, tt, odo = np.empty(n, np.int32), np.empty(n), np.empty(n)
+    for i in range(n_plans):
+        p0, p1 = plan_start[i], plan_start[i + 1]
+        a, cur = starts[i], targets[i]
+        nodes[p0] = a
+        pos = p0 + hops[i]
+        while cur != a:  # the path backwards from the target
+            nodes[pos] = cur
+            pos -= 1
+            cur = pred[a, cur]
+        prev = nodes[p0 + hops[i] - 1] if hops[i] > 1 else a
+        nodes[p0 + 1 + hops[i] : p1] = random_walk(offsets, heads, targets[i], prev, u[i])
+        bad = plan_arrays(
+            offsets, heads, lengths, nodes[p0], nodes[p0 + 1 : p1], t0[i], odo0[i], speed,
+            nodes[p0:p1], tt[p0:p1], odo[p0:p1],
+        )  # fmt: skip
+        if bad >= 0:
+            return nodes, tt, odo, plan_start, i, 2
+    for i in range(n_plans):
+        p0, p1 = plan_start[i], plan_start[i + 1]
+        fill_row(
+            w_tt, w_node, w_odo, base, length, tt_before, last, w_cruising, vehicles[i],
+            nodes[p0:p1], tt[p0:p1], odo[p0:p1], True, 0,
+        )  # fmt: skip
+    return nodes, tt, odo, plan_start, -1, 0
+
+
+@njit(cache=True, nogil=True)
 def extended_cruise(
     offsets: np.ndarray,
     heads: np.ndarray,
@@ -376,6 +447,10 @@ def load_route_kernels() -> None:
     routed_plans(
         pred, offsets, heads, one, 1.0, np.zeros(2, np.int64), np.array([0, 2], np.int64),
         np.zeros(1), np.zeros(1), z, z.copy(), w.tt, w.node, w.odo, w.base, w.length, w.tt_before, w.last, w.cruising,
+    )  # fmt: skip
+    repositioned_plans(
+        pred, offsets, heads, one, 1.0, z, z.copy(), np.zeros((1, 1)), np.zeros(1), np.zeros(1), z.copy(),
+        w.tt, w.node, w.odo, w.base, w.length, w.tt_before, w.last, w.cruising,
     )  # fmt: skip
     plan_and_window(
         offsets, heads, one, 0, np.zeros(0, np.int32), 0.0, 0.0, 1.0,

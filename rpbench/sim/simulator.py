@@ -366,8 +366,7 @@ class Simulator:
         moves = self.strategy.reposition(state, rm, chosen)
         used = rm.vehicle[chosen]
         vehicles, targets = self._checked(k, t, lambda: received_moves(moves, state, used, len(self.dist)))
-        for v, node in zip(vehicles, targets, strict=True):
-            self._reposition(int(v), int(node), t)
+        self._reposition(vehicles, targets, t)
 
     def _idle_round(self, k: int, t: float) -> None:
         """A round where nobody waits: no model, only the strategy's moves of idle vacant vehicles."""
@@ -375,8 +374,7 @@ class Simulator:
         moves = self._checked(k, t, lambda: self.strategy.idle_moves(state))
         none = np.zeros(0, np.int64)
         vehicles, targets = self._checked(k, t, lambda: received_moves(moves, state, none, len(self.dist)))
-        for v, node in zip(vehicles, targets, strict=True):
-            self._reposition(int(v), int(node), t)
+        self._reposition(vehicles, targets, t)
 
     def _strategy_text(self) -> str:
         """The strategy as error lines name it: its run name and class."""
@@ -548,19 +546,11 @@ class Simulator:
             self.waiting = left
         return len(assigned)
 
-    def _reposition(self, v: int, node: int, t: float) -> None:
-        """Send a vacant vehicle to ``node``; it stays vacant and cruises on from there."""
-        fl = self.fleet
-        k, h, _ = fl.positions(np.array([v]), t)
-        tail, _ = fl.route_through([int(h[0]), node])
-        fl.replan(
-            v,
-            int(k[0]),
-            np.concatenate([tail, fl.random_walk_from(node, int(tail[-2]) if len(tail) > 1 else int(h[0]))]),
-            [],
-            cruising=True,
-        )
-        self._event(t, "reposition", -1, v, node)
+    def _reposition(self, vehicles: np.ndarray, targets: np.ndarray, t: float) -> None:
+        """Send vacant vehicles to ``targets``; they stay vacant and cruise on from there."""
+        self.fleet.send(vehicles, targets, t)
+        for v, node in zip(vehicles.tolist(), targets.tolist(), strict=True):
+            self._event(t, "reposition", -1, v, node)
 
     @staticmethod
     def _drop_order(a: int, b: int, a_first: bool) -> list[int]:

@@ -360,3 +360,39 @@ def test_replanning_many_vehicles_names_a_missing_path():
     with pytest.raises(ParameterError, match="no path from node 0 to node 2"):
         fl.replan_through([0, 1], [0, 0], [[0, 1], [1, 0, 2]], lambda i, reach: [])
     assert fl.plans[0].nodes.tolist() == [0] and fl.plans[1].nodes.tolist() == [1]  # nobody replanned
+
+
+def _send_one_by_one(fl: FleetState, vehicles, targets, t: float) -> None:
+    """:meth:`FleetState.send` spelt out per vehicle: position, shortest path, cruise on, replan."""
+    anchors, starts, _ = fl.positions(np.asarray(vehicles), t)
+    for v, k, h, node in zip(vehicles, anchors.tolist(), starts.tolist(), targets, strict=True):
+        tail, _ = fl.route_through([h, node])
+        walk = fl.random_walk_from(node, int(tail[-2]) if len(tail) > 1 else h)
+        fl.replan(v, k, np.concatenate([tail, walk]), [], cruising=True)
+
+
+def test_sending_vehicles_makes_the_plans_of_one_replan_each(grid):
+    """Vehicles cruising, mid-arc or at a node, sent to a far node, a neighbour or where they are: the plans,
+    windows and random numbers of one compiled call are those of a replan per vehicle."""
+    vehicles, targets = [3, 0, 2, 1], [8, 1, 2, 4]  # 2 is sent to the node it stands at
+    fleets = []
+    for _ in range(2):
+        fl = fleet(grid, [0, 1, 2, 4], seed=7)
+        fl.on_duty[:] = True
+        for v in (0, 1, 3):
+            fl.start_cruise(v, 0)
+        fleets.append(fl)
+    t = 150.0  # the cruisers are mid-arc (arcs take 100 s)
+    fleets[0].send(np.array(vehicles), np.array(targets), t)
+    _send_one_by_one(fleets[1], vehicles, targets, t)
+    sent, one_by_one = fleets
+    for v in range(4):
+        a, b = sent.plans[v], one_by_one.plans[v]
+        assert a.nodes.tolist() == b.nodes.tolist() and a.cruising == b.cruising
+        assert np.array_equal(a.tt, b.tt) and np.array_equal(a.odo, b.odo)
+        for t_later in (t, 420.0, 900.0):  # the windows answer as the plans do
+            assert [x.tolist() for x in sent.positions(np.array([v]), t_later)] == [
+                x.tolist() for x in one_by_one.positions(np.array([v]), t_later)
+            ]
+    assert sent.rng.random() == one_by_one.rng.random()  # the same numbers were drawn
+    assert sent.plans[2].nodes[0] == 2 and sent.plans[2].nodes[1] != 2  # sent where it stands: cruises on
