@@ -55,13 +55,28 @@ def test_start_stays_in_process_without_an_idle_core(monkeypatch):
 
 def test_an_idle_core_needs_two_cores_and_a_load_below_them(monkeypatch):
     monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 1})
+    monkeypatch.setattr(sidecar, "others_running", lambda: 1.0)  # the other core busy right now
     monkeypatch.setattr(os, "getloadavg", lambda: (0.8, 0.0, 0.0))
     assert sidecar.idle_core()
     monkeypatch.setattr(os, "getloadavg", lambda: (1.5, 0.0, 0.0))
     assert not sidecar.idle_core()
+    monkeypatch.setattr(sidecar, "others_running", lambda: 0.2)  # the average holds a load that has ended
+    assert sidecar.idle_core()
     monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0})
     monkeypatch.setattr(os, "getloadavg", lambda: (0.0, 0.0, 0.0))
     assert not sidecar.idle_core()
+
+
+def test_the_processes_running_now_are_read_from_proc(monkeypatch):
+    if not os.path.exists("/proc/loadavg"):
+        pytest.skip("no /proc/loadavg here")
+    running = sidecar.others_running()
+    assert 0.0 <= running < float("inf")
+    import builtins
+
+    real_open = builtins.open
+    monkeypatch.setattr(builtins, "open", lambda path, *a, **k: real_open(os.devnull, *a, **k))  # unreadable
+    assert sidecar.others_running() == float("inf")
 
 
 def _fail() -> None:
