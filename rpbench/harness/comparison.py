@@ -155,21 +155,18 @@ def independent_runs(spec: RunSpec) -> list[int]:
     for, no other run calibrated by their strategy, and no twin (the same strategy and options) whose
     simulation the parent would share."""
     entries = spec.simulated
-    references = set()
+    waits = []  # per run: the source of the strategy that calibrates it, or None
     for entry in entries:
         cls = entry.strategy_class()
-        if cls.calibrated_by is not None and cls.needs_calibration(entry.options):
-            references.add(resolve_runs([cls.calibrated_by])[0].source)
+        by = cls.calibrated_by
+        waits.append(resolve_runs([by])[0].source if by is not None and cls.needs_calibration(entry.options) else None)
+    references = {source for source in waits if source is not None}
     twins = [(e.source, e.options) for e in entries]
-    out = []
-    for index, entry in enumerate(entries):
-        cls = entry.strategy_class()
-        if cls.calibrated_by is not None and cls.needs_calibration(entry.options):
-            continue
-        if entry.source in references or twins.count((entry.source, entry.options)) > 1:
-            continue
-        out.append(index)
-    return out
+    return [
+        index
+        for index, entry in enumerate(entries)
+        if waits[index] is None and entry.source not in references and twins.count((entry.source, entry.options)) == 1
+    ]
 
 
 def with_decision_budget(run: StrategyRun, budget_s: float) -> StrategyRun:
