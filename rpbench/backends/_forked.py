@@ -3,12 +3,16 @@
 Sparse blossom (PyMatching) and Blossom V (OGDF) have no time limit of their
 own; a call with a deadline runs in a ``fork``-ed child, which inherits the
 arrays (nothing is pickled in) and the libraries already loaded, and is
-killed when the deadline passes.
+killed when the deadline passes.  Every forked child of rpbench is started by
+:func:`start_forked`, so that a stop signal arriving during the fork is not lost.
 """
 
 from __future__ import annotations
 
+import signal
 import time
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -45,9 +49,10 @@ def run_in_child(fn, args, deadline: float | None, *, solver: str):
         raise Timeout()
     ctx = multiprocessing.get_context("fork")
     receive, send = ctx.Pipe(duplex=False)
-    child = ctx.Process(target=_child_main, args=(send, fn, args))
-    child.start()
-    send.close()
+    try:
+        child = start_forked(_child_main, (send, fn, args))
+    finally:
+        send.close()
     try:
         if not receive.poll(remaining):
             raise Timeout()
@@ -71,3 +76,46 @@ def _child_main(conn, fn, args) -> None:
         conn.send((False, f"{type(exc).__name__}: {exc}"))
     finally:
         conn.close()
+
+
+#: The stop signals (Ctrl-C, ``kill``) held back while a child is forked.
+_HELD = (signal.SIGINT, signal.SIGTERM)
+
+
+def start_forked(target: Callable[..., Any], args: tuple) -> Any:
+    """A started ``fork``-ed :class:`multiprocessing.Process` running ``target(*args)``.
+
+    SIGINT and SIGTERM are held back while it forks: Python runs its at-fork callbacks (logging's, among
+    others) inside the fork, and an exception a signal handler raises there is printed and dropped, so a
+    Ctrl-C or SIGTERM arriving then was lost and the run went on.  Held, the signal comes once the fork is
+    done, in this process's own code; its exception then ends the child before it is raised here.
+
+    The child leaves a stop to this process, which ends it: it ignores SIGINT (a terminal's Ctrl-C reaches
+    the whole process group) and dies quietly of SIGTERM, then lets both through again and runs ``target``.
+    """
+    import multiprocessing
+
+    child = multiprocessing.get_context("fork").Process(target=_released, args=(target, args))
+    if not hasattr(signal, "pthread_sigmask"):  # pragma: no cover - no fork there either
+        child.start()
+        return child
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, _HELD)
+    try:
+        child.start()
+    finally:
+        try:
+            signal.pthread_sigmask(signal.SIG_SETMASK, previous)  # a held signal's handler runs here
+        except BaseException:
+            if child.pid is not None:
+                child.kill()
+                child.join()
+            raise
+    return child
+
+
+def _released(target: Callable[..., Any], args: tuple) -> None:
+    """The forked child's start (:func:`start_forked`): its stop handling, the signals let through, ``target``."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, _HELD)
+    target(*args)

@@ -27,13 +27,13 @@ from __future__ import annotations
 import functools
 import multiprocessing
 import os
-import signal
 import time
 from collections.abc import Callable
 from multiprocessing.connection import Connection
 from pathlib import Path
 from typing import Any
 
+from rpbench.backends._forked import start_forked
 from rpbench.exceptions import RpbenchError
 
 OfflineFn = Callable[[], Any]
@@ -110,12 +110,15 @@ class Forked(Serial):
         ctx = multiprocessing.get_context("fork")
         self._claims = claims if simulate is not None else None
         self._conn, child_end = ctx.Pipe(duplex=True)
-        self._child = ctx.Process(
-            target=_child_main,
-            args=(child_end, self._conn, offline, report, beside, warm_up, simulate, self._claims),
-        )
-        self._child.start()
-        child_end.close()
+        try:
+            self._child = start_forked(
+                _child_main, (child_end, self._conn, offline, report, beside, warm_up, simulate, self._claims)
+            )
+        except BaseException:
+            self._conn.close()
+            raise
+        finally:
+            child_end.close()
         self._asked_report = False
         self._offline_value: tuple[Any] | None = None  # received once, kept
         self._runs: dict[int, Any] | None = None
@@ -247,9 +250,8 @@ def _child_main(
     claims: Claims | None,
 ) -> None:
     parent_end.close()  # so that the parent's exit closes the pipe: recv() then ends this process
-    # Ctrl-C and SIGTERM reach the whole process group: the parent stops, then ends this child itself.
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    # Ctrl-C and SIGTERM reach the whole process group: the parent stops, then ends this child itself
+    # (start_forked set the signals so).
     try:
         # Everything is computed before anything is sent: a large answer waits in the pipe until the parent
         # reads it, after its own simulations, and the child must not wait there while runs are left to take.
@@ -307,9 +309,13 @@ def side_by_side(here: Callable[[], Any], there: Callable[[], Any], *, fork: boo
         return here(), there()
     ctx = multiprocessing.get_context("fork")
     conn, child_end = ctx.Pipe(duplex=False)
-    helper = ctx.Process(target=_helper_main, args=(child_end, conn, there))
-    helper.start()
-    child_end.close()
+    try:
+        helper = start_forked(_helper_main, (child_end, conn, there))
+    except BaseException:
+        conn.close()
+        raise
+    finally:
+        child_end.close()
     try:
         mine = here()
         try:
@@ -329,7 +335,6 @@ def side_by_side(here: Callable[[], Any], there: Callable[[], Any], *, fork: boo
 
 def _helper_main(conn: Connection, parent_end: Connection, fn: Callable[[], Any]) -> None:
     parent_end.close()
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
         _send(conn, fn)
     except BrokenPipeError:
