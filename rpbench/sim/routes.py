@@ -255,12 +255,9 @@ def routed_plans(
         )  # fmt: skip
         if bad >= 0:
             return nodes, tt, odo, plan_start, i, bad, 2
-    for i in range(n_routes):
-        p0, p1 = plan_start[i], plan_start[i + 1]
-        fill_row(
-            w_tt, w_node, w_odo, base, length, tt_before, last, w_cruising, vehicles[i],
-            nodes[p0:p1], tt[p0:p1], odo[p0:p1], False, 0,
-        )  # fmt: skip
+    _fill_windows(
+        w_tt, w_node, w_odo, base, length, tt_before, last, w_cruising, vehicles, nodes, tt, odo, plan_start, False
+    )
     return nodes, tt, odo, plan_start, -1, 0, 0
 
 
@@ -326,13 +323,37 @@ def repositioned_plans(
         )  # fmt: skip
         if bad >= 0:
             return nodes, tt, odo, plan_start, i, 2
-    for i in range(n_plans):
+    _fill_windows(
+        w_tt, w_node, w_odo, base, length, tt_before, last, w_cruising, vehicles, nodes, tt, odo, plan_start, True
+    )
+    return nodes, tt, odo, plan_start, -1, 0
+
+
+@njit(cache=True, nogil=True)
+def _fill_windows(
+    w_tt: np.ndarray,
+    w_node: np.ndarray,
+    w_odo: np.ndarray,
+    base: np.ndarray,
+    length: np.ndarray,
+    tt_before: np.ndarray,
+    last: np.ndarray,
+    w_cruising: np.ndarray,
+    vehicles: np.ndarray,
+    nodes: np.ndarray,
+    tt: np.ndarray,
+    odo: np.ndarray,
+    plan_start: np.ndarray,
+    cruising: bool,
+) -> None:  # pragma: no cover - compiled
+    """Vehicle ``vehicles[i]``'s window filled over plan ``i`` of plans laid one after another (offsets
+    ``plan_start``) from its first node (:func:`~rpbench.sim.lookahead.fill_row`)."""
+    for i in range(len(vehicles)):
         p0, p1 = plan_start[i], plan_start[i + 1]
         fill_row(
             w_tt, w_node, w_odo, base, length, tt_before, last, w_cruising, vehicles[i],
-            nodes[p0:p1], tt[p0:p1], odo[p0:p1], True, 0,
+            nodes[p0:p1], tt[p0:p1], odo[p0:p1], cruising, 0,
         )  # fmt: skip
-    return nodes, tt, odo, plan_start, -1, 0
 
 
 @njit(cache=True, nogil=True)
