@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 from importlib import resources
 from pathlib import Path
 
@@ -82,13 +83,8 @@ class Preset:
         """The backend object that solves this preset's models (its solver library is not imported yet)."""
         if self.instance is not None:
             return self.instance
-        known = self.__dict__.get("_adapter_class")  # found once per preset: every solve asks for it
-        if known is not None:
-            return known()
         try:
-            cls = backend_class(self.backend)
-            object.__setattr__(self, "_adapter_class", cls)
-            return cls()
+            return self._adapter_class()
         except ModuleNotFoundError as exc:  # a broken installation: an adapter module of the package is gone
             if not (exc.name or "").startswith("rpbench.backends."):
                 raise
@@ -96,6 +92,11 @@ class Preset:
                 f"solver preset {self.name!r}: the adapter module {exc.name} of backend {self.backend!r} is "
                 "missing from this installation; choose another --solver"
             ) from None
+
+    @cached_property
+    def _adapter_class(self) -> type[Backend]:
+        """The registry's class for ``backend``, found once per preset: every solve asks for it."""
+        return backend_class(self.backend)
 
     def is_installed(self) -> bool:
         return self.adapter().is_installed()

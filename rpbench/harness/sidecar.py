@@ -110,15 +110,12 @@ class Forked(Serial):
         ctx = multiprocessing.get_context("fork")
         self._claims = claims if simulate is not None else None
         self._conn, child_end = ctx.Pipe(duplex=True)
-        try:
-            self._child = start_forked(
-                _child_main, (child_end, self._conn, offline, report, beside, warm_up, simulate, self._claims)
-            )
-        except BaseException:
-            self._conn.close()
-            raise
-        finally:
-            child_end.close()
+        self._child = _started(
+            _child_main,
+            (child_end, self._conn, offline, report, beside, warm_up, simulate, self._claims),
+            self._conn,
+            child_end,
+        )
         self._asked_report = False
         self._offline_value: tuple[Any] | None = None  # received once, kept
         self._runs: dict[int, Any] | None = None
@@ -309,13 +306,7 @@ def side_by_side(here: Callable[[], Any], there: Callable[[], Any], *, fork: boo
         return here(), there()
     ctx = multiprocessing.get_context("fork")
     conn, child_end = ctx.Pipe(duplex=False)
-    try:
-        helper = start_forked(_helper_main, (child_end, conn, there))
-    except BaseException:
-        conn.close()
-        raise
-    finally:
-        child_end.close()
+    helper = _started(_helper_main, (child_end, conn, there), conn, child_end)
     try:
         mine = here()
         try:
@@ -331,6 +322,18 @@ def side_by_side(here: Callable[[], Any], there: Callable[[], Any], *, fork: boo
             helper.kill()
         helper.join()
         conn.close()
+
+
+def _started(target: Callable[..., Any], args: tuple, mine: Connection, theirs: Connection) -> Any:
+    """The child :func:`~rpbench.backends._forked.start_forked` starts, talking over a pipe: this process's copy
+    of the child's end ``theirs`` closed once it is forked, and ``mine`` too if it could not be."""
+    try:
+        return start_forked(target, args)
+    except BaseException:
+        mine.close()
+        raise
+    finally:
+        theirs.close()
 
 
 def _helper_main(conn: Connection, parent_end: Connection, fn: Callable[[], Any]) -> None:

@@ -160,15 +160,17 @@ def load_model_kernels() -> None:
     integral_support(np.zeros(1))
     strictly_increasing(np.zeros(1, np.int64))
     # as a round calls them on a frozen model (read-only arrays: machine code of its own)
-    p, v, values = _read_only(np.zeros(1, np.int32)), _read_only(np.zeros(1, np.int32)), _read_only(np.zeros(1))
+    p, v, values = read_only(np.zeros(1, np.int32)), read_only(np.zeros(1, np.int32)), read_only(np.zeros(1))
     assignment_valid(1, 1, p, v, values)
     assignment_column_rows(1, p, v)
-    start, rows, exact = _read_only(np.array([0, 1], np.int64)), p, _read_only(np.ones(1, np.bool_))
-    chosen = _read_only(np.zeros(1, np.int64))
+    start, rows, exact = read_only(np.array([0, 1], np.int64)), p, read_only(np.ones(1, np.bool_))
+    chosen = read_only(np.zeros(1, np.int64))
     cover(start, rows, exact, chosen)
     strictly_increasing(chosen)
 
 
-def _read_only(a: np.ndarray) -> np.ndarray:
+def read_only(a: np.ndarray) -> np.ndarray:
+    """``a`` made read-only, for warming up a kernel as a run calls it: numba compiles one machine code per
+    writability of the arrays, and a run's models and distance tables are read-only."""
     a.setflags(write=False)
     return a

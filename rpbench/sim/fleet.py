@@ -271,8 +271,7 @@ class FleetState:
             wp_start.append(wp_start[-1] + len(points))
         flat = np.fromiter(itertools.chain.from_iterable(waypoints), np.int64, wp_start[-1])
         plans = [self.plans[v] for v in vehicles]
-        t0 = np.array([float(plan.tt[a]) for plan, a in zip(plans, anchors, strict=True)])
-        odo0 = np.array([float(plan.odo[a]) for plan, a in zip(plans, anchors, strict=True)])
+        t0, odo0 = _anchor_times(plans, anchors)
         reach = np.zeros(wp_start[-1] - len(vehicles), np.int64)
         w = self._windows
         nodes, tt, odo, plan_start, bad, where, why = routes.routed_plans(
@@ -306,8 +305,7 @@ class FleetState:
         anchors, starts, _ = self.positions(vehicles, t)
         listed, at = vehicles.tolist(), anchors.tolist()
         plans = [self.plans[v] for v in listed]
-        t0 = np.array([float(plan.tt[a]) for plan, a in zip(plans, at, strict=True)])
-        odo0 = np.array([float(plan.odo[a]) for plan, a in zip(plans, at, strict=True)])
+        t0, odo0 = _anchor_times(plans, at)
         u = self.rng.random((len(listed), CRUISE_ARCS))  # row i: :meth:`_random_walk`'s numbers for vehicle i
         w = self._windows
         nodes, tt, odo, plan_start, bad, why = routes.repositioned_plans(
@@ -434,3 +432,10 @@ class FleetState:
         )
         offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
         return offsets, all_nodes[keep], all_tt[keep], all_odo[keep]
+
+
+def _anchor_times(plans: list[Plan], anchors: list[int]) -> tuple[np.ndarray, np.ndarray]:
+    """The time and odometer at which each plan is left, at its index ``anchors[i]``: where its new plan starts."""
+    t0 = np.array([float(plan.tt[a]) for plan, a in zip(plans, anchors, strict=True)])
+    odo0 = np.array([float(plan.odo[a]) for plan, a in zip(plans, anchors, strict=True)])
+    return t0, odo0

@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from rpbench.model.kernels import read_only
 from rpbench.sim.lookahead import fill_row
 
 
@@ -55,6 +56,29 @@ def random_walk(offsets: np.ndarray, heads: np.ndarray, node: int, prev: int, u:
 
 
 @njit(cache=True, nogil=True)
+def _path_hops(pred: np.ndarray, a: int, b: int) -> int:
+    """The arcs of the shortest path from ``a`` to ``b`` read off the predecessor matrix ``pred`` (``pred[o, v]``:
+    the node before ``v`` on the shortest path from ``o``); -1 when there is none."""
+    hops = 0
+    while b != a:
+        b = pred[a, b]
+        if b < 0:
+            return -1
+        hops += 1
+    return hops
+
+
+@njit(cache=True, nogil=True)
+def _write_path(pred: np.ndarray, a: int, b: int, out: np.ndarray, end: int) -> None:
+    """The shortest path from ``a`` to ``b`` without ``a`` (:func:`_path_hops` nodes), written into ``out`` so that
+    ``b`` lands at ``end``: backwards from ``b``, as the predecessor matrix gives it."""
+    while b != a:
+        out[end] = b
+        end -= 1
+        b = pred[a, b]
+
+
+@njit(cache=True, nogil=True)
 def route_through(pred: np.ndarray, waypoints: np.ndarray, reach: np.ndarray) -> np.ndarray:
     """The shortest-path nodes visiting ``waypoints`` after the first (the start node left out).
 
@@ -66,24 +90,15 @@ def route_through(pred: np.ndarray, waypoints: np.ndarray, reach: np.ndarray) ->
     n_seg = len(waypoints) - 1
     total = 0
     for s in range(n_seg):
-        a, cur = waypoints[s], waypoints[s + 1]
-        hops = 0
-        while cur != a:
-            cur = pred[a, cur]
-            if cur < 0:
-                reach[0] = -1 - s
-                return np.empty(0, np.int32)
-            hops += 1
+        hops = _path_hops(pred, waypoints[s], waypoints[s + 1])
+        if hops < 0:
+            reach[0] = -1 - s
+            return np.empty(0, np.int32)
         total += hops
         reach[s] = total
     tail = np.empty(total, np.int32)
     for s in range(n_seg):
-        a, cur = waypoints[s], waypoints[s + 1]
-        pos = reach[s] - 1
-        while cur != a:  # backwards from the segment's end
-            tail[pos] = cur
-            pos -= 1
-            cur = pred[a, cur]
+        _write_path(pred, waypoints[s], waypoints[s + 1], tail, reach[s] - 1)
     return tail
 
 
@@ -228,12 +243,10 @@ def routed_plans(
         total = 0
         r0 = wp_start[i] - i
         for s in range(wp_start[i + 1] - wp_start[i] - 1):
-            a, cur = waypoints[wp_start[i] + s], waypoints[wp_start[i] + s + 1]
-            while cur != a:
-                cur = pred[a, cur]
-                if cur < 0:
-                    return np.empty(0, np.int32), np.empty(0), np.empty(0), plan_start, i, s, 1
-                total += 1
+            hops = _path_hops(pred, waypoints[wp_start[i] + s], waypoints[wp_start[i] + s + 1])
+            if hops < 0:
+                return np.empty(0, np.int32), np.empty(0), np.empty(0), plan_start, i, s, 1
+            total += hops
             reach[r0 + s] = total
         plan_start[i + 1] = plan_start[i] + total + 1
     n = plan_start[n_routes]
@@ -242,13 +255,8 @@ def routed_plans(
         p0, p1 = plan_start[i], plan_start[i + 1]
         r0 = wp_start[i] - i
         nodes[p0] = waypoints[wp_start[i]]
-        for s in range(wp_start[i + 1] - wp_start[i] - 1):  # each segment backwards from its end
-            a, cur = waypoints[wp_start[i] + s], waypoints[wp_start[i] + s + 1]
-            pos = p0 + reach[r0 + s]
-            while cur != a:
-                nodes[pos] = cur
-                pos -= 1
-                cur = pred[a, cur]
+        for s in range(wp_start[i + 1] - wp_start[i] - 1):
+            _write_path(pred, waypoints[wp_start[i] + s], waypoints[wp_start[i] + s + 1], nodes, p0 + reach[r0 + s])
         bad = plan_arrays(
             offsets, heads, lengths, nodes[p0], nodes[p0 + 1 : p1], t0[i], odo0[i], speed,
             nodes[p0:p1], tt[p0:p1], odo[p0:p1],
@@ -297,24 +305,17 @@ def repositioned_plans(
     plan_start = np.zeros(n_plans + 1, np.int64)
     hops = np.zeros(n_plans, np.int64)
     for i in range(n_plans):  # the paths' lengths
-        a, cur = starts[i], targets[i]
-        while cur != a:
-            cur = pred[a, cur]
-            if cur < 0:
-                return np.empty(0, np.int32), np.empty(0), np.empty(0), plan_start, i, 1
-            hops[i] += 1
+        hops[i] = _path_hops(pred, starts[i], targets[i])
+        if hops[i] < 0:
+            return np.empty(0, np.int32), np.empty(0), np.empty(0), plan_start, i, 1
         plan_start[i + 1] = plan_start[i] + 1 + hops[i] + n_walk
     n = plan_start[n_plans]
     nodes, tt, odo = np.empty(n, np.int32), np.empty(n), np.empty(n)
     for i in range(n_plans):
         p0, p1 = plan_start[i], plan_start[i + 1]
-        a, cur = starts[i], targets[i]
+        a = starts[i]
         nodes[p0] = a
-        pos = p0 + hops[i]
-        while cur != a:  # the path backwards from the target
-            nodes[pos] = cur
-            pos -= 1
-            cur = pred[a, cur]
+        _write_path(pred, a, targets[i], nodes, p0 + hops[i])
         prev = nodes[p0 + hops[i] - 1] if hops[i] > 1 else a
         nodes[p0 + 1 + hops[i] : p1] = random_walk(offsets, heads, targets[i], prev, u[i])
         bad = plan_arrays(
@@ -462,8 +463,7 @@ def load_route_kernels() -> None:
         w.tt, w.node, w.odo, w.base, w.length, w.tt_before, w.last, w.cruising, 0,
     )  # fmt: skip
     z = np.zeros(1, np.int64)
-    pred = np.zeros((2, 2), np.int32)
-    pred.setflags(write=False)  # a run's predecessor table is read-only: machine code of its own
+    pred = read_only(np.zeros((2, 2), np.int32))  # a run's predecessor table is read-only: machine code of its own
     route_through(pred, np.zeros(2, np.int64), np.zeros(1, np.int64))
     routed_plans(
         pred, offsets, heads, one, 1.0, np.zeros(2, np.int64), np.array([0, 2], np.int64),

@@ -25,6 +25,7 @@ from numba import njit
 
 from rpbench.exceptions import ModelError, one_line
 from rpbench.model import AssignmentModel, Structure, TripPackingModel
+from rpbench.model.kernels import read_only
 from rpbench.options import RunOptions
 from rpbench.scenarios.base import OnlineView, Params, Scenario
 
@@ -288,12 +289,7 @@ def load_state_kernels() -> None:
     i, f = np.zeros(0, np.int64), np.zeros(0)
     _assignment_decoded(np.zeros(0, np.int8), i, i, i, f, f, np.zeros(0, np.int32), np.zeros(0, np.int32), i, i, i)
     # as received() calls it: the round model's arrays are read-only copies
-    ro: list[np.ndarray] = [
-        np.zeros(0, dtype)
-        for dtype in (np.int8, np.int64, np.int64, np.int64, np.float64, np.float64, np.int32, np.int32)
-    ]
-    for a in ro:
-        a.setflags(write=False)
+    ro = [read_only(np.zeros(0, d)) for d in (np.int8, np.int64, np.int64, np.int64, float, float, np.int32, np.int32)]
     _assignment_decoded(ro[0], ro[1], ro[2], ro[3], ro[4], ro[5], ro[6], ro[7], i, i, i)
 
 

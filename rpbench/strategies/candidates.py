@@ -21,6 +21,7 @@ from numba import njit
 
 from rpbench.geometry import ORDER_RULES, TOLERANCE_M, choose_order, pair_geometry
 from rpbench.model import AssignmentModel, quantize
+from rpbench.model.kernels import read_only
 from rpbench.scenarios.base import Params
 from rpbench.strategies.base import Kind, RoundModel, RoundState
 
@@ -368,15 +369,9 @@ def load_candidate_kernels() -> None:
     i, f = np.zeros(0, np.int64), np.zeros(0)
     _columns_kernel(i, i, f, f, i, i, f, f, np.zeros(0, np.bool_), f, i, i, 0)
     reach = np.ones((1, 1), dtype=bool)
-    for dist in (np.zeros((1, 1)), _read_only(np.zeros((1, 1)))):  # a run's distance table is read-only
+    for dist in (np.zeros((1, 1)), read_only(np.zeros((1, 1)))):  # a run's distance table is read-only
         _pickup_pairs(reach, True, dist, i, i, f, 0.0)
         _join_pairs(reach, dist, i, i, f, i, f, f, i, i, f, 0.0, 0.0, True)
-
-
-def _read_only(a: np.ndarray) -> np.ndarray:
-    """``a`` made read-only (a compiled kernel has one machine code per writability of its arrays)."""
-    a.setflags(write=False)
-    return a
 
 
 # Which node pairs lie within a distance: a table that pre-filters pick-up candidates.
