@@ -12,11 +12,14 @@ from __future__ import annotations
 import signal
 import time
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from rpbench.exceptions import SolverError
+
+if TYPE_CHECKING:
+    from multiprocessing.connection import Connection
 
 
 class Timeout(Exception):
@@ -49,10 +52,7 @@ def run_in_child(fn, args, deadline: float | None, *, solver: str):
         raise Timeout()
     ctx = multiprocessing.get_context("fork")
     receive, send = ctx.Pipe(duplex=False)
-    try:
-        child = start_forked(_child_main, (send, fn, args))
-    finally:
-        send.close()
+    child = start_piped(_child_main, (send, fn, args), receive, send)
     try:
         if not receive.poll(remaining):
             raise Timeout()
@@ -111,6 +111,18 @@ def start_forked(target: Callable[..., Any], args: tuple) -> Any:
                 child.join()
             raise
     return child
+
+
+def start_piped(target: Callable[..., Any], args: tuple, mine: Connection, theirs: Connection) -> Any:
+    """:func:`start_forked` for a child that talks over a pipe: this process's copy of the child's end
+    ``theirs`` closed once it is forked, and ``mine`` too if it could not be."""
+    try:
+        return start_forked(target, args)
+    except BaseException:
+        mine.close()
+        raise
+    finally:
+        theirs.close()
 
 
 def _released(target: Callable[..., Any], args: tuple) -> None:

@@ -33,7 +33,7 @@ from multiprocessing.connection import Connection
 from pathlib import Path
 from typing import Any
 
-from rpbench.backends._forked import start_forked
+from rpbench.backends._forked import start_piped
 from rpbench.exceptions import RpbenchError
 
 OfflineFn = Callable[[], Any]
@@ -110,7 +110,7 @@ class Forked(Serial):
         ctx = multiprocessing.get_context("fork")
         self._claims = claims if simulate is not None else None
         self._conn, child_end = ctx.Pipe(duplex=True)
-        self._child = _started(
+        self._child = start_piped(
             _child_main,
             (child_end, self._conn, offline, report, beside, warm_up, simulate, self._claims),
             self._conn,
@@ -248,7 +248,7 @@ def _child_main(
 ) -> None:
     parent_end.close()  # so that the parent's exit closes the pipe: recv() then ends this process
     # Ctrl-C and SIGTERM reach the whole process group: the parent stops, then ends this child itself
-    # (start_forked set the signals so).
+    # (start_piped set the signals so).
     try:
         # Everything is computed before anything is sent: a large answer waits in the pipe until the parent
         # reads it, after its own simulations, and the child must not wait there while runs are left to take.
@@ -306,7 +306,7 @@ def side_by_side(here: Callable[[], Any], there: Callable[[], Any], *, fork: boo
         return here(), there()
     ctx = multiprocessing.get_context("fork")
     conn, child_end = ctx.Pipe(duplex=False)
-    helper = _started(_helper_main, (child_end, conn, there), conn, child_end)
+    helper = start_piped(_helper_main, (child_end, conn, there), conn, child_end)
     try:
         mine = here()
         try:
@@ -322,18 +322,6 @@ def side_by_side(here: Callable[[], Any], there: Callable[[], Any], *, fork: boo
             helper.kill()
         helper.join()
         conn.close()
-
-
-def _started(target: Callable[..., Any], args: tuple, mine: Connection, theirs: Connection) -> Any:
-    """The child :func:`~rpbench.backends._forked.start_forked` starts, talking over a pipe: this process's copy
-    of the child's end ``theirs`` closed once it is forked, and ``mine`` too if it could not be."""
-    try:
-        return start_forked(target, args)
-    except BaseException:
-        mine.close()
-        raise
-    finally:
-        theirs.close()
 
 
 def _helper_main(conn: Connection, parent_end: Connection, fn: Callable[[], Any]) -> None:

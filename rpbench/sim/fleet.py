@@ -166,7 +166,7 @@ class FleetState:
         before = t - _EPS_S
         w = self._windows
         n_missed = advance(
-            vehicles, before, t, w.tt, w.node, w.odo, w.base, w.length, w.tt_before, w.last, w.cruising,
+            vehicles, before, t, w.arrays,
             self._next_k, self._next_node, self._next_tt, self._next_odo, self._idle, self._missed,
         )  # fmt: skip
         for v in self._missed[:n_missed].tolist():  # past the window: look up the plan, then refill
@@ -175,8 +175,7 @@ class FleetState:
             while True:
                 k = refill_from_plan(
                     v, k, before, t, plan.nodes, plan.tt, plan.odo, plan.cruising,
-                    self._next_k, self._next_node, self._next_tt, self._next_odo, self._idle,
-                    w.tt, w.node, w.odo, w.base, w.length, w.tt_before, w.last, w.cruising,
+                    self._next_k, self._next_node, self._next_tt, self._next_odo, self._idle, w.arrays,
                 )  # fmt: skip
                 if k >= 0:
                     break
@@ -228,7 +227,7 @@ class FleetState:
         w = self._windows
         nodes, tt, odo, bad = routes.plan_and_window(
             self._offsets, self._heads, self._lengths, start, tail, t0, float(plan.odo[anchor]), self.speed,
-            w.tt, w.node, w.odo, w.base, w.length, w.tt_before, w.last, w.cruising, v, cruising,
+            w.arrays, v, cruising,
         )  # fmt: skip
         if bad >= 0:
             before = start if bad == 0 else int(tail[bad - 1])
@@ -276,8 +275,7 @@ class FleetState:
         w = self._windows
         nodes, tt, odo, plan_start, bad, where, why = routes.routed_plans(
             self._pred, self._offsets, self._heads, self._lengths, self.speed, flat, np.asarray(wp_start, np.int64),
-            t0, odo0, reach, np.asarray(vehicles, np.int64),
-            w.tt, w.node, w.odo, w.base, w.length, w.tt_before, w.last, w.cruising,
+            t0, odo0, reach, np.asarray(vehicles, np.int64), w.arrays,
         )  # fmt: skip
         if bad >= 0:
             points = waypoints[bad]
@@ -310,8 +308,7 @@ class FleetState:
         w = self._windows
         nodes, tt, odo, plan_start, bad, why = routes.repositioned_plans(
             self._pred, self._offsets, self._heads, self._lengths, self.speed,
-            np.asarray(starts, np.int64), np.asarray(targets, np.int64), u, t0, odo0, vehicles,
-            w.tt, w.node, w.odo, w.base, w.length, w.tt_before, w.last, w.cruising,
+            np.asarray(starts, np.int64), np.asarray(targets, np.int64), u, t0, odo0, vehicles, w.arrays,
         )  # fmt: skip
         if bad >= 0:  # pragma: no cover - a network is strongly connected, and paths follow its arcs
             if why == 1:
@@ -334,7 +331,7 @@ class FleetState:
         w = self._windows
         nodes, tt, odo, bad = routes.cruise_and_window(
             self._offsets, self._heads, self._lengths, node, prev, u, t0, float(plan.odo[anchor]), self.speed,
-            w.tt, w.node, w.odo, w.base, w.length, w.tt_before, w.last, w.cruising, v,
+            w.arrays, v,
         )  # fmt: skip
         if bad >= 0:  # pragma: no cover - a random walk follows arcs
             raise ValueError(f"vehicle {v}: a cruise left the network's arcs")

@@ -45,13 +45,15 @@ class PlanWindows:
         self.tt_before = np.full(n_vehicles, -np.inf)  # time at the node before the window
         self.last = np.zeros(n_vehicles, dtype=np.int64)  # the plan's last index
         self.cruising = np.zeros(n_vehicles, dtype=bool)
+        #: The eight arrays in one tuple, as the compiled kernels take them (``windows``; the arrays are
+        #: written in place, never replaced).
+        self.arrays = (
+            self.tt, self.node, self.odo, self.base, self.length, self.tt_before, self.last, self.cruising
+        )  # fmt: skip
 
     def fill(self, v: int, nodes: np.ndarray, tt: np.ndarray, odo: np.ndarray, cruising: bool, k: int) -> None:
         """Window of vehicle ``v`` over its plan (``nodes``, ``tt``, ``odo``) from plan index ``k``."""
-        fill_row(
-            self.tt, self.node, self.odo, self.base, self.length, self.tt_before, self.last, self.cruising,
-            v, nodes, tt, odo, cruising, k,
-        )  # fmt: skip
+        fill_row(self.arrays, v, nodes, tt, odo, cruising, k)
 
     def drop(self, v: int) -> None:
         self.length[v] = 0
@@ -82,14 +84,7 @@ class PlanWindows:
 
 @njit(cache=True, nogil=True)
 def fill_row(
-    w_tt: np.ndarray,
-    w_node: np.ndarray,
-    w_odo: np.ndarray,
-    base: np.ndarray,
-    length: np.ndarray,
-    tt_before: np.ndarray,
-    last: np.ndarray,
-    w_cruising: np.ndarray,
+    windows: tuple,
     v: int,
     nodes: np.ndarray,
     tt: np.ndarray,
@@ -97,7 +92,9 @@ def fill_row(
     cruising: bool,
     k: int,
 ) -> None:  # pragma: no cover - compiled
-    """:meth:`PlanWindows.fill` in one compiled call (a round fills a window for every vehicle it replans)."""
+    """:meth:`PlanWindows.fill` in one compiled call (a round fills a window for every vehicle it replans);
+    ``windows``: :attr:`PlanWindows.arrays`."""
+    w_tt, w_node, w_odo, base, length, tt_before, last, w_cruising = windows
     m = min(len(tt), k + WIDTH) - k
     for j in range(WIDTH):
         if j < m:
@@ -118,14 +115,7 @@ def advance(
     vehicles: np.ndarray,
     before: float,
     t: float,
-    w_tt: np.ndarray,
-    w_node: np.ndarray,
-    w_odo: np.ndarray,
-    base: np.ndarray,
-    length: np.ndarray,
-    tt_before: np.ndarray,
-    last: np.ndarray,
-    cruising: np.ndarray,
+    windows: tuple,
     next_k: np.ndarray,
     next_node: np.ndarray,
     next_tt: np.ndarray,
@@ -137,8 +127,9 @@ def advance(
     ``before``, as :meth:`PlanWindows.find` finds it; a vehicle is stale when it is not idle and its cached node
     lies before ``before``.  Stale vehicles whose window cannot answer are written to ``missed`` in the order
     given; returns their number.  One compiled pass instead of a numpy pass per field: a round asks this for
-    every vacant and every partly occupied vehicle.
+    every vacant and every partly occupied vehicle (``windows``: :attr:`PlanWindows.arrays`).
     """
+    w_tt, w_node, w_odo, base, length, tt_before, last, cruising = windows
     n_missed = 0
     for i in range(len(vehicles)):
         v = vehicles[i]
@@ -177,19 +168,13 @@ def refill_from_plan(
     next_tt: np.ndarray,
     next_odo: np.ndarray,
     idle: np.ndarray,
-    w_tt: np.ndarray,
-    w_node: np.ndarray,
-    w_odo: np.ndarray,
-    base: np.ndarray,
-    length: np.ndarray,
-    tt_before: np.ndarray,
-    last: np.ndarray,
-    w_cruising: np.ndarray,
+    windows: tuple,
 ) -> int:  # pragma: no cover - compiled
     """Vehicle ``v``'s cached next node and window from its plan (``nodes``, ``tt``, ``odo``) when its window
     could not answer: at plan index ``k``, or (``k < 0``) at its first node reached at or after ``before``
     (``searchsorted(tt, before)``).  Returns that index, or -1, changing nothing, when it lies past the plan's
-    end (the caller extends a cruise or stands the vehicle at its last node, then passes the index)."""
+    end (the caller extends a cruise or stands the vehicle at its last node, then passes the index);
+    ``windows``: :attr:`PlanWindows.arrays`."""
     if k < 0:
         k = int(np.searchsorted(tt, before))
         if k >= len(nodes):
@@ -200,7 +185,7 @@ def refill_from_plan(
     idle[v] = k == len(nodes) - 1 and tt_k <= t and not cruising
     next_tt[v] = tt_k
     next_odo[v] = odo[k]
-    fill_row(w_tt, w_node, w_odo, base, length, tt_before, last, w_cruising, v, nodes, tt, odo, cruising, k)
+    fill_row(windows, v, nodes, tt, odo, cruising, k)
     return k
 
 
@@ -233,14 +218,7 @@ def load_lookahead_kernels() -> None:
         one,
         0.0,
         0.0,
-        w.tt,
-        w.node,
-        w.odo,
-        w.base,
-        w.length,
-        w.tt_before,
-        w.last,
-        w.cruising,
+        w.arrays,
         one.copy(),
         one.copy(),
         np.zeros(1),
@@ -251,7 +229,6 @@ def load_lookahead_kernels() -> None:
     gather_positions(one, 0.0, 1.0, one, one, np.zeros(1), np.zeros(1, bool))
     refill_from_plan(
         0, -1, 0.0, 0.0, np.zeros(1, np.int32), np.zeros(1), np.zeros(1), False,
-        one.copy(), one.copy(), np.zeros(1), np.zeros(1), np.zeros(1, bool),
-        w.tt, w.node, w.odo, w.base, w.length, w.tt_before, w.last, w.cruising,
+        one.copy(), one.copy(), np.zeros(1), np.zeros(1), np.zeros(1, bool), w.arrays,
     )  # fmt: skip
     w.fill(0, np.zeros(1, np.int32), np.zeros(1), np.zeros(1), False, 0)

@@ -9,7 +9,9 @@ arc by arc in plan order, as ``np.cumsum`` sums them.
 
 The network's outgoing arcs are passed as CSR arrays (``offsets``, and per arc its head and
 length in ``out_arcs`` order); a node sequence whose consecutive nodes are not joined by an arc,
-or a pair of nodes without a path, is reported to the caller (a negative count), which raises.
+or a pair of nodes without a path, is reported to the caller (a negative count), which raises.  The
+kernels that fill a vehicle's plan window take the fleet's windows as one tuple, ``windows``
+(:attr:`~rpbench.sim.lookahead.PlanWindows.arrays`).
 """
 
 from __future__ import annotations
@@ -154,14 +156,7 @@ def plan_and_window(
     t0: float,
     odo0: float,
     speed: float,
-    w_tt: np.ndarray,
-    w_node: np.ndarray,
-    w_odo: np.ndarray,
-    base: np.ndarray,
-    length: np.ndarray,
-    tt_before: np.ndarray,
-    last: np.ndarray,
-    w_cruising: np.ndarray,
+    windows: tuple,
     v: int,
     cruising: bool,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:  # pragma: no cover - compiled
@@ -172,7 +167,7 @@ def plan_and_window(
     nodes, tt, odo = np.empty(n, np.int32), np.empty(n), np.empty(n)
     bad = plan_arrays(offsets, heads, lengths, start, tail, t0, odo0, speed, nodes, tt, odo)
     if bad < 0:
-        fill_row(w_tt, w_node, w_odo, base, length, tt_before, last, w_cruising, v, nodes, tt, odo, cruising, 0)
+        fill_row(windows, v, nodes, tt, odo, cruising, 0)
     return nodes, tt, odo, bad
 
 
@@ -187,23 +182,13 @@ def cruise_and_window(
     t0: float,
     odo0: float,
     speed: float,
-    w_tt: np.ndarray,
-    w_node: np.ndarray,
-    w_odo: np.ndarray,
-    base: np.ndarray,
-    length: np.ndarray,
-    tt_before: np.ndarray,
-    last: np.ndarray,
-    w_cruising: np.ndarray,
+    windows: tuple,
     v: int,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:  # pragma: no cover - compiled
     """A new random cruise of vehicle ``v`` from ``start`` (reached from ``prev``): :func:`random_walk` over
     ``u``, then :func:`plan_and_window` of it as a cruising plan: one compiled call for a cruise's start."""
     tail = random_walk(offsets, heads, start, prev, u)
-    return plan_and_window(
-        offsets, heads, lengths, start, tail, t0, odo0, speed,
-        w_tt, w_node, w_odo, base, length, tt_before, last, w_cruising, v, True,
-    )  # fmt: skip
+    return plan_and_window(offsets, heads, lengths, start, tail, t0, odo0, speed, windows, v, True)
 
 
 @njit(cache=True, nogil=True)
@@ -219,14 +204,7 @@ def routed_plans(
     odo0: np.ndarray,
     reach: np.ndarray,
     vehicles: np.ndarray,
-    w_tt: np.ndarray,
-    w_node: np.ndarray,
-    w_odo: np.ndarray,
-    base: np.ndarray,
-    length: np.ndarray,
-    tt_before: np.ndarray,
-    last: np.ndarray,
-    w_cruising: np.ndarray,
+    windows: tuple,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int, int, int]:  # pragma: no cover - compiled
     """Many replans' new plans at once: route ``i`` drives the shortest paths through its waypoints
     ``waypoints[wp_start[i]:wp_start[i + 1]]`` (as :func:`route_through` finds them) from time ``t0[i]`` and
@@ -263,9 +241,7 @@ def routed_plans(
         )  # fmt: skip
         if bad >= 0:
             return nodes, tt, odo, plan_start, i, bad, 2
-    _fill_windows(
-        w_tt, w_node, w_odo, base, length, tt_before, last, w_cruising, vehicles, nodes, tt, odo, plan_start, False
-    )
+    _fill_windows(windows, vehicles, nodes, tt, odo, plan_start, False)
     return nodes, tt, odo, plan_start, -1, 0, 0
 
 
@@ -282,14 +258,7 @@ def repositioned_plans(
     t0: np.ndarray,
     odo0: np.ndarray,
     vehicles: np.ndarray,
-    w_tt: np.ndarray,
-    w_node: np.ndarray,
-    w_odo: np.ndarray,
-    base: np.ndarray,
-    length: np.ndarray,
-    tt_before: np.ndarray,
-    last: np.ndarray,
-    w_cruising: np.ndarray,
+    windows: tuple,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int, int]:  # pragma: no cover - compiled
     """Many vacant vehicles' new cruising plans at once: plan ``i`` drives the shortest path from
     ``starts[i]`` to ``targets[i]`` (as :func:`route_through` finds it), then a random cruise over the numbers
@@ -324,22 +293,13 @@ def repositioned_plans(
         )  # fmt: skip
         if bad >= 0:
             return nodes, tt, odo, plan_start, i, 2
-    _fill_windows(
-        w_tt, w_node, w_odo, base, length, tt_before, last, w_cruising, vehicles, nodes, tt, odo, plan_start, True
-    )
+    _fill_windows(windows, vehicles, nodes, tt, odo, plan_start, True)
     return nodes, tt, odo, plan_start, -1, 0
 
 
 @njit(cache=True, nogil=True)
 def _fill_windows(
-    w_tt: np.ndarray,
-    w_node: np.ndarray,
-    w_odo: np.ndarray,
-    base: np.ndarray,
-    length: np.ndarray,
-    tt_before: np.ndarray,
-    last: np.ndarray,
-    w_cruising: np.ndarray,
+    windows: tuple,
     vehicles: np.ndarray,
     nodes: np.ndarray,
     tt: np.ndarray,
@@ -351,10 +311,7 @@ def _fill_windows(
     ``plan_start``) from its first node (:func:`~rpbench.sim.lookahead.fill_row`)."""
     for i in range(len(vehicles)):
         p0, p1 = plan_start[i], plan_start[i + 1]
-        fill_row(
-            w_tt, w_node, w_odo, base, length, tt_before, last, w_cruising, vehicles[i],
-            nodes[p0:p1], tt[p0:p1], odo[p0:p1], cruising, 0,
-        )  # fmt: skip
+        fill_row(windows, vehicles[i], nodes[p0:p1], tt[p0:p1], odo[p0:p1], cruising, 0)
 
 
 @njit(cache=True, nogil=True)
@@ -458,22 +415,15 @@ def load_route_kernels() -> None:
     from rpbench.sim.lookahead import PlanWindows
 
     w = PlanWindows(1)
-    cruise_and_window(
-        offsets, heads, one, 0, -1, np.zeros(1), 0.0, 0.0, 1.0,
-        w.tt, w.node, w.odo, w.base, w.length, w.tt_before, w.last, w.cruising, 0,
-    )  # fmt: skip
+    cruise_and_window(offsets, heads, one, 0, -1, np.zeros(1), 0.0, 0.0, 1.0, w.arrays, 0)
     z = np.zeros(1, np.int64)
     pred = read_only(np.zeros((2, 2), np.int32))  # a run's predecessor table is read-only: machine code of its own
     route_through(pred, np.zeros(2, np.int64), np.zeros(1, np.int64))
     routed_plans(
         pred, offsets, heads, one, 1.0, np.zeros(2, np.int64), np.array([0, 2], np.int64),
-        np.zeros(1), np.zeros(1), z, z.copy(), w.tt, w.node, w.odo, w.base, w.length, w.tt_before, w.last, w.cruising,
+        np.zeros(1), np.zeros(1), z, z.copy(), w.arrays,
     )  # fmt: skip
     repositioned_plans(
-        pred, offsets, heads, one, 1.0, z, z.copy(), np.zeros((1, 1)), np.zeros(1), np.zeros(1), z.copy(),
-        w.tt, w.node, w.odo, w.base, w.length, w.tt_before, w.last, w.cruising,
+        pred, offsets, heads, one, 1.0, z, z.copy(), np.zeros((1, 1)), np.zeros(1), np.zeros(1), z.copy(), w.arrays
     )  # fmt: skip
-    plan_and_window(
-        offsets, heads, one, 0, np.zeros(0, np.int32), 0.0, 0.0, 1.0,
-        w.tt, w.node, w.odo, w.base, w.length, w.tt_before, w.last, w.cruising, 0, False,
-    )  # fmt: skip
+    plan_and_window(offsets, heads, one, 0, np.zeros(0, np.int32), 0.0, 0.0, 1.0, w.arrays, 0, False)
